@@ -1,0 +1,35 @@
+"""amlip_qp: angular-momentum (ALIP) foot placement with whole-body QP tracking.
+
+The layers, from the bottom up:
+
+- :mod:`amlip_qp.alip`: the pure ALIP planner math (numpy only, no robot model).
+- :mod:`amlip_qp.codegen`: CasADi definitions of the planner functions, the
+  generated C in the repository's ``codegen/`` folder, and a fast caller.
+- :mod:`amlip_qp.robots`: the MJCF models loaded into MuJoCo (plant) and
+  Pinocchio (controller model), state conversion and model-side kinematics.
+"""
+
+from amlip_qp.exceptions import (
+    AmlipError,
+    CodegenError,
+    ControllerError,
+    InputError,
+    MJCFError,
+    ModelFileError,
+    QPError,
+    UnknownRobotError,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AmlipError",
+    "CodegenError",
+    "ControllerError",
+    "InputError",
+    "MJCFError",
+    "ModelFileError",
+    "QPError",
+    "UnknownRobotError",
+    "__version__",
+]

@@ -1,0 +1,56 @@
+"""Typed exceptions of amlip_qp.
+
+Every error the library raises on purpose derives from :class:`AmlipError`,
+so a caller can catch the whole family at once. Errors caused by a bad
+argument or state value also derive from :class:`ValueError`, and a missing
+file from :class:`FileNotFoundError`, so generic handlers keep working.
+
+Each message says what was wrong *and* what to do about it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class AmlipError(Exception):
+    """Base class of every error amlip_qp raises on purpose."""
+
+
+class InputError(AmlipError, ValueError):
+    """An argument or a state value is invalid (NaN, out of range, wrong shape...)."""
+
+
+class UnknownRobotError(AmlipError, ValueError):
+    """A robot name is neither a bundled robot nor a path to an MJCF file."""
+
+
+class ModelFileError(AmlipError, FileNotFoundError):
+    """A robot model file does not exist."""
+
+
+class MJCFError(AmlipError, ValueError):
+    """A model file exists but cannot be parsed, or lacks what amlip_qp needs."""
+
+
+class CodegenError(AmlipError):
+    """Generating, compiling or loading the CasADi-generated C code failed."""
+
+
+class QPError(AmlipError):
+    """A tracker QP could not be solved.
+
+    Attributes:
+        problem: The problem object that failed (for inspection or re-solving
+            with another backend), or ``None``.
+        status: The solver's status string, if any.
+    """
+
+    def __init__(self, message: str, problem: Any = None, status: str | None = None):
+        super().__init__(message)
+        self.problem = problem
+        self.status = status
+
+
+class ControllerError(AmlipError):
+    """The walking controller cannot continue (for example a fall was detected)."""
