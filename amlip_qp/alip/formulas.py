@@ -1,0 +1,144 @@
+"""The ALIP formulas, written once for numpy and CasADi.
+
+Every function here is plain arithmetic on its arguments plus ``cosh``,
+``sinh``, ``sqrt``, ``cos`` and ``sin`` taken from the arguments' backend:
+numpy for floats and arrays, CasADi for ``SX``/``MX``/``DM`` symbols. The
+numpy entry points with input validation live in :mod:`amlip_qp.alip.lip`,
+:mod:`amlip_qp.alip.desired` and :mod:`amlip_qp.alip.outputs`; the CasADi code
+generation in :mod:`amlip_qp.codegen.symbolic` calls these same functions
+with symbols, so the generated C and the numpy reference cannot drift apart.
+
+They work on the generic pair ``(p, L)`` of ``../shared/ALIP_NOTES.md``:
+the sagittal pair is ``(p_x, L_y)`` and the lateral pair is ``(p_y, Lt)``
+with ``Lt = -L_x``. No validation happens here.
+
+Units: p in m, L in kg m^2/s, times in s, mass in kg, heights in m,
+velocities in m/s, g in m/s^2 (positive), phase ``s`` dimensionless.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Standard gravity, m/s^2 (positive; gravity points along -z).
+GRAVITY_MPS2 = 9.81
+
+
+def backend(*args):
+    """Return the math module for the arguments: ``casadi`` if any argument is
+    a CasADi expression, else ``numpy``."""
+    for a in args:
+        if type(a).__module__.split(".")[0] == "casadi":
+            import casadi
+
+            return casadi
+    return np
+
+
+def omega(H_m, g_mps2=GRAVITY_MPS2):
+    """LIP natural frequency ``l = sqrt(g / H)``, in 1/s."""
+    return backend(H_m, g_mps2).sqrt(g_mps2 / H_m)
+
+
+def flow(p_m, L, tau_s, mass_kg, H_m, g_mps2=GRAVITY_MPS2):
+    """Flow of the ALIP pair over a horizon ``tau_s`` (paper eq. LIP_AM_Preiction).
+
+    Returns ``(p(t+tau), L(t+tau))``::
+
+        p' = cosh(l tau) p + sinh(l tau) / (m H l) L
+        L' = m H l sinh(l tau) p + cosh(l tau) L
+    """
+    xp = backend(p_m, L, tau_s, mass_kg, H_m, g_mps2)
+    l = omega(H_m, g_mps2)
+    c = xp.cosh(l * tau_s)
+    s = xp.sinh(l * tau_s)
+    return c * p_m + s / (mass_kg * H_m * l) * L, mass_kg * H_m * l * s * p_m + c * L
+
+
+def transfer(L_minus, p_st_m, p_sw_m, v_z_mps, mass_kg):
+    """Momentum about the new contact after touchdown (notes, eq. AM_transfer).
+
+    ``L(T+) = L(T-) + m v_z (p_st(T-) - p_sw(T-))`` for the generic pair on flat
+    ground; ``p_st`` and ``p_sw`` are the CoM offsets from the old and new
+    contacts just before touchdown, ``v_z`` the CoM vertical velocity.
+    """
+    return L_minus + mass_kg * v_z_mps * (p_st_m - p_sw_m)
+
+
+def foot_placement(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps=0.0, g_mps2=GRAVITY_MPS2):
+    """Deadbeat foot placement in ``L`` at the end of the *next* step.
+
+    ``L_hat`` and ``p_hat_m`` are the predicted ``L(T-)`` and ``p_st(T-)`` of the
+    current step, ``v_z_mps`` the predicted CoM vertical velocity at touchdown.
+    Returns ``p_sw->CoM`` at touchdown, in m::
+
+        [L_des - cosh(lT) (L_hat + m v_z p_hat)] / [m (H l sinh(lT) - v_z cosh(lT))]
+    """
+    xp = backend(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps, g_mps2)
+    l = omega(H_m, g_mps2)
+    c = xp.cosh(l * T_s)
+    s = xp.sinh(l * T_s)
+    return (L_des - c * (L_hat + mass_kg * v_z_mps * p_hat_m)) / (mass_kg * (H_m * l * s - v_z_mps * c))
+
+
+def L_from_velocity(v_mps, mass_kg, H_m):
+    """Pair momentum of a point mass at height ``H`` moving at ``v``: ``m H v``.
+
+    Sagittal: ``L_y = m H v_x``. Lateral: ``Lt = -L_x = m H v_y``.
+    """
+    return mass_kg * H_m * v_mps
+
+
+def Lt_step_width(W_m, T_s, mass_kg, H_m, next_stance_sign, g_mps2=GRAVITY_MPS2):
+    """Lateral pair momentum ``Lt = -L_x`` at the end of the next step for
+    walking in place with step width ``W_m`` (paper eq. lateral_desired_Lx).
+
+    ``next_stance_sign`` is +1 when the next stance leg is the left one and -1
+    for the right one; the paper's ``L_x^des = +-(1/2) m H W l sinh(lT)/(1+cosh(lT))``
+    has that sign, so ``Lt`` has the opposite one.
+    """
+    xp = backend(W_m, T_s, mass_kg, H_m, next_stance_sign, g_mps2)
+    l = omega(H_m, g_mps2)
+    return -next_stance_sign * 0.5 * mass_kg * H_m * W_m * l * xp.sinh(l * T_s) / (1.0 + xp.cosh(l * T_s))
+
+
+# --- phase-based reference shapes, with d/ds and d^2/ds^2 ---------------------
+
+
+def cosine_blend(s, start, end):
+    """Half-period cosine from ``start`` (s=0) to ``end`` (s=1).
+
+    Returns ``(y, dy/ds, d2y/ds2)`` of ``1/2 [(1 + cos(pi s)) start + (1 - cos(pi s)) end]``.
+    """
+    xp = backend(s, start, end)
+    c = xp.cos(np.pi * s)
+    sn = xp.sin(np.pi * s)
+    return (
+        0.5 * ((1.0 + c) * start + (1.0 - c) * end),
+        0.5 * np.pi * sn * (end - start),
+        0.5 * np.pi**2 * c * (end - start),
+    )
+
+
+def line(s, start, end):
+    """Straight line from ``start`` (s=0) to ``end`` (s=1): ``(y, dy/ds, d2y/ds2)``."""
+    return (1.0 - s) * start + s * end, end - start, 0.0 * s
+
+
+def clearance_parabola(s, H_m, z_cl_m):
+    """Swing ``p^z_sw->CoM`` reference ``4 z_cl (s - 1/2)^2 + (H - z_cl)``.
+
+    It equals ``H`` at s=0 and s=1 and ``H - z_cl`` at mid-step, lifting the foot
+    by ``z_cl`` when the CoM stays at ``H``. Returns ``(y, dy/ds, d2y/ds2)`` in m.
+    """
+    return 4.0 * z_cl_m * (s - 0.5) ** 2 + (H_m - z_cl_m), 8.0 * z_cl_m * (s - 0.5), 8.0 * z_cl_m + 0.0 * s
+
+
+def constant(s, value):
+    """A constant reference: ``(value, 0, 0)``."""
+    return value + 0.0 * s, 0.0 * s, 0.0 * s
+
+
+def to_time_derivatives(y, dy_ds, d2y_ds2, T_s):
+    """Convert phase derivatives to time derivatives (``d/dt = (1/T) d/ds``)."""
+    return y, dy_ds / T_s, d2y_ds2 / T_s**2
