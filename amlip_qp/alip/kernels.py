@@ -1,0 +1,115 @@
+"""The two per-tick planner kernels, with dense input and output layouts.
+
+These are the functions CasADi turns into C (see :mod:`amlip_qp.codegen`).
+They are written once, on top of :mod:`amlip_qp.alip.formulas`, and accept
+either numpy scalars or CasADi symbols: ``alip_plan_terms`` and
+``swing_reference_terms`` take a sequence of scalars and return a list of
+scalar expressions. :func:`alip_plan` and :func:`swing_reference` are the
+numpy reference on 1-D float arrays.
+
+``ALIP_PLAN`` (inputs ``u``, 15):
+
+=====  ==================  =====================================================
+index  name                meaning
+=====  ==================  =====================================================
+0, 1   p_st_x, p_st_y      CoM minus stance contact, world axes, m
+2, 3   L_x, L_y            angular momentum about the stance contact, world, kg m^2/s
+4      t_rem               time left in the current step, s (>= 0)
+5      v_z                 predicted CoM vertical velocity at touchdown, m/s
+6, 7   vx_des, vy_des      desired velocity in the next step's heading frame, m/s
+8      heading_next        heading ``D_{k+1}`` of the next step (yaw), rad
+9      next_stance_sign    +1 if the next stance leg is the left one, -1 if right
+10     m                   total mass, kg
+11     H                   CoM height over the contact, m
+12     T                   step duration, s
+13     W                   step width for walking in place, m
+14     g                   gravity magnitude, m/s^2
+=====  ==================  =====================================================
+
+``ALIP_PLAN`` outputs (8): ``L_hat_x, L_hat_y`` (predicted ``L(T-)``, world),
+``p_hat_x, p_hat_y`` (predicted ``p_st(T-)``, world), ``L_des_x, L_des_y``
+(desired ``L`` at the end of the next step, world), ``p_sw_des_x, p_sw_des_y``
+(desired CoM minus swing contact at touchdown, world axes, m).
+
+``SWING_REFERENCE`` (inputs ``u``, 11): ``s`` (phase), ``T`` (s), ``H`` (m),
+``z_cl`` (m), ``stance_yaw0``, ``swing_yaw0`` (hip yaws at the step start, rad),
+``x0``, ``y0`` (CoM minus swing contact at the step start, heading frame, m),
+``p_sw_des_x``, ``p_sw_des_y`` (target at touchdown, heading frame, m),
+``dD`` (turn of this step, rad).
+
+``SWING_REFERENCE`` outputs (27): ``h_d`` (9), ``dh_d/dt`` (9), ``d2h_d/dt2`` (9)
+in Cassie's output order (``amlip_qp.alip.outputs.CASSIE_OUTPUTS``). Rabbit's
+four outputs are entries ``RABBIT_FROM_CASSIE = (0, 4, 5, 7)`` of that layout.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from amlip_qp.alip import formulas as F
+
+ALIP_PLAN_INPUTS = (
+    "p_st_x", "p_st_y", "L_x", "L_y", "t_rem", "v_z", "vx_des", "vy_des",
+    "heading_next", "next_stance_sign", "m", "H", "T", "W", "g",
+)  # fmt: skip
+ALIP_PLAN_OUTPUTS = ("L_hat_x", "L_hat_y", "p_hat_x", "p_hat_y", "L_des_x", "L_des_y", "p_sw_des_x", "p_sw_des_y")
+
+SWING_REFERENCE_INPUTS = (
+    "s", "T", "H", "z_cl", "stance_yaw0", "swing_yaw0", "x0", "y0", "p_sw_des_x", "p_sw_des_y", "dD",
+)  # fmt: skip
+N_CASSIE_OUTPUTS = 9
+SWING_REFERENCE_N_OUT = 3 * N_CASSIE_OUTPUTS
+
+#: Rabbit's outputs (torso pitch, CoM z over stance, CoM x and z over swing)
+#: as indices into Cassie's output layout.
+RABBIT_FROM_CASSIE = (0, 4, 5, 7)
+
+
+def alip_plan_terms(u: Sequence) -> list:
+    """Predict ``L(T-)``, choose ``L_des`` and place the foot (layout in the module doc)."""
+    p_x, p_y, L_x, L_y, t_rem, v_z, vx_des, vy_des, D_next, sign, m, H, T, W, g = u
+    xp = F.backend(*u)
+    # Prediction to the end of the current step, on the pairs (p_x, L_y) and (p_y, -L_x).
+    p_hat_x, L_hat_y = F.flow(p_x, L_y, t_rem, m, H, g)
+    p_hat_y, Lt_hat = F.flow(p_y, -L_x, t_rem, m, H, g)
+    # Desired momentum at the end of the next step, decided in the next heading frame.
+    Ly_h = F.L_from_velocity(vx_des, m, H)
+    Lt_h = F.L_from_velocity(vy_des, m, H) + F.Lt_step_width(W, T, m, H, sign, g)
+    Lx_h = -Lt_h
+    c, s = xp.cos(D_next), xp.sin(D_next)
+    L_des_x = c * Lx_h - s * Ly_h
+    L_des_y = s * Lx_h + c * Ly_h
+    # Foot placement, deadbeat at the end of the next step, with the v_z transfer.
+    p_sw_x = F.foot_placement(L_des_y, L_hat_y, p_hat_x, T, m, H, v_z, g)
+    p_sw_y = F.foot_placement(-L_des_x, Lt_hat, p_hat_y, T, m, H, v_z, g)
+    return [-Lt_hat, L_hat_y, p_hat_x, p_hat_y, L_des_x, L_des_y, p_sw_x, p_sw_y]
+
+
+def swing_reference_terms(u: Sequence) -> list:
+    """Cassie's ``h_d(s)`` and its first two time derivatives (layout in the module doc)."""
+    s, T, H, z_cl, st_yaw0, sw_yaw0, x0, y0, x_des, y_des, dD = u
+    shapes = [
+        F.constant(s, 0.0),  # torso pitch
+        F.constant(s, 0.0),  # torso roll
+        F.line(s, st_yaw0, -0.5 * dD),  # stance hip yaw
+        F.line(s, sw_yaw0, 0.5 * dD),  # swing hip yaw
+        F.constant(s, H),  # CoM z over stance
+        F.cosine_blend(s, x0, x_des),  # CoM x over swing
+        F.cosine_blend(s, y0, y_des),  # CoM y over swing
+        F.clearance_parabola(s, H, z_cl),  # CoM z over swing
+        F.constant(s, 0.0),  # swing toe pitch
+    ]
+    derivs = [F.to_time_derivatives(*shape, T) for shape in shapes]
+    return [d[0] for d in derivs] + [d[1] for d in derivs] + [d[2] for d in derivs]
+
+
+def alip_plan(u: np.ndarray) -> np.ndarray:
+    """numpy reference of ``ALIP_PLAN``: 15 inputs -> 8 outputs (no validation)."""
+    return np.array([float(v) for v in alip_plan_terms([float(v) for v in u])])
+
+
+def swing_reference(u: np.ndarray) -> np.ndarray:
+    """numpy reference of ``SWING_REFERENCE``: 11 inputs -> 27 outputs (no validation)."""
+    return np.array([float(v) for v in swing_reference_terms([float(v) for v in u])])
