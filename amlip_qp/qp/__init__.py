@@ -1,0 +1,13 @@
+"""Quadratic programs for whole-body tracking: an inspectable problem object
+(:class:`QPProblem`), a persistent warm-started ProxQP solver
+(:class:`ProxQPSolver`), and a cross-check through any ``qpsolvers`` backend
+(:meth:`QPProblem.solve_with`).
+
+Building a problem is separate from solving it, so a user can inspect,
+record, or re-solve any tick's problem.
+"""
+
+from amlip_qp.qp.problem import QPProblem
+from amlip_qp.qp.solver import ProxQPSolver, QPSolution
+
+__all__ = ["ProxQPSolver", "QPProblem", "QPSolution"]

@@ -1,0 +1,145 @@
+"""An inspectable dense QP in ProxQP's form.
+
+.. math::
+
+    \\min_x \\tfrac12 x^T H x + g^T x \\quad \\text{s.t.}\\quad
+    A x = b,\\; l \\le C x \\le u,\\; l_{box} \\le x \\le u_{box}
+
+Rows and variables carry names, so a failing problem can be read by a person:
+``problem.variables["forces"]`` is the slice of the force variables,
+``problem.eq_rows`` and ``problem.in_rows`` list ``(name, slice)`` blocks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from amlip_qp.exceptions import QPError
+
+
+@dataclass
+class QPProblem:
+    """A dense QP ``min 1/2 x'Hx + g'x  s.t.  Ax = b, l <= Cx <= u, lb <= x <= ub``.
+
+    Attributes:
+        H: Cost Hessian, (n, n), symmetric positive semi-definite.
+        g: Cost gradient, (n,).
+        A: Equality matrix, (n_eq, n).
+        b: Equality right-hand side, (n_eq,).
+        C: Inequality matrix, (n_in, n).
+        l: Inequality lower bounds, (n_in,) (``-inf`` allowed).
+        u: Inequality upper bounds, (n_in,) (``+inf`` allowed).
+        lb: Box lower bounds on ``x``, (n,).
+        ub: Box upper bounds on ``x``, (n,).
+        variables: Name -> slice of ``x``.
+        eq_rows: ``(name, slice)`` blocks of the equality rows.
+        in_rows: ``(name, slice)`` blocks of the inequality rows.
+    """
+
+    H: np.ndarray
+    g: np.ndarray
+    A: np.ndarray
+    b: np.ndarray
+    C: np.ndarray
+    l: np.ndarray
+    u: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
+    variables: dict[str, slice] = field(default_factory=dict)
+    eq_rows: list[tuple[str, slice]] = field(default_factory=list)
+    in_rows: list[tuple[str, slice]] = field(default_factory=list)
+
+    @property
+    def n(self) -> int:
+        """Number of variables."""
+        return self.H.shape[0]
+
+    @property
+    def n_eq(self) -> int:
+        """Number of equality rows."""
+        return self.A.shape[0]
+
+    @property
+    def n_in(self) -> int:
+        """Number of two-sided inequality rows (box bounds not counted)."""
+        return self.C.shape[0]
+
+    def copy(self) -> "QPProblem":
+        """A deep copy (for recording problems while the builder reuses buffers)."""
+        return QPProblem(
+            *(np.array(getattr(self, k), copy=True) for k in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")),
+            variables=dict(self.variables),
+            eq_rows=list(self.eq_rows),
+            in_rows=list(self.in_rows),
+        )
+
+    def validate(self) -> None:
+        """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
+        n = self.n
+        shapes = {
+            "H": (n, n), "g": (n,), "A": (self.n_eq, n), "b": (self.n_eq,), "C": (self.n_in, n),
+            "l": (self.n_in,), "u": (self.n_in,), "lb": (n,), "ub": (n,),
+        }  # fmt: skip
+        for name, shape in shapes.items():
+            value = getattr(self, name)
+            if value.shape != shape:
+                raise QPError(f"QP field {name} has shape {value.shape}, expected {shape}", problem=self)
+        for name in ("H", "g", "A", "b", "C"):
+            if not np.all(np.isfinite(getattr(self, name))):
+                raise QPError(f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self)
+        for name in ("l", "u", "lb", "ub"):
+            if np.any(np.isnan(getattr(self, name))):
+                raise QPError(f"QP bound {name} contains NaN", problem=self)
+        if np.any(self.l > self.u) or np.any(self.lb > self.ub):
+            raise QPError("QP has a lower bound above its upper bound (infeasible by construction)", problem=self)
+
+    def objective(self, x: np.ndarray) -> float:
+        """Cost ``1/2 x'Hx + g'x`` at ``x``."""
+        return float(0.5 * x @ self.H @ x + self.g @ x)
+
+    def residuals(self, x: np.ndarray) -> dict[str, float]:
+        """Largest constraint violations at ``x``: ``eq``, ``in`` and ``box`` (>= 0)."""
+        eq = float(np.max(np.abs(self.A @ x - self.b), initial=0.0))
+        cx = self.C @ x
+        ineq = float(np.max(np.maximum(self.l - cx, cx - self.u), initial=0.0))
+        box = float(np.max(np.maximum(self.lb - x, x - self.ub), initial=0.0))
+        return {"eq": eq, "in": max(ineq, 0.0), "box": max(box, 0.0)}
+
+    def to_qpsolvers(self):
+        """The same problem as a :class:`qpsolvers.Problem` (``G x <= h`` form)."""
+        import qpsolvers
+
+        rows_u = np.isfinite(self.u)
+        rows_l = np.isfinite(self.l)
+        G = np.vstack([self.C[rows_u], -self.C[rows_l]])
+        h = np.concatenate([self.u[rows_u], -self.l[rows_l]])
+        return qpsolvers.Problem(
+            P=self.H,
+            q=self.g,
+            G=G if G.shape[0] else None,
+            h=h if h.shape[0] else None,
+            A=self.A if self.n_eq else None,
+            b=self.b if self.n_eq else None,
+            lb=self.lb,
+            ub=self.ub,
+        )
+
+    def solve_with(self, solver: str, **kwargs) -> np.ndarray:
+        """Solve with any installed ``qpsolvers`` backend (cross-checks, benchmarks).
+
+        Raises:
+            QPError: the backend is not installed or found no solution.
+        """
+        import qpsolvers
+
+        if solver not in qpsolvers.available_solvers:
+            raise QPError(
+                f"qpsolvers backend {solver!r} is not installed; available: {', '.join(qpsolvers.available_solvers)}",
+                problem=self,
+            )
+        solution = qpsolvers.solve_problem(self.to_qpsolvers(), solver=solver, **kwargs)
+        if not solution.found or solution.x is None:
+            raise QPError(f"qpsolvers backend {solver!r} found no solution", problem=self, status="not found")
+        return np.asarray(solution.x)

@@ -1,0 +1,103 @@
+"""One persistent ProxQP solver, updated every tick and warm-started.
+
+TSID re-initialises ProxQP at every control tick; here one
+``proxsuite.proxqp.dense.QP`` lives as long as the tracker and is
+``update``-d with the new matrices, starting from the previous solution.
+That works because the tracker's problem keeps fixed dimensions (the swing
+foot keeps its force variables, bounded to zero).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from proxsuite import proxqp
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp.problem import QPProblem
+
+_OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
+
+
+@dataclass
+class QPSolution:
+    """A solved QP.
+
+    Attributes:
+        x: The primal solution.
+        status: Solver status name, e.g. ``"PROXQP_SOLVED"``.
+        iterations: Solver iterations.
+        solve_time_us: Wall time of the ``update`` + ``solve`` calls, µs.
+    """
+
+    x: np.ndarray
+    status: str
+    iterations: int
+    solve_time_us: float
+
+
+class ProxQPSolver:
+    """A persistent dense ProxQP solver with warm start.
+
+    Args:
+        eps_abs: Absolute primal/dual tolerance.
+        max_iter: Iteration cap per solve.
+        warm_start: Start each solve from the previous solution (default). With
+            ``False`` the solver is re-initialised at every call, as TSID does;
+            that mode exists for benchmarks and comparisons.
+    """
+
+    def __init__(self, eps_abs: float = 1e-6, max_iter: int = 200, warm_start: bool = True):
+        self.eps_abs = eps_abs
+        self.max_iter = max_iter
+        self.warm_start = warm_start
+        self._qp: proxqp.dense.QP | None = None
+        self._dims: tuple[int, int, int] | None = None
+        #: Number of (re-)initialisations so far (1 in steady warm-started use).
+        self.n_init = 0
+
+    def _new_qp(self, problem: QPProblem) -> proxqp.dense.QP:
+        qp = proxqp.dense.QP(problem.n, problem.n_eq, problem.n_in, True)
+        qp.settings.eps_abs = self.eps_abs
+        qp.settings.eps_rel = 0.0
+        qp.settings.max_iter = self.max_iter
+        qp.settings.verbose = False
+        qp.settings.initial_guess = (
+            proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+            if self.warm_start
+            else proxqp.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
+        )
+        return qp
+
+    def reset(self) -> None:
+        """Forget the previous solution; the next solve re-initialises."""
+        self._qp = None
+        self._dims = None
+
+    def solve(self, problem: QPProblem) -> QPSolution:
+        """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
+        dims = (problem.n, problem.n_eq, problem.n_in)
+        t0 = time.perf_counter_ns()
+        args = (problem.H, problem.g, problem.A, problem.b, problem.C, problem.l, problem.u, problem.lb, problem.ub)
+        if self._qp is None or dims != self._dims or not self.warm_start:
+            self._qp = self._new_qp(problem)
+            self._qp.init(*args)
+            self._dims = dims
+            self.n_init += 1
+        else:
+            self._qp.update(*args)
+        self._qp.solve()
+        elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
+        info = self._qp.results.info
+        status = info.status
+        x = self._qp.results.x
+        if status not in _OK or not np.all(np.isfinite(x)):
+            name = getattr(status, "name", str(status))
+            # Do not warm-start the next tick from a failed iterate.
+            self.reset()
+            raise QPError(f"ProxQP failed with status {name} after {info.iter} iterations", problem=problem, status=name)
+        return QPSolution(
+            x=np.array(x), status=status.name, iterations=int(info.iter), solve_time_us=elapsed_us
+        )

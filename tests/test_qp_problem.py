@@ -1,0 +1,76 @@
+"""QPProblem: validation, residuals and the qpsolvers conversion."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp import QPProblem
+
+
+def random_problem(seed: int, n: int = 8, n_eq: int = 2, n_in: int = 4) -> QPProblem:
+    """A feasible, strictly convex random QP (x = 0 is feasible)."""
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(n, n))
+    A = rng.normal(size=(n_eq, n))
+    C = rng.normal(size=(n_in, n))
+    return QPProblem(
+        H=M @ M.T + np.eye(n),
+        g=rng.normal(size=n),
+        A=A,
+        b=np.zeros(n_eq),
+        C=C,
+        l=-rng.uniform(0.1, 1.0, n_in),
+        u=np.r_[rng.uniform(0.1, 1.0, n_in - 1), np.inf],
+        lb=-np.ones(n),
+        ub=np.ones(n),
+        variables={"x": slice(0, n)},
+    )
+
+
+def test_residuals_measure_violations():
+    p = random_problem(0)
+    x = np.full(p.n, 2.0)
+    r = p.residuals(x)
+    assert r["box"] == pytest.approx(1.0)
+    assert r["eq"] == pytest.approx(np.max(np.abs(p.A @ x)))
+    assert p.residuals(np.zeros(p.n)) == {"eq": 0.0, "in": 0.0, "box": 0.0}
+
+
+def test_objective_value():
+    p = random_problem(1)
+    x = np.linspace(-0.5, 0.5, p.n)
+    assert p.objective(x) == pytest.approx(0.5 * x @ p.H @ x + p.g @ x)
+
+
+def test_validate_names_nan_field():
+    p = random_problem(2)
+    p.g[3] = np.nan
+    with pytest.raises(QPError, match="g contains NaN") as info:
+        p.validate()
+    assert info.value.problem is p
+
+
+def test_validate_names_bad_shape_and_crossed_bounds():
+    p = random_problem(3)
+    p.b = np.zeros(5)
+    with pytest.raises(QPError, match="b has shape"):
+        p.validate()
+    p = random_problem(3)
+    p.lb[0] = 2.0
+    with pytest.raises(QPError, match="lower bound above its upper bound"):
+        p.validate()
+
+
+def test_qpsolvers_conversion_drops_infinite_rows_and_solves():
+    p = random_problem(4)
+    qp = p.to_qpsolvers()
+    # one row has u = +inf: 4 upper rows minus 1, plus 4 lower rows
+    assert qp.G.shape == (7, p.n)
+    x = p.solve_with("quadprog")
+    r = p.residuals(x)
+    assert max(r.values()) < 1e-9
+
+
+def test_unknown_backend_is_a_typed_error():
+    with pytest.raises(QPError, match="not installed"):
+        random_problem(5).solve_with("no-such-solver")

@@ -1,0 +1,55 @@
+"""ProxQPSolver: persistence, warm start, agreement with another backend, failures."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp import ProxQPSolver
+from test_qp_problem import random_problem
+
+
+def test_matches_quadprog_on_random_problems():
+    solver = ProxQPSolver(eps_abs=1e-9)
+    for seed in range(10):
+        p = random_problem(seed)
+        x = solver.solve(p).x
+        x_ref = p.solve_with("quadprog")
+        assert np.max(np.abs(x - x_ref)) < 1e-6
+        assert max(p.residuals(x).values()) < 1e-7
+
+
+def test_one_init_for_a_sequence_of_same_size_problems():
+    solver = ProxQPSolver()
+    base = random_problem(0)
+    for k in range(20):
+        p = base.copy()
+        p.g = base.g + 0.01 * k
+        solver.solve(p)
+    assert solver.n_init == 1
+
+
+def test_warm_start_needs_fewer_iterations_on_a_slowly_varying_sequence():
+    def run(warm: bool) -> int:
+        solver = ProxQPSolver(warm_start=warm, eps_abs=1e-8)
+        base = random_problem(7, n=30, n_eq=5, n_in=20)
+        total = 0
+        for k in range(30):
+            p = base.copy()
+            p.g = base.g + 1e-3 * np.sin(0.1 * k)
+            total += solver.solve(p).iterations
+        return total
+
+    warm, cold = run(True), run(False)
+    assert warm < cold
+
+
+def test_infeasible_problem_raises_with_the_problem_attached():
+    p = random_problem(3)
+    # x0 = 1 and x0 = -1 at once
+    p.A = np.vstack([np.eye(p.n)[0], np.eye(p.n)[0]])
+    p.b = np.array([0.5, -0.5])
+    solver = ProxQPSolver(max_iter=100)
+    with pytest.raises(QPError) as info:
+        solver.solve(p)
+    assert info.value.problem is p
+    assert info.value.status != "PROXQP_SOLVED"
