@@ -1,0 +1,27 @@
+"""CasADi definitions of the planner kernels, their generated C, and a fast caller.
+
+Modules (one job each):
+
+- :mod:`~amlip_qp.codegen.symbolic`: the SX ``casadi.Function`` objects
+  ``alip_plan`` and ``swing_reference`` built from :mod:`amlip_qp.alip.kernels`.
+- :mod:`~amlip_qp.codegen.generate`: deterministic C generation into the
+  repository's ``codegen/`` and the staleness check.
+- :mod:`~amlip_qp.codegen.runtime`: compile-on-first-use into a per-user
+  cache and microsecond calls (:class:`Kernels`, :class:`FastFunction`).
+- :mod:`~amlip_qp.codegen.bench`: timings of the fast path, the CasADi
+  Function and the numpy reference.
+- :mod:`~amlip_qp.codegen.cli`: the ``amlip-qp codegen`` / ``bench codegen`` handlers.
+
+A controller gets the kernels with ``kernels = load_kernels()`` and calls
+``kernels.alip_plan(u)`` and ``kernels.swing_reference(u)``.
+"""
+
+from amlip_qp.codegen.runtime import (
+    CodegenFallbackWarning,
+    CodegenStaleWarning,
+    FastFunction,
+    Kernels,
+    load_kernels,
+)
+
+__all__ = ["CodegenFallbackWarning", "CodegenStaleWarning", "FastFunction", "Kernels", "load_kernels"]
