@@ -1,0 +1,58 @@
+"""Small input checks shared by the validated numpy API of :mod:`amlip_qp.alip`.
+
+Each check raises :class:`amlip_qp.exceptions.InputError` with a message that
+names the argument, shows the bad value and says what to pass instead.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+
+
+def finite(name: str, value) -> None:
+    """Raise InputError unless every entry of ``value`` is finite (no NaN, no inf)."""
+    if isinstance(value, (float, int)):
+        if math.isfinite(value):
+            return
+    else:
+        arr = np.asarray(value, dtype=float)
+        if np.all(np.isfinite(arr)):
+            return
+    raise InputError(f"{name} must be finite (no NaN or inf), got {value!r}; pass a finite value")
+
+
+def positive(name: str, value, unit: str) -> None:
+    """Raise InputError unless ``value`` is finite and > 0 (every entry, if an array)."""
+    finite(name, value)
+    if not np.all(np.asarray(value, dtype=float) > 0.0):
+        raise InputError(f"{name} must be > 0 {unit}, got {value!r}; pass a strictly positive value")
+
+
+def non_negative(name: str, value, unit: str) -> None:
+    """Raise InputError unless ``value`` is finite and >= 0 (every entry, if an array)."""
+    finite(name, value)
+    if not np.all(np.asarray(value, dtype=float) >= 0.0):
+        raise InputError(f"{name} must be >= 0 {unit}, got {value!r}; pass a non-negative value")
+
+
+def vector(name: str, value, length: int) -> np.ndarray:
+    """Return ``value`` as a finite float array of shape ``(length,)`` or raise InputError."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a sequence of {length} numbers, got {value!r}") from exc
+    if arr.shape != (length,):
+        raise InputError(f"{name} must have shape ({length},), got shape {arr.shape}; pass {length} numbers")
+    finite(name, arr)
+    return arr
+
+
+def side(name: str, value) -> str:
+    """Return ``value`` if it is ``"left"`` or ``"right"``, else raise InputError."""
+    if value not in ("left", "right"):
+        raise InputError(f"{name} must be 'left' or 'right', got {value!r}")
+    return value

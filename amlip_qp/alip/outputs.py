@@ -1,0 +1,152 @@
+"""Reference outputs ``h_d(s)`` with their first and second time derivatives.
+
+The output names and orders are those of ``docs/ARCHITECTURE.md``. The shapes
+come from :func:`amlip_qp.alip.kernels.swing_reference` (Cassie's nine
+outputs); Rabbit's four are the entries ``kernels.RABBIT_FROM_CASSIE`` of that
+layout, so there is one copy of the shapes.
+
+The swing targets ``com_x_over_swing`` / ``com_y_over_swing`` are expressed in
+the current step's heading frame ``D_k`` (ARCHITECTURE.md): pass the desired
+``p_sw->CoM`` at touchdown rotated into that frame
+(:func:`amlip_qp.alip.heading.world_to_heading`).
+
+Units: angles rad, lengths m, ``s`` dimensionless, ``T`` s; velocities are per
+second and accelerations per second squared (``d/dt = (1/T) d/ds``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from amlip_qp.alip import _checks as C
+from amlip_qp.alip import kernels
+from amlip_qp.exceptions import InputError
+
+#: Cassie's nine outputs, in the order of ``h_0``, ``h_d`` and the SWING_REFERENCE layout.
+CASSIE_OUTPUTS = (
+    "torso_pitch",
+    "torso_roll",
+    "stance_hip_yaw",
+    "swing_hip_yaw",
+    "com_z_over_stance",
+    "com_x_over_swing",
+    "com_y_over_swing",
+    "com_z_over_swing",
+    "swing_toe_pitch",
+)
+
+#: Rabbit's four outputs, in order.
+RABBIT_OUTPUTS = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+
+#: Output names of each supported robot.
+ROBOT_OUTPUTS = {"cassie": CASSIE_OUTPUTS, "rabbit": RABBIT_OUTPUTS}
+
+#: Indices of each robot's outputs in the SWING_REFERENCE (Cassie) layout.
+ROBOT_INDICES = {"cassie": tuple(range(kernels.N_CASSIE_OUTPUTS)), "rabbit": tuple(kernels.RABBIT_FROM_CASSIE)}
+
+_RABBIT_IDX = np.asarray(kernels.RABBIT_FROM_CASSIE)
+
+assert len(CASSIE_OUTPUTS) == kernels.N_CASSIE_OUTPUTS
+assert tuple(CASSIE_OUTPUTS[i] for i in kernels.RABBIT_FROM_CASSIE) == RABBIT_OUTPUTS
+
+
+def check_robot(robot: str) -> str:
+    """Return ``robot`` if it is ``"cassie"`` or ``"rabbit"``, else raise InputError."""
+    if robot not in ROBOT_OUTPUTS:
+        raise InputError(f"unknown robot {robot!r}; the ALIP planner supports {sorted(ROBOT_OUTPUTS)}")
+    return robot
+
+
+def output_names(robot: str) -> tuple[str, ...]:
+    """Output names of ``robot`` (``"cassie"`` or ``"rabbit"``), in order."""
+    return ROBOT_OUTPUTS[check_robot(robot)]
+
+
+def check_clearance(z_cl_m, H_m) -> None:
+    """Raise InputError unless ``0 <= z_cl_m < H_m`` (m): the swing foot must stay below the CoM."""
+    C.non_negative("z_cl_m (swing clearance)", z_cl_m, "m")
+    C.positive("H_m (CoM height over the contact)", H_m, "m")
+    if not z_cl_m < H_m:
+        raise InputError(f"z_cl_m={z_cl_m!r} m must be smaller than H_m={H_m!r} m (the swing foot cannot rise to the CoM)")
+
+
+def pack_swing_reference_input(
+    robot: str, s, T_s, H_m, z_cl_m, h0_start, p_sw_des_heading_m, turn_rad, out: np.ndarray | None = None
+) -> np.ndarray:
+    """Fill the dense SWING_REFERENCE input vector (11,) without validation.
+
+    Args:
+        robot: ``"cassie"`` or ``"rabbit"`` (already checked).
+        s: phase in [0, 1]; T_s: step duration, s; H_m: CoM height, m; z_cl_m: clearance, m.
+        h0_start: the robot's measured outputs at the step start, in its output order.
+        p_sw_des_heading_m: (2,) target ``p_sw->CoM`` at touchdown in the heading frame
+            ``D_k`` (x, y), m; for Rabbit only x is used.
+        turn_rad: ``dD = D_{k+1} - D_k``, rad (0 for Rabbit).
+        out: optional (11,) float array to fill in place (no allocation).
+    """
+    u = np.empty(len(kernels.SWING_REFERENCE_INPUTS)) if out is None else out
+    u[0] = s
+    u[1] = T_s
+    u[2] = H_m
+    u[3] = z_cl_m
+    if robot == "cassie":
+        u[4] = h0_start[2]
+        u[5] = h0_start[3]
+        u[6] = h0_start[5]
+        u[7] = h0_start[6]
+        u[8] = p_sw_des_heading_m[0]
+        u[9] = p_sw_des_heading_m[1]
+        u[10] = turn_rad
+    else:
+        u[4] = 0.0
+        u[5] = 0.0
+        u[6] = h0_start[2]
+        u[7] = 0.0
+        u[8] = p_sw_des_heading_m[0]
+        u[9] = 0.0
+        u[10] = 0.0
+    return u
+
+
+def reference_outputs(
+    robot: str, s, T_s, H_m, z_cl_m, h0_start, p_sw_des_heading_m, turn_rad=0.0, reference_fn=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``h_d(s)``, ``dh_d/dt`` and ``d^2h_d/dt^2`` of ``robot`` in its output order.
+
+    Args:
+        robot: ``"cassie"`` (9 outputs) or ``"rabbit"`` (4 outputs).
+        s: phase in [0, 1] (dimensionless; see :mod:`amlip_qp.alip.phase`).
+        T_s: step duration, s (> 0).
+        H_m: desired CoM height over the stance contact, m (> 0).
+        z_cl_m: swing-foot clearance at mid-step, m (0 <= z_cl < H).
+        h0_start: measured outputs at the step start, the robot's order and units.
+        p_sw_des_heading_m: (2,) desired CoM minus swing contact at touchdown in the
+            current step's heading frame, m (Rabbit: only x is used).
+        turn_rad: turn of this step ``D_{k+1} - D_k``, rad (split +/- half to the hip yaws; Cassie only).
+        reference_fn: the SWING_REFERENCE implementation (11 -> 27); default
+            :func:`kernels.swing_reference`.
+
+    Returns:
+        Three float arrays of the robot's output count: values (rad or m), first
+        time derivatives (per s) and second time derivatives (per s^2).
+    """
+    names = output_names(robot)
+    C.finite("s", s)
+    if not 0.0 <= s <= 1.0:
+        raise InputError(f"phase s={s!r} must be in [0, 1]; clip it with amlip_qp.alip.phase.step_phase_clipped")
+    C.positive("T_s (step duration)", T_s, "s")
+    check_clearance(z_cl_m, H_m)
+    h0 = C.vector("h0_start", h0_start, len(names))
+    target = C.vector("p_sw_des_heading_m", p_sw_des_heading_m, 2)
+    C.finite("turn_rad", turn_rad)
+    u = pack_swing_reference_input(robot, s, T_s, H_m, z_cl_m, h0, target, turn_rad)
+    y = np.asarray((reference_fn or kernels.swing_reference)(u), dtype=float).reshape(-1)
+    return split_reference(robot, y)
+
+
+def split_reference(robot: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split a SWING_REFERENCE output (27,) into the robot's ``(h_d, dh_d, ddh_d)`` (new arrays)."""
+    n = kernels.N_CASSIE_OUTPUTS
+    if robot == "cassie":
+        return y[:n].copy(), y[n : 2 * n].copy(), y[2 * n :].copy()
+    return y[_RABBIT_IDX], y[n + _RABBIT_IDX], y[2 * n + _RABBIT_IDX]

@@ -1,0 +1,446 @@
+"""The ALIP planner: one object a walking controller calls every control tick.
+
+Per step ``k`` (stance leg ``st``, heading ``D_k``) the planner
+
+1. predicts ``L(T-)`` and ``p_st(T-)`` of the current step from the estimated
+   ``p_st`` and ``L`` about the stance contact (paper eq. LIP_AM_Preiction);
+2. decides ``L^des`` at the end of the *next* step in the heading frame
+   ``D_{k+1} = D_k + turn_rate * T`` (forward speed, lateral speed, step width)
+   and rotates it to world axes;
+3. places the swing foot, deadbeat in ``L`` at the end of the next step, with the
+   ``v_z`` correction of the momentum transfer at touchdown;
+4. evaluates the reference outputs ``h_d(s)``, ``dh_d/dt``, ``d^2h_d/dt^2``.
+
+Steps 1-3 are the dense kernel ``ALIP_PLAN`` and step 4 is ``SWING_REFERENCE``
+(:mod:`amlip_qp.alip.kernels`). Both are injectable (``plan_fn``,
+``reference_fn``) so the controller can pass the CasADi-generated C functions,
+which use identical dense layouts.
+
+Use::
+
+    planner = Planner("cassie", mass_kg=31.0)
+    planner.start_step("left", t_s, h0)          # at every touchdown
+    out = planner.update(estimate, command)       # every control tick
+
+``h0`` (the measured outputs at the step start) must express
+``com_x_over_swing`` / ``com_y_over_swing`` in the new step's heading frame,
+which is :attr:`Planner.heading_next_rad` just before ``start_step`` (or the
+``heading_rad`` passed to it).
+
+Rabbit is planar (sagittal plane x-z): its lateral terms (``vy``, step width,
+turn rate, ``p_st,y``, ``L_x``) are ignored and its heading stays 0.
+
+Velocity command: ``Command.vx_mps`` / ``vy_mps`` are by default the *mean*
+CoM velocity over a step (what a user means by "walk at 1 m/s"). The paper's
+``L^des = m H v`` fixes the velocity at the *end* of a step, which on the
+periodic LIP gait is larger by ``(lT/2)/tanh(lT/2)``; the planner converts
+(:func:`amlip_qp.alip.desired.end_of_step_velocity`). Pass
+``speed_reference="end_of_step"`` to use the paper's meaning unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from amlip_qp.alip import _checks as C
+from amlip_qp.alip import kernels
+from amlip_qp.alip import outputs as O
+from amlip_qp.alip.formulas import GRAVITY_MPS2
+from amlip_qp.exceptions import InputError
+
+#: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
+#: of ``H l tanh(lT)``, where the law's denominator vanishes (see
+#: :func:`amlip_qp.alip.lip.vz_limit`); at 0.5 the denominator stays at least
+#: half its ``v_z = 0`` value, so a glitch in the ``v_z`` estimate cannot throw
+#: the swing foot away. The clamp is symmetric to bound glitches of either sign.
+VZ_CLAMP_FRACTION = 0.5
+
+_SPEED_REFERENCES = ("mean", "end_of_step")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Command:
+    """What the walking controller asks for. All fields keyword-only, SI units.
+
+    Attributes:
+        step_time_s: step duration ``T``, s (> 0).
+        com_height_m: desired CoM height over the stance contact ``H``, m (> 0).
+        clearance_m: swing-foot clearance ``z_cl`` at mid-step, m (0 <= z_cl < H).
+        vx_mps: forward CoM velocity in the heading frame, m/s (mean over a
+            step unless the planner uses ``speed_reference="end_of_step"``).
+        vy_mps: lateral (left positive) CoM velocity in the heading frame, m/s.
+        turn_rate_radps: heading rate, rad/s (positive turns left); the heading
+            advances by ``turn_rate * T`` per step.
+        step_width_m: lateral distance between the feet when walking in place, m (>= 0).
+    """
+
+    step_time_s: float
+    com_height_m: float
+    clearance_m: float
+    vx_mps: float = 0.0
+    vy_mps: float = 0.0
+    turn_rate_radps: float = 0.0
+    step_width_m: float = 0.0
+
+    def __post_init__(self):
+        for name in ("step_time_s", "com_height_m", "clearance_m", "vx_mps", "vy_mps", "turn_rate_radps", "step_width_m"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+                raise InputError(f"Command.{name} must be a finite number, got {v!r}")
+        if not self.step_time_s > 0.0:
+            raise InputError(f"Command.step_time_s (T) must be > 0 s, got {self.step_time_s!r}")
+        if not self.com_height_m > 0.0:
+            raise InputError(f"Command.com_height_m (H) must be > 0 m, got {self.com_height_m!r}")
+        if not self.step_width_m >= 0.0:
+            raise InputError(f"Command.step_width_m must be >= 0 m, got {self.step_width_m!r}")
+        if not 0.0 <= self.clearance_m < self.com_height_m:
+            raise InputError(
+                f"Command.clearance_m (z_cl) must satisfy 0 <= z_cl < H = {self.com_height_m!r} m, got {self.clearance_m!r}"
+            )
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class StateEstimate:
+    """The controller's estimate at one tick. All fields keyword-only, SI units, world axes.
+
+    Attributes:
+        stance: ``"left"`` or ``"right"``, the leg in stance.
+        p_st_m: (3,) CoM minus stance contact, m.
+        L_Nms: (3,) angular momentum about the stance contact, kg m^2/s.
+        v_z_mps: CoM vertical velocity, m/s; used as the prediction of ``v_z`` at
+            touchdown in the momentum-transfer correction.
+        t_in_step_s: time since the current step started, s (>= 0; may exceed ``T``
+            after a late touchdown, then the phase is held at 1).
+        com_m: (3,) CoM position, m.
+
+    Arrays are converted to float ``numpy`` arrays; NaN/inf, wrong shapes,
+    unknown stance sides and negative times raise InputError.
+    """
+
+    stance: str
+    p_st_m: np.ndarray
+    L_Nms: np.ndarray
+    v_z_mps: float
+    t_in_step_s: float
+    com_m: np.ndarray
+
+    def __post_init__(self):
+        if self.stance not in ("left", "right"):
+            raise InputError(f"StateEstimate.stance must be 'left' or 'right', got {self.stance!r}")
+        arrays = []
+        for name in ("p_st_m", "L_Nms", "com_m"):
+            a = getattr(self, name)
+            if not (isinstance(a, np.ndarray) and a.dtype == np.float64):
+                try:
+                    a = np.asarray(a, dtype=float)
+                except (TypeError, ValueError) as exc:
+                    raise InputError(f"StateEstimate.{name} must be 3 numbers, got {a!r}") from exc
+                object.__setattr__(self, name, a)
+            if a.shape != (3,):
+                raise InputError(f"StateEstimate.{name} must have shape (3,), got {a.shape}")
+            arrays.append(a)
+        # One cheap finiteness test: NaN and inf propagate through a sum.
+        try:
+            total = float(arrays[0].sum() + arrays[1].sum() + arrays[2].sum() + self.v_z_mps + self.t_in_step_s)
+        except (TypeError, ValueError) as exc:
+            raise InputError(
+                f"StateEstimate.v_z_mps and t_in_step_s must be numbers, got {self.v_z_mps!r} and {self.t_in_step_s!r}"
+            ) from exc
+        if not math.isfinite(total):
+            bad = [
+                n
+                for n in ("p_st_m", "L_Nms", "com_m", "v_z_mps", "t_in_step_s")
+                if not np.all(np.isfinite(np.asarray(getattr(self, n), dtype=float)))
+            ]
+            raise InputError(f"StateEstimate has NaN or inf in {bad or 'a value too large to add'}; check the estimator")
+        if self.t_in_step_s < 0.0:
+            raise InputError(f"StateEstimate.t_in_step_s must be >= 0 s, got {self.t_in_step_s!r}")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class PlannerOutput:
+    """The planner's answer at one tick (SI units).
+
+    Attributes:
+        s: phase in [0, 1] (clipped: held at 1 after a late touchdown).
+        t_remaining_s: predictor horizon ``max(T - t_in_step, 0)``, s.
+        L_hat_Nms: (2,) predicted ``(L_x, L_y)`` at the end of the step, world axes, kg m^2/s.
+        p_hat_m: (2,) predicted ``p_st(T-)`` (x, y), world axes, m.
+        L_des_Nms: (2,) desired ``(L_x, L_y)`` at the end of the next step, world axes, kg m^2/s.
+        p_sw_des_world_m: (2,) desired CoM minus swing contact at touchdown, world axes, m.
+        p_sw_des_heading_m: (2,) the same in the current heading frame ``D_k``, m
+            (the end targets of ``com_x_over_swing`` / ``com_y_over_swing``).
+        swing_target_world_m: (3,) where the swing contact should land, world, m:
+            ``x, y = r_st + p_hat - p_sw_des`` (= predicted CoM at ``T-`` minus
+            ``p_sw_des``, with ``r_st = com - p_st`` the stance contact), ``z`` = the
+            stance contact's height (flat ground).
+        h_d, dh_d, ddh_d: reference outputs and their first and second time
+            derivatives, in the robot's output order (:attr:`Planner.output_names`).
+        heading_rad: heading ``D_k`` of the current step, rad.
+        heading_next_rad: heading ``D_{k+1}`` of the next step, rad.
+        turn_rad: ``D_{k+1} - D_k``, rad (split between the hip yaws).
+        v_z_used_mps: the ``v_z`` given to the foot-placement law after clamping, m/s.
+    """
+
+    s: float
+    t_remaining_s: float
+    L_hat_Nms: np.ndarray
+    p_hat_m: np.ndarray
+    L_des_Nms: np.ndarray
+    p_sw_des_world_m: np.ndarray
+    p_sw_des_heading_m: np.ndarray
+    swing_target_world_m: np.ndarray
+    h_d: np.ndarray
+    dh_d: np.ndarray
+    ddh_d: np.ndarray
+    heading_rad: float
+    heading_next_rad: float
+    turn_rad: float
+    v_z_used_mps: float
+
+
+class Planner:
+    """ALIP foot-placement planner and reference generator (module doc).
+
+    Args:
+        robot: ``"cassie"`` (3-D, 9 outputs) or ``"rabbit"`` (planar, 4 outputs).
+        mass_kg: total robot mass, kg (> 0).
+        g: gravity magnitude, m/s^2 (> 0).
+        plan_fn: ``ALIP_PLAN`` implementation, 15 floats -> 8 floats (default
+            :func:`kernels.alip_plan`).
+        reference_fn: ``SWING_REFERENCE`` implementation, 11 floats -> 27 floats
+            (default :func:`kernels.swing_reference`).
+        heading_rad: heading of the first step, rad.
+        speed_reference: ``"mean"`` (default) if ``Command.vx_mps``/``vy_mps`` are
+            mean velocities over a step, ``"end_of_step"`` for the paper's meaning.
+        vz_correction: use ``StateEstimate.v_z_mps`` in the momentum transfer
+            (True, default) or the basic law with ``v_z = 0`` (False).
+    """
+
+    def __init__(
+        self,
+        robot: str,
+        mass_kg: float,
+        g: float = GRAVITY_MPS2,
+        plan_fn: Callable[[np.ndarray], np.ndarray] | None = None,
+        reference_fn: Callable[[np.ndarray], np.ndarray] | None = None,
+        *,
+        heading_rad: float = 0.0,
+        speed_reference: str = "mean",
+        vz_correction: bool = True,
+    ):
+        self.robot = O.check_robot(robot)
+        C.positive("mass_kg", mass_kg, "kg")
+        C.positive("g (gravity magnitude)", g, "m/s^2")
+        C.finite("heading_rad", heading_rad)
+        if speed_reference not in _SPEED_REFERENCES:
+            raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
+        if plan_fn is not None and not callable(plan_fn):
+            raise InputError(f"plan_fn must be callable (15 floats -> 8 floats), got {plan_fn!r}")
+        if reference_fn is not None and not callable(reference_fn):
+            raise InputError(f"reference_fn must be callable (11 floats -> 27 floats), got {reference_fn!r}")
+        self.mass_kg = float(mass_kg)
+        self.g = float(g)
+        self.plan_fn = plan_fn or kernels.alip_plan
+        self.reference_fn = reference_fn or kernels.swing_reference
+        self.speed_reference = speed_reference
+        self.vz_correction = bool(vz_correction)
+        #: Output names in order (Cassie's nine or Rabbit's four).
+        self.output_names = O.output_names(robot)
+        self._planar = robot == "rabbit"
+        self._u_plan = np.zeros(len(kernels.ALIP_PLAN_INPUTS))
+        self._u_ref = np.zeros(len(kernels.SWING_REFERENCE_INPUTS))
+        self._heading = 0.0 if self._planar else float(heading_rad)
+        self._heading_next = self._heading
+        self._stance: str | None = None
+        self._t_start = 0.0
+        self._h0 = np.zeros(len(self.output_names))
+        self._steps = 0
+
+    # --- read-only state -----------------------------------------------------
+
+    @property
+    def n_outputs(self) -> int:
+        """Number of reference outputs (9 for Cassie, 4 for Rabbit)."""
+        return len(self.output_names)
+
+    @property
+    def stance(self) -> str | None:
+        """Stance side of the current step (``None`` before the first :meth:`start_step`)."""
+        return self._stance
+
+    @property
+    def t_step_start_s(self) -> float:
+        """Time at which the current step started, s."""
+        return self._t_start
+
+    @property
+    def heading_rad(self) -> float:
+        """Heading ``D_k`` of the current step, rad."""
+        return self._heading
+
+    @property
+    def heading_next_rad(self) -> float:
+        """Heading ``D_{k+1}`` planned by the last :meth:`update` (``D_k`` before any
+        update); :meth:`start_step` makes it the new step's heading. Use it to
+        express ``h0_start`` in the new step's heading frame."""
+        return self._heading_next
+
+    @property
+    def step_count(self) -> int:
+        """Number of :meth:`start_step` calls so far."""
+        return self._steps
+
+    @property
+    def h0_start(self) -> np.ndarray:
+        """Copy of the outputs measured at the start of the current step (robot order)."""
+        return self._h0.copy()
+
+    def time_in_step(self, t_s: float) -> float:
+        """Time since the current step started, ``t_s - t_step_start_s``, in s."""
+        return float(t_s) - self._t_start
+
+    # --- per step ------------------------------------------------------------
+
+    def start_step(self, stance: str, t_start_s: float, h0_start, heading_rad: float | None = None) -> None:
+        """Begin a step at touchdown.
+
+        Args:
+            stance: the new stance leg, ``"left"`` or ``"right"``.
+            t_start_s: touchdown time, s.
+            h0_start: the robot's outputs measured at touchdown, in robot order
+                (rad / m; ``com_x_over_swing``/``com_y_over_swing`` in the new
+                step's heading frame, see :attr:`heading_next_rad`).
+            heading_rad: the new step's heading ``D_k`` (rad); by default the
+                ``D_{k+1}`` of the step that just ended, i.e. the previous heading
+                advanced by the commanded ``turn_rate * T`` (Rabbit: always 0).
+        """
+        C.side("stance", stance)
+        C.finite("t_start_s", t_start_s)
+        h0 = C.vector("h0_start", h0_start, self.n_outputs)
+        if heading_rad is not None:
+            C.finite("heading_rad", heading_rad)
+            if not self._planar:
+                self._heading = float(heading_rad)
+        else:
+            self._heading = self._heading_next
+        self._heading_next = self._heading
+        self._stance = stance
+        self._t_start = float(t_start_s)
+        self._h0[:] = h0
+        self._steps += 1
+
+    # --- per tick ------------------------------------------------------------
+
+    def update(self, estimate: StateEstimate, command: Command) -> PlannerOutput:
+        """Plan the foot placement and evaluate ``h_d`` for one control tick.
+
+        Args:
+            estimate: the current :class:`StateEstimate` (its ``stance`` must match
+                the last :meth:`start_step`).
+            command: the current :class:`Command`.
+
+        Returns:
+            A :class:`PlannerOutput`.
+        """
+        if self._stance is None:
+            raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
+        if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):
+            raise InputError(
+                f"update needs a StateEstimate and a Command, got {type(estimate).__name__} and {type(command).__name__}"
+            )
+        if estimate.stance != self._stance:
+            raise InputError(
+                f"estimate.stance={estimate.stance!r} but the current step has stance {self._stance!r}; "
+                "call start_step at touchdown before updating with the new stance"
+            )
+        T = command.step_time_s
+        H = command.com_height_m
+        m = self.mass_kg
+        g = self.g
+        # Inlined hot-path versions of phase.step_phase_clipped / phase.time_remaining,
+        # desired.mean_to_end_factor and heading.next_heading (inputs already validated).
+        t_in = estimate.t_in_step_s
+        s = t_in / T
+        if s > 1.0:
+            s = 1.0
+        t_rem = T - t_in
+        if t_rem < 0.0:
+            t_rem = 0.0
+
+        l = math.sqrt(g / H)
+        if self.speed_reference == "mean":
+            half = 0.5 * l * T
+            factor = half / math.tanh(half)
+        else:
+            factor = 1.0
+        v_z = estimate.v_z_mps if self.vz_correction else 0.0
+        vz_max = VZ_CLAMP_FRACTION * H * l * math.tanh(l * T)
+        if v_z > vz_max:
+            v_z = vz_max
+        elif v_z < -vz_max:
+            v_z = -vz_max
+
+        p_st = estimate.p_st_m
+        L = estimate.L_Nms
+        u = self._u_plan
+        u[0] = p_st[0]
+        u[3] = L[1]
+        u[4] = t_rem
+        u[5] = v_z
+        u[6] = command.vx_mps * factor
+        u[9] = 1.0 if self._stance == "right" else -1.0  # the next stance leg is the other one
+        u[10] = m
+        u[11] = H
+        u[12] = T
+        u[14] = g
+        if self._planar:
+            heading_next = 0.0
+            u[1] = u[2] = u[7] = u[8] = u[13] = 0.0
+        else:
+            heading_next = self._heading + command.turn_rate_radps * T
+            u[1] = p_st[1]
+            u[2] = L[0]
+            u[7] = command.vy_mps * factor
+            u[8] = heading_next
+            u[13] = command.step_width_m
+        self._heading_next = heading_next
+        y = np.asarray(self.plan_fn(u), dtype=float).reshape(-1)
+
+        # p_sw_des into the current heading frame D_k for the swing-x/y references.
+        c, sn = math.cos(self._heading), math.sin(self._heading)
+        px_w, py_w = float(y[6]), float(y[7])
+        p_sw_h = np.array([c * px_w + sn * py_w, -sn * px_w + c * py_w])
+        turn = heading_next - self._heading
+        ur = O.pack_swing_reference_input(self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref)
+        h_d, dh_d, ddh_d = O.split_reference(self.robot, np.asarray(self.reference_fn(ur), dtype=float).reshape(-1))
+
+        com = estimate.com_m
+        target = np.array(
+            [
+                com[0] - p_st[0] + y[2] - px_w,
+                com[1] - p_st[1] + y[3] - py_w,
+                com[2] - p_st[2],
+            ]
+        )
+        return PlannerOutput(
+            s=s,
+            t_remaining_s=t_rem,
+            L_hat_Nms=y[0:2].copy(),
+            p_hat_m=y[2:4].copy(),
+            L_des_Nms=y[4:6].copy(),
+            p_sw_des_world_m=y[6:8].copy(),
+            p_sw_des_heading_m=p_sw_h,
+            swing_target_world_m=target,
+            h_d=h_d,
+            dh_d=dh_d,
+            ddh_d=ddh_d,
+            heading_rad=self._heading,
+            heading_next_rad=heading_next,
+            turn_rad=turn,
+            v_z_used_mps=v_z,
+        )

@@ -1,0 +1,91 @@
+"""Tests of amlip_qp.alip.outputs: names, order, values and derivatives of h_d(s)."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.alip import kernels, outputs
+from amlip_qp.exceptions import InputError
+
+T, H, ZCL = 0.35, 0.8, 0.08
+H0_CASSIE = np.array([0.02, -0.01, 0.04, -0.06, 0.79, -0.21, 0.13, 0.78, 0.05])
+H0_RABBIT = np.array([0.03, 0.79, -0.18, 0.77])
+TARGET = np.array([0.17, -0.11])
+
+
+def test_names_and_order_follow_the_architecture():
+    assert outputs.CASSIE_OUTPUTS == (
+        "torso_pitch", "torso_roll", "stance_hip_yaw", "swing_hip_yaw", "com_z_over_stance",
+        "com_x_over_swing", "com_y_over_swing", "com_z_over_swing", "swing_toe_pitch",
+    )  # fmt: skip
+    assert outputs.RABBIT_OUTPUTS == ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+    assert outputs.output_names("cassie") == outputs.CASSIE_OUTPUTS
+    assert outputs.output_names("rabbit") == outputs.RABBIT_OUTPUTS
+
+
+def test_cassie_start_and_end_values():
+    h, dh, ddh = outputs.reference_outputs("cassie", 0.0, T, H, ZCL, H0_CASSIE, TARGET, 0.2)
+    np.testing.assert_allclose(h, [0, 0, 0.04, -0.06, H, -0.21, 0.13, H, 0], atol=1e-15)
+    h, dh, ddh = outputs.reference_outputs("cassie", 1.0, T, H, ZCL, H0_CASSIE, TARGET, 0.2)
+    np.testing.assert_allclose(h, [0, 0, -0.1, 0.1, H, 0.17, -0.11, H, 0], atol=1e-15)
+    h, _, _ = outputs.reference_outputs("cassie", 0.5, T, H, ZCL, H0_CASSIE, TARGET, 0.2)
+    assert h[7] == pytest.approx(H - ZCL)
+
+
+def test_rabbit_is_the_cassie_subset():
+    h0 = H0_CASSIE.copy()
+    h0[5] = H0_RABBIT[2]
+    hc = outputs.reference_outputs("cassie", 0.37, T, H, ZCL, h0, TARGET, 0.0)
+    hr = outputs.reference_outputs("rabbit", 0.37, T, H, ZCL, H0_RABBIT, TARGET, 0.0)
+    idx = list(kernels.RABBIT_FROM_CASSIE)
+    for a, b in zip(hr, hc):
+        assert a.shape == (4,)
+        np.testing.assert_allclose(a, b[idx], atol=1e-15)
+    assert hr[0][2] == pytest.approx(0.5 * ((1 + np.cos(np.pi * 0.37)) * -0.18 + (1 - np.cos(np.pi * 0.37)) * 0.17))
+
+
+@pytest.mark.parametrize("robot, h0", [("cassie", H0_CASSIE), ("rabbit", H0_RABBIT)])
+def test_derivatives_match_finite_differences(robot, h0):
+    dt = 1e-5
+    for s in (0.1, 0.33, 0.5, 0.81):
+        t = s * T
+        h, dh, ddh = outputs.reference_outputs(robot, s, T, H, ZCL, h0, TARGET, 0.25)
+        hp = outputs.reference_outputs(robot, (t + dt) / T, T, H, ZCL, h0, TARGET, 0.25)[0]
+        hm = outputs.reference_outputs(robot, (t - dt) / T, T, H, ZCL, h0, TARGET, 0.25)[0]
+        np.testing.assert_allclose(dh, (hp - hm) / (2 * dt), atol=1e-6)
+        np.testing.assert_allclose(ddh, (hp - 2 * h + hm) / dt**2, atol=2e-3)
+    assert np.max(np.abs(ddh)) > 1.0  # the check is not vacuous
+
+
+def test_injected_reference_fn_is_used():
+    calls = []
+
+    def fn(u):
+        calls.append(np.array(u))
+        return kernels.swing_reference(u)
+
+    outputs.reference_outputs("cassie", 0.2, T, H, ZCL, H0_CASSIE, TARGET, 0.1, reference_fn=fn)
+    assert len(calls) == 1
+    np.testing.assert_allclose(calls[0], [0.2, T, H, ZCL, 0.04, -0.06, -0.21, 0.13, 0.17, -0.11, 0.1])
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(robot="atlas"), "unknown robot 'atlas'"),
+        (dict(s=1.2), r"s=1.2 must be in \[0, 1\]"),
+        (dict(s=-0.1), r"must be in \[0, 1\]"),
+        (dict(s=np.nan), "s must be finite"),
+        (dict(T_s=0.0), "T_s.*must be > 0"),
+        (dict(H_m=-0.8), "H_m.*must be > 0"),
+        (dict(z_cl_m=0.9), "must be smaller than H_m"),
+        (dict(z_cl_m=-0.01), "z_cl_m.*>= 0"),
+        (dict(h0_start=H0_CASSIE[:4]), r"h0_start must have shape \(9,\)"),
+        (dict(h0_start=np.full(9, np.nan)), "h0_start must be finite"),
+        (dict(p_sw_des_heading_m=[0.1, np.inf]), "p_sw_des_heading_m must be finite"),
+    ],
+)
+def test_bad_input_raises_input_error(kwargs, match):
+    args = dict(robot="cassie", s=0.3, T_s=T, H_m=H, z_cl_m=ZCL, h0_start=H0_CASSIE, p_sw_des_heading_m=TARGET)
+    args.update(kwargs)
+    with pytest.raises(InputError, match=match):
+        outputs.reference_outputs(**args)

@@ -1,0 +1,232 @@
+"""Tests of amlip_qp.alip.planner: the Planner API, its dense packing and its validation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from amlip_qp.alip import Command, Planner, PlannerOutput, StateEstimate, desired, kernels, lip
+from amlip_qp.exceptions import InputError
+
+M, H, G, T = 31.0, 0.9, 9.81, 0.3
+H0 = np.array([0.01, -0.02, 0.03, -0.04, 0.9, -0.15, 0.12, 0.88, 0.0])
+
+
+def cmd(**kw):
+    base = dict(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, vy_mps=0.1, step_width_m=0.2)
+    base.update(kw)
+    return Command(**base)
+
+
+def est(**kw):
+    base = dict(stance="left", p_st_m=[0.03, -0.1, H], L_Nms=[1.5, 12.0, 0.2], v_z_mps=0.05, t_in_step_s=0.1,
+                com_m=[1.0, 0.5, H])  # fmt: skip
+    base.update(kw)
+    return StateEstimate(**base)
+
+
+def started(robot="cassie", h0=H0, **kw):
+    p = Planner(robot, M, G, **kw)
+    p.start_step("left", 2.0, h0)
+    return p
+
+
+def test_update_matches_the_validated_lip_functions():
+    p = started()
+    e, c = est(), cmd()
+    out = p.update(e, c)
+    assert isinstance(out, PlannerOutput)
+    t_rem = T - 0.1
+    px, Ly = lip.predict_end_of_step(0.03, 12.0, t_rem, M, H, G)
+    py, Lt = lip.predict_end_of_step(-0.1, -1.5, t_rem, M, H, G)
+    np.testing.assert_allclose(out.L_hat_Nms, [-Lt, Ly], rtol=1e-12)
+    np.testing.assert_allclose(out.p_hat_m, [px, py], rtol=1e-12)
+    vx_end = desired.end_of_step_velocity(0.5, T, H, G)
+    vy_end = desired.end_of_step_velocity(0.1, T, H, G)
+    L_des = desired.desired_L_world(vx_end, vy_end, 0.2, T, M, H, "right", 0.0, G)
+    np.testing.assert_allclose(out.L_des_Nms, L_des, rtol=1e-12)
+    p_sw_x = lip.foot_placement_vz(L_des[1], Ly, px, 0.05, T, M, H, G)
+    p_sw_y = lip.foot_placement_vz(-L_des[0], Lt, py, 0.05, T, M, H, G)
+    np.testing.assert_allclose(out.p_sw_des_world_m, [p_sw_x, p_sw_y], rtol=1e-12)
+    r_st = np.array([1.0, 0.5, H]) - np.array([0.03, -0.1, H])
+    np.testing.assert_allclose(out.swing_target_world_m, [r_st[0] + px - p_sw_x, r_st[1] + py - p_sw_y, 0.0], atol=1e-12)
+    assert out.s == pytest.approx(0.1 / T) and out.t_remaining_s == pytest.approx(t_rem)
+    assert out.h_d.shape == out.dh_d.shape == out.ddh_d.shape == (9,)
+    assert p.output_names[5] == "com_x_over_swing" and p.n_outputs == 9
+
+
+def test_end_of_step_speed_reference_is_the_papers_L_des():
+    out = started(speed_reference="end_of_step").update(est(), cmd(vy_mps=0.0, step_width_m=0.0))
+    np.testing.assert_allclose(out.L_des_Nms, [0.0, M * H * 0.5], atol=1e-12)
+
+
+def test_injected_kernels_receive_the_dense_layouts_and_outputs_are_unpacked():
+    seen = {}
+
+    def plan_fn(u):
+        seen["plan"] = np.array(u)
+        return np.arange(8.0)
+
+    def reference_fn(u):
+        seen["ref"] = np.array(u)
+        return np.arange(27.0)
+
+    p = started(plan_fn=plan_fn, reference_fn=reference_fn)
+    e = est()
+    out = p.update(e, cmd(turn_rate_radps=0.5))
+    u = dict(zip(kernels.ALIP_PLAN_INPUTS, seen["plan"]))
+    assert u["p_st_x"] == 0.03 and u["p_st_y"] == -0.1 and u["L_x"] == 1.5 and u["L_y"] == 12.0
+    assert u["t_rem"] == pytest.approx(0.2) and u["v_z"] == 0.05 and u["next_stance_sign"] == -1.0
+    assert u["vx_des"] == pytest.approx(desired.end_of_step_velocity(0.5, T, H, G))
+    assert u["heading_next"] == pytest.approx(0.15) and (u["m"], u["H"], u["T"], u["W"], u["g"]) == (M, H, T, 0.2, G)
+    np.testing.assert_allclose(out.L_hat_Nms, [0, 1])
+    np.testing.assert_allclose(out.p_hat_m, [2, 3])
+    np.testing.assert_allclose(out.L_des_Nms, [4, 5])
+    np.testing.assert_allclose(out.p_sw_des_world_m, [6, 7])
+    np.testing.assert_allclose(out.h_d, np.arange(9.0))
+    np.testing.assert_allclose(out.ddh_d, np.arange(18.0, 27.0))
+    r = dict(zip(kernels.SWING_REFERENCE_INPUTS, seen["ref"]))
+    assert (r["stance_yaw0"], r["swing_yaw0"], r["x0"], r["y0"]) == (0.03, -0.04, -0.15, 0.12)
+    assert (r["p_sw_des_x"], r["p_sw_des_y"], r["dD"]) == (6.0, 7.0, pytest.approx(0.15))
+    np.testing.assert_allclose(out.swing_target_world_m, [1.0 - 0.03 + 2 - 6, 0.5 + 0.1 + 3 - 7, 0.0])
+
+
+def test_heading_advances_at_start_step_and_targets_are_in_the_step_frame():
+    p = Planner("cassie", M, G, heading_rad=0.4)
+    p.start_step("left", 0.0, H0)
+    c = cmd(turn_rate_radps=1.0)
+    out = p.update(est(t_in_step_s=T), c)
+    assert out.heading_rad == 0.4 and out.heading_next_rad == pytest.approx(0.4 + T)
+    assert out.turn_rad == pytest.approx(T)
+    assert p.heading_next_rad == pytest.approx(0.4 + T)
+    # At s = 1: hip yaws at -+dD/2 and the swing targets are p_sw_des rotated into D_k.
+    assert out.h_d[2] == pytest.approx(-T / 2) and out.h_d[3] == pytest.approx(T / 2)
+    c4, s4 = math.cos(0.4), math.sin(0.4)
+    x, y = out.p_sw_des_world_m
+    np.testing.assert_allclose(out.p_sw_des_heading_m, [c4 * x + s4 * y, -s4 * x + c4 * y], atol=1e-12)
+    np.testing.assert_allclose(out.h_d[5:7], out.p_sw_des_heading_m, atol=1e-12)
+    p.start_step("right", T, H0)
+    assert p.heading_rad == pytest.approx(0.4 + T) and p.step_count == 2 and p.stance == "right"
+    p.start_step("left", 2 * T, H0, heading_rad=-1.0)
+    assert p.heading_rad == -1.0
+    assert p.t_step_start_s == pytest.approx(2 * T) and p.time_in_step(2 * T + 0.05) == pytest.approx(0.05)
+
+
+def test_start_of_step_references_equal_the_measured_outputs():
+    out = started().update(est(t_in_step_s=0.0), cmd())
+    np.testing.assert_allclose(out.h_d[[2, 3, 5, 6]], H0[[2, 3, 5, 6]], atol=1e-15)
+    np.testing.assert_allclose(out.h_d[[0, 1, 4, 7, 8]], [0, 0, H, H, 0], atol=1e-15)
+
+
+def test_late_touchdown_holds_phase_and_horizon():
+    out = started().update(est(t_in_step_s=T + 0.07), cmd())
+    assert out.s == 1.0 and out.t_remaining_s == 0.0
+    np.testing.assert_allclose(out.p_hat_m, [0.03, -0.1], atol=1e-15)
+    np.testing.assert_allclose(out.dh_d[5:7], 0.0, atol=1e-12)
+
+
+def test_vz_clamp_and_switch():
+    limit = lip.vz_limit(T, H, G)
+    out = started().update(est(v_z_mps=5.0), cmd())
+    assert out.v_z_used_mps == pytest.approx(0.5 * limit) and np.all(np.isfinite(out.p_sw_des_world_m))
+    out = started().update(est(v_z_mps=-5.0), cmd())
+    assert out.v_z_used_mps == pytest.approx(-0.5 * limit)
+    out0 = started(vz_correction=False).update(est(v_z_mps=0.3), cmd())
+    ref = started().update(est(v_z_mps=0.0), cmd())
+    assert out0.v_z_used_mps == 0.0
+    np.testing.assert_allclose(out0.p_sw_des_world_m, ref.p_sw_des_world_m, atol=1e-15)
+
+
+def test_rabbit_ignores_lateral_terms():
+    h0 = np.array([0.02, 0.9, -0.15, 0.88])
+    p = Planner("rabbit", 32.0, G, heading_rad=1.0)
+    p.start_step("left", 0.0, h0, heading_rad=0.7)
+    out = p.update(est(), cmd(turn_rate_radps=2.0, vy_mps=0.4, step_width_m=0.3))
+    assert p.output_names == ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+    assert out.h_d.shape == (4,) and out.heading_rad == 0.0 and out.heading_next_rad == 0.0
+    assert out.L_hat_Nms[0] == 0.0 and out.p_hat_m[1] == 0.0 and out.L_des_Nms[0] == 0.0 and out.p_sw_des_world_m[1] == 0.0
+    _, Ly = lip.predict_end_of_step(0.03, 12.0, T - 0.1, 32.0, H, G)
+    assert out.L_hat_Nms[1] == pytest.approx(Ly, rel=1e-12)
+    s = 0.1 / T
+    np.testing.assert_allclose(out.h_d[[0, 1, 3]], [0.0, H, 4 * 0.1 * (s - 0.5) ** 2 + H - 0.1], atol=1e-12)
+    blend = 0.5 * ((1 + math.cos(math.pi * s)) * -0.15 + (1 - math.cos(math.pi * s)) * out.p_sw_des_world_m[0])
+    assert out.h_d[2] == pytest.approx(blend, abs=1e-12)
+
+
+def test_dataclasses_are_frozen():
+    c = cmd()
+    with pytest.raises(AttributeError):
+        c.vx_mps = 2.0  # type: ignore[misc]
+    e = est()
+    assert isinstance(e.p_st_m, np.ndarray) and e.p_st_m.dtype == np.float64
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(step_time_s=0.0), r"step_time_s \(T\) must be > 0"),
+        (dict(step_time_s=-0.3), r"step_time_s \(T\) must be > 0"),
+        (dict(com_height_m=0.0), r"com_height_m \(H\) must be > 0"),
+        (dict(com_height_m=-1.0, clearance_m=0.0), r"com_height_m \(H\) must be > 0"),
+        (dict(clearance_m=0.95), r"clearance_m \(z_cl\) must satisfy"),
+        (dict(clearance_m=-0.01), r"clearance_m \(z_cl\) must satisfy"),
+        (dict(step_width_m=-0.1), "step_width_m must be >= 0"),
+        (dict(vx_mps=float("nan")), "vx_mps must be a finite number"),
+        (dict(turn_rate_radps=float("inf")), "turn_rate_radps must be a finite number"),
+        (dict(vy_mps="fast"), "vy_mps must be a finite number"),
+    ],
+)
+def test_bad_command_raises_input_error(kw, match):
+    with pytest.raises(InputError, match=match):
+        cmd(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(stance="middle"), "stance must be 'left' or 'right'"),
+        (dict(p_st_m=[0.0, np.nan, H]), r"NaN or inf in \['p_st_m'\]"),
+        (dict(L_Nms=[np.inf, 0.0, 0.0]), r"NaN or inf in \['L_Nms'\]"),
+        (dict(com_m=[0.0, 0.0, -np.inf]), r"NaN or inf in \['com_m'\]"),
+        (dict(v_z_mps=np.nan), r"NaN or inf in \['v_z_mps'\]"),
+        (dict(t_in_step_s=np.inf), r"NaN or inf in \['t_in_step_s'\]"),
+        (dict(t_in_step_s=-0.01), "t_in_step_s must be >= 0"),
+        (dict(p_st_m=[0.0, 0.1]), r"p_st_m must have shape \(3,\)"),
+        (dict(L_Nms="abc"), "L_Nms must be 3 numbers"),
+        (dict(v_z_mps="fast"), "v_z_mps and t_in_step_s must be numbers"),
+    ],
+)
+def test_bad_estimate_raises_input_error(kw, match):
+    with pytest.raises(InputError, match=match):
+        est(**kw)
+
+
+def test_bad_planner_use_raises_input_error():
+    with pytest.raises(InputError, match="unknown robot 'atlas'"):
+        Planner("atlas", M)
+    with pytest.raises(InputError, match="mass_kg must be > 0"):
+        Planner("cassie", 0.0)
+    with pytest.raises(InputError, match="mass_kg must be finite"):
+        Planner("cassie", float("nan"))
+    with pytest.raises(InputError, match=r"g \(gravity magnitude\) must be > 0"):
+        Planner("cassie", M, g=-9.81)
+    with pytest.raises(InputError, match="speed_reference must be one of"):
+        Planner("cassie", M, speed_reference="avg")
+    with pytest.raises(InputError, match="plan_fn must be callable"):
+        Planner("cassie", M, plan_fn=3)
+    p = Planner("cassie", M)
+    with pytest.raises(InputError, match="before start_step"):
+        p.update(est(), cmd())
+    with pytest.raises(InputError, match="stance must be 'left' or 'right'"):
+        p.start_step("up", 0.0, H0)
+    with pytest.raises(InputError, match=r"h0_start must have shape \(9,\)"):
+        p.start_step("left", 0.0, H0[:4])
+    with pytest.raises(InputError, match="h0_start must be finite"):
+        p.start_step("left", 0.0, np.full(9, np.nan))
+    with pytest.raises(InputError, match="t_start_s must be finite"):
+        p.start_step("left", np.nan, H0)
+    p.start_step("left", 0.0, H0)
+    with pytest.raises(InputError, match="estimate.stance='right' but the current step has stance 'left'"):
+        p.update(est(stance="right"), cmd())
+    with pytest.raises(InputError, match="needs a StateEstimate and a Command"):
+        p.update(est(), {"vx_mps": 1.0})
