@@ -1,0 +1,92 @@
+"""The interface every tracker implements.
+
+A tracker turns the planner's reference outputs ``h_d(s)`` (with their time
+derivatives) into joint torques for the actuated joints, given the state
+estimate in Pinocchio coordinates (through the controller's kinematics
+object, updated once per tick). The paper's baseline (iterative IK plus a
+passivity-based controller, :mod:`amlip_qp.control.pbc`) and the task-space
+QP (:mod:`amlip_qp.control.qp_tracker`) both implement it, so the walking loop
+(:class:`amlip_qp.control.controller.WalkingController`) runs either one.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class TrackingTarget:
+    """What the tracker must follow at this tick.
+
+    Attributes:
+        stance: ``"left"`` or ``"right"``: the stance side of the current step.
+        phase: Phase ``s`` in [0, 1] (clipped; late steps stay at 1).
+        heading_rad: Heading ``D_k`` of the current step (yaw), rad.
+        h_d: Reference outputs in the robot's output order (m or rad).
+        dh_d: Their time derivatives (m/s or rad/s).
+        ddh_d: Their second time derivatives (m/s^2 or rad/s^2).
+        swing_contact_weight: 0 while the swing foot is in the air, rising to 1
+            when it touches down: trackers use it to ramp contact forces in.
+        stance_knee_offset_rad: Offset added to the stance knee reference to
+            compensate the spring deflection (0 for robots without springs).
+    """
+
+    stance: str
+    phase: float
+    heading_rad: float
+    h_d: np.ndarray
+    dh_d: np.ndarray
+    ddh_d: np.ndarray
+    swing_contact_weight: float = 0.0
+    stance_knee_offset_rad: float = 0.0
+
+    @property
+    def swing(self) -> str:
+        """The swing side."""
+        return "right" if self.stance == "left" else "left"
+
+
+@dataclass
+class TrackerResult:
+    """A tracker's output for one tick.
+
+    Attributes:
+        tau_Nm: Joint-side torques of the actuated joints (robot's actuator
+            order), before saturation by the controller, N m. Never NaN.
+        ok: ``False`` when the tracker fell back (solver failure, NaN...).
+        fallback: Why it fell back, or ``None``.
+        info: Diagnostics (solve time, iterations, contact forces, tracking
+            error...), numbers only.
+    """
+
+    tau_Nm: np.ndarray
+    ok: bool = True
+    fallback: str | None = None
+    info: dict = field(default_factory=dict)
+
+
+class Tracker(abc.ABC):
+    """Follows reference outputs with joint torques.
+
+    Subclasses set :attr:`name` and implement :meth:`compute`.
+    """
+
+    #: Short name used by the CLI and in summaries (``"pbc"``, ``"qp"``).
+    name: str = "tracker"
+
+    @abc.abstractmethod
+    def compute(self, kin, target: TrackingTarget) -> TrackerResult:
+        """Torques for the state in ``kin`` and the references in ``target``.
+
+        Args:
+            kin: The controller's :class:`~amlip_qp.robots.kinematics.RobotKinematics`,
+                already updated at this tick's estimated ``(q, v)`` (read
+                ``kin.q``, ``kin.v``); trackers must not update it again.
+            target: This tick's references.
+        """
+
+    def reset(self) -> None:
+        """Forget internal state (warm starts, filters) before a new run."""

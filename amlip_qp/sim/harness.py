@@ -1,0 +1,355 @@
+"""The MuJoCo harness: the plant, its sensors, pushes, and the closed loop.
+
+The harness is the only code that knows the plant. Every control tick it
+reads MuJoCo's state, converts it once to Pinocchio's convention
+(:mod:`amlip_qp.robots.state`), optionally adds sensor noise, reads the foot
+contact switches (normal force above a threshold), hands the
+:class:`~amlip_qp.control.estimator.Measurement` to the controller, turns the
+joint torques into actuator controls (``ctrl = tau / gear``), applies pushes
+on the base body, and steps MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from amlip_qp.alip.planner import Command
+from amlip_qp.control.controller import StepRecord, WalkingController
+from amlip_qp.control.estimator import Measurement
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import state as S
+
+
+@dataclass(frozen=True)
+class Push:
+    """A force on the base body.
+
+    Attributes:
+        t_s: Start time, s.
+        force_N: World-frame force (fx, fy, fz), N.
+        duration_s: How long it lasts, s.
+    """
+
+    t_s: float
+    force_N: tuple[float, float, float]
+    duration_s: float
+
+    def __post_init__(self):
+        vals = (self.t_s, *self.force_N, self.duration_s)
+        if len(self.force_N) != 3 or not all(math.isfinite(float(x)) for x in vals):
+            raise InputError(f"a push needs finite t, (fx, fy, fz) and duration, got {self!r}")
+        if self.t_s < 0 or self.duration_s <= 0:
+            raise InputError(f"a push needs t >= 0 s and duration > 0 s, got t={self.t_s}, duration={self.duration_s}")
+
+    @property
+    def impulse_Ns(self) -> float:
+        """Magnitude of the impulse, N s."""
+        return float(np.linalg.norm(self.force_N) * self.duration_s)
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """Gaussian sensor noise (standard deviations), added to the measurement.
+
+    Attributes:
+        joint_pos_rad: Joint encoders, rad.
+        joint_vel_radps: Joint velocities, rad/s.
+        base_pos_m: Base position, m.
+        base_rot_rad: Base orientation (small rotation vector), rad.
+        base_lin_vel_mps: Base linear velocity, m/s.
+        base_ang_vel_radps: Base angular velocity (IMU gyro), rad/s.
+    """
+
+    joint_pos_rad: float = 5e-4
+    joint_vel_radps: float = 0.05
+    base_pos_m: float = 1e-3
+    base_rot_rad: float = 2e-3
+    base_lin_vel_mps: float = 0.02
+    base_ang_vel_radps: float = 0.02
+
+
+@dataclass(frozen=True)
+class FallCriteria:
+    """When a run counts as a fall.
+
+    Attributes:
+        min_height_fraction: Base height below this fraction of its initial value.
+        max_tilt_rad: Base tilt (angle between its z axis and the world's) above this.
+    """
+
+    min_height_fraction: float = 0.6
+    max_tilt_rad: float = math.radians(50.0)
+
+
+@dataclass
+class RunResult:
+    """A finished simulation.
+
+    Attributes:
+        robot: Robot name.
+        tracker: Tracker name.
+        duration_s: Requested simulated time, s.
+        sim_time_s: Simulated time reached (< duration after a fall), s.
+        wall_time_s: Wall-clock time of the loop, s.
+        fell: True if the fall criteria triggered.
+        fall_time_s: When, or NaN.
+        log: Name -> array with one row per control tick (see :meth:`Simulation.run`).
+        steps: The completed steps.
+        tick_time_us: Controller wall time per tick, µs.
+        fallback_ticks: Ticks that used the damped fallback torque.
+        pushes: The pushes applied.
+        commands: Name -> array of the commanded values per tick.
+    """
+
+    robot: str
+    tracker: str
+    duration_s: float
+    sim_time_s: float
+    wall_time_s: float
+    fell: bool
+    fall_time_s: float
+    log: dict[str, np.ndarray]
+    steps: list[StepRecord]
+    tick_time_us: np.ndarray
+    fallback_ticks: int
+    pushes: tuple[Push, ...] = ()
+    info: dict = field(default_factory=dict)
+
+
+def _quat_mul_small_rotation(quat_xyzw: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
+    """Quaternion (xyzw) times the small rotation ``rotvec`` (body frame), normalised."""
+    angle = float(np.linalg.norm(rotvec))
+    if angle < 1e-15:
+        return quat_xyzw
+    axis = rotvec / angle
+    s = math.sin(0.5 * angle)
+    dq = np.array([axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * angle)])
+    x1, y1, z1, w1 = quat_xyzw
+    x2, y2, z2, w2 = dq
+    out = np.array(
+        [
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        ]
+    )
+    return out / np.linalg.norm(out)
+
+
+class Simulation:
+    """A MuJoCo plant closed around a :class:`WalkingController`.
+
+    Args:
+        robot: The :class:`~amlip_qp.robots.robot.Robot` (its ``mj_model`` is the plant).
+        controller: The controller.
+        command_fn: Time (s) -> :class:`~amlip_qp.alip.planner.Command`.
+        pushes: Forces on the base body.
+        noise: Sensor noise, or ``None`` for exact measurements.
+        seed: Seed of the noise generator.
+        contact_threshold_N: Normal force above which a foot's contact switch is on, N.
+        fall: Fall criteria.
+        keyframe: Initial keyframe name.
+    """
+
+    def __init__(
+        self,
+        robot,
+        controller: WalkingController,
+        command_fn: Callable[[float], Command],
+        pushes: tuple[Push, ...] | list[Push] = (),
+        noise: SensorNoise | None = None,
+        seed: int = 0,
+        contact_threshold_N: float = 20.0,
+        fall: FallCriteria | None = None,
+        keyframe: str = "stand",
+    ):
+        self.robot = robot
+        self.controller = controller
+        self.command_fn = command_fn
+        self.pushes = tuple(pushes)
+        self.noise = noise
+        self.rng = np.random.default_rng(seed)
+        self.contact_threshold_N = float(contact_threshold_N)
+        self.fall = fall or FallCriteria()
+        self.model = robot.mj_model
+        self.data = robot.new_mj_data(keyframe)
+        self.dt_s = float(self.model.opt.timestep)
+        ratio = controller.dt_s / self.dt_s
+        self.substeps = int(round(ratio))
+        if self.substeps < 1 or abs(ratio - self.substeps) > 1e-9:
+            raise InputError(
+                f"the control period ({controller.dt_s} s) must be a whole multiple of the plant step ({self.dt_s} s)"
+            )
+        m = self.model
+        self._base_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, robot.base_body)
+        self._foot_bodies = {side: int(m.site_bodyid[robot.contact_site_ids[side]]) for side in robot.foot_sides}
+        self._gear = robot.actuated.gear
+        self._ctrl_range = robot.actuated.ctrl_range
+        self._force6 = np.zeros(6)
+        self._scalar_pin_q = robot.state_map.scalar_pin_q
+        self._scalar_pin_v = robot.state_map.scalar_pin_v
+
+    # ----------------------------------------------------------- sensors
+    def foot_contact(self) -> dict[str, bool]:
+        """Contact switches: True when the floor pushes on the foot's body harder than the threshold."""
+        m, d = self.model, self.data
+        normal = {side: 0.0 for side in self._foot_bodies}
+        for i in range(d.ncon):
+            con = d.contact[i]
+            b1, b2 = int(m.geom_bodyid[con.geom1]), int(m.geom_bodyid[con.geom2])
+            for side, body in self._foot_bodies.items():
+                if (b1 == body and b2 == 0) or (b2 == body and b1 == 0):
+                    mujoco.mj_contactForce(m, d, i, self._force6)
+                    normal[side] += abs(self._force6[0])
+        return {side: f > self.contact_threshold_N for side, f in normal.items()}
+
+    def measure(self) -> Measurement:
+        """This tick's sensor data (exact or noisy)."""
+        q, v = S.mj_to_pin(self.robot.state_map, self.data.qpos, self.data.qvel)
+        if self.noise is not None:
+            n, rng = self.noise, self.rng
+            q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
+            v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
+            if self.robot.is_floating:
+                q[:3] += rng.normal(0.0, n.base_pos_m, 3)
+                q[3:7] = _quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
+                v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
+                v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
+        return Measurement(t_s=float(self.data.time), q=q, v=v, foot_contact=self.foot_contact())
+
+    # ------------------------------------------------------------ checks
+    def _base_height_and_tilt(self) -> tuple[float, float]:
+        d = self.data
+        z = float(d.xpos[self._base_body][2])
+        R = d.xmat[self._base_body].reshape(3, 3)
+        tilt = math.acos(max(-1.0, min(1.0, float(R[2, 2]))))
+        return z, tilt
+
+    def _push_force(self, t: float) -> np.ndarray:
+        f = np.zeros(3)
+        for p in self.pushes:
+            if p.t_s <= t < p.t_s + p.duration_s:
+                f += np.asarray(p.force_N, dtype=float)
+        return f
+
+    # --------------------------------------------------------------- run
+    def run(self, duration_s: float, progress: bool = False) -> RunResult:
+        """Simulate ``duration_s`` seconds (stops early at a fall).
+
+        The log holds, per control tick: ``t``, ``com`` (3), ``com_vel`` (3),
+        ``base_pos`` (3), ``base_tilt``, ``stance_left`` (1 if left stance),
+        ``phase``, ``heading``, ``L_meas`` (3), ``L`` (3, filtered),
+        ``L_hat`` (2), ``L_des`` (2), ``p_sw_des`` (2), ``swing_target`` (3),
+        ``h`` and ``h_d`` (outputs), ``tau`` (joint side, N m),
+        ``tracker_ok``, ``push`` (3, N) and the command ``cmd_vx``, ``cmd_vy``,
+        ``cmd_turn_rate``.
+        """
+        if not (duration_s > 0 and math.isfinite(duration_s)):
+            raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
+        m, d, ctrl = self.model, self.data, self.controller
+        ctrl.reset()
+        n_ticks = int(round(duration_s / ctrl.dt_s))
+        nu = len(self._gear)
+        n_out = ctrl.planner.n_outputs
+        log = {
+            "t": np.zeros(n_ticks),
+            "com": np.zeros((n_ticks, 3)),
+            "com_vel": np.zeros((n_ticks, 3)),
+            "base_pos": np.zeros((n_ticks, 3)),
+            "base_tilt": np.zeros(n_ticks),
+            "stance_left": np.zeros(n_ticks),
+            "phase": np.zeros(n_ticks),
+            "heading": np.zeros(n_ticks),
+            "L_meas": np.zeros((n_ticks, 3)),
+            "L": np.zeros((n_ticks, 3)),
+            "L_hat": np.zeros((n_ticks, 2)),
+            "L_des": np.zeros((n_ticks, 2)),
+            "p_sw_des": np.zeros((n_ticks, 2)),
+            "swing_target": np.zeros((n_ticks, 3)),
+            "h": np.zeros((n_ticks, n_out)),
+            "h_d": np.zeros((n_ticks, n_out)),
+            "tau": np.zeros((n_ticks, nu)),
+            "tracker_ok": np.zeros(n_ticks),
+            "push": np.zeros((n_ticks, 3)),
+            "cmd_vx": np.zeros(n_ticks),
+            "cmd_vy": np.zeros(n_ticks),
+            "cmd_turn_rate": np.zeros(n_ticks),
+        }
+        tick_us = np.zeros(n_ticks)
+        z0, _ = self._base_height_and_tilt()
+        fell, fall_time = False, float("nan")
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
+        wall0 = time.perf_counter()
+        k = 0
+        for k in range(n_ticks):
+            t = float(d.time)
+            cmd = self.command_fn(t)
+            meas = self.measure()
+            t0 = time.perf_counter_ns()
+            tick = ctrl.step(meas, cmd)
+            tick_us[k] = (time.perf_counter_ns() - t0) * 1e-3
+            d.ctrl[:nu] = np.clip(tick.tau_Nm / self._gear, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
+            push = self._push_force(t)
+            d.xfrc_applied[self._base_body, :3] = push
+            # log
+            est, plan = tick.estimate, tick.plan
+            z, tilt = self._base_height_and_tilt()
+            log["t"][k] = t
+            log["com"][k] = est.com_m
+            log["com_vel"][k] = est.com_vel_mps
+            log["base_pos"][k] = d.xpos[self._base_body]
+            log["base_tilt"][k] = tilt
+            log["stance_left"][k] = 1.0 if tick.stance == "left" else 0.0
+            log["phase"][k] = tick.phase
+            log["heading"][k] = plan.heading_rad
+            log["L_meas"][k] = est.L_meas_Nms
+            log["L"][k] = est.L_Nms
+            log["L_hat"][k] = plan.L_hat_Nms
+            log["L_des"][k] = plan.L_des_Nms
+            log["p_sw_des"][k] = plan.p_sw_des_world_m
+            log["swing_target"][k] = plan.swing_target_world_m
+            log["h"][k] = tick.h
+            log["h_d"][k] = plan.h_d
+            log["tau"][k] = tick.tau_Nm
+            log["tracker_ok"][k] = 1.0 if tick.tracker_ok else 0.0
+            log["push"][k] = push
+            log["cmd_vx"][k] = cmd.vx_mps
+            log["cmd_vy"][k] = cmd.vy_mps
+            log["cmd_turn_rate"][k] = cmd.turn_rate_radps
+            for _ in range(self.substeps):
+                mujoco.mj_step(m, d)
+            if bar is not None and k % 200 == 0:
+                bar.update(200 if k else 1)
+            if z < self.fall.min_height_fraction * z0 or tilt > self.fall.max_tilt_rad or not np.all(np.isfinite(d.qpos)):
+                fell, fall_time = True, t
+                break
+        wall = time.perf_counter() - wall0
+        if bar is not None:
+            bar.close()
+        n = k + 1
+        log = {key: value[:n] for key, value in log.items()}
+        return RunResult(
+            robot=self.robot.name,
+            tracker=ctrl.tracker.name,
+            duration_s=float(duration_s),
+            sim_time_s=float(d.time),
+            wall_time_s=wall,
+            fell=fell,
+            fall_time_s=fall_time,
+            log=log,
+            steps=list(ctrl.steps),
+            tick_time_us=tick_us[:n],
+            fallback_ticks=ctrl.fallback_ticks,
+            pushes=self.pushes,
+        )

@@ -1,0 +1,219 @@
+"""Walking scenarios: commands over time, pushes, durations.
+
+A :class:`Scenario` is everything a run needs besides the robot and the
+tracker. The named scenarios of :data:`SCENARIOS` are the acceptance
+scenarios of the walking issues; the CLI, the examples, the comparison and
+the tests all take them from here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from amlip_qp.alip.planner import Command
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim.harness import Push
+
+
+@dataclass(frozen=True)
+class GaitSettings:
+    """The fixed gait parameters of a robot (SI units).
+
+    Attributes:
+        step_time_s: Step duration ``T``, s.
+        com_height_m: CoM height over the stance contact ``H``, m.
+        clearance_m: Swing clearance ``z_cl``, m.
+        step_width_m: Step width ``W`` for walking in place, m (0 for planar robots).
+    """
+
+    step_time_s: float
+    com_height_m: float
+    clearance_m: float
+    step_width_m: float
+
+
+#: Default gait per robot. Cassie's ``H`` is the CoM height over the foot
+#: ("toe") joint, the paper's contact point.
+DEFAULT_GAITS: dict[str, GaitSettings] = {
+    "cassie": GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
+    "rabbit": GaitSettings(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, step_width_m=0.0),
+}
+
+
+@dataclass(frozen=True)
+class SpeedProfile:
+    """Piecewise-linear forward speed over time, held constant after the last knot.
+
+    Attributes:
+        times_s: Knot times, s (strictly increasing, first >= 0).
+        speeds_mps: Speeds at the knots, m/s.
+    """
+
+    times_s: tuple[float, ...]
+    speeds_mps: tuple[float, ...]
+
+    def __post_init__(self):
+        t = np.asarray(self.times_s, dtype=float)
+        v = np.asarray(self.speeds_mps, dtype=float)
+        if t.size == 0 or t.shape != v.shape:
+            raise InputError("a speed profile needs as many times as speeds, at least one knot")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+            raise InputError("speed profile times and speeds must be finite numbers")
+        if t[0] < 0 or np.any(np.diff(t) <= 0):
+            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {list(t)}")
+
+    @classmethod
+    def parse(cls, text: str) -> "SpeedProfile":
+        """Parse ``"t0:v0,t1:v1,..."`` (s:m/s), e.g. ``"0:0,5:2.1"``."""
+        try:
+            pairs = [item.split(":") for item in text.split(",") if item.strip()]
+            times = tuple(float(a) for a, _ in pairs)
+            speeds = tuple(float(b) for _, b in pairs)
+        except ValueError:
+            raise InputError(f"speed profile must look like '0:0,5:2.1' (time_s:speed_mps,...), got {text!r}") from None
+        return cls(times, speeds)
+
+    @classmethod
+    def constant(cls, speed_mps: float) -> "SpeedProfile":
+        """A constant speed."""
+        return cls((0.0,), (float(speed_mps),))
+
+    def __call__(self, t_s: float) -> float:
+        """Speed at time ``t_s``, m/s."""
+        return float(np.interp(t_s, self.times_s, self.speeds_mps))
+
+    @property
+    def final_mps(self) -> float:
+        """The speed held after the last knot, m/s."""
+        return float(self.speeds_mps[-1])
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A walking experiment.
+
+    Attributes:
+        name: Identifier.
+        robot: ``"cassie"`` or ``"rabbit"``.
+        duration_s: Simulated time, s.
+        vx: Forward speed profile (heading frame), m/s.
+        vy_mps: Lateral speed (heading frame), m/s.
+        turn_rate_radps: Turn rate, rad/s.
+        turn_start_s: Time the turn starts, s.
+        turn_angle_rad: Total turn; the rate drops to 0 once reached (``inf`` = keep turning).
+        pushes: Forces on the base.
+        gait: Gait parameters (``None``: the robot's default).
+        description: One line for people.
+    """
+
+    name: str
+    robot: str
+    duration_s: float
+    vx: SpeedProfile = field(default_factory=lambda: SpeedProfile.constant(0.0))
+    vy_mps: float = 0.0
+    turn_rate_radps: float = 0.0
+    turn_start_s: float = 0.0
+    turn_angle_rad: float = math.inf
+    pushes: tuple[Push, ...] = ()
+    gait: GaitSettings | None = None
+    description: str = ""
+
+    def __post_init__(self):
+        if self.robot not in DEFAULT_GAITS:
+            raise InputError(f"unknown robot {self.robot!r} for a scenario; known: {', '.join(DEFAULT_GAITS)}")
+        if not (self.duration_s > 0 and math.isfinite(self.duration_s)):
+            raise InputError(f"scenario duration must be a positive number of seconds, got {self.duration_s!r}")
+        for name in ("vy_mps", "turn_rate_radps", "turn_start_s"):
+            if not math.isfinite(getattr(self, name)):
+                raise InputError(f"scenario {name} must be finite, got {getattr(self, name)!r}")
+
+    @property
+    def gait_settings(self) -> GaitSettings:
+        """The gait used (the scenario's or the robot's default)."""
+        return self.gait or DEFAULT_GAITS[self.robot]
+
+    def turn_rate_at(self, t_s: float) -> float:
+        """Commanded turn rate at ``t_s``, rad/s."""
+        if self.turn_rate_radps == 0.0 or t_s < self.turn_start_s:
+            return 0.0
+        if math.isinf(self.turn_angle_rad):
+            return self.turn_rate_radps
+        t_end = self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
+        return self.turn_rate_radps if t_s < t_end else 0.0
+
+    def command(self, t_s: float) -> Command:
+        """The :class:`~amlip_qp.alip.planner.Command` at time ``t_s``."""
+        g = self.gait_settings
+        return Command(
+            step_time_s=g.step_time_s,
+            com_height_m=g.com_height_m,
+            clearance_m=g.clearance_m,
+            vx_mps=self.vx(t_s),
+            vy_mps=self.vy_mps,
+            turn_rate_radps=self.turn_rate_at(t_s),
+            step_width_m=g.step_width_m,
+        )
+
+    def with_(self, **changes) -> "Scenario":
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+
+def _ramp(v_end: float, t_ramp: float, t0: float = 1.0) -> SpeedProfile:
+    return SpeedProfile((0.0, t0, t0 + t_ramp), (0.0, 0.0, v_end))
+
+
+#: The acceptance scenarios (issue "walking with the baseline tracker", section 5).
+SCENARIOS: dict[str, Scenario] = {
+    s.name: s
+    for s in (
+        Scenario("cassie-in-place", "cassie", 20.0, description="Cassie walks in place for 20 s"),
+        Scenario("cassie-1mps", "cassie", 10.0, vx=_ramp(1.0, 2.0), description="Cassie walks at 1.0 m/s"),
+        Scenario(
+            "cassie-ramp-2.1",
+            "cassie",
+            15.0,
+            vx=SpeedProfile((0.0, 10.0), (0.0, 2.1)),
+            description="Cassie ramps from 0 to 2.1 m/s over 10 s and holds it",
+        ),
+        Scenario(
+            "cassie-turn-90",
+            "cassie",
+            12.0,
+            vx=_ramp(0.75, 1.5),
+            turn_rate_radps=math.radians(18.0),
+            turn_start_s=3.0,
+            turn_angle_rad=math.radians(90.0),
+            description="Cassie turns 90 degrees at 0.75 m/s",
+        ),
+        Scenario(
+            "cassie-diagonal",
+            "cassie",
+            10.0,
+            vx=_ramp(0.5, 1.5),
+            vy_mps=0.3,
+            description="Cassie walks diagonally, 0.5 m/s forward and 0.3 m/s sideways",
+        ),
+        Scenario(
+            "cassie-push",
+            "cassie",
+            10.0,
+            vx=_ramp(1.0, 2.0),
+            pushes=(Push(6.0, (100.0, 0.0, 0.0), 0.2),),
+            description="Cassie at 1 m/s takes a 100 N sagittal push for 0.2 s",
+        ),
+        Scenario("rabbit-0.5mps", "rabbit", 20.0, vx=_ramp(0.5, 2.0), description="Rabbit walks at 0.5 m/s"),
+        Scenario("rabbit-1mps", "rabbit", 20.0, vx=_ramp(1.0, 3.0), description="Rabbit walks at 1.0 m/s"),
+    )
+}
+
+
+def get_scenario(name: str) -> Scenario:
+    """The named scenario; :class:`InputError` listing the names otherwise."""
+    try:
+        return SCENARIOS[name]
+    except KeyError:
+        raise InputError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}") from None
