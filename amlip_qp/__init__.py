@@ -32,4 +32,14 @@ __all__ = [
     "QPError",
     "UnknownRobotError",
     "__version__",
+    "load_robot",
 ]
+
+
+def __getattr__(name: str):
+    """Lazy re-exports, so ``import amlip_qp`` does not import MuJoCo or Pinocchio."""
+    if name == "load_robot":
+        from amlip_qp.robots.loader import load_robot
+
+        return load_robot
+    raise AttributeError(f"module 'amlip_qp' has no attribute {name!r}")

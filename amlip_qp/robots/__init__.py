@@ -1,0 +1,58 @@
+"""Robot models: MJCF loading into MuJoCo and Pinocchio, state conversion, kinematics.
+
+- :func:`load_robot` / :class:`Robot` (:mod:`.loader`, :mod:`.robot`): one
+  MJCF file compiled by both libraries, described from the models.
+- :mod:`.state`: MuJoCo ``(qpos, qvel)`` <-> Pinocchio ``(q, v)``.
+- :class:`RobotKinematics` (:mod:`.kinematics`): CoM, centroidal momentum,
+  ``L`` about a contact, contact Jacobians, ``M``, ``h``, passive forces,
+  coupling constraints and the output map ``h_0`` (:mod:`.outputs`).
+"""
+
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.loader import KNOWN_ROBOTS, load_robot
+from amlip_qp.robots.outputs import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap
+from amlip_qp.robots.passive import coupling_constraints, passive_forces
+from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
+from amlip_qp.robots.state import (
+    StateMap,
+    bias_mj_to_pin,
+    force_mj_to_pin,
+    force_pin_to_mj,
+    mass_matrix_mj_to_pin,
+    mj_to_pin,
+    pin_to_mj,
+    q_to_qpos,
+    qpos_to_q,
+    qvel_to_v,
+    v_to_qvel,
+    velocity_map,
+    velocity_map_dot_v,
+)
+
+__all__ = [
+    "CASSIE_OUTPUTS",
+    "FOOT_SIDES",
+    "KNOWN_ROBOTS",
+    "PLANAR_OUTPUTS",
+    "ActuatorSet",
+    "Coupling",
+    "OutputMap",
+    "Robot",
+    "RobotKinematics",
+    "StateMap",
+    "bias_mj_to_pin",
+    "coupling_constraints",
+    "force_mj_to_pin",
+    "force_pin_to_mj",
+    "load_robot",
+    "mass_matrix_mj_to_pin",
+    "mj_to_pin",
+    "passive_forces",
+    "pin_to_mj",
+    "q_to_qpos",
+    "qpos_to_q",
+    "qvel_to_v",
+    "v_to_qvel",
+    "velocity_map",
+    "velocity_map_dot_v",
+]

@@ -1,0 +1,248 @@
+"""Model-side kinematics and dynamics on Pinocchio, for the trackers.
+
+Usage: create one :class:`RobotKinematics` per controller, call
+:meth:`RobotKinematics.update` once per control tick with the Pinocchio state
+``(q, v)``; it runs Pinocchio's passes once (``computeAllTerms``: kinematics,
+joint Jacobians, CoM and its Jacobian, CRBA, nonlinear effects, centroidal
+momentum; then the zero-acceleration forward pass for the drift terms). The
+getters afterwards only read and combine cached results.
+
+All vectors are in world axes and SI units. Jacobians are world-aligned
+(Pinocchio's ``LOCAL_WORLD_ALIGNED``) and map Pinocchio's ``v``; a
+"``jdot_v``" is the classical-acceleration drift ``Jdot v`` (the acceleration
+with ``vdot = 0``), so ``xddot = J vdot + jdot_v``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import passive as _passive
+
+
+class RobotKinematics:
+    """Pinocchio kinematics/dynamics of one robot at the last ``update(q, v)``.
+
+    Attributes:
+        robot: The :class:`~amlip_qp.robots.robot.Robot`.
+        model: Its Pinocchio model.
+        data: This object's own Pinocchio data.
+        q: The configuration of the last update (copy), shape (nq,).
+        v: The velocity of the last update (copy), shape (nv,).
+    """
+
+    def __init__(self, robot):
+        """Create the Pinocchio data; call :meth:`update` before any getter."""
+        import pinocchio as pin
+
+        self._pin = pin
+        self.robot = robot
+        self.model = robot.pin_model
+        self.data = self.model.createData()
+        self._a0 = np.zeros(self.model.nv)
+        self.q: np.ndarray | None = None
+        self.v: np.ndarray | None = None
+        self._jac: dict[int, np.ndarray] = {}
+        self._acc: dict[int, np.ndarray] = {}
+        self._output_map = None
+
+    # ------------------------------------------------------------------ update
+    def update(self, q, v) -> None:
+        """Run Pinocchio's passes at the state ``(q, v)`` (Pinocchio convention).
+
+        Raises:
+            InputError: Wrong shapes or NaN/inf.
+        """
+        pin = self._pin
+        q = np.asarray(q, dtype=float)
+        v = np.asarray(v, dtype=float)
+        if q.shape != (self.model.nq,) or v.shape != (self.model.nv,):
+            raise InputError(
+                f"q, v must have shapes ({self.model.nq},), ({self.model.nv},); got {q.shape}, {v.shape}"
+            )
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            raise InputError("q or v contains NaN or inf")
+        self.q, self.v = q.copy(), v.copy()
+        m, d = self.model, self.data
+        pin.computeAllTerms(m, d, self.q, self.v)
+        pin.forwardKinematics(m, d, self.q, self.v, self._a0)
+        pin.updateFramePlacements(m, d)
+        pin.centerOfMass(m, d, pin.KinematicLevel.ACCELERATION, False)
+        self._jac.clear()
+        self._acc.clear()
+
+    def _ready(self) -> None:
+        if self.q is None:
+            raise InputError("RobotKinematics: call update(q, v) first")
+
+    # ------------------------------------------------------------- frames
+    def frame_position(self, frame_id: int) -> np.ndarray:
+        """World position (m) of a Pinocchio frame, shape (3,)."""
+        self._ready()
+        return self.data.oMf[frame_id].translation.copy()
+
+    def frame_rotation(self, frame_id: int) -> np.ndarray:
+        """World rotation matrix of a Pinocchio frame, shape (3, 3)."""
+        self._ready()
+        return self.data.oMf[frame_id].rotation.copy()
+
+    def frame_jacobian6(self, frame_id: int) -> np.ndarray:
+        """World-aligned 6 x nv Jacobian (linear rows first, then angular) of a frame."""
+        self._ready()
+        jac = self._jac.get(frame_id)
+        if jac is None:
+            pin = self._pin
+            jac = pin.getFrameJacobian(self.model, self.data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            self._jac[frame_id] = jac
+        return jac
+
+    def frame_jdot_v6(self, frame_id: int) -> np.ndarray:
+        """World-aligned classical acceleration drift of a frame (linear, angular), shape (6,)."""
+        self._ready()
+        acc = self._acc.get(frame_id)
+        if acc is None:
+            pin = self._pin
+            a = pin.getFrameClassicalAcceleration(
+                self.model, self.data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            )
+            acc = np.concatenate([a.linear, a.angular])
+            self._acc[frame_id] = acc
+        return acc
+
+    def frame_jacobian(self, frame_id: int) -> np.ndarray:
+        """World-aligned translational Jacobian (3 x nv) of a frame's origin."""
+        return self.frame_jacobian6(frame_id)[:3]
+
+    def frame_jdot_v(self, frame_id: int) -> np.ndarray:
+        """``Jdot v`` (m/s^2) of a frame's origin, world axes, shape (3,)."""
+        return self.frame_jdot_v6(frame_id)[:3]
+
+    # ---------------------------------------------------------- contacts
+    def contact_position(self, side: str) -> np.ndarray:
+        """World position (m) of the ALIP contact point (``{side}-contact``)."""
+        return self.frame_position(self.robot.contact_frame_ids[self._side(side)])
+
+    def contact_jacobian(self, side: str) -> np.ndarray:
+        """Translational Jacobian (3 x nv) of the ALIP contact point."""
+        return self.frame_jacobian(self.robot.contact_frame_ids[self._side(side)])
+
+    def contact_jdot_v(self, side: str) -> np.ndarray:
+        """``Jdot v`` (m/s^2) of the ALIP contact point, shape (3,)."""
+        return self.frame_jdot_v(self.robot.contact_frame_ids[self._side(side)])
+
+    def force_point_positions(self, side: str) -> np.ndarray:
+        """World positions (m) of the foot's force points (toe, heel or the contact), shape (k, 3)."""
+        return np.array([self.frame_position(f) for f in self.robot.force_frame_ids[self._side(side)]])
+
+    def force_point_jacobian(self, side: str) -> np.ndarray:
+        """Stacked translational Jacobians (3k x nv) of the foot's force points."""
+        return np.vstack([self.frame_jacobian(f) for f in self.robot.force_frame_ids[self._side(side)]])
+
+    def force_point_jdot_v(self, side: str) -> np.ndarray:
+        """Stacked ``Jdot v`` (3k,) of the foot's force points."""
+        return np.concatenate([self.frame_jdot_v(f) for f in self.robot.force_frame_ids[self._side(side)]])
+
+    def _side(self, side: str) -> str:
+        if side not in self.robot.foot_sides:
+            raise InputError(f"side must be 'left' or 'right', got {side!r}")
+        return side
+
+    # -------------------------------------------------------------- base
+    def base_rotation(self) -> np.ndarray:
+        """World rotation of the root body (pelvis / torso), shape (3, 3)."""
+        return self.frame_rotation(self.robot.base_frame_id)
+
+    def base_angular_jacobian(self) -> np.ndarray:
+        """World angular-velocity Jacobian (3 x nv) of the root body."""
+        return self.frame_jacobian6(self.robot.base_frame_id)[3:]
+
+    def base_angular_jdot_v(self) -> np.ndarray:
+        """World angular-acceleration drift (rad/s^2) of the root body, shape (3,)."""
+        return self.frame_jdot_v6(self.robot.base_frame_id)[3:]
+
+    # ------------------------------------------------------- centre of mass
+    @property
+    def mass_kg(self) -> float:
+        """Total mass (kg)."""
+        return float(self.data.mass[0])
+
+    def com(self) -> np.ndarray:
+        """Centre of mass ``c`` (m), shape (3,)."""
+        self._ready()
+        return self.data.com[0].copy()
+
+    def com_velocity(self) -> np.ndarray:
+        """CoM velocity ``v_c`` (m/s), shape (3,)."""
+        self._ready()
+        return self.data.vcom[0].copy()
+
+    def com_jacobian(self) -> np.ndarray:
+        """CoM Jacobian (3 x nv)."""
+        self._ready()
+        return self.data.Jcom
+
+    def com_jdot_v(self) -> np.ndarray:
+        """CoM acceleration drift ``Jcom_dot v`` (m/s^2), shape (3,)."""
+        self._ready()
+        return self.data.acom[0].copy()
+
+    # ------------------------------------------------------------ momentum
+    def centroidal_momentum(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(m v_c, L_c)``: linear momentum (kg m/s) and angular momentum about the CoM (kg m^2/s), world axes."""
+        self._ready()
+        hg = self.data.hg
+        return hg.linear.copy(), hg.angular.copy()
+
+    def angular_momentum_about(self, point) -> np.ndarray:
+        """Angular momentum ``L = L_c + (c - r) x m v_c`` (kg m^2/s) about a world point ``r`` (m)."""
+        r = np.asarray(point, dtype=float)
+        if r.shape != (3,) or not np.all(np.isfinite(r)):
+            raise InputError(f"point must be a finite 3-vector, got {r!r}")
+        lin, ang = self.centroidal_momentum()
+        return ang + np.cross(self.data.com[0] - r, lin)
+
+    def angular_momentum_about_contact(self, side: str) -> np.ndarray:
+        """``L`` (kg m^2/s) about the ``{side}-contact`` point."""
+        return self.angular_momentum_about(self.contact_position(side))
+
+    def centroidal_momentum_matrix(self) -> np.ndarray:
+        """Centroidal momentum matrix ``A_g`` (6 x nv): ``(m v_c, L_c) = A_g v``."""
+        self._ready()
+        return self.data.Ag
+
+    # ------------------------------------------------------------ dynamics
+    def mass_matrix(self) -> np.ndarray:
+        """Joint-space inertia matrix ``M(q)`` (nv x nv, symmetric, armature included)."""
+        self._ready()
+        upper = np.triu(self.data.M)
+        return upper + np.triu(upper, 1).T
+
+    def nonlinear_effects(self) -> np.ndarray:
+        """``h = C(q, v) v + g(q)`` (N m / N), shape (nv,)."""
+        self._ready()
+        return self.data.nle.copy()
+
+    def passive_forces(self) -> np.ndarray:
+        """Joint springs, damping and tendon springs (= MuJoCo's qfrc_passive, Pinocchio coordinates)."""
+        self._ready()
+        return _passive.passive_forces(self.robot, self.q, self.v)
+
+    def coupling_constraints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(g, G, Gdot_v)`` of the rigid joint couplings (see :mod:`amlip_qp.robots.passive`)."""
+        self._ready()
+        return _passive.coupling_constraints(self.robot, self.q, self.v)
+
+    # ------------------------------------------------------------- outputs
+    def outputs(self, stance: str, heading_rad: float = 0.0):
+        """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`."""
+        if self._output_map is None:
+            from amlip_qp.robots.outputs import OutputMap
+
+            self._output_map = OutputMap(self.robot)
+        return self._output_map.evaluate(self, stance, heading_rad)
+
+    def joint_position(self, name: str) -> float:
+        """Position (rad or m) of a hinge/slide joint, by MuJoCo name."""
+        self._ready()
+        return float(self.q[self.robot.state_map.joint_pin_q[name]])

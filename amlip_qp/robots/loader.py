@@ -1,0 +1,385 @@
+"""Load an MJCF file into MuJoCo and Pinocchio and describe the robot.
+
+:func:`load_robot` accepts a bundled robot name (``"cassie"``, ``"rabbit"``)
+or a path to an MJCF ``.xml`` file. Everything in the returned
+:class:`~amlip_qp.robots.robot.Robot` is derived from the compiled models:
+joint names, actuator gears and limits, fixed tendons, springs, sites.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from amlip_qp.exceptions import MJCFError, ModelFileError, UnknownRobotError
+from amlip_qp.paths import MODELS_DIR
+from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
+from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
+
+#: Bundled robots: name -> MJCF file.
+KNOWN_ROBOTS: dict[str, Path] = {
+    "cassie": MODELS_DIR / "cassie.xml",
+    "rabbit": MODELS_DIR / "rabbit.xml",
+}
+
+#: Name of the keyframe used as the nominal standing configuration.
+STAND_KEYFRAME = "stand"
+
+# Tolerance (m) of the load-time check that both models place every site alike.
+_SITE_AGREEMENT_TOL_M = 1e-6
+
+_FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3
+
+
+def _one_line(exc: BaseException) -> str:
+    """The parser's message on a single line."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    return "; ".join(lines) if lines else type(exc).__name__
+
+
+def resolve_model_path(name_or_path: str | os.PathLike) -> tuple[str, Path]:
+    """Turn a robot name or an MJCF path into ``(name, path)``.
+
+    Raises:
+        UnknownRobotError: Not a known name and does not look like a file path.
+        ModelFileError: The file does not exist.
+    """
+    if isinstance(name_or_path, str) and name_or_path.strip().lower() in KNOWN_ROBOTS:
+        name = name_or_path.strip().lower()
+        path = KNOWN_ROBOTS[name]
+    else:
+        text = os.fspath(name_or_path)
+        looks_like_path = (
+            not isinstance(name_or_path, str)
+            or text.lower().endswith(".xml")
+            or os.sep in text
+            or (os.altsep is not None and os.altsep in text)
+            or Path(text).exists()
+        )
+        if not looks_like_path:
+            known = ", ".join(repr(k) for k in KNOWN_ROBOTS)
+            raise UnknownRobotError(
+                f"unknown robot {text!r}: known robots are {known}; "
+                "a path to an MJCF .xml file also works"
+            )
+        path = Path(text).expanduser()
+        name = path.stem
+    if not path.is_file():
+        raise ModelFileError(f"robot model file not found: {path}")
+    return name, path.resolve()
+
+
+def _compile(path: Path):
+    """Compile the MJCF file with MuJoCo and Pinocchio; MJCFError on failure."""
+    import mujoco
+    import pinocchio as pin
+
+    try:
+        mj_model = mujoco.MjModel.from_xml_path(str(path))
+    except Exception as exc:  # MuJoCo raises ValueError for XML and compile errors
+        raise MJCFError(f"{path}: MuJoCo cannot load the model: {_one_line(exc)}") from exc
+    try:
+        pin_model = pin.buildModelFromMJCF(str(path))
+    except Exception as exc:
+        raise MJCFError(f"{path}: Pinocchio cannot load the model: {_one_line(exc)}") from exc
+    return mj_model, pin_model
+
+
+def _name(mj_model, objtype, idx: int) -> str:
+    import mujoco
+
+    return mujoco.mj_id2name(mj_model, objtype, idx) or ""
+
+
+def _site_ids(mj_model, pin_model, names, path) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    import mujoco
+    import pinocchio as pin
+
+    mj_ids, pin_ids = [], []
+    for n in names:
+        mj_ids.append(mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, n))
+        if not pin_model.existFrame(n, pin.OP_FRAME):
+            raise MJCFError(f"{path}: Pinocchio has no frame for site {n!r}")
+        pin_ids.append(pin_model.getFrameId(n, pin.OP_FRAME))
+    return tuple(mj_ids), tuple(pin_ids)
+
+
+def _sites(mj_model, pin_model, path: Path):
+    """Contact and force sites per side; MJCFError naming any missing site."""
+    import mujoco
+
+    has = lambda n: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, n) >= 0  # noqa: E731
+    missing = [f"{s}-contact" for s in FOOT_SIDES if not has(f"{s}-contact")]
+    if missing:
+        raise MJCFError(
+            f"{path}: missing required contact site(s) {', '.join(missing)} "
+            "(see docs/ARCHITECTURE.md, 'Model conventions')"
+        )
+    force: dict[str, tuple[str, ...]] = {}
+    for s in FOOT_SIDES:
+        toe, heel = has(f"{s}-toe"), has(f"{s}-heel")
+        if toe != heel:
+            raise MJCFError(
+                f"{path}: site {s}-{'heel' if toe else 'toe'} is missing: "
+                "a blade foot needs both toe and heel sites"
+            )
+        force[s] = (f"{s}-toe", f"{s}-heel") if toe else (f"{s}-contact",)
+    contact = {s: f"{s}-contact" for s in FOOT_SIDES}
+    c_mj, c_pin, f_mj, f_pin = {}, {}, {}, {}
+    for s in FOOT_SIDES:
+        (c_mj[s],), (c_pin[s],) = _site_ids(mj_model, pin_model, (contact[s],), path)
+        f_mj[s], f_pin[s] = _site_ids(mj_model, pin_model, force[s], path)
+    return contact, c_mj, c_pin, force, f_mj, f_pin
+
+
+def _root(mj_model, path: Path):
+    """The root body and its joints; whether they form a free or planar root."""
+    import mujoco
+
+    if mj_model.njnt == 0:
+        raise MJCFError(f"{path}: the model has no joints")
+    root_body = int(mj_model.jnt_bodyid[0])
+    if int(mj_model.body_parentid[root_body]) != 0:
+        raise MJCFError(f"{path}: the first joint must sit on a body directly under <worldbody>")
+    root_joints = [j for j in range(mj_model.njnt) if int(mj_model.jnt_bodyid[j]) == root_body]
+    types = [int(mj_model.jnt_type[j]) for j in root_joints]
+    is_floating = types == [_FREE]
+    is_planar = False
+    if sorted(types) == [_SLIDE, _SLIDE, _HINGE]:
+        data = mujoco.MjData(mj_model)
+        mujoco.mj_kinematics(mj_model, data)
+        hinge_axes = [
+            data.xaxis[j] for j in range(mj_model.njnt) if int(mj_model.jnt_type[j]) == _HINGE
+        ]
+        slide_axes = [data.xaxis[j] for j in root_joints if int(mj_model.jnt_type[j]) == _SLIDE]
+        normal = hinge_axes[0]
+        is_planar = abs(abs(normal[1]) - 1.0) < 1e-9  # motion in the world x-z plane
+        is_planar = is_planar and all(abs(abs(a @ normal) - 1.0) < 1e-9 for a in hinge_axes) and all(
+            abs(a @ normal) < 1e-9 for a in slide_axes
+        )
+    if not (is_floating or is_planar):
+        raise MJCFError(
+            f"{path}: the root body {_name(mj_model, mujoco.mjtObj.mjOBJ_BODY, root_body)!r} "
+            "must carry either one free joint or a planar slide/slide/hinge triple "
+            "(all hinges about the world y axis, slides in the x-z plane)"
+        )
+    names = tuple(_name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in root_joints)
+    return root_body, root_joints, names, is_floating, is_planar
+
+
+def _actuators(mj_model, smap, path: Path) -> ActuatorSet:
+    import mujoco
+
+    names, jnames, pv, pq, dof, qadr, gear, crange, tlim = [], [], [], [], [], [], [], [], []
+    for a in range(mj_model.nu):
+        aname = _name(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        if int(mj_model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT):
+            raise MJCFError(f"{path}: actuator {aname!r} must drive a joint directly")
+        j = int(mj_model.actuator_trnid[a, 0])
+        if int(mj_model.jnt_type[j]) not in (_SLIDE, _HINGE):
+            raise MJCFError(f"{path}: actuator {aname!r} must drive a hinge or slide joint")
+        jname = _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        g = float(mj_model.actuator_gear[a, 0])
+        lo, hi = -np.inf, np.inf
+        if mj_model.actuator_ctrllimited[a]:
+            lo, hi = (float(x) for x in mj_model.actuator_ctrlrange[a])
+        crange.append((lo, hi))
+        if mj_model.actuator_forcelimited[a]:
+            flo, fhi = (float(x) for x in mj_model.actuator_forcerange[a])
+            lo, hi = max(lo, flo), min(hi, fhi)
+        t_lo, t_hi = sorted((g * lo, g * hi))
+        if mj_model.jnt_actfrclimited[j]:  # joint-level clamp on the summed actuator force
+            t_lo = max(t_lo, float(mj_model.jnt_actfrcrange[j, 0]))
+            t_hi = min(t_hi, float(mj_model.jnt_actfrcrange[j, 1]))
+        names.append(aname)
+        jnames.append(jname)
+        pv.append(smap.joint_pin_v[jname])
+        pq.append(smap.joint_pin_q[jname])
+        dof.append(int(mj_model.jnt_dofadr[j]))
+        qadr.append(int(mj_model.jnt_qposadr[j]))
+        gear.append(g)
+        tlim.append((t_lo, t_hi))
+    idx = lambda x: np.asarray(x, dtype=np.intp)  # noqa: E731
+    return ActuatorSet(
+        names=tuple(names),
+        joint_names=tuple(jnames),
+        pin_v_idx=idx(pv),
+        pin_q_idx=idx(pq),
+        mj_dof_idx=idx(dof),
+        mj_qpos_idx=idx(qadr),
+        gear=np.asarray(gear, dtype=float).reshape(-1),
+        ctrl_range=np.asarray(crange, dtype=float).reshape(-1, 2),
+        torque_limit_Nm=np.asarray(tlim, dtype=float).reshape(-1, 2),
+    )
+
+
+def _couplings(mj_model, smap, path: Path) -> tuple[Coupling, ...]:
+    import mujoco
+
+    out = []
+    for t in range(mj_model.ntendon):
+        tname = _name(mj_model, mujoco.mjtObj.mjOBJ_TENDON, t)
+        adr, num = int(mj_model.tendon_adr[t]), int(mj_model.tendon_num[t])
+        if any(int(mj_model.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT) for w in range(adr, adr + num)):
+            raise MJCFError(f"{path}: tendon {tname!r}: only fixed (joint) tendons are supported")
+        if np.any(mj_model.tendon_stiffnesspoly[t]) or np.any(mj_model.tendon_dampingpoly[t]):
+            raise MJCFError(f"{path}: tendon {tname!r}: nonlinear spring/damper polynomials are not supported")
+        joints = [int(mj_model.wrap_objid[w]) for w in range(adr, adr + num)]
+        jn = tuple(_name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints)
+        out.append(
+            Coupling(
+                name=tname,
+                joint_names=jn,
+                coefficients=np.array([float(mj_model.wrap_prm[w]) for w in range(adr, adr + num)]),
+                pin_q_idx=np.array([smap.joint_pin_q[n] for n in jn], dtype=np.intp),
+                pin_v_idx=np.array([smap.joint_pin_v[n] for n in jn], dtype=np.intp),
+                springlength=(float(mj_model.tendon_lengthspring[t, 0]), float(mj_model.tendon_lengthspring[t, 1])),
+                stiffness=float(mj_model.tendon_stiffness[t]),
+                damping=float(mj_model.tendon_damping[t]),
+            )
+        )
+    return tuple(out)
+
+
+def _passive_params(mj_model, smap, path: Path):
+    """Joint stiffness / springref / damping / armature in Pinocchio v order.
+
+    Damping and armature are per dof and MuJoCo uses the same value on every
+    dof of a free or ball joint, so they are invariant under the free-flyer
+    velocity map and can be copied dof by dof.
+    """
+    import mujoco
+
+    if np.any(mj_model.jnt_stiffnesspoly) or np.any(mj_model.dof_dampingpoly):
+        raise MJCFError(f"{path}: nonlinear joint spring/damper polynomials are not supported")
+    if np.any(mj_model.body_gravcomp):
+        raise MJCFError(f"{path}: body gravcomp is not supported (it hides gravity from the controller)")
+    nv = mj_model.nv
+    stiff, ref, damp, arm = np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(nv)
+    ndof = {_FREE: 6, _BALL: 3, _SLIDE: 1, _HINGE: 1}
+    for j in range(mj_model.njnt):
+        jtype = int(mj_model.jnt_type[j])
+        name = _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+        pv, da, n = smap.joint_pin_v[name], int(mj_model.jnt_dofadr[j]), ndof[jtype]
+        damp[pv : pv + n] = mj_model.dof_damping[da : da + n]
+        arm[pv : pv + n] = mj_model.dof_armature[da : da + n]
+        if jtype in (_SLIDE, _HINGE):
+            stiff[pv] = float(mj_model.jnt_stiffness[j])
+            ref[pv] = float(mj_model.qpos_spring[int(mj_model.jnt_qposadr[j])])
+        elif mj_model.jnt_stiffness[j] != 0.0:
+            raise MJCFError(f"{path}: stiffness on free or ball joints is not supported")
+    return stiff, ref, damp, arm
+
+
+def _check_sites_agree(mj_model, pin_model, smap, path: Path) -> None:
+    """Both models must place every site at the same point (catches parser differences)."""
+    import mujoco
+    import pinocchio as pin
+
+    rng = np.random.default_rng(12345)
+    data = mujoco.MjData(mj_model)
+    qpos = mj_model.qpos0.copy()
+    for j in range(mj_model.njnt):
+        qa, jt = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_type[j])
+        if jt in (_SLIDE, _HINGE):
+            qpos[qa] += rng.uniform(-0.3, 0.3)
+        elif jt == _FREE:
+            qpos[qa : qa + 3] += rng.uniform(-0.3, 0.3, 3)
+            quat = rng.normal(size=4)
+            qpos[qa + 3 : qa + 7] = quat / np.linalg.norm(quat)
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(mj_model, data)
+    pin_data = pin_model.createData()
+    pin.framesForwardKinematics(pin_model, pin_data, qpos_to_q(smap, qpos))
+    for s in range(mj_model.nsite):
+        sname = _name(mj_model, mujoco.mjtObj.mjOBJ_SITE, s)
+        if not sname or not pin_model.existFrame(sname, pin.OP_FRAME):
+            continue
+        err = np.linalg.norm(pin_data.oMf[pin_model.getFrameId(sname, pin.OP_FRAME)].translation - data.site_xpos[s])
+        if err > _SITE_AGREEMENT_TOL_M:
+            raise MJCFError(
+                f"{path}: Pinocchio and MuJoCo place site {sname!r} {err:.3g} m apart; the MJCF uses "
+                "something Pinocchio's parser reads differently (e.g. a joint-less body fixed to the world)"
+            )
+
+
+def load_robot(name_or_path: str | os.PathLike) -> Robot:
+    """Load a robot into MuJoCo and Pinocchio from one MJCF file.
+
+    Args:
+        name_or_path: ``"cassie"``, ``"rabbit"`` (bundled in ``models/``) or
+            a path to an MJCF ``.xml`` file following the site conventions of
+            ``docs/ARCHITECTURE.md``.
+
+    Returns:
+        The :class:`~amlip_qp.robots.robot.Robot`.
+
+    Raises:
+        UnknownRobotError: An unknown name (the message lists the known names).
+        ModelFileError: The file does not exist.
+        MJCFError: The file is malformed (XML syntax, MuJoCo compile error,
+            Pinocchio failure), lacks the ``left-contact``/``right-contact``
+            sites, or uses something this library does not support.
+    """
+    import mujoco
+
+    name, path = resolve_model_path(name_or_path)
+    mj_model, pin_model = _compile(path)
+    smap = build_state_map(mj_model, pin_model, source=str(path))
+    contact, c_mj, c_pin, force, f_mj, f_pin = _sites(mj_model, pin_model, path)
+    root_body, root_joints, root_names, is_floating, is_planar = _root(mj_model, path)
+    _check_sites_agree(mj_model, pin_model, smap, path)
+
+    actuated = _actuators(mj_model, smap, path)
+    jt = mj_model.jnt_type
+    joint_names = tuple(
+        _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        for j in range(mj_model.njnt)
+        if j not in root_joints and int(jt[j]) in (_SLIDE, _HINGE)
+    )
+    act_set = set(actuated.joint_names)
+    passive = tuple(n for n in joint_names if n not in act_set)
+
+    key_id = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_KEY, STAND_KEYFRAME)
+    qpos_stand = (mj_model.key_qpos[key_id] if key_id >= 0 else mj_model.qpos0).copy()
+    q_stand = qpos_to_q(smap, qpos_stand)
+    qpos_stand = q_to_qpos(smap, q_stand)  # quaternion normalized
+
+    import pinocchio as pin
+
+    base_name = _name(mj_model, mujoco.mjtObj.mjOBJ_BODY, root_body)
+    stiff, ref, damp, arm = _passive_params(mj_model, smap, path)
+    return Robot(
+        name=name,
+        path=path,
+        mj_model=mj_model,
+        pin_model=pin_model,
+        pin_data=pin_model.createData(),
+        state_map=smap,
+        contact_sites=contact,
+        contact_site_ids=c_mj,
+        contact_frame_ids=c_pin,
+        force_sites=force,
+        force_site_ids=f_mj,
+        force_frame_ids=f_pin,
+        base_body=base_name,
+        base_frame_id=int(pin_model.getFrameId(base_name, pin.BODY)),
+        root_joint_names=root_names,
+        is_floating=is_floating,
+        is_planar=is_planar,
+        joint_names=joint_names,
+        actuated=actuated,
+        passive_joint_names=passive,
+        passive_v_idx=np.array([smap.joint_pin_v[n] for n in passive], dtype=np.intp),
+        passive_q_idx=np.array([smap.joint_pin_q[n] for n in passive], dtype=np.intp),
+        mass_kg=float(np.sum(mj_model.body_mass)),
+        q_stand=q_stand,
+        qpos_stand=qpos_stand,
+        couplings=_couplings(mj_model, smap, path),
+        dof_stiffness=stiff,
+        dof_springref=ref,
+        dof_damping=damp,
+        dof_armature=arm,
+    )

@@ -1,0 +1,120 @@
+"""Tests of amlip_qp.robots.outputs: h_0(q) values, Jacobians and drifts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.spatial.transform import Rotation
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.paths import MODELS_DIR
+from amlip_qp.robots import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap, RobotKinematics, load_robot
+
+needs_cassie = pytest.mark.skipif(not (MODELS_DIR / "cassie.xml").exists(), reason="models/cassie.xml not written yet")
+ROBOTS = ["rabbit", pytest.param("cassie", marks=needs_cassie)]
+
+
+@pytest.fixture(scope="module", params=ROBOTS)
+def robot(request):
+    return load_robot(request.param)
+
+
+def random_state(robot, rng):
+    """Random Pinocchio state near the stand keyframe (joints within range)."""
+    pm = robot.pin_model
+    q = robot.q_stand.copy()
+    dq = rng.uniform(-0.3, 0.3, robot.nv)
+    q = pin.integrate(pm, q, dq)
+    lo, hi = pm.lowerPositionLimit, pm.upperPositionLimit
+    finite = np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 100)
+    if robot.is_floating:
+        finite[:7] = False
+    q[finite] = np.clip(q[finite], lo[finite], hi[finite])
+    return q, rng.normal(size=robot.nv)
+
+
+def test_layout(robot):
+    omap = OutputMap(robot)
+    expect = CASSIE_OUTPUTS if robot.is_floating else PLANAR_OUTPUTS
+    assert omap.names == expect and omap.size == len(expect)
+
+
+def test_values_follow_the_definitions(robot):
+    rng = np.random.default_rng(20)
+    kin = RobotKinematics(robot)
+    for _ in range(3):
+        q, v = random_state(robot, rng)
+        kin.update(q, v)
+        D = rng.uniform(-np.pi, np.pi)
+        for st in robot.foot_sides:
+            sw = robot.other_side(st)
+            y, J, jdv = kin.outputs(st, D)
+            c, r_st, r_sw = kin.com(), kin.contact_position(st), kin.contact_position(sw)
+            xD, yD = np.array([np.cos(D), np.sin(D), 0]), np.array([-np.sin(D), np.cos(D), 0])
+            named = dict(zip(OutputMap(robot).names, y))
+            assert named["com_z_over_stance"] == pytest.approx(c[2] - r_st[2], abs=1e-14)
+            assert named["com_x_over_swing"] == pytest.approx((c - r_sw) @ xD, abs=1e-14)
+            assert named["com_z_over_swing"] == pytest.approx(c[2] - r_sw[2], abs=1e-14)
+            R = kin.base_rotation()
+            if robot.is_planar:
+                assert named["torso_pitch"] == pytest.approx(q[2], abs=1e-12)  # root-pitch, absolute
+            else:
+                yaw, pitch, roll = Rotation.from_matrix(R).as_euler("ZYX")
+                assert named["torso_pitch"] == pytest.approx(pitch, abs=1e-12)
+                assert named["torso_roll"] == pytest.approx(roll, abs=1e-12)
+                sm = robot.state_map
+                assert named["stance_hip_yaw"] == q[sm.joint_pin_q[f"{st}-hip-yaw"]]
+                assert named["swing_hip_yaw"] == q[sm.joint_pin_q[f"{sw}-hip-yaw"]]
+                assert named["com_y_over_swing"] == pytest.approx((c - r_sw) @ yD, abs=1e-14)
+                toe, heel = kin.force_point_positions(sw)
+                dlt = toe - heel
+                assert named["swing_toe_pitch"] == pytest.approx(np.arctan2(-dlt[2], np.hypot(dlt[0], dlt[1])), abs=1e-14)
+
+
+def test_planar_pitch_sign():
+    """Rabbit: positive torso_pitch = torso leaning forward (its top moves to +x)."""
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    q = robot.q_stand.copy()
+    q[2] = 0.2
+    kin.update(q, np.zeros(7))
+    y, _, _ = kin.outputs("left")
+    assert y[0] == pytest.approx(0.2)
+    assert kin.base_rotation()[:, 2][0] > 0  # torso axis tilts forward
+
+
+def test_jacobian_and_drift_by_finite_differences(robot):
+    rng = np.random.default_rng(21)
+    kin, probe = RobotKinematics(robot), RobotKinematics(robot)
+    h = 1e-6
+    for _ in range(2):
+        q, v = random_state(robot, rng)
+        D = rng.uniform(-np.pi, np.pi)
+        kin.update(q, v)
+        for st in robot.foot_sides:
+            y, J, jdv = kin.outputs(st, D)
+
+            def out(qq, k=0):
+                probe.update(qq, v)
+                return probe.outputs(st, D)[k]
+
+            cols = []
+            for i in range(robot.nv):
+                e = np.zeros(robot.nv)
+                e[i] = h
+                cols.append((out(pin.integrate(robot.pin_model, q, e)) - out(pin.integrate(robot.pin_model, q, -e))) / (2 * h))
+            np.testing.assert_allclose(J, np.column_stack(cols), atol=1e-6)
+            jv_p = out(pin.integrate(robot.pin_model, q, v * h), 1) @ v
+            jv_m = out(pin.integrate(robot.pin_model, q, -v * h), 1) @ v
+            np.testing.assert_allclose(jdv, (jv_p - jv_m) / (2 * h), atol=1e-5)
+
+
+def test_bad_arguments():
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(7))
+    with pytest.raises(InputError, match="stance must be 'left' or 'right'"):
+        kin.outputs("both")
+    with pytest.raises(InputError, match="heading_rad must be finite"):
+        kin.outputs("left", float("nan"))
