@@ -46,6 +46,7 @@ class RobotKinematics:
         self._jac: dict[int, np.ndarray] = {}
         self._acc: dict[int, np.ndarray] = {}
         self._output_map = None
+        self._out_cache: tuple | None = None
 
     # ------------------------------------------------------------------ update
     def update(self, q, v) -> None:
@@ -71,6 +72,7 @@ class RobotKinematics:
         pin.centerOfMass(m, d, pin.KinematicLevel.ACCELERATION, False)
         self._jac.clear()
         self._acc.clear()
+        self._out_cache = None
 
     def _ready(self) -> None:
         if self.q is None:
@@ -199,8 +201,17 @@ class RobotKinematics:
         r = np.asarray(point, dtype=float)
         if r.shape != (3,) or not np.all(np.isfinite(r)):
             raise InputError(f"point must be a finite 3-vector, got {r!r}")
-        lin, ang = self.centroidal_momentum()
-        return ang + np.cross(self.data.com[0] - r, lin)
+        hg = self.data.hg
+        lin, ang = hg.linear, hg.angular
+        p = self.data.com[0] - r
+        # p x (m v_c), written out: numpy's cross costs ~20 µs on 3-vectors.
+        return np.array(
+            [
+                ang[0] + p[1] * lin[2] - p[2] * lin[1],
+                ang[1] + p[2] * lin[0] - p[0] * lin[2],
+                ang[2] + p[0] * lin[1] - p[1] * lin[0],
+            ]
+        )
 
     def angular_momentum_about_contact(self, side: str) -> np.ndarray:
         """``L`` (kg m^2/s) about the ``{side}-contact`` point."""
@@ -235,12 +246,22 @@ class RobotKinematics:
 
     # ------------------------------------------------------------- outputs
     def outputs(self, stance: str, heading_rad: float = 0.0):
-        """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`."""
+        """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`.
+
+        The result is cached until the next :meth:`update` for the same
+        ``(stance, heading_rad)``: treat the returned arrays as read-only.
+        """
+        self._ready()
+        cache = self._out_cache
+        if cache is not None and cache[0] == stance and cache[1] == heading_rad:
+            return cache[2]
         if self._output_map is None:
             from amlip_qp.robots.outputs import OutputMap
 
             self._output_map = OutputMap(self.robot)
-        return self._output_map.evaluate(self, stance, heading_rad)
+        result = self._output_map.evaluate(self, stance, heading_rad)
+        self._out_cache = (stance, heading_rad, result)
+        return result
 
     def joint_position(self, name: str) -> float:
         """Position (rad or m) of a hinge/slide joint, by MuJoCo name."""
