@@ -24,25 +24,14 @@ import math
 
 import numpy as np
 
+from amlip_qp.alip import outputs as _alip_outputs
 from amlip_qp.exceptions import InputError, MJCFError
 
-CASSIE_OUTPUTS: tuple[str, ...] = (
-    "torso_pitch",
-    "torso_roll",
-    "stance_hip_yaw",
-    "swing_hip_yaw",
-    "com_z_over_stance",
-    "com_x_over_swing",
-    "com_y_over_swing",
-    "com_z_over_swing",
-    "swing_toe_pitch",
-)
-PLANAR_OUTPUTS: tuple[str, ...] = (
-    "torso_pitch",
-    "com_z_over_stance",
-    "com_x_over_swing",
-    "com_z_over_swing",
-)
+# One definition of the output names, shared with the planner's references.
+#: Cassie's nine outputs, in order.
+CASSIE_OUTPUTS: tuple[str, ...] = _alip_outputs.CASSIE_OUTPUTS
+#: The planar (Rabbit) layout's four outputs, in order.
+PLANAR_OUTPUTS: tuple[str, ...] = _alip_outputs.RABBIT_OUTPUTS
 
 
 class _Scalar:
