@@ -126,8 +126,46 @@ class QPProblem:
             ub=self.ub,
         )
 
+    def without_fixed_variables(self) -> tuple["QPProblem", np.ndarray, np.ndarray]:
+        """The equivalent problem over the variables whose box is not a single point.
+
+        Variables with ``lb == ub`` (e.g. the swing foot's forces in the air)
+        are substituted. Active-set solvers such as quadprog reject the
+        degenerate pair of opposite bounds they become; the reduced problem
+        has the same optimum.
+
+        Returns:
+            ``(reduced, free, x_fixed)``: the reduced problem, the boolean mask
+            of the free variables, and the values of the fixed ones.
+        """
+        fixed = self.lb == self.ub
+        free = ~fixed
+        x_fixed = self.lb[fixed].copy()
+        if not np.any(fixed):
+            return self, free, x_fixed
+        off_c = self.C[:, fixed] @ x_fixed
+        names = {}
+        reduced = QPProblem(
+            H=self.H[np.ix_(free, free)],
+            g=self.g[free] + self.H[np.ix_(free, fixed)] @ x_fixed,
+            A=self.A[:, free],
+            b=self.b - self.A[:, fixed] @ x_fixed,
+            C=self.C[:, free],
+            l=self.l - off_c,
+            u=self.u - off_c,
+            lb=self.lb[free],
+            ub=self.ub[free],
+            variables=names,
+            eq_rows=list(self.eq_rows),
+            in_rows=list(self.in_rows),
+        )
+        return reduced, free, x_fixed
+
     def solve_with(self, solver: str, **kwargs) -> np.ndarray:
         """Solve with any installed ``qpsolvers`` backend (cross-checks, benchmarks).
+
+        Fixed variables (``lb == ub``) are substituted first
+        (:meth:`without_fixed_variables`); the returned ``x`` has full size.
 
         Raises:
             QPError: the backend is not installed or found no solution.
@@ -139,7 +177,11 @@ class QPProblem:
                 f"qpsolvers backend {solver!r} is not installed; available: {', '.join(qpsolvers.available_solvers)}",
                 problem=self,
             )
-        solution = qpsolvers.solve_problem(self.to_qpsolvers(), solver=solver, **kwargs)
+        reduced, free, x_fixed = self.without_fixed_variables()
+        solution = qpsolvers.solve_problem(reduced.to_qpsolvers(), solver=solver, **kwargs)
         if not solution.found or solution.x is None:
             raise QPError(f"qpsolvers backend {solver!r} found no solution", problem=self, status="not found")
-        return np.asarray(solution.x)
+        x = np.empty(self.n)
+        x[free] = solution.x
+        x[~free] = x_fixed
+        return x

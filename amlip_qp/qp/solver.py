@@ -47,12 +47,18 @@ class ProxQPSolver:
         warm_start: Start each solve from the previous solution (default). With
             ``False`` the solver is re-initialised at every call, as TSID does;
             that mode exists for benchmarks and comparisons.
+        eps_primal_inf: ProxQP's primal infeasibility threshold (its default
+            1e-4). Problems with forces of hundreds of newtons can trip it
+            falsely; the whole-body tracker uses 1e-9.
     """
 
-    def __init__(self, eps_abs: float = 1e-6, max_iter: int = 200, warm_start: bool = True):
+    def __init__(
+        self, eps_abs: float = 1e-6, max_iter: int = 200, warm_start: bool = True, eps_primal_inf: float = 1e-4
+    ):
         self.eps_abs = eps_abs
         self.max_iter = max_iter
         self.warm_start = warm_start
+        self.eps_primal_inf = eps_primal_inf
         self._qp: proxqp.dense.QP | None = None
         self._dims: tuple[int, int, int] | None = None
         #: Number of (re-)initialisations so far (1 in steady warm-started use).
@@ -63,6 +69,7 @@ class ProxQPSolver:
         qp.settings.eps_abs = self.eps_abs
         qp.settings.eps_rel = 0.0
         qp.settings.max_iter = self.max_iter
+        qp.settings.eps_primal_inf = self.eps_primal_inf
         qp.settings.verbose = False
         qp.settings.initial_guess = (
             proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT

@@ -1,0 +1,534 @@
+"""The whole-body task-space QP of the tracker: built here, solved elsewhere.
+
+Decision variables ``x = [vdot, f_st, f_sw, lambda]``:
+
+- ``vdot`` (nv): generalized accelerations (Pinocchio ``v`` coordinates),
+  m/s^2 and rad/s^2;
+- ``f_st``, ``f_sw``: world-frame contact point forces of the **stance** and
+  **swing** foot, N. Cassie: toe then heel sphere centre, 3-D each (6 per
+  foot); Rabbit (planar): the point foot, ``(f_x, f_z)`` (2 per foot). The
+  stance foot's block always comes first, so the dimensions never change
+  and one persistent ProxQP serves the whole walk;
+- ``lambda`` (Cassie): the constraint forces that hold the springs of a leg
+  rigid, N m: per leg the knee-tarsus coupling (the achilles tendon) and the
+  shin spring. With ``rigid_springs="swing"`` (default) only the swing leg's
+  springs are held rigid, as in the paper (section "Springs": the swing-leg
+  deflection is small, the leg is treated as rigid); the stance leg keeps its
+  exact spring model (the tendon and shin springs in ``taup``), which the
+  closed chain through the ground makes controllable. ``"all"`` holds both
+  legs rigid, ``"none"`` keeps every spring as a spring (no ``lambda``).
+  Rigid is not what the plant does: the swing leg's spring modes are not
+  controllable by an instantaneous QP (the QP cannot change this tick's
+  spring torque and fights the 25 Hz tarsus mode with large accelerations);
+  holding them rigid toward zero deflection matches what the unloaded
+  spring does anyway.
+
+Torques are not variables; they are recovered from the actuated rows,
+``tau = M_a vdot + h_a - taup_a - J_a^T f - G_a^T lambda`` (N m), an affine map
+``tau = T x + tau0`` that :meth:`WholeBodyQP.torques` evaluates.
+
+Equalities:
+
+- ``dynamics``: the unactuated rows (floating base and passive joints) of
+  ``M vdot + h - taup = S^T tau + J^T f + G^T lambda`` with the spring, tendon
+  and damping torques in ``taup`` (:meth:`RobotKinematics.passive_forces`);
+- ``contact``: the stance foot does not accelerate,
+  ``J_c vdot + Jdot_c v = -K_c J_c v`` (velocity Baumgarte term ``K_c``).
+  Cassie's blade uses 5 independent rows: the toe's 3 and the heel's 2
+  components orthogonal to the toe-heel axis (the third is implied by the
+  rigid foot, and dropping it keeps the rows independent for active-set
+  solvers);
+- ``rigid_stance`` / ``rigid_swing``: ``G vdot + Gdot v = -K_p g - K_d G v``
+  with ``g`` the spring deflections (tendon length minus its rest length,
+  shin angle minus its spring reference), rad.
+
+Inequalities (rows of ``C``): ``torque`` limits (from
+``robot.actuated.torque_limit_Nm``) and the ``friction`` pyramid (4 rows per
+3-D point, 2 per planar point) on every force point. Box bounds: the normal
+force of the stance points in ``[f_min, f_max]``; swing points bounded to
+zero in the air, relaxed with the **force ramp** ``w = max(swing_contact_weight,
+liftoff ramp)``: ``0 <= f_z <= w f_max`` and ``|f_t| <= mu w f_max``. The
+liftoff ramp ``1 - s / liftoff_phase`` lets the previous stance foot unload
+smoothly during the first ``liftoff_phase`` of a step. Actuated joint
+accelerations of the **swing leg** are bounded so the joint stops inside its
+range within the horizon ``joint_limit_horizon_s`` (position and velocity
+margins). The stance leg's joints are tied to the base by the contact rows;
+bounding them as well made the problem infeasible near a straight stance
+knee (measured on Cassie), so they are left to the output tasks.
+
+Cost: ``sum_tasks ||W^(1/2)(J vdot + Jdot v - ydd_des)||^2`` over the output
+task (every output of ``h_0``), a low-weight posture task on the actuated
+joints and a damping task on the passive springs, plus small regularisation
+of ``vdot``, forces and torques.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from amlip_qp.control.tasks import Gains, JointTask, OutputTask
+from amlip_qp.exceptions import InputError
+from amlip_qp.qp.problem import QPProblem
+
+
+@dataclass(frozen=True)
+class QPConfig:
+    """Weights, gains and limits of the whole-body QP (SI units).
+
+    Attributes:
+        output_kp: Output PD proportional gains, 1/s^2, one per output of h_0.
+        output_kd: Output PD derivative gains, 1/s, one per output.
+        output_weight: Output tracking weights, (m/s^2)^-2 or (rad/s^2)^-2.
+        posture_kp: Posture task (actuated joints toward ``robot.q_stand``) kp, 1/s^2.
+        posture_kd: Posture task kd, 1/s.
+        posture_weight: Posture task weight (keep small: a null-space regulariser).
+        spring_kd: Damping gain of the passive-spring task, 1/s.
+        spring_weight: Weight of the passive-spring damping task (0 disables).
+        friction_mu: Friction coefficient of the pyramid (below the plant's 1.0).
+        min_normal_force_N: Least normal force on each stance force point, N.
+        max_normal_force_N: Largest normal force on each force point, N.
+        liftoff_phase: Phase over which the previous stance foot unloads.
+        contact_kd: Velocity Baumgarte gain of the stance contact rows, 1/s.
+        rigid_springs: Which legs' springs (tendon coupling, passive spring
+            joints) the QP holds rigid with constraint forces: ``"swing"``,
+            ``"all"`` or ``"none"`` (see the module docstring).
+        coupling_kp: Swing leg: stiffness of the rigid-spring constraint toward
+            zero deflection (what the unloaded spring does), 1/s^2.
+        coupling_kd: Swing leg: damping of the rigid-spring constraint, 1/s.
+        stance_coupling_kp: Stance leg (``"all"``): stiffness toward zero
+            deflection, 1/s^2. Default 0: the loaded spring keeps its
+            deflection (the constraint only damps its rate), so the constraint
+            force stays small instead of fighting the spring's static load.
+        stance_coupling_kd: Stance leg: damping of the deflection rate, 1/s.
+        joint_limit_horizon_s: Horizon of the joint-limit acceleration bounds, s.
+        joint_limit_max_recovery: Cap on the acceleration the bounds may force
+            (to stay feasible with the torque limits), rad/s^2.
+        reg_vdot: Regularisation weight on ``vdot``, (rad/s^2)^-2.
+        reg_force: Regularisation weight on forces, N^-2.
+        reg_torque: Regularisation weight on joint torques, (N m)^-2.
+        reg_coupling: Regularisation weight on coupling forces, (N m)^-2.
+    """
+
+    output_kp: tuple[float, ...]
+    output_kd: tuple[float, ...]
+    output_weight: tuple[float, ...]
+    posture_kp: float = 20.0
+    posture_kd: float = 8.0
+    posture_weight: float = 1e-2
+    spring_kd: float = 40.0
+    spring_weight: float = 0.0
+    friction_mu: float = 0.7
+    min_normal_force_N: float = 5.0
+    max_normal_force_N: float = 1500.0
+    liftoff_phase: float = 0.08
+    contact_kd: float = 10.0
+    rigid_springs: str = "all"
+    coupling_kp: float = 400.0
+    coupling_kd: float = 40.0
+    stance_coupling_kp: float = 0.0
+    stance_coupling_kd: float = 40.0
+    joint_limit_horizon_s: float = 0.05
+    joint_limit_max_recovery: float = 200.0
+    reg_vdot: float = 1e-6
+    reg_force: float = 1e-6
+    reg_torque: float = 1e-6
+    reg_coupling: float = 1e-6
+
+    def __post_init__(self):
+        if self.rigid_springs not in ("swing", "all", "none"):
+            raise InputError(f"rigid_springs must be 'swing', 'all' or 'none', got {self.rigid_springs!r}")
+        n = len(self.output_kp)
+        if len(self.output_kd) != n or len(self.output_weight) != n:
+            raise InputError("output_kp, output_kd and output_weight need one entry per output")
+        scalars = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in ("rigid_springs",)}
+        for name, val in scalars.items():
+            arr = np.asarray(val, dtype=float)
+            if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+                raise InputError(f"QPConfig.{name} must be finite and >= 0, got {val!r}")
+        if not 0 < self.friction_mu:
+            raise InputError("friction_mu must be > 0")
+        if self.min_normal_force_N > self.max_normal_force_N:
+            raise InputError("min_normal_force_N must not exceed max_normal_force_N")
+        if self.joint_limit_horizon_s <= 0:
+            raise InputError("joint_limit_horizon_s must be > 0 s")
+
+    def with_(self, **changes) -> "QPConfig":
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+
+#: Cassie outputs: torso pitch, roll, stance/swing hip yaw, com z over stance,
+#: com x/y/z over swing, swing toe pitch.
+CASSIE_CONFIG = QPConfig(
+    output_kp=(400.0, 400.0, 200.0, 200.0, 400.0, 400.0, 400.0, 400.0, 200.0),
+    output_kd=(40.0, 40.0, 25.0, 25.0, 40.0, 40.0, 40.0, 40.0, 25.0),
+    output_weight=(10.0, 10.0, 1.0, 1.0, 10.0, 3.0, 3.0, 3.0, 0.5),
+    spring_weight=1e-2,
+)
+#: Rabbit outputs: torso pitch, com z over stance, com x/z over swing.
+RABBIT_CONFIG = QPConfig(
+    output_kp=(400.0, 400.0, 400.0, 400.0),
+    output_kd=(40.0, 40.0, 40.0, 40.0),
+    output_weight=(10.0, 10.0, 3.0, 3.0),
+    posture_weight=1e-4,
+    min_normal_force_N=10.0,
+)
+
+
+def default_config(robot) -> QPConfig:
+    """The documented default :class:`QPConfig` for ``robot`` (Cassie layout or planar)."""
+    if robot.is_planar:
+        return RABBIT_CONFIG
+    return CASSIE_CONFIG
+
+
+@dataclass
+class _Layout:
+    """Variable slices and sizes."""
+
+    nv: int
+    point_dim: int
+    n_points: int  # per foot
+    n_rigid_st: int
+    n_rigid_sw: int
+    sl_vdot: slice = field(init=False)
+    sl_f_st: slice = field(init=False)
+    sl_f_sw: slice = field(init=False)
+    sl_lam_st: slice = field(init=False)
+    sl_lam_sw: slice = field(init=False)
+    sl_lambda: slice = field(init=False)
+    n: int = field(init=False)
+
+    def __post_init__(self):
+        nf = self.point_dim * self.n_points
+        self.sl_vdot = slice(0, self.nv)
+        self.sl_f_st = slice(self.nv, self.nv + nf)
+        self.sl_f_sw = slice(self.nv + nf, self.nv + 2 * nf)
+        s0 = self.nv + 2 * nf
+        self.sl_lam_st = slice(s0, s0 + self.n_rigid_st)
+        self.sl_lam_sw = slice(s0 + self.n_rigid_st, s0 + self.n_rigid_st + self.n_rigid_sw)
+        self.sl_lambda = slice(s0, self.sl_lam_sw.stop)
+        self.n = self.sl_lambda.stop
+
+    @property
+    def n_lambda(self) -> int:
+        return self.n_rigid_st + self.n_rigid_sw
+
+
+class WholeBodyQP:
+    """Builds the tracker QP (see the module docstring) into preallocated arrays.
+
+    :meth:`build` refills and returns the same :class:`QPProblem` each tick
+    (call :meth:`QPProblem.copy` to keep one). After a build, :meth:`torques`
+    and :meth:`forces` map a solution back to joint torques and contact forces.
+
+    Args:
+        robot: The :class:`~amlip_qp.robots.robot.Robot`.
+        config: The :class:`QPConfig` (default: :func:`default_config`).
+    """
+
+    def __init__(self, robot, config: QPConfig | None = None):
+        self.robot = robot
+        self.config = config = config or default_config(robot)
+        nv = robot.nv
+        self._planar = bool(robot.is_planar)
+        self._axes = np.array([0, 2]) if self._planar else np.array([0, 1, 2])
+        n_points = {len(robot.force_frame_ids[s]) for s in robot.foot_sides}
+        if len(n_points) != 1 or n_points == {0}:
+            raise InputError("both feet need the same (nonzero) number of force points")
+        k = n_points.pop()
+        if k > 2 or (k == 2 and self._planar):
+            raise InputError("supported feet: one point (3-D or planar) or a 3-D blade of two points")
+        self._spring_rows = {side: self._leg_springs(robot, side) for side in robot.foot_sides}
+        n_r = {len(self._spring_rows[s][0]) for s in robot.foot_sides}
+        if len(n_r) != 1:
+            raise InputError("both legs need the same number of springs/couplings")
+        n_r = n_r.pop()
+        mode = config.rigid_springs
+        L = self._layout = _Layout(nv, len(self._axes), k, n_r if mode == "all" else 0, 0 if mode == "none" else n_r)
+        n_lambda = L.n_lambda
+        self.output_task = OutputTask(Gains.of(len(config.output_kp), config.output_kp, config.output_kd, config.output_weight))
+        self._act_v = np.asarray(robot.actuated.pin_v_idx, dtype=int)
+        self._act_q = np.asarray(robot.actuated.pin_q_idx, dtype=int)
+        self._unact_v = np.setdiff1d(np.arange(nv), self._act_v)
+        nu = len(self._act_v)
+        qmap = dict(zip(self._act_v.tolist(), self._act_q.tolist()))
+        qmap.update(zip(np.asarray(robot.passive_v_idx, int).tolist(), np.asarray(robot.passive_q_idx, int).tolist()))
+        sel = np.zeros((nu, nv))
+        sel[np.arange(nu), self._act_v] = 1.0
+        self.posture_task = JointTask(
+            "posture", sel, qmap, robot.q_stand[self._act_q],
+            Gains.of(nu, config.posture_kp, config.posture_kd, config.posture_weight),
+        )  # fmt: skip
+        self.spring_task = None
+        pv = np.asarray(robot.passive_v_idx, dtype=int)
+        if pv.size and config.spring_weight > 0:
+            rows = np.zeros((pv.size, nv))
+            rows[np.arange(pv.size), pv] = 1.0
+            ref = robot.q_stand[np.asarray(robot.passive_q_idx, int)]
+            self.spring_task = JointTask("springs", rows, qmap, ref, Gains.of(pv.size, 0.0, config.spring_kd, config.spring_weight))
+        self.tasks = [t for t in (self.output_task, self.posture_task, self.spring_task) if t is not None]
+
+        # Rows.
+        n_unact = self._unact_v.size
+        n_contact = len(self._axes) if k == 1 else 5
+        n_eq = n_unact + n_contact + n_lambda
+        n_fric_per_point = 2 * (len(self._axes) - 1)
+        n_fric = n_fric_per_point * 2 * k
+        n_in = nu + n_fric
+        n = L.n
+        inf = np.inf
+        self.problem = QPProblem(
+            H=np.zeros((n, n)), g=np.zeros(n), A=np.zeros((n_eq, n)), b=np.zeros(n_eq),
+            C=np.zeros((n_in, n)), l=np.full(n_in, -inf), u=np.zeros(n_in),
+            lb=np.full(n, -inf), ub=np.full(n, inf),
+            variables={"vdot": L.sl_vdot, "forces_stance": L.sl_f_st, "forces_swing": L.sl_f_sw,
+                       "rigid_forces_stance": L.sl_lam_st, "rigid_forces_swing": L.sl_lam_sw},
+            eq_rows=[("dynamics", slice(0, n_unact)), ("contact", slice(n_unact, n_unact + n_contact)),
+                     ("rigid_stance", slice(n_unact + n_contact, n_unact + n_contact + L.n_rigid_st)),
+                     ("rigid_swing", slice(n_unact + n_contact + L.n_rigid_st, n_eq))],
+            in_rows=[("torque", slice(0, nu)), ("friction", slice(nu, n_in))],
+        )  # fmt: skip
+        self._sl_dyn = slice(0, n_unact)
+        self._sl_contact = slice(n_unact, n_unact + n_contact)
+        self._sl_coup = slice(n_unact + n_contact, n_eq)
+        self._sl_tau = slice(0, nu)
+        # Friction pyramid: constant rows, l = -inf, u = 0.
+        mu = config.friction_mu
+        C = self.problem.C
+        r = nu
+        d = len(self._axes)
+        for p in range(2 * k):
+            c0 = L.nv + d * p
+            for t in range(d - 1):
+                for sign in (1.0, -1.0):
+                    C[r, c0 + t] = sign
+                    C[r, c0 + d - 1] = -mu
+                    r += 1
+        # Index helpers for the force boxes.
+        self._fz_st = L.sl_f_st.start + d * np.arange(k) + d - 1
+        self._fz_sw = L.sl_f_sw.start + d * np.arange(k) + d - 1
+        self._ft_st = np.array([L.sl_f_st.start + d * p + t for p in range(k) for t in range(d - 1)], dtype=int)
+        self._ft_sw = np.array([L.sl_f_sw.start + d * p + t for p in range(k) for t in range(d - 1)], dtype=int)
+        # Joint limits of the actuated joints.
+        lo = np.asarray(robot.pin_model.lowerPositionLimit)[self._act_q]
+        hi = np.asarray(robot.pin_model.upperPositionLimit)[self._act_q]
+        self._q_lo = np.where(hi > lo, lo, -inf)
+        self._q_hi = np.where(hi > lo, hi, inf)
+        self._tau_lim = np.asarray(robot.actuated.torque_limit_Nm, dtype=float)
+        self._act_side = {
+            side: np.array([nm.startswith(side) for nm in robot.actuated.joint_names]) for side in robot.foot_sides
+        }
+        # Per-tick buffers.
+        self._Jf = np.zeros((2 * d * k, nv))
+        self._T = np.zeros((nu, n))
+        self._tau0 = np.zeros(nu)
+        self._last_force_weight = 0.0
+        self._G = np.zeros((n_lambda, nv))
+        self._rigid_kp = np.r_[np.full(L.n_rigid_st, config.stance_coupling_kp), np.full(L.n_rigid_sw, config.coupling_kp)]
+        self._rigid_kd = np.r_[np.full(L.n_rigid_st, config.stance_coupling_kd), np.full(L.n_rigid_sw, config.coupling_kd)]
+
+    # ------------------------------------------------------------------ info
+    @property
+    def n_variables(self) -> int:
+        """Number of decision variables."""
+        return self._layout.n
+
+    @property
+    def layout(self) -> _Layout:
+        """Variable slices."""
+        return self._layout
+
+    def reset(self) -> None:
+        """Nothing to forget between runs (the builder is stateless across ticks)."""
+
+    @staticmethod
+    def _leg_springs(robot, side: str):
+        """Rows ``(G (n_r, nv), q index lists, coefficients, offsets)`` of one leg's springs.
+
+        Deflection ``g_i = sum_j c_ij q_j - g0_i``: the couplings whose joints
+        all belong to ``side`` (rest length: their spring length) and the
+        passive joints of ``side`` with a spring (rest: ``springref``).
+        """
+        from amlip_qp.robots.passive import coupling_target
+
+        rows, qidx, coefs, offs = [], [], [], []
+        for c in robot.couplings:
+            if all(name.startswith(side) for name in c.joint_names):
+                row = np.zeros(robot.nv)
+                np.add.at(row, np.asarray(c.pin_v_idx, int), c.coefficients)
+                rows.append(row)
+                qidx.append(np.asarray(c.pin_q_idx, int))
+                coefs.append(np.asarray(c.coefficients, float))
+                offs.append(coupling_target(c))
+        for name, vi, qi in zip(robot.passive_joint_names, robot.passive_v_idx, robot.passive_q_idx):
+            if name.startswith(side) and robot.dof_stiffness[vi] > 0:
+                row = np.zeros(robot.nv)
+                row[vi] = 1.0
+                rows.append(row)
+                qidx.append(np.array([qi]))
+                coefs.append(np.array([1.0]))
+                offs.append(float(robot.dof_springref[vi]))
+        G = np.array(rows) if rows else np.zeros((0, robot.nv))
+        return G, qidx, coefs, np.array(offs)
+
+    def _deflection(self, q, side: str) -> np.ndarray:
+        _, qidx, coefs, offs = self._spring_rows[side]
+        return np.array([c @ q[i] for i, c in zip(qidx, coefs)]) - offs
+
+    # ------------------------------------------------------------------ build
+    def _force_jacobians(self, kin, side: str, rows: slice):
+        """Fill the stacked force-point Jacobian rows of one foot; return the per-point (3, nv) list."""
+        d = len(self._axes)
+        jacs = []
+        for p, fid in enumerate(self.robot.force_frame_ids[side]):
+            J = kin.frame_jacobian(fid)
+            self._Jf[rows.start + d * p : rows.start + d * (p + 1)] = J[self._axes]
+            jacs.append(J)
+        return jacs
+
+    def swing_force_weight(self, target) -> float:
+        """The force ramp ``w`` of the swing foot (0 in the air, 1 fully loaded)."""
+        lift = self.config.liftoff_phase
+        w_lift = max(0.0, 1.0 - target.phase / lift) if lift > 0 else 0.0
+        w = max(float(target.swing_contact_weight), w_lift)
+        if not math.isfinite(w):
+            return 0.0
+        return min(max(w, 0.0), 1.0)
+
+    def build(self, kin, target) -> QPProblem:
+        """Fill the problem for the state in ``kin`` (already updated) and the references in ``target``."""
+        cfg, L, P = self.config, self._layout, self.problem
+        robot = self.robot
+        stance = target.stance
+        swing = "right" if stance == "left" else "left"
+        nv, d, k = L.nv, len(self._axes), L.n_points
+        v = kin.v
+        M = kin.mass_matrix()
+        h = kin.nonlinear_effects()
+        taup = kin.passive_forces()
+        nf = d * k
+        # Force Jacobians (world-aligned, selected axes) stacked stance then swing.
+        st_jacs = self._force_jacobians(kin, stance, slice(0, nf))
+        self._force_jacobians(kin, swing, slice(nf, 2 * nf))
+        Jf = self._Jf
+        A, b = P.A, P.b
+        A.fill(0.0)
+        # Dynamics (unactuated rows): M_u vdot - Jf_u^T f - G_u^T lam = -(h_u - taup_u).
+        u = self._unact_v
+        A[self._sl_dyn, L.sl_vdot] = M[u]
+        A[self._sl_dyn, L.sl_f_st.start : L.sl_f_sw.stop] = -Jf[:, u].T
+        b[self._sl_dyn] = taup[u] - h[u]
+        # Torque map: tau = T x + tau0.
+        a = self._act_v
+        T = self._T
+        T[:, L.sl_vdot] = M[a]
+        T[:, L.sl_f_st.start : L.sl_f_sw.stop] = -Jf[:, a].T
+        self._tau0[:] = h[a] - taup[a]
+        # Coupling.
+        if L.n_lambda:
+            G = self._G
+            rows, gdef = [], []
+            if L.n_rigid_st:
+                rows.append(self._spring_rows[stance][0])
+                gdef.append(self._deflection(kin.q, stance))
+            if L.n_rigid_sw:
+                rows.append(self._spring_rows[swing][0])
+                gdef.append(self._deflection(kin.q, swing))
+            G[:] = np.vstack(rows)
+            g_c = np.concatenate(gdef)
+            A[self._sl_dyn, L.sl_lambda] = -G[:, u].T
+            T[:, L.sl_lambda] = -G[:, a].T
+            A[self._sl_coup, L.sl_vdot] = G
+            kp, kd = self._rigid_kp, self._rigid_kd
+            b[self._sl_coup] = -kp * g_c - kd * (G @ v)
+        # Stance contact acceleration.
+        rc = self._sl_contact
+        fids = robot.force_frame_ids[stance]
+        if k == 1:
+            J0 = st_jacs[0][self._axes]
+            a0 = kin.frame_jdot_v(fids[0])[self._axes]
+            A[rc, L.sl_vdot] = J0
+            b[rc] = -a0 - cfg.contact_kd * (J0 @ v)
+        else:
+            J0, J1 = st_jacs
+            a0, a1 = kin.frame_jdot_v(fids[0]), kin.frame_jdot_v(fids[1])
+            axis = kin.frame_position(fids[0]) - kin.frame_position(fids[1])
+            axis /= np.linalg.norm(axis)
+            n1 = np.array([0.0, 0.0, 1.0]) - axis[2] * axis
+            n1 /= np.linalg.norm(n1)
+            n2 = np.cross(axis, n1)
+            Jh = np.vstack([n1 @ J1, n2 @ J1])
+            A[rc.start : rc.start + 3, L.sl_vdot] = J0
+            A[rc.start + 3 : rc.stop, L.sl_vdot] = Jh
+            b[rc.start : rc.start + 3] = -a0 - cfg.contact_kd * (J0 @ v)
+            b[rc.start + 3 : rc.stop] = -np.array([n1 @ a1, n2 @ a1]) - cfg.contact_kd * (Jh @ v)
+        # Torque limits.
+        P.C[self._sl_tau] = T
+        P.l[self._sl_tau] = self._tau_lim[:, 0] - self._tau0
+        P.u[self._sl_tau] = self._tau_lim[:, 1] - self._tau0
+        # Box bounds: joint limits on actuated vdot, force ramps.
+        hz = cfg.joint_limit_horizon_s
+        q_a, v_a = kin.q[self._act_q], v[a]
+        a_hi = 2.0 * (self._q_hi - q_a - v_a * hz) / hz**2
+        a_lo = 2.0 * (self._q_lo - q_a - v_a * hz) / hz**2
+        rec = cfg.joint_limit_max_recovery
+        sw = self._act_side[swing]
+        P.ub[a] = np.where(sw, np.maximum(a_hi, -rec), np.inf)
+        P.lb[a] = np.where(sw, np.minimum(a_lo, rec), -np.inf)
+        fmax, mu = cfg.max_normal_force_N, cfg.friction_mu
+        P.lb[self._fz_st] = cfg.min_normal_force_N
+        P.ub[self._fz_st] = fmax
+        P.lb[self._ft_st] = -mu * fmax
+        P.ub[self._ft_st] = mu * fmax
+        w = self.swing_force_weight(target)
+        self._last_force_weight = w
+        P.lb[self._fz_sw] = 0.0
+        P.ub[self._fz_sw] = w * fmax
+        P.lb[self._ft_sw] = -mu * w * fmax
+        P.ub[self._ft_sw] = mu * w * fmax
+        # Cost.
+        H, g = P.H, P.g
+        H.fill(0.0)
+        g.fill(0.0)
+        sv = L.sl_vdot
+        for task in self.tasks:
+            J = task.jacobian(kin, target)
+            r = task.drift(kin, target) - task.desired_acceleration(kin, target)
+            WJ = J.T * task.gains.weight
+            H[sv, sv] += WJ @ J
+            g[sv] += WJ @ r
+        idx = np.arange(nv)
+        H[idx, idx] += cfg.reg_vdot
+        fi = np.arange(L.sl_f_st.start, L.sl_f_sw.stop)
+        H[fi, fi] += cfg.reg_force
+        if L.n_lambda:
+            li = np.arange(L.sl_lambda.start, L.sl_lambda.stop)
+            H[li, li] += cfg.reg_coupling
+        if cfg.reg_torque > 0:
+            H += cfg.reg_torque * (T.T @ T)
+            g += cfg.reg_torque * (T.T @ self._tau0)
+        return P
+
+    # ------------------------------------------------------------ recovery
+    def torques(self, x: np.ndarray) -> np.ndarray:
+        """Joint torques (N m, actuator order) of a solution of the last built problem."""
+        return self._T @ x + self._tau0
+
+    def forces(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Contact point forces (N) of a solution: ``{"stance": (k, d), "swing": (k, d)}`` (axes x,y,z or x,z)."""
+        L = self._layout
+        d = len(self._axes)
+        return {"stance": x[L.sl_f_st].reshape(-1, d), "swing": x[L.sl_f_sw].reshape(-1, d)}
+
+    def generalized_contact_force(self, x: np.ndarray) -> np.ndarray:
+        """``J_f^T f + G^T lambda`` (nv,) of a solution of the last built problem (for checks)."""
+        L = self._layout
+        out = self._Jf.T @ x[L.sl_f_st.start : L.sl_f_sw.stop]
+        if L.n_lambda:
+            lam = x[L.sl_lambda]
+            out = out + self._G.T @ lam
+        return out

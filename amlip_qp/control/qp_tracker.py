@@ -1,0 +1,180 @@
+"""The task-space whole-body QP tracker.
+
+Every tick: build the QP of :mod:`amlip_qp.control.qp_formulation` for the
+current state and references, solve it with ONE persistent warm-started
+:class:`~amlip_qp.qp.solver.ProxQPSolver`, check the status, and recover the
+joint torques from the actuated rows of the dynamics.
+
+Infeasible ticks get a second chance without the torque-limit rows (counted
+in :attr:`QPTracker.relaxed_solves`; the controller saturates the torques).
+Safe fallback: when the problem cannot be built or solved (non-finite data,
+infeasible, iteration cap) the tracker returns the previous tick's good
+torques decayed by ``fallback_decay`` per failed tick plus joint damping
+``-fallback_damping_Nms * v_a`` (a damped hold of the current posture), with
+``ok=False`` and the reason in ``fallback``; the count is in
+:attr:`QPTracker.fallbacks` and ``info["fallbacks"]``. It never returns NaN.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP
+from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.exceptions import AmlipError, QPError
+from amlip_qp.qp.problem import QPProblem
+from amlip_qp.qp.solver import ProxQPSolver
+
+
+class QPTracker(Tracker):
+    """Whole-body QP tracker (one persistent ProxQP, warm-started).
+
+    Args:
+        robot: The :class:`~amlip_qp.robots.robot.Robot`.
+        config: The :class:`~amlip_qp.control.qp_formulation.QPConfig` (default per robot).
+        eps_abs: ProxQP absolute tolerance.
+        max_iter: ProxQP iteration cap per tick.
+        warm_start: Warm-start from the previous solution (default) or re-initialise every tick.
+        record: Keep a copy of every solved problem in :attr:`recorded` (bench, tests).
+        fallback_decay: Factor applied to the last good torques per failed tick (0..1).
+        fallback_damping_Nms: Joint damping of the fallback, N m s/rad.
+
+    Attributes:
+        last_problem: The last built :class:`QPProblem` (the builder's live
+            buffers: copy it to keep it).
+        last_solution: The last primal solution, or ``None``.
+        recorded: ``(problem copy, solution x)`` pairs when ``record`` is on.
+        fallbacks: Number of ticks that used the fallback.
+        cold_retries: Ticks whose warm-started solve failed and was retried
+            from scratch (once) before any fallback.
+    """
+
+    name = "qp"
+
+    def __init__(
+        self,
+        robot,
+        config: QPConfig | None = None,
+        eps_abs: float = 1e-5,
+        max_iter: int = 200,
+        warm_start: bool = True,
+        record: bool = False,
+        fallback_decay: float = 0.9,
+        fallback_damping_Nms: float = 5.0,
+    ):
+        self.robot = robot
+        self.builder = WholeBodyQP(robot, config)
+        self.config = self.builder.config
+        self.solver = ProxQPSolver(eps_abs=eps_abs, max_iter=max_iter, warm_start=warm_start, eps_primal_inf=1e-9)
+        self.record = bool(record)
+        self.fallback_decay = float(fallback_decay)
+        self.fallback_kd = float(fallback_damping_Nms)
+        self._act_v = np.asarray(robot.actuated.pin_v_idx, dtype=int)
+        self._tau_lim = np.asarray(robot.actuated.torque_limit_Nm, dtype=float)
+        self.recorded: list[tuple[QPProblem, np.ndarray]] = []
+        self.last_problem: QPProblem | None = None
+        self.last_solution: np.ndarray | None = None
+        self.fallbacks = 0
+        #: Ticks whose warm-started solve failed and was retried cold.
+        self.cold_retries = 0
+        #: Ticks solved only after dropping the torque-limit rows (then saturated by the controller).
+        self.relaxed_solves = 0
+        self._tau_prev = np.zeros(len(self._act_v))
+        self._fail_streak = 0
+
+    def reset(self) -> None:
+        """New run: forget the warm start, the last torques and the counters."""
+        self.solver.reset()
+        self.builder.reset()
+        self.recorded.clear()
+        self.last_problem = None
+        self.last_solution = None
+        self.fallbacks = 0
+        self.cold_retries = 0
+        self.relaxed_solves = 0
+        self._tau_prev[:] = 0.0
+        self._fail_streak = 0
+
+    def _fallback(self, kin, reason: str, info: dict) -> TrackerResult:
+        self.fallbacks += 1
+        self._fail_streak += 1
+        v_a = kin.v[self._act_v] if kin.v is not None else np.zeros_like(self._tau_prev)
+        v_a = np.where(np.isfinite(v_a), v_a, 0.0)
+        tau = self.fallback_decay**self._fail_streak * self._tau_prev - self.fallback_kd * v_a
+        tau = np.clip(np.nan_to_num(tau, nan=0.0, posinf=0.0, neginf=0.0), self._tau_lim[:, 0], self._tau_lim[:, 1])
+        info.update(fallbacks=self.fallbacks, qp_ok=0.0)
+        return TrackerResult(tau_Nm=tau, ok=False, fallback=reason, info=info)
+
+    def compute(self, kin, target) -> TrackerResult:
+        """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN)."""
+        info: dict = {}
+        t0 = time.perf_counter_ns()
+        try:
+            problem = self.builder.build(kin, target)
+            self.last_problem = problem
+            problem.validate()
+        except QPError as exc:
+            return self._fallback(kin, f"invalid problem: {exc}", info)
+        except (AmlipError, ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+            return self._fallback(kin, f"cannot build the QP: {exc}", info)
+        t1 = time.perf_counter_ns()
+        try:
+            try:
+                sol = self.solver.solve(problem)
+            except QPError:
+                # A warm start from a far-away iterate can stall: retry once from
+                # scratch (the solver re-initialises after a failure).
+                self.cold_retries += 1
+                sol = self.solver.solve(problem)
+        except QPError as exc:
+            sol = self._solve_relaxed(problem)
+            if sol is not None:
+                return self._finish(problem, sol, info, t0, t1, relaxed=True)
+            if self.record:
+                self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
+            return self._fallback(kin, f"solver: {exc.status or exc}", info)
+        return self._finish(problem, sol, info, t0, t1, relaxed=False)
+
+    def _solve_relaxed(self, problem: QPProblem):
+        """Second chance after an infeasible tick: drop the torque-limit rows
+        (the controller saturates the torques anyway); ``None`` if that fails too."""
+        relaxed = problem.copy()
+        rows = dict(relaxed.in_rows)["torque"]
+        relaxed.l[rows] = -np.inf
+        relaxed.u[rows] = np.inf
+        try:
+            sol = self.solver.solve(relaxed)
+        except QPError:
+            return None
+        self.relaxed_solves += 1
+        return sol
+
+    def _finish(self, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
+        tau = self.builder.torques(sol.x)
+        if not np.all(np.isfinite(tau)):
+            return self._fallback(kin, "non-finite torques", info)
+        self.last_solution = sol.x
+        if self.record:
+            self.recorded.append((problem.copy(), sol.x.copy()))
+        self._tau_prev[:] = tau
+        self._fail_streak = 0
+        forces = self.builder.forces(sol.x)
+        info.update(
+            qp_ok=1.0,
+            build_us=(t1 - t0) * 1e-3,
+            solve_us=sol.solve_time_us,
+            iterations=float(sol.iterations),
+            fallbacks=self.fallbacks,
+            cold_retries=self.cold_retries,
+            relaxed_solves=self.relaxed_solves,
+            relaxed=float(relaxed),
+            stance_fz_N=float(forces["stance"][:, -1].sum()),
+            swing_fz_N=float(forces["swing"][:, -1].sum()),
+            swing_force_weight=self.builder._last_force_weight,
+        )
+        if not math.isfinite(info["stance_fz_N"]):
+            return self._fallback(kin, "non-finite forces", info)
+        return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)

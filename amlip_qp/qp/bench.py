@@ -1,0 +1,163 @@
+"""Benchmark of the tracker QP: replay recorded Cassie problems through several solvers.
+
+:func:`record_walk` runs a Cassie walk with the QP tracker in recording mode
+(every tick's problem is copied) and keeps the whole controller tick times
+(estimate, plan, build, solve). :func:`bench_solvers` replays the recorded
+sequence through
+
+- ``proxsuite-warm``: one persistent ProxQP, ``update`` + warm start (the
+  tracker's path);
+- ``proxsuite-init``: ProxQP re-initialised at every problem (as TSID does);
+- every other installed ``qpsolvers`` backend among daqp, osqp, quadprog
+  (fixed variables substituted first, :meth:`QPProblem.without_fixed_variables`);
+
+and reports the median and 99th percentile solve time per solver (µs) and
+each one's ratio to the warm ProxSuite path.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.qp.problem import QPProblem
+from amlip_qp.qp.solver import ProxQPSolver
+
+#: qpsolvers backends compared when installed.
+QPSOLVERS_BACKENDS: tuple[str, ...] = ("daqp", "osqp", "quadprog")
+
+
+def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: float = 1.0):
+    """Run ``scenario`` with a recording QP tracker.
+
+    Args:
+        n_ticks: Problems to keep (after ``t_skip_s``), >= 1.
+        scenario: A name of :data:`amlip_qp.sim.scenarios.SCENARIOS`.
+        t_skip_s: Walking time to skip before recording starts (start-up), s.
+
+    Returns:
+        ``(problems, tick_time_us, fell)``: the recorded problems, the
+        controller tick wall times of the recorded ticks (µs), and whether the
+        robot fell.
+    """
+    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.robots import load_robot
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.sim.harness import Simulation
+    from amlip_qp.sim.scenarios import get_scenario
+
+    if n_ticks < 1:
+        raise InputError(f"n_ticks must be >= 1, got {n_ticks}")
+    sc = get_scenario(scenario)
+    robot = load_robot(sc.robot)
+    kin = RobotKinematics(robot)
+    tracker = QPTracker(robot, record=True)
+    ctrl = WalkingController(robot, tracker, kin)
+    duration = t_skip_s + n_ticks * ctrl.dt_s
+    result = Simulation(robot, ctrl, sc.command).run(duration)
+    skip = int(round(t_skip_s / ctrl.dt_s))
+    problems = [p for p, x in tracker.recorded[skip:] if np.all(np.isfinite(x))]
+    return problems, result.tick_time_us[skip:], result.fell
+
+
+def _stats(times_us: list[float]) -> dict:
+    t = np.asarray(times_us, dtype=float)
+    return {"median_us": float(np.median(t)), "p99_us": float(np.percentile(t, 99)), "n": int(t.size)}
+
+
+def _time_proxsuite(problems: list[QPProblem], warm: bool) -> tuple[list[float], int, int]:
+    """The tracker's path: solve; after a failure retry once from scratch (timed too)."""
+    from amlip_qp.exceptions import QPError
+
+    solver = ProxQPSolver(eps_abs=1e-5, warm_start=warm, eps_primal_inf=1e-9)
+    times, failures, retries = [], 0, 0
+    for p in problems:
+        t0 = time.perf_counter_ns()
+        try:
+            solver.solve(p)
+        except QPError:
+            retries += 1
+            try:
+                solver.solve(p)
+            except QPError:
+                failures += 1
+        times.append((time.perf_counter_ns() - t0) * 1e-3)
+    return times, failures, retries
+
+
+def _time_qpsolvers(problems: list[QPProblem], backend: str) -> tuple[list[float], int]:
+    from amlip_qp.exceptions import QPError
+
+    times, failures = [], 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # osqp's dense-to-sparse conversion notices
+        for p in problems:
+            t0 = time.perf_counter_ns()
+            try:
+                p.solve_with(backend)
+            except QPError:
+                failures += 1
+            times.append((time.perf_counter_ns() - t0) * 1e-3)
+    return times, failures
+
+
+def bench_solvers(problems: list[QPProblem], backends: tuple[str, ...] | None = None) -> dict:
+    """Solve-time statistics per solver on ``problems`` (see the module docstring).
+
+    Returns:
+        ``{name: {"median_us", "p99_us", "n", "failures", "ratio_to_warm"}}``
+        (ProxSuite entries also count ``cold_retries``: failed warm solves
+        retried from scratch, as the tracker does, timing included);
+        ``ratio_to_warm`` is the median over the warm ProxSuite median.
+    """
+    import qpsolvers
+
+    if not problems:
+        raise InputError("bench_solvers needs at least one problem")
+    out: dict[str, dict] = {}
+    for name, warm in (("proxsuite-warm", True), ("proxsuite-init", False)):
+        times, fails, retries = _time_proxsuite(problems, warm)
+        out[name] = {**_stats(times), "failures": fails, "cold_retries": retries}
+    wanted = backends if backends is not None else QPSOLVERS_BACKENDS
+    for backend in wanted:
+        if backend not in qpsolvers.available_solvers:
+            continue
+        times, fails = _time_qpsolvers(problems, backend)
+        out[backend] = {**_stats(times), "failures": fails}
+    ref = out["proxsuite-warm"]["median_us"]
+    for stats in out.values():
+        stats["ratio_to_warm"] = stats["median_us"] / ref if ref > 0 else float("nan")
+    return out
+
+
+def run(n_ticks: int = 1200, scenario: str = "cassie-1mps") -> dict:
+    """Record a walk, bench the solvers, and return the JSON-ready report.
+
+    Returns:
+        ``{"solvers": {...}, "tick_us": {"median", "p99"}, "n_problems", "scenario", "fell"}``.
+    """
+    problems, tick_us, fell = record_walk(n_ticks, scenario)
+    return {
+        "scenario": scenario,
+        "n_problems": len(problems),
+        "fell": bool(fell),
+        "solvers": bench_solvers(problems),
+        "tick_us": {"median": float(np.median(tick_us)), "p99": float(np.percentile(tick_us, 99))},
+    }
+
+
+def format_report(report: dict) -> str:
+    """A human-readable table of :func:`run`'s report."""
+    lines = [
+        f"{report['n_problems']} tracker QPs replayed from {report['scenario']}",
+        f"{'solver':<16}{'median µs':>12}{'p99 µs':>12}{'x warm':>9}{'fails':>7}",
+    ]
+    for name, s in report["solvers"].items():
+        lines.append(f"{name:<16}{s['median_us']:>12.1f}{s['p99_us']:>12.1f}{s['ratio_to_warm']:>9.2f}{s['failures']:>7d}")
+    t = report["tick_us"]
+    lines.append(f"controller tick (estimate, plan, build, solve): median {t['median']:.1f} µs, p99 {t['p99']:.1f} µs")
+    return "\n".join(lines)

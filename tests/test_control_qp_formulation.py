@@ -1,0 +1,137 @@
+"""The whole-body QP formulation: dynamics, contact, friction, force ramps, shapes."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP, default_config
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.exceptions import InputError
+from amlip_qp.qp.solver import ProxQPSolver
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+
+
+@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+def robot(request):
+    return load_robot(request.param)
+
+
+def _kin(robot, seed=0, scale=0.02):
+    rng = np.random.default_rng(seed)
+    q = robot.q_stand.copy()
+    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, scale, robot.state_map.scalar_pin_q.size)
+    v = rng.normal(0.0, 0.2, robot.nv)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    return kin
+
+
+def _target(kin, stance="left", phase=0.5, weight=0.0, offset=0.0):
+    y, _, _ = kin.outputs(stance, 0.0)
+    n = y.size
+    return TrackingTarget(stance, phase, 0.0, y + offset, np.zeros(n), np.zeros(n), swing_contact_weight=weight)
+
+
+def _solve(builder, kin, target):
+    problem = builder.build(kin, target)
+    problem.validate()
+    x = ProxQPSolver(eps_abs=1e-9, warm_start=False, eps_primal_inf=1e-9).solve(problem).x
+    return problem, x
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_solution_satisfies_the_full_dynamics_with_recovered_torques(robot, stance):
+    kin = _kin(robot)
+    builder = WholeBodyQP(robot)
+    problem, x = _solve(builder, kin, _target(kin, stance, phase=0.5, weight=1.0, offset=0.01))
+    res = problem.residuals(x)
+    assert res["eq"] < 1e-6 and res["in"] < 1e-6 and res["box"] < 1e-6
+    tau = builder.torques(x)
+    vdot = x[problem.variables["vdot"]]
+    S_T_tau = np.zeros(robot.nv)
+    S_T_tau[robot.actuated.pin_v_idx] = tau
+    lhs = kin.mass_matrix() @ vdot + kin.nonlinear_effects() - kin.passive_forces()
+    rhs = S_T_tau + builder.generalized_contact_force(x)
+    assert np.max(np.abs(lhs - rhs)) < 1e-6 * max(1.0, np.max(np.abs(lhs)))
+    # Stance contact points do not accelerate (up to the velocity Baumgarte term).
+    kd = builder.config.contact_kd
+    for fid in robot.force_frame_ids[stance]:
+        J = kin.frame_jacobian(fid)
+        acc = J @ vdot + kin.frame_jdot_v(fid) + kd * (J @ kin.v)
+        axes = [0, 2] if robot.is_planar else [0, 1, 2]
+        if len(robot.force_frame_ids[stance]) == 1:
+            assert np.max(np.abs(acc[axes])) < 1e-6
+        else:
+            # the heel's component along the blade is implied by the rigid foot up to O(v^2)
+            assert np.max(np.abs(acc[axes])) < 0.5
+    # Torques inside the limits.
+    lim = robot.actuated.torque_limit_Nm
+    assert np.all(tau >= lim[:, 0] - 1e-6) and np.all(tau <= lim[:, 1] + 1e-6)
+
+
+def test_friction_pyramid_and_minimum_normal_force_hold(robot):
+    builder = WholeBodyQP(robot)
+    cfg = builder.config
+    for seed in range(4):
+        kin = _kin(robot, seed)
+        problem, x = _solve(builder, kin, _target(kin, "left", phase=0.5, weight=1.0, offset=0.02))
+        forces = builder.forces(x)
+        for side in ("stance", "swing"):
+            f = forces[side]
+            fz = f[:, -1]
+            assert np.all(fz >= -1e-6)
+            tangential = np.abs(f[:, :-1])
+            assert np.all(tangential <= cfg.friction_mu * fz[:, None] + 1e-6)
+        assert np.all(forces["stance"][:, -1] >= cfg.min_normal_force_N - 1e-6)
+
+
+def test_swing_forces_are_zero_in_the_air_and_ramp_in(robot):
+    kin = _kin(robot, 5)
+    builder = WholeBodyQP(robot)
+    _, x = _solve(builder, kin, _target(kin, "right", phase=0.5, weight=0.0))
+    assert np.max(np.abs(builder.forces(x)["swing"])) < 1e-6
+    problem = builder.build(kin, _target(kin, "right", phase=0.95, weight=0.5))
+    fz_cols = problem.variables["forces_swing"]
+    ub = problem.ub[fz_cols][len(builder._axes) - 1 :: len(builder._axes)]
+    assert np.allclose(ub, 0.5 * builder.config.max_normal_force_N)
+    # Liftoff ramp: early in a step the previous stance foot may still carry load.
+    problem = builder.build(kin, _target(kin, "right", phase=0.25 * builder.config.liftoff_phase, weight=0.0))
+    ub = problem.ub[fz_cols][len(builder._axes) - 1 :: len(builder._axes)]
+    assert np.allclose(ub, 0.75 * builder.config.max_normal_force_N)
+
+
+def test_dimensions_do_not_depend_on_the_stance(robot):
+    kin = _kin(robot, 6)
+    builder = WholeBodyQP(robot)
+    a = builder.build(kin, _target(kin, "left")).copy()
+    b = builder.build(kin, _target(kin, "right")).copy()
+    assert (a.n, a.n_eq, a.n_in) == (b.n, b.n_eq, b.n_in)
+    nf = 2 * (2 if robot.is_planar else 6)
+    n_lambda = 0 if robot.is_planar else 4
+    assert a.n == robot.nv + nf + n_lambda
+    assert {"vdot", "forces_stance", "forces_swing"} <= set(a.variables)
+    assert [name for name, _ in a.in_rows] == ["torque", "friction"]
+
+
+def test_builder_reuses_its_buffers_and_copy_keeps_a_snapshot(robot):
+    kin = _kin(robot, 7)
+    builder = WholeBodyQP(robot)
+    p1 = builder.build(kin, _target(kin, "left"))
+    snap = p1.copy()
+    p2 = builder.build(kin, _target(kin, "right"))
+    assert p1 is p2
+    assert not np.allclose(snap.A, p2.A)
+
+
+def test_config_validation_and_defaults():
+    cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
+    assert len(default_config(cassie).output_kp) == 9
+    assert len(default_config(rabbit).output_kp) == 4
+    with pytest.raises(InputError):
+        default_config(cassie).with_(friction_mu=-0.1)
+    with pytest.raises(InputError):
+        default_config(cassie).with_(rigid_springs="maybe")
+    with pytest.raises(InputError):
+        QPConfig(output_kp=(1.0,), output_kd=(1.0, 2.0), output_weight=(1.0,))
+    with pytest.raises(InputError):
+        default_config(cassie).with_(min_normal_force_N=2000.0)

@@ -1,0 +1,147 @@
+"""The QP tracker: persistent warm-started ProxQP, cross-check with quadprog, fallbacks."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.controller import WalkingController
+from amlip_qp.control.qp_tracker import QPTracker
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.sim.harness import Simulation
+from amlip_qp.sim.scenarios import SCENARIOS
+
+
+@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+def walk(request):
+    """A short recorded walk: (robot, tracker, run result)."""
+    robot = load_robot(request.param)
+    kin = RobotKinematics(robot)
+    tracker = QPTracker(robot, record=True)
+    ctrl = WalkingController(robot, tracker, kin)
+    scenario = SCENARIOS["cassie-1mps" if request.param == "cassie" else "rabbit-0.5mps"]
+    result = Simulation(robot, ctrl, scenario.command).run(0.4)
+    return robot, tracker, result
+
+
+def test_one_persistent_solver_warm_started(walk):
+    robot, tracker, result = walk
+    assert not result.fell
+    assert len(tracker.recorded) == len(result.log["t"])
+    # One initialisation, plus one per cold retry after a failed warm solve.
+    assert tracker.solver.n_init == 1 + tracker.cold_retries
+    assert tracker.cold_retries <= 0.02 * len(tracker.recorded)
+    assert tracker.fallbacks == 0
+    assert np.all(np.isfinite(result.log["tau"]))
+
+
+def test_agrees_with_quadprog_on_recorded_problems(walk):
+    robot, tracker, _ = walk
+    checked = 0
+    for problem, x in tracker.recorded[::25]:
+        assert np.all(np.isfinite(x))
+        x_ref = problem.solve_with("quadprog")
+        assert max(problem.residuals(x_ref).values()) < 1e-6
+        # Same optimum: objective and the physically meaningful parts (vdot, forces).
+        obj, obj_ref = problem.objective(x), problem.objective(x_ref)
+        assert abs(obj - obj_ref) <= 1e-3 * max(1.0, abs(obj_ref))
+        nv = robot.nv
+        assert np.max(np.abs(x[:nv] - x_ref[:nv])) < 0.05 * max(1.0, np.max(np.abs(x_ref[:nv])))
+        checked += 1
+    assert checked >= 8
+
+
+def test_recorded_solutions_satisfy_the_constraints(walk):
+    _, tracker, _ = walk
+    for problem, x in tracker.recorded[::10]:
+        res = problem.residuals(x)
+        assert res["eq"] < 1e-3 and res["in"] < 1e-3 and res["box"] < 1e-3
+
+
+def test_swing_forces_are_zero_while_the_foot_is_in_the_air(walk):
+    _, tracker, result = walk
+    phase = result.log["phase"]
+    seen = 0
+    for k, (problem, x) in enumerate(tracker.recorded):
+        if 0.2 < phase[k] < 0.8:
+            assert np.max(np.abs(x[problem.variables["forces_swing"]])) < 1e-4
+            seen += 1
+    assert seen > 50
+
+
+def _stand(robot):
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    y, _, _ = kin.outputs("left", 0.0)
+    n = y.size
+    return kin, TrackingTarget("left", 0.5, 0.0, y, np.zeros(n), np.zeros(n), swing_contact_weight=1.0)
+
+
+@pytest.mark.parametrize("name", ["cassie", "rabbit"])
+def test_nan_reference_falls_back_to_finite_damped_torques(name):
+    robot = load_robot(name)
+    tracker = QPTracker(robot)
+    kin, target = _stand(robot)
+    good = tracker.compute(kin, target)
+    assert good.ok and np.all(np.isfinite(good.tau_Nm))
+    target.h_d = target.h_d.copy()
+    target.h_d[0] = np.nan
+    bad = tracker.compute(kin, target)
+    assert not bad.ok and "NaN" in bad.fallback
+    assert np.all(np.isfinite(bad.tau_Nm))
+    assert np.allclose(bad.tau_Nm, tracker.fallback_decay * good.tau_Nm)
+    assert tracker.fallbacks == 1 and bad.info["fallbacks"] == 1
+    again = tracker.compute(kin, target)
+    assert np.allclose(again.tau_Nm, tracker.fallback_decay**2 * good.tau_Nm)
+
+
+def test_infeasible_problem_falls_back_and_recovers():
+    robot = load_robot("cassie")
+    tracker = QPTracker(robot)
+    kin, target = _stand(robot)
+    good = tracker.compute(kin, target)
+    build = tracker.builder.build
+
+    def contradictory(kin, target):
+        problem = build(kin, target)
+        problem.A[0] = 0.0
+        problem.b[0] = 1.0  # 0 = 1: infeasible whatever the bounds
+        return problem
+
+    tracker.builder.build = contradictory
+    bad = tracker.compute(kin, target)
+    assert not bad.ok and bad.fallback.startswith("solver")
+    assert np.all(np.isfinite(bad.tau_Nm))
+    assert np.allclose(bad.tau_Nm, tracker.fallback_decay * good.tau_Nm)
+    tracker.builder.build = build
+    recovered = tracker.compute(kin, target)
+    assert recovered.ok and np.allclose(recovered.tau_Nm, good.tau_Nm, atol=1e-2)
+
+
+def test_nan_state_through_the_controller_never_gives_nan_torques():
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    tracker = QPTracker(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    kin.v = kin.v.copy()
+    kin.v[0] = np.nan  # a corrupted state reaching the tracker
+    y, _, _ = kin.outputs("left", 0.0)
+    n = y.size
+    res = tracker.compute(kin, TrackingTarget("left", 0.5, 0.0, y, np.zeros(n), np.zeros(n)))
+    assert not res.ok and res.fallback
+    assert np.all(np.isfinite(res.tau_Nm))
+
+
+def test_bench_reports_every_solver_on_recorded_problems(walk):
+    from amlip_qp.qp.bench import bench_solvers, format_report
+
+    robot, tracker, _ = walk
+    problems = [p for p, _ in tracker.recorded[::20]]
+    stats = bench_solvers(problems)
+    assert {"proxsuite-warm", "proxsuite-init", "quadprog"} <= set(stats)
+    assert stats["proxsuite-warm"]["ratio_to_warm"] == pytest.approx(1.0)
+    for s in stats.values():
+        assert s["n"] == len(problems) and s["median_us"] > 0 and s["p99_us"] >= s["median_us"]
+    assert stats["proxsuite-warm"]["failures"] == 0 and stats["quadprog"]["failures"] == 0
+    text = format_report({"scenario": "x", "n_problems": len(problems), "solvers": stats, "tick_us": {"median": 1.0, "p99": 2.0}})
+    assert "proxsuite-warm" in text and "controller tick" in text

@@ -1,0 +1,110 @@
+"""Tasks of the whole-body QP: Jacobians and drifts against finite differences."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from amlip_qp.control.qp_formulation import WholeBodyQP
+from amlip_qp.control.tasks import Gains, OutputTask
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+
+
+@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+def robot(request):
+    return load_robot(request.param)
+
+
+def _state(robot, seed):
+    rng = np.random.default_rng(seed)
+    q = robot.q_stand.copy()
+    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, 0.05, robot.state_map.scalar_pin_q.size)
+    v = rng.normal(0.0, 0.5, robot.nv)
+    return q, v
+
+
+def _target(n, stance="left", heading=0.3):
+    z = np.zeros(n)
+    return TrackingTarget(stance=stance, phase=0.4, heading_rad=heading, h_d=z, dh_d=z, ddh_d=z)
+
+
+def _tasks(robot):
+    builder = WholeBodyQP(robot)
+    return builder.tasks
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_every_task_jacobian_matches_finite_differences(robot, stance):
+    q, v = _state(robot, 1)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    tasks = _tasks(robot)
+    target = _target(tasks[0].size, stance)
+    eps = 1e-6
+    for task in tasks:
+        J = task.jacobian(kin, target).copy()
+        y0 = task.value(kin, target).copy()
+        kin_p = RobotKinematics(robot)
+        for direction in np.eye(robot.nv)[:: max(1, robot.nv // 7)]:
+            kin_p.update(pin.integrate(robot.pin_model, q, eps * direction), v)
+            y_p = task.value(kin_p, target).copy()
+            kin_p.update(pin.integrate(robot.pin_model, q, -eps * direction), v)
+            y_m = task.value(kin_p, target).copy()
+            fd = (y_p - y_m) / (2 * eps)
+            assert np.max(np.abs(fd - J @ direction)) < 1e-5, (task.name, direction)
+        assert np.allclose(task.value(kin, target), y0)
+
+
+def test_output_drift_matches_finite_difference_of_J_v(robot):
+    q, v = _state(robot, 2)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    task = _tasks(robot)[0]
+    target = _target(task.size)
+    drift = task.drift(kin, target).copy()
+    eps = 1e-6
+    other = RobotKinematics(robot)
+    other.update(pin.integrate(robot.pin_model, q, eps * v), v)
+    jv_p = task.jacobian(other, target) @ v
+    other.update(pin.integrate(robot.pin_model, q, -eps * v), v)
+    jv_m = task.jacobian(other, target) @ v
+    fd = (jv_p - jv_m) / (2 * eps)
+    assert np.max(np.abs(fd - drift)) < 1e-4 * max(1.0, np.max(np.abs(drift)))
+
+
+def test_desired_acceleration_is_feedforward_plus_pd(robot):
+    q, v = _state(robot, 3)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    n = len(WholeBodyQP(robot).config.output_kp)
+    task = OutputTask(Gains.of(n, 100.0, 20.0, 1.0))
+    rng = np.random.default_rng(0)
+    h_d, dh_d, ddh_d = rng.normal(size=(3, n))
+    target = TrackingTarget("right", 0.5, 0.0, h_d, dh_d, ddh_d)
+    y = task.value(kin, target)
+    J = task.jacobian(kin, target)
+    expected = ddh_d + 20.0 * (dh_d - J @ v) + 100.0 * (h_d - y)
+    assert np.allclose(task.desired_acceleration(kin, target), expected)
+    assert np.allclose(task.error(kin, target), h_d - y)
+
+
+def test_cache_follows_the_state_and_the_stance(robot):
+    kin = RobotKinematics(robot)
+    task = _tasks(robot)[0]
+    q, v = _state(robot, 4)
+    kin.update(q, v)
+    a = task.value(kin, _target(task.size, "left")).copy()
+    b = task.value(kin, _target(task.size, "right")).copy()
+    assert not np.allclose(a, b)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    c = task.value(kin, _target(task.size, "left"))
+    assert not np.allclose(a, c)
+
+
+def test_gains_reject_negative_or_nan():
+    with pytest.raises(InputError):
+        Gains.of(3, -1.0, 1.0, 1.0)
+    with pytest.raises(InputError):
+        Gains.of(3, 1.0, np.nan, 1.0)
