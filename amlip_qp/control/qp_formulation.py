@@ -243,6 +243,13 @@ class WholeBodyQP:
         if k > 2 or (k == 2 and self._planar):
             raise InputError("supported feet: one point (3-D or planar) or a 3-D blade of two points")
         self._spring_rows = {side: self._leg_springs(robot, side) for side in robot.foot_sides}
+        # Deflections as one product: g = Gq q - offsets (the rows are linear in q).
+        self._spring_q: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        for side, (_, qidx, coefs, offs) in self._spring_rows.items():
+            Gq = np.zeros((len(qidx), robot.nq))
+            for row, (qi, c) in enumerate(zip(qidx, coefs)):
+                Gq[row, qi] += c
+            self._spring_q[side] = (Gq, np.asarray(offs, dtype=float))
         n_r = {len(self._spring_rows[s][0]) for s in robot.foot_sides}
         if len(n_r) != 1:
             raise InputError("both legs need the same number of springs/couplings")
@@ -376,8 +383,24 @@ class WholeBodyQP:
         return G, qidx, coefs, np.array(offs)
 
     def _deflection(self, q, side: str) -> np.ndarray:
-        _, qidx, coefs, offs = self._spring_rows[side]
-        return np.array([c @ q[i] for i, c in zip(qidx, coefs)]) - offs
+        Gq, offs = self._spring_q[side]
+        return Gq @ q - offs
+
+    def _stacked_springs(self, stance: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(G, Gq, offsets)`` of the rigidly held springs for this stance (cached per stance)."""
+        cache = self.__dict__.setdefault("_springs_by_stance", {})
+        hit = cache.get(stance)
+        if hit is None:
+            L = self._layout
+            swing = "right" if stance == "left" else "left"
+            sides = ([stance] if L.n_rigid_st else []) + ([swing] if L.n_rigid_sw else [])
+            hit = (
+                np.vstack([self._spring_rows[s][0] for s in sides]),
+                np.vstack([self._spring_q[s][0] for s in sides]),
+                np.concatenate([self._spring_q[s][1] for s in sides]),
+            )
+            cache[stance] = hit
+        return hit
 
     # ------------------------------------------------------------------ build
     def _force_jacobians(self, kin, side: str, rows: slice):
@@ -431,15 +454,8 @@ class WholeBodyQP:
         # Coupling.
         if L.n_lambda:
             G = self._G
-            rows, gdef = [], []
-            if L.n_rigid_st:
-                rows.append(self._spring_rows[stance][0])
-                gdef.append(self._deflection(kin.q, stance))
-            if L.n_rigid_sw:
-                rows.append(self._spring_rows[swing][0])
-                gdef.append(self._deflection(kin.q, swing))
-            G[:] = np.vstack(rows)
-            g_c = np.concatenate(gdef)
+            G[:], Gq, offs = self._stacked_springs(stance)
+            g_c = Gq @ kin.q - offs
             A[self._sl_dyn, L.sl_lambda] = -G[:, u].T
             T[:, L.sl_lambda] = -G[:, a].T
             A[self._sl_coup, L.sl_vdot] = G
@@ -456,11 +472,14 @@ class WholeBodyQP:
         else:
             J0, J1 = st_jacs
             a0, a1 = kin.frame_jdot_v(fids[0]), kin.frame_jdot_v(fids[1])
-            axis = kin.frame_position(fids[0]) - kin.frame_position(fids[1])
-            axis /= np.linalg.norm(axis)
-            n1 = np.array([0.0, 0.0, 1.0]) - axis[2] * axis
-            n1 /= np.linalg.norm(n1)
-            n2 = np.cross(axis, n1)
+            ax = kin.frame_position(fids[0]) - kin.frame_position(fids[1])
+            ax /= math.sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2])
+            # n1: the vertical made orthogonal to the blade; n2 = axis x n1.
+            n1 = np.array([-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2]])
+            n1 /= math.sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2])
+            n2 = np.array(
+                [ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0]]
+            )
             Jh = np.vstack([n1 @ J1, n2 @ J1])
             A[rc.start : rc.start + 3, L.sl_vdot] = J0
             A[rc.start + 3 : rc.stop, L.sl_vdot] = Jh

@@ -68,7 +68,15 @@ class QPTracker(Tracker):
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
         self.config = self.builder.config
-        self.solver = ProxQPSolver(eps_abs=eps_abs, max_iter=max_iter, warm_start=warm_start, eps_primal_inf=1e-9)
+        self.solver = ProxQPSolver(
+            eps_abs=eps_abs,
+            max_iter=max_iter,
+            warm_start=warm_start,
+            eps_primal_inf=1e-9,
+            mu_eq=1e-4,
+            mu_in=1e-3,
+            update_preconditioner=False,
+        )
         self.record = bool(record)
         self.fallback_decay = float(fallback_decay)
         self.fallback_kd = float(fallback_damping_Nms)

@@ -12,6 +12,7 @@ Rows and variables carry names, so a failing problem can be read by a person:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -86,13 +87,19 @@ class QPProblem:
             value = getattr(self, name)
             if value.shape != shape:
                 raise QPError(f"QP field {name} has shape {value.shape}, expected {shape}", problem=self)
-        for name in ("H", "g", "A", "b", "C"):
-            if not np.all(np.isfinite(getattr(self, name))):
-                raise QPError(f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self)
-        for name in ("l", "u", "lb", "ub"):
-            if np.any(np.isnan(getattr(self, name))):
-                raise QPError(f"QP bound {name} contains NaN", problem=self)
-        if np.any(self.l > self.u) or np.any(self.lb > self.ub):
+        # Fast path, once per control tick: NaN and inf propagate through a sum.
+        total = float(self.H.sum() + self.g.sum() + self.A.sum() + self.b.sum() + self.C.sum())
+        if not math.isfinite(total):
+            for name in ("H", "g", "A", "b", "C"):
+                if not np.all(np.isfinite(getattr(self, name))):
+                    raise QPError(
+                        f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self
+                    )
+        # Bounds may be +-inf, but never NaN; a crossed pair is infeasible by construction.
+        if not (np.all(self.l <= self.u) and np.all(self.lb <= self.ub)):
+            for name in ("l", "u", "lb", "ub"):
+                if np.any(np.isnan(getattr(self, name))):
+                    raise QPError(f"QP bound {name} contains NaN", problem=self)
             raise QPError("QP has a lower bound above its upper bound (infeasible by construction)", problem=self)
 
     def objective(self, x: np.ndarray) -> float:

@@ -47,6 +47,9 @@ class RobotKinematics:
         self._acc: dict[int, np.ndarray] = {}
         self._output_map = None
         self._out_cache: tuple | None = None
+        self._M: np.ndarray | None = None
+        self._taup: np.ndarray | None = None
+        self._lower = np.tril_indices(self.model.nv, -1)
 
     # ------------------------------------------------------------------ update
     def update(self, q, v) -> None:
@@ -73,6 +76,8 @@ class RobotKinematics:
         self._jac.clear()
         self._acc.clear()
         self._out_cache = None
+        self._M = None
+        self._taup = None
 
     def _ready(self) -> None:
         if self.q is None:
@@ -224,10 +229,17 @@ class RobotKinematics:
 
     # ------------------------------------------------------------ dynamics
     def mass_matrix(self) -> np.ndarray:
-        """Joint-space inertia matrix ``M(q)`` (nv x nv, symmetric, armature included)."""
+        """Joint-space inertia matrix ``M(q)`` (nv x nv, symmetric, armature included).
+
+        Cached until the next :meth:`update` (treat as read-only).
+        """
         self._ready()
-        upper = np.triu(self.data.M)
-        return upper + np.triu(upper, 1).T
+        if self._M is None:
+            # CRBA fills the upper triangle; mirror it once per update.
+            M = self.data.M.copy()
+            M[self._lower] = M.T[self._lower]
+            self._M = M
+        return self._M
 
     def nonlinear_effects(self) -> np.ndarray:
         """``h = C(q, v) v + g(q)`` (N m / N), shape (nv,)."""
@@ -235,9 +247,14 @@ class RobotKinematics:
         return self.data.nle.copy()
 
     def passive_forces(self) -> np.ndarray:
-        """Joint springs, damping and tendon springs (= MuJoCo's qfrc_passive, Pinocchio coordinates)."""
+        """Joint springs, damping and tendon springs (= MuJoCo's qfrc_passive, Pinocchio coordinates).
+
+        Cached until the next :meth:`update` (treat as read-only).
+        """
         self._ready()
-        return _passive.passive_forces(self.robot, self.q, self.v)
+        if self._taup is None:
+            self._taup = _passive.passive_forces_unchecked(self.robot, self.q, self.v)
+        return self._taup
 
     def coupling_constraints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(g, G, Gdot_v)`` of the rigid joint couplings (see :mod:`amlip_qp.robots.passive`)."""

@@ -51,6 +51,11 @@ def passive_forces(robot, q, v) -> np.ndarray:
         v: Pinocchio velocity, shape (nv,).
     """
     q, v = _checked(robot, q, v)
+    return passive_forces_unchecked(robot, q, v)
+
+
+def passive_forces_unchecked(robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """:func:`passive_forces` without input validation, for callers that already checked ``(q, v)``."""
     smap = robot.state_map
     f = -robot.dof_damping * v
     pq, pv = smap.scalar_pin_q, smap.scalar_pin_v
@@ -58,7 +63,8 @@ def passive_forces(robot, q, v) -> np.ndarray:
     for c in robot.couplings:
         length = float(c.coefficients @ q[c.pin_q_idx])
         rate = float(c.coefficients @ v[c.pin_v_idx])
-        np.add.at(f, c.pin_v_idx, c.coefficients * tendon_force(c, length, rate))
+        # A tendon couples distinct joints, so plain fancy-index addition is exact.
+        f[c.pin_v_idx] += c.coefficients * tendon_force(c, length, rate)
     return f
 
 
