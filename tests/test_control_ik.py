@@ -1,0 +1,168 @@
+"""Tests of the iterative IK (amlip_qp.control.ik) on Cassie and Rabbit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from amlip_qp.control.ik import IKSettings, IterativeIK
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+
+
+@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+def robot(request):
+    return load_robot(request.param)
+
+
+def _perturbed_state(robot, seed: int, scale: float = 0.05):
+    """A standing configuration with perturbed joints and base, and a random velocity."""
+    rng = np.random.default_rng(seed)
+    dq = np.zeros(robot.nv)
+    nb = robot.nv - robot.nu - len(robot.passive_v_idx)
+    dq[:nb] = rng.normal(0.0, 0.02, nb)
+    dq[nb:] = rng.normal(0.0, scale, robot.nv - nb)
+    q = pin.integrate(robot.pin_model, robot.q_stand, dq)
+    q[robot.actuated.pin_q_idx] = np.clip(
+        q[robot.actuated.pin_q_idx],
+        robot.pin_model.lowerPositionLimit[robot.actuated.pin_q_idx] + 0.05,
+        robot.pin_model.upperPositionLimit[robot.actuated.pin_q_idx] - 0.05,
+    )
+    v = rng.normal(0.0, 0.2, robot.nv)
+    return q, v
+
+
+def test_output_evaluation_matches_output_map(robot):
+    q, v = _perturbed_state(robot, 1)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    ik = IterativeIK(robot)
+    for stance in ("left", "right"):
+        h, J, _ = kin.outputs(stance, 0.3 if not robot.is_planar else 0.0)
+        ik.ev.compute(q)
+        h2, J2 = ik.ev.outputs(q, stance, 0.3 if not robot.is_planar else 0.0)
+        np.testing.assert_allclose(h2, h, atol=1e-12)
+        np.testing.assert_allclose(J2, J, atol=1e-12)
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_converges_and_holds_the_stance_foot_and_passive_joints(robot, stance):
+    q_est, v_est = _perturbed_state(robot, 2)
+    kin = RobotKinematics(robot)
+    kin.update(q_est, v_est)
+    heading = 0.0 if robot.is_planar else 0.2
+    h_est, _, _ = kin.outputs(stance, heading)
+    # a target near the estimate's outputs, solved from the estimate (cold start)
+    ik = IterativeIK(robot)
+    rng = np.random.default_rng(3)
+    h_d = h_est + rng.normal(0.0, 0.01, h_est.size)
+    n = h_d.size
+    res = ik.solve(kin, stance, heading, h_d, np.zeros(n), np.zeros(n), iterations=12)
+    assert res.ok
+    assert res.residual < 1e-8
+    kin_r = RobotKinematics(robot)
+    kin_r.update(res.q_r, np.zeros(robot.nv))
+    h_r, _, _ = kin_r.outputs(stance, heading)
+    np.testing.assert_allclose(h_r, h_d, atol=1e-8)
+    # stance contact pose held
+    cid = robot.contact_frame_ids[stance]
+    np.testing.assert_allclose(kin_r.frame_position(cid), kin.frame_position(cid), atol=1e-8)
+    rot_err = pin.log3(kin_r.frame_rotation(cid) @ kin.frame_rotation(cid).T)
+    np.testing.assert_allclose(rot_err, 0.0, atol=1e-8)
+    # passive joints: the shins fixed, each coupling length fixed
+    coupled = {int(i) for c in robot.couplings for i in c.pin_q_idx}
+    for iq in robot.passive_q_idx:
+        if int(iq) not in coupled:
+            assert res.q_r[iq] == pytest.approx(q_est[iq], abs=1e-10)
+    for c in robot.couplings:
+        assert c.coefficients @ res.q_r[c.pin_q_idx] == pytest.approx(c.coefficients @ q_est[c.pin_q_idx], abs=1e-10)
+    # Cassie's stance toe (passive in the paper) held
+    if not robot.is_planar:
+        iq = robot.state_map.joint_pin_q[f"{stance}-foot"]
+        assert res.q_r[iq] == pytest.approx(q_est[iq], abs=1e-10)
+
+
+def test_warm_start_converges_in_few_iterations(robot):
+    q_est, v_est = _perturbed_state(robot, 4)
+    kin = RobotKinematics(robot)
+    kin.update(q_est, v_est)
+    h, _, _ = kin.outputs("left", 0.0)
+    ik = IterativeIK(robot, IKSettings(iterations=2))
+    n = h.size
+    ik.solve(kin, "left", 0.0, h - 0.01, np.zeros(n), np.zeros(n))
+    res = ik.solve(kin, "left", 0.0, h - 0.011, np.zeros(n), np.zeros(n))
+    assert res.iterations == 2
+    assert res.residual < 1e-8
+
+
+def test_velocity_reference_maps_to_dh_d_and_is_the_derivative_of_q_r(robot):
+    """J(q_r) v_r = dh_d, and v_r matches a finite difference of q_r along h_d(t)."""
+    stance = "right"
+    q_est, v_est = _perturbed_state(robot, 5)
+    v_est[:] = 0.0  # a still estimate: the held coordinates have zero rate
+    kin = RobotKinematics(robot)
+    kin.update(q_est, v_est)
+    h0, _, _ = kin.outputs(stance, 0.0)
+    rng = np.random.default_rng(6)
+    dh = rng.normal(0.0, 0.2, h0.size)
+    ddh = rng.normal(0.0, 1.0, h0.size)
+    ik = IterativeIK(robot)
+
+    def h_of(t):
+        return h0 - 0.01 + dh * t + 0.5 * ddh * t * t
+
+    res = ik.solve(kin, stance, 0.0, h_of(0.0), dh, ddh, iterations=15)
+    kin_r = RobotKinematics(robot)
+    kin_r.update(res.q_r, res.v_r)
+    _, J, jdv = kin_r.outputs(stance, 0.0)
+    np.testing.assert_allclose(J @ res.v_r, dh, atol=1e-9)
+    # acceleration reference: J a_r + Jdot v_r = ddh_d (finite-difference drift)
+    np.testing.assert_allclose(J @ res.a_r + jdv, ddh, atol=1e-4)
+    dt = 1e-5
+    q_p = ik.solve(kin, stance, 0.0, h_of(dt), dh + ddh * dt, ddh, iterations=15).q_r
+    q_m = ik.solve(kin, stance, 0.0, h_of(-dt), dh - ddh * dt, ddh, iterations=15).q_r
+    v_fd = pin.difference(robot.pin_model, q_m, q_p) / (2 * dt)
+    np.testing.assert_allclose(v_fd, res.v_r, atol=1e-5)
+
+
+def test_nan_target_falls_back_to_previous_reference(robot):
+    q_est, v_est = _perturbed_state(robot, 7)
+    kin = RobotKinematics(robot)
+    kin.update(q_est, v_est)
+    h, _, _ = kin.outputs("left", 0.0)
+    n = h.size
+    ik = IterativeIK(robot)
+    good = ik.solve(kin, "left", 0.0, h, np.zeros(n), np.zeros(n))
+    bad = ik.solve(kin, "left", 0.0, np.full(n, np.nan), np.zeros(n), np.zeros(n))
+    assert not bad.ok
+    np.testing.assert_array_equal(bad.q_r, good.q_r)
+    assert np.all(np.isfinite(bad.v_r)) and np.all(np.isfinite(bad.a_r))
+    # without a previous reference: the estimate
+    ik.reset()
+    bad = ik.solve(kin, "left", 0.0, np.full(n, np.nan), np.zeros(n), np.zeros(n))
+    assert not bad.ok
+    np.testing.assert_array_equal(bad.q_r, q_est)
+
+
+def test_joint_limits_are_respected(robot):
+    q_est, v_est = _perturbed_state(robot, 8)
+    kin = RobotKinematics(robot)
+    kin.update(q_est, v_est)
+    h, _, _ = kin.outputs("left", 0.0)
+    n = h.size
+    res = IterativeIK(robot).solve(kin, "left", 0.0, h + 5.0, np.zeros(n), np.zeros(n))
+    aq = robot.actuated.pin_q_idx
+    assert np.all(np.isfinite(res.q_r))
+    assert np.all(res.q_r[aq] >= robot.pin_model.lowerPositionLimit[aq] - 1e-12)
+    assert np.all(res.q_r[aq] <= robot.pin_model.upperPositionLimit[aq] + 1e-12)
+
+
+def test_bad_shapes_raise(robot):
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    with pytest.raises(InputError):
+        IterativeIK(robot).solve(kin, "left", 0.0, np.zeros(2), np.zeros(2), np.zeros(2))
+    with pytest.raises(InputError):
+        IKSettings(iterations=0)

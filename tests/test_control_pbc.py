@@ -1,0 +1,145 @@
+"""Tests of the passivity-based tracker (amlip_qp.control.pbc) and the spring model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from amlip_qp.control.pbc import PBCGains, PBCTracker
+from amlip_qp.control.springs import spring_deflections_rad, stance_knee_offset_rad
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+
+
+@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+def robot(request):
+    return load_robot(request.param)
+
+
+def _state(robot, seed):
+    rng = np.random.default_rng(seed)
+    q = robot.q_stand.copy()
+    q[robot.actuated.pin_q_idx] += rng.normal(0.0, 0.02, robot.nu)
+    v = rng.normal(0.0, 0.3, robot.nv)
+    return q, v
+
+
+def _target_at_estimate(kin, stance, phase=0.5):
+    """References equal to the current outputs and their rates: zero tracking errors."""
+    h, J, jdv = kin.outputs(stance, 0.0)
+    return TrackingTarget(stance=stance, phase=phase, heading_rad=0.0, h_d=h, dh_d=J @ kin.v, ddh_d=np.zeros_like(h))
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_torques_reproduce_the_constrained_inverse_dynamics(robot, stance):
+    """With zero errors, M vdot + h - tau_pas = B tau + J_c^T lambda and J_c vdot + Jdot v = 0
+    hold with the recovered lambda, and the controlled joints get the commanded accelerations."""
+    q, v = _state(robot, 11)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    tracker = PBCTracker(robot)
+    res = tracker.compute(kin, _target_at_estimate(kin, stance))
+    assert res.ok and np.all(np.isfinite(res.tau_Nm))
+    # the IK reproduces the estimate: zero position errors
+    lay = tracker._layout[stance]
+    assert res.info["tracking_error_rad"] < 1e-8
+    ik = tracker.ik._prev
+    vdot_cmd = ik.a_r[lay.ctrl_v] + lay.kd * (ik.v_r[lay.ctrl_v] - v[lay.ctrl_v])
+    vdot, tau_c, lam = tracker.solve_dynamics(kin, stance, vdot_cmd)
+    np.testing.assert_allclose(tau_c, res.tau_Nm[lay.ctrl], atol=1e-8)
+    # recompute the dynamics independently with Pinocchio's RNEA
+    tau_full = np.zeros(robot.nv)
+    tau_full[robot.actuated.pin_v_idx] = res.tau_Nm
+    Jc, jdv = tracker.constraints(kin, stance)
+    data = robot.pin_model.createData()
+    rnea = pin.rnea(robot.pin_model, data, q, v, vdot)  # Pinocchio 3+: armature included
+    residual = rnea - kin.passive_forces() - tau_full - Jc.T @ lam
+    assert np.max(np.abs(residual)) < 1e-8
+    np.testing.assert_allclose(Jc @ vdot + jdv, 0.0, atol=1e-9)
+    np.testing.assert_allclose(vdot[lay.ctrl_v], vdot_cmd, atol=1e-9)
+    # the stance ankle of Cassie is passive: zero torque
+    if not robot.is_planar:
+        k = robot.actuated.joint_names.index(f"{stance}-foot")
+        assert res.tau_Nm[k] == 0.0
+
+
+def test_static_standing_needs_about_the_weight_on_the_stance_foot(robot):
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    tracker = PBCTracker(robot)
+    res = tracker.compute(kin, _target_at_estimate(kin, "left"))
+    assert res.ok
+    # single-support model on the standing pose: the stance foot carries the weight
+    # plus the (zero here) vertical acceleration of the CoM
+    assert res.info["contact_force_z_N"] == pytest.approx(robot.mass_kg * 9.81, rel=0.05)
+
+
+@pytest.mark.parametrize("bad", ["nan_h", "nan_phase", "inf_weight"])
+def test_never_nan_on_degenerate_input(robot, bad):
+    kin = RobotKinematics(robot)
+    q, v = _state(robot, 12)
+    kin.update(q, v)
+    tracker = PBCTracker(robot)
+    tgt = _target_at_estimate(kin, "left")
+    if bad == "nan_h":
+        tgt.h_d = np.full_like(tgt.h_d, np.nan)
+    elif bad == "nan_phase":
+        tgt.phase = float("nan")
+        tgt.stance_knee_offset_rad = float("nan")
+    else:
+        tgt.swing_contact_weight = float("inf")
+    res = tracker.compute(kin, tgt)
+    assert np.all(np.isfinite(res.tau_Nm))
+    assert res.tau_Nm.shape == (robot.nu,)
+    if bad == "nan_h":
+        assert not res.ok and res.fallback == "ik_failed"
+
+
+def test_singular_dynamics_falls_back(robot, monkeypatch):
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    tracker = PBCTracker(robot)
+
+    def singular(*_args, **_kw):
+        raise np.linalg.LinAlgError("singular")
+
+    monkeypatch.setattr(tracker, "solve_dynamics", singular)
+    res = tracker.compute(kin, _target_at_estimate(kin, "right"))
+    assert not res.ok and res.fallback == "singular_dynamics"
+    assert np.all(np.isfinite(res.tau_Nm))
+
+
+def test_gains_validation_and_swing_schedule():
+    with pytest.raises(InputError):
+        PBCGains(kp_stance_ps2=-1.0)
+    with pytest.raises(InputError):
+        PBCGains(swing_start_fraction=2.0)
+    g = PBCGains(swing_start_fraction=0.2, swing_ramp_phase=0.5, touchdown_gain_drop=0.5)
+    assert g.swing_scale(0.0, 0.0) == pytest.approx(0.2)
+    assert g.swing_scale(0.25, 0.0) == pytest.approx(0.6)
+    assert g.swing_scale(1.0, 1.0) == pytest.approx(0.5)
+    assert np.isfinite(g.swing_scale(float("nan"), float("nan")))
+
+
+def test_spring_model_cassie_standing_numbers():
+    """Full weight on one leg stretches the achilles coupling about twice the measured
+    double-support stretch at the stand keyframe (0.031 rad, models/README.md)."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    shin, achilles = spring_deflections_rad(kin, "left")
+    assert achilles == pytest.approx(2 * 0.031, rel=0.1)
+    assert abs(shin) < 0.02
+    off = stance_knee_offset_rad(kin, "left")
+    assert np.isfinite(off) and 0.0 < abs(off) < 0.2
+
+
+def test_spring_model_rabbit_has_no_springs():
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    assert spring_deflections_rad(kin, "left").size == 0
+    assert stance_knee_offset_rad(kin, "left") == 0.0
