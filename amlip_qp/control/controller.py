@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,6 +28,94 @@ from amlip_qp.control.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.gait import GaitLogic, GaitParams
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.exceptions import InputError
+
+
+@dataclass(frozen=True)
+class SpeedCorrection:
+    """Integral action on the step-to-step velocity error.
+
+    The deadbeat law reaches ``L_des`` exactly only on the LIP. On a real
+    robot the unmodelled dynamics (the CoM bounce after impact, the swing
+    leg's centroidal momentum, foot-placement error) leave a steady bias: a
+    robot commanded at 1 m/s settles a few tenths slower, every step alike.
+    This slow integral removes that bias. After every step the heading-frame
+    mean CoM velocity over the step is compared with the command the planner
+    aimed at for that step (the one in force a step earlier, so a speed ramp
+    does not wind it up), and ``gain_per_step`` times the error is added to
+    the correction given to the planner. Lateral errors use the mean over the
+    last two steps (a stride), because the CoM sways from side to side.
+
+    Attributes:
+        enabled: Apply the correction.
+        gain_per_step: Fraction of the error corrected per step (dimensionless).
+        max_correction_mps: Bound on the correction, m/s.
+        max_error_mps: Larger step errors are disturbances (a push), not bias:
+            they are left to the foot placement and do not enter the integral, m/s.
+        settle_steps: Steps ignored at the start of a run.
+    """
+
+    enabled: bool = True
+    gain_per_step: float = 0.3
+    max_correction_mps: float = 0.3
+    max_error_mps: float = 0.5
+    settle_steps: int = 2
+
+    def __post_init__(self):
+        vals = (self.gain_per_step, self.max_correction_mps, self.max_error_mps)
+        if not all(math.isfinite(v) and v >= 0 for v in vals) or self.gain_per_step > 1 or self.settle_steps < 0:
+            raise InputError(
+                "SpeedCorrection needs 0 <= gain_per_step <= 1, finite non-negative bounds and settle_steps >= 0, "
+                f"got {self!r}"
+            )
+
+
+class SpeedIntegrator:
+    """The integral of :class:`SpeedCorrection`, updated once per completed step.
+
+    Args:
+        params: Gains and bounds.
+        planar: Only the forward axis (planar robots).
+    """
+
+    def __init__(self, params: SpeedCorrection, planar: bool = False):
+        self.params = params
+        self.planar = bool(planar)
+        self._correction = np.zeros(2)
+        self._prev_vy = math.nan
+        self._steps = 0
+
+    @property
+    def correction_mps(self) -> np.ndarray:
+        """``(vx, vy)`` to add to the command, heading frame, m/s (copy)."""
+        return self._correction.copy()
+
+    def reset(self) -> None:
+        """Back to zero correction (a new run)."""
+        self._correction[:] = 0.0
+        self._prev_vy = math.nan
+        self._steps = 0
+
+    def update(self, v_step_mps, v_aimed_mps) -> np.ndarray:
+        """Account for one completed step; returns the new correction (m/s).
+
+        Args:
+            v_step_mps: The step's mean CoM velocity ``(vx, vy)``, heading frame, m/s.
+            v_aimed_mps: The command the foot placement aimed at for that step, m/s.
+        """
+        p = self.params
+        self._steps += 1
+        vy_stride = 0.5 * (v_step_mps[1] + self._prev_vy)
+        self._prev_vy = float(v_step_mps[1])
+        if not p.enabled or self._steps <= p.settle_steps:
+            return self.correction_mps
+        for axis, v in ((0, float(v_step_mps[0])), (1, vy_stride)):
+            if axis == 1 and self.planar or not math.isfinite(v):
+                continue
+            err = float(v_aimed_mps[axis]) - v
+            if abs(err) <= p.max_error_mps:
+                c = self._correction[axis] + p.gain_per_step * err
+                self._correction[axis] = min(max(c, -p.max_correction_mps), p.max_correction_mps)
+        return self.correction_mps
 
 
 @dataclass
@@ -45,6 +133,9 @@ class StepRecord:
             step (chosen during the previous step), or NaN for the first step.
         com_vel_end_mps: CoM velocity at the end of the step, m/s.
         heading_rad: The step's heading ``D_k``, rad.
+        mean_velocity_heading_mps: Mean CoM velocity over the step (CoM
+            displacement / duration) in the step's heading frame, m/s.
+        speed_correction_mps: The integral speed correction in force during the step, m/s.
     """
 
     t_start_s: float
@@ -56,6 +147,8 @@ class StepRecord:
     L_target_Nms: np.ndarray
     com_vel_end_mps: np.ndarray
     heading_rad: float
+    mean_velocity_heading_mps: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    speed_correction_mps: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 @dataclass
@@ -88,6 +181,9 @@ class WalkingController:
         gait: Touchdown detection settings.
         initial_stance: Stance side of the first step.
         fallback_damping_Nms: Damping of the safe fallback torque, N m s/rad.
+        speed_correction: Integral action on the step-to-step velocity error
+            (:class:`SpeedCorrection`; ``SpeedCorrection(enabled=False)`` gives
+            the paper's controller unchanged).
     """
 
     def __init__(
@@ -101,6 +197,7 @@ class WalkingController:
         gait: GaitParams | None = None,
         initial_stance: str = "left",
         fallback_damping_Nms: float = 5.0,
+        speed_correction: SpeedCorrection | None = None,
     ):
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
@@ -127,9 +224,19 @@ class WalkingController:
         self.steps: list[StepRecord] = []
         #: Ticks whose tracker output was replaced by the damped fallback.
         self.fallback_ticks = 0
+        self.speed = SpeedIntegrator(speed_correction or SpeedCorrection(), planar=robot.is_planar)
         self._stance: str | None = None
         self._last_plan: PlannerOutput | None = None
         self._L_target_this_step = np.full(2, np.nan)
+        self._correction = np.zeros(2)
+        self._com_step_start = np.zeros(3)
+        self._cmd_aimed = np.zeros(2)
+        self._cmd_now = np.zeros(2)
+
+    @property
+    def speed_correction_mps(self) -> np.ndarray:
+        """The integral speed correction now given to the planner, heading frame, m/s (copy)."""
+        return self._correction.copy()
 
     @property
     def stance(self) -> str | None:
@@ -145,18 +252,28 @@ class WalkingController:
         self._stance = None
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
+        self.speed.reset()
+        self._correction[:] = 0.0
+        self._cmd_aimed[:] = 0.0
+        self._cmd_now[:] = 0.0
 
     def _begin_step(self, stance: str, t_s: float) -> None:
         heading = self.planner.heading_next_rad
         h0, _, _ = self.kin.outputs(stance, heading)
         self.planner.start_step(stance, t_s, h0)
         self._stance = stance
+        self._com_step_start = self.kin.com()
 
     def _record_step(self, t_s: float, est: Estimate) -> None:
         plan = self._last_plan
+        t0 = self.planner.t_step_start_s
+        c, sn = math.cos(plan.heading_rad), math.sin(plan.heading_rad)
+        disp = est.com_m - self._com_step_start
+        dt = max(t_s - t0, 1e-9)
+        v_mean = np.array([c * disp[0] + sn * disp[1], -sn * disp[0] + c * disp[1]]) / dt
         self.steps.append(
             StepRecord(
-                t_start_s=self.planner.t_step_start_s,
+                t_start_s=t0,
                 t_end_s=t_s,
                 stance=self._stance,
                 swing_target_m=plan.swing_target_world_m.copy(),
@@ -165,9 +282,14 @@ class WalkingController:
                 L_target_Nms=self._L_target_this_step.copy(),
                 com_vel_end_mps=est.com_vel_mps.copy(),
                 heading_rad=plan.heading_rad,
+                mean_velocity_heading_mps=v_mean,
+                speed_correction_mps=self._correction.copy(),
             )
         )
         self._L_target_this_step = plan.L_des_Nms.copy()
+        self._correction[:] = self.speed.update(v_mean, self._cmd_aimed)
+        # The command in force now is what the next step's foot placement aims at.
+        self._cmd_aimed[:] = self._cmd_now
 
     def step(self, measurement: Measurement, command: Command) -> TickInfo:
         """One control tick: joint torques (actuator order, joint side, N m) and signals."""
@@ -188,6 +310,13 @@ class WalkingController:
                 self._record_step(t, est_old)
                 self._begin_step(swing, t)
                 touchdown = True
+        self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
+        if self._correction[0] != 0.0 or self._correction[1] != 0.0:
+            command = replace(
+                command,
+                vx_mps=command.vx_mps + float(self._correction[0]),
+                vy_mps=command.vy_mps + float(self._correction[1]),
+            )
         est = self.estimator.estimate(self._stance, touchdown=touchdown)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
@@ -209,7 +338,7 @@ class WalkingController:
             h_d=plan.h_d,
             dh_d=plan.dh_d,
             ddh_d=plan.ddh_d,
-            swing_contact_weight=self._swing_contact_weight(measurement, plan.s),
+            swing_contact_weight=self._swing_contact_weight(plan.s),
         )
         result = self.tracker.compute(kin, target)
         tau = result.tau_Nm
@@ -241,7 +370,7 @@ class WalkingController:
         )
 
     @staticmethod
-    def _swing_contact_weight(measurement: Measurement, phase: float) -> float:
+    def _swing_contact_weight(phase: float) -> float:
         """0 in the air; rises over the last 10% of the step so trackers can blend forces in."""
         if phase <= 0.9:
             return 0.0
