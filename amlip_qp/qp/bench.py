@@ -69,11 +69,19 @@ def _stats(times_us: list[float]) -> dict:
     return {"median_us": float(np.median(t)), "p99_us": float(np.percentile(t, 99)), "n": int(t.size)}
 
 
-def _time_proxsuite(problems: list[QPProblem], warm: bool) -> tuple[list[float], int, int]:
+def tracker_solver_options() -> dict:
+    """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
+    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.robots import load_robot
+
+    return QPTracker(load_robot("rabbit")).solver.options
+
+
+def _time_proxsuite(problems: list[QPProblem], warm: bool, options: dict) -> tuple[list[float], int, int]:
     """The tracker's path: solve; after a failure retry once from scratch (timed too)."""
     from amlip_qp.exceptions import QPError
 
-    solver = ProxQPSolver(eps_abs=1e-5, warm_start=warm, eps_primal_inf=1e-9)
+    solver = ProxQPSolver(**{**options, "warm_start": warm})
     times, failures, retries = [], 0, 0
     for p in problems:
         t0 = time.perf_counter_ns()
@@ -105,8 +113,14 @@ def _time_qpsolvers(problems: list[QPProblem], backend: str) -> tuple[list[float
     return times, failures
 
 
-def bench_solvers(problems: list[QPProblem], backends: tuple[str, ...] | None = None) -> dict:
+def bench_solvers(
+    problems: list[QPProblem], backends: tuple[str, ...] | None = None, solver_options: dict | None = None
+) -> dict:
     """Solve-time statistics per solver on ``problems`` (see the module docstring).
+
+    ``solver_options`` are the :class:`ProxQPSolver` arguments of both ProxSuite
+    entries (default: the tracker's, :func:`tracker_solver_options`), so the
+    bench times the solver exactly as the tracker runs it.
 
     Returns:
         ``{name: {"median_us", "p99_us", "n", "failures", "ratio_to_warm"}}``
@@ -118,9 +132,10 @@ def bench_solvers(problems: list[QPProblem], backends: tuple[str, ...] | None = 
 
     if not problems:
         raise InputError("bench_solvers needs at least one problem")
+    options = solver_options if solver_options is not None else tracker_solver_options()
     out: dict[str, dict] = {}
     for name, warm in (("proxsuite-warm", True), ("proxsuite-init", False)):
-        times, fails, retries = _time_proxsuite(problems, warm)
+        times, fails, retries = _time_proxsuite(problems, warm, options)
         out[name] = {**_stats(times), "failures": fails, "cold_retries": retries}
     wanted = backends if backends is not None else QPSOLVERS_BACKENDS
     for backend in wanted:

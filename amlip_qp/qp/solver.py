@@ -88,6 +88,19 @@ class ProxQPSolver:
         #: Number of (re-)initialisations so far (1 in steady warm-started use).
         self.n_init = 0
 
+    @property
+    def options(self) -> dict:
+        """The constructor arguments of this solver (to build another one alike)."""
+        return {
+            "eps_abs": self.eps_abs,
+            "max_iter": self.max_iter,
+            "warm_start": self.warm_start,
+            "eps_primal_inf": self.eps_primal_inf,
+            "mu_eq": self._mu.get("mu_eq"),
+            "mu_in": self._mu.get("mu_in"),
+            "update_preconditioner": self.update_preconditioner,
+        }
+
     def _new_qp(self, problem: QPProblem) -> proxqp.dense.QP:
         qp = proxqp.dense.QP(problem.n, problem.n_eq, problem.n_in, True)
         qp.settings.eps_abs = self.eps_abs
