@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import math
 import sys
 from typing import Callable, Sequence
 
@@ -69,7 +70,139 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--calls", type=_positive_int, default=20000, help="timed calls per path (default 20000)")
     b.set_defaults(func=_handler("amlip_qp.codegen.cli:run_bench"))
 
+    _add_walk(sub)
+    _add_compare(sub)
     return parser
+
+
+#: Robots and trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import).
+_ROBOTS = ("cassie", "rabbit")
+_TRACKERS = ("pbc", "qp")
+
+
+def _add_walk(sub) -> None:
+    p = sub.add_parser(
+        "walk",
+        help="simulate one walk in MuJoCo and summarise it",
+        description="Simulate one walk in MuJoCo with the PBC or QP tracker and print a summary. "
+        "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
+    )
+    p.add_argument("--robot", choices=_ROBOTS, default=None, help="robot (default cassie, or the scenario's)")
+    p.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
+    p.add_argument("--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)")
+    speed = p.add_mutually_exclusive_group()
+    speed.add_argument("--vx", type=_finite_float, metavar="M/S", default=None, help="constant forward speed, m/s (default 0)")
+    speed.add_argument(
+        "--speed-profile", metavar="T:V,...", default=None, help="piecewise-linear forward speed, e.g. '0:0,5:2.1' (s:m/s)"
+    )
+    p.add_argument("--vy", type=_finite_float, metavar="M/S", default=None, help="lateral speed, m/s (left positive)")
+    p.add_argument("--turn-rate", type=_finite_float, metavar="DEG/S", default=None, help="turn rate, deg/s (left positive)")
+    p.add_argument("--duration", type=_positive_float, metavar="S", default=None, help="simulated time, s (default 10)")
+    p.add_argument(
+        "--push",
+        type=parse_push_spec,
+        action="append",
+        metavar="T:FX,FY,FZ:DUR",
+        default=[],
+        help="push the base with a world force (N) from T for DUR seconds; repeatable",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
+    p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
+    p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
+    p.add_argument("--plot", metavar="PATH", default=None, help="write a PNG figure (speed, L, foot placement, tracking)")
+    p.add_argument("--video", metavar="PATH", default=None, help="record the 'track' camera to PATH (.mp4 or .gif)")
+    p.add_argument("--video-fps", type=_positive_float, default=30.0, metavar="FPS", help="video frames per second (default 30)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.set_defaults(func=_handler("amlip_qp.sim.cli:run_walk"))
+
+
+def _add_compare(sub) -> None:
+    p = sub.add_parser(
+        "compare",
+        help="compare the PBC and QP trackers on the same scenarios and seed",
+        description="Run both trackers on the same scenarios with the same seed and print one table row per "
+        "robot and tracker (see docs/SUMMARY_SCHEMA.md for the definitions).",
+    )
+    p.add_argument("--robots", type=_name_list(_ROBOTS), default=["cassie", "rabbit"], metavar="R1,R2", help="robots (default cassie,rabbit)")
+    p.add_argument("--trackers", type=_name_list(_TRACKERS), default=list(_TRACKERS), metavar="T1,T2", help="trackers (default pbc,qp)")
+    p.add_argument(
+        "--scenario",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="nominal scenario of a robot (replaces its default; repeatable, one per robot)",
+    )
+    p.add_argument("--quick", action="store_true", help="short runs and 1 bisection iteration (a smoke test, a few minutes at most)")
+    p.add_argument("--push-iterations", type=_non_negative_int, default=None, metavar="N", help="bisection iterations per push direction")
+    p.add_argument("--no-ramp", action="store_true", help="skip the speed-ramp test")
+    p.add_argument("--no-push", action="store_true", help="skip the push tests")
+    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise")
+    p.add_argument("--jobs", type=_positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
+    p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")
+    p.add_argument("--plot", metavar="PATH", default="out/compare.png", help="comparison figure (default out/compare.png)")
+    p.add_argument("--no-plot", action="store_true", help="do not write the figure")
+    p.set_defaults(func=_handler("amlip_qp.sim.cli:run_compare"))
+
+
+def parse_push_spec(text: str) -> tuple[float, tuple[float, float, float], float]:
+    """Parse ``T:FX,FY,FZ:DUR`` (s : N,N,N : s) into ``(t_s, (fx, fy, fz), duration_s)``."""
+    usage = f"expected T:FX,FY,FZ:DUR (s:N,N,N:s), e.g. 6:100,0,0:0.2, got {text!r}"
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(usage)
+    try:
+        t = float(parts[0])
+        force = tuple(float(x) for x in parts[1].split(","))
+        dur = float(parts[2])
+    except ValueError:
+        raise argparse.ArgumentTypeError(usage) from None
+    if len(force) != 3 or not all(math.isfinite(x) for x in (t, dur, *force)):
+        raise argparse.ArgumentTypeError(usage)
+    if t < 0 or dur <= 0:
+        raise argparse.ArgumentTypeError(f"a push needs T >= 0 s and DUR > 0 s, got {text!r}")
+    return t, force, dur  # type: ignore[return-value]
+
+
+def _finite_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = _finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {value}")
+    return value
+
+
+def _name_list(allowed: tuple[str, ...]):
+    """Argparse type: a comma-separated list of names from ``allowed`` (order kept, duplicates dropped)."""
+
+    def parse(text: str) -> list[str]:
+        names = list(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
+        bad = [n for n in names if n not in allowed]
+        if not names or bad:
+            raise argparse.ArgumentTypeError(f"expected a comma-separated list from {', '.join(allowed)}, got {text!r}")
+        return names
+
+    return parse
 
 
 def _positive_int(text: str) -> int:

@@ -25,6 +25,14 @@ from amlip_qp.control.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import state as S
 
+#: Tolerance of the push-window time comparisons, s.
+_TIME_TOL_S = 1e-9
+
+#: Signature of the optional per-tick callback of :meth:`Simulation.run`:
+#: ``on_tick(t_s, data)`` with the simulated time after the tick's plant steps
+#: (s) and MuJoCo's ``MjData`` (read only: do not modify it).
+TickCallback = Callable[[float, "mujoco.MjData"], None]
+
 
 @dataclass(frozen=True)
 class Push:
@@ -104,7 +112,10 @@ class RunResult:
         tick_time_us: Controller wall time per tick, µs.
         fallback_ticks: Ticks that used the damped fallback torque.
         pushes: The pushes applied.
-        commands: Name -> array of the commanded values per tick.
+        info: Run metadata: ``output_names`` (the order of ``log["h"]``),
+            ``actuator_names`` (the order of ``log["tau"]``), ``control_dt_s``,
+            ``planar`` (True for a planar robot),
+            ``seed`` and ``noise`` (True if sensor noise was on).
     """
 
     robot: str
@@ -175,6 +186,7 @@ class Simulation:
         self.command_fn = command_fn
         self.pushes = tuple(pushes)
         self.noise = noise
+        self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self.contact_threshold_N = float(contact_threshold_N)
         self.fall = fall or FallCriteria()
@@ -232,20 +244,38 @@ class Simulation:
         tilt = math.acos(max(-1.0, min(1.0, float(R[2, 2]))))
         return z, tilt
 
-    def _push_force(self, t: float) -> np.ndarray:
+    def _base_yaw(self) -> float:
+        """Yaw of the base body (rad, in (-pi, pi])."""
+        R = self.data.xmat[self._base_body].reshape(3, 3)
+        return math.atan2(float(R[1, 0]), float(R[0, 0]))
+
+    def push_force(self, t_s: float) -> np.ndarray:
+        """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[t, t + duration)``.
+
+        Times are compared with a 1 ns tolerance so that MuJoCo's accumulated
+        ``data.time`` (a sum of plant steps) does not shift a push by a tick.
+        """
         f = np.zeros(3)
         for p in self.pushes:
-            if p.t_s <= t < p.t_s + p.duration_s:
+            if p.t_s - _TIME_TOL_S <= t_s < p.t_s + p.duration_s - _TIME_TOL_S:
                 f += np.asarray(p.force_N, dtype=float)
         return f
 
     # --------------------------------------------------------------- run
-    def run(self, duration_s: float, progress: bool = False) -> RunResult:
+    def run(self, duration_s: float, progress: bool = False, on_tick: TickCallback | None = None) -> RunResult:
         """Simulate ``duration_s`` seconds (stops early at a fall).
 
+        Args:
+            duration_s: Simulated time, s.
+            progress: Show a tqdm progress bar on stderr.
+            on_tick: Optional ``on_tick(t_s, data)`` called after every control
+                tick's plant steps (e.g. a video recorder); it must not modify ``data``.
+
         The log holds, per control tick: ``t``, ``com`` (3), ``com_vel`` (3),
-        ``base_pos`` (3), ``base_tilt``, ``stance_left`` (1 if left stance),
-        ``phase``, ``heading``, ``L_meas`` (3), ``L`` (3, filtered),
+        ``base_pos`` (3), ``base_tilt``, ``base_yaw`` (rad, wrapped to (-pi, pi]),
+        ``stance_left`` (1 if left stance), ``phase``, ``t_remaining`` (the
+        planner's prediction horizon, s), ``heading``, ``p_st`` (3, CoM minus
+        stance contact, m), ``L_meas`` (3), ``L`` (3, filtered),
         ``L_hat`` (2), ``L_des`` (2), ``p_sw_des`` (2), ``swing_target`` (3),
         ``h`` and ``h_d`` (outputs), ``tau`` (joint side, N m),
         ``tracker_ok``, ``push`` (3, N) and the command ``cmd_vx``, ``cmd_vy``,
@@ -264,9 +294,12 @@ class Simulation:
             "com_vel": np.zeros((n_ticks, 3)),
             "base_pos": np.zeros((n_ticks, 3)),
             "base_tilt": np.zeros(n_ticks),
+            "base_yaw": np.zeros(n_ticks),
             "stance_left": np.zeros(n_ticks),
             "phase": np.zeros(n_ticks),
+            "t_remaining": np.zeros(n_ticks),
             "heading": np.zeros(n_ticks),
+            "p_st": np.zeros((n_ticks, 3)),
             "L_meas": np.zeros((n_ticks, 3)),
             "L": np.zeros((n_ticks, 3)),
             "L_hat": np.zeros((n_ticks, 2)),
@@ -300,7 +333,7 @@ class Simulation:
             tick = ctrl.step(meas, cmd)
             tick_us[k] = (time.perf_counter_ns() - t0) * 1e-3
             d.ctrl[:nu] = np.clip(tick.tau_Nm / self._gear, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
-            push = self._push_force(t)
+            push = self.push_force(t)
             d.xfrc_applied[self._base_body, :3] = push
             # log
             est, plan = tick.estimate, tick.plan
@@ -310,9 +343,12 @@ class Simulation:
             log["com_vel"][k] = est.com_vel_mps
             log["base_pos"][k] = d.xpos[self._base_body]
             log["base_tilt"][k] = tilt
+            log["base_yaw"][k] = self._base_yaw()
             log["stance_left"][k] = 1.0 if tick.stance == "left" else 0.0
             log["phase"][k] = tick.phase
+            log["t_remaining"][k] = plan.t_remaining_s
             log["heading"][k] = plan.heading_rad
+            log["p_st"][k] = est.p_st_m
             log["L_meas"][k] = est.L_meas_Nms
             log["L"][k] = est.L_Nms
             log["L_hat"][k] = plan.L_hat_Nms
@@ -329,15 +365,18 @@ class Simulation:
             log["cmd_turn_rate"][k] = cmd.turn_rate_radps
             for _ in range(self.substeps):
                 mujoco.mj_step(m, d)
-            if bar is not None and k % 200 == 0:
-                bar.update(200 if k else 1)
+            if on_tick is not None:
+                on_tick(float(d.time), d)
+            if bar is not None and (k + 1) % 200 == 0:
+                bar.update(200)
             if z < self.fall.min_height_fraction * z0 or tilt > self.fall.max_tilt_rad or not np.all(np.isfinite(d.qpos)):
                 fell, fall_time = True, t
                 break
         wall = time.perf_counter() - wall0
-        if bar is not None:
-            bar.close()
         n = k + 1
+        if bar is not None:
+            bar.update(n - bar.n)
+            bar.close()
         log = {key: value[:n] for key, value in log.items()}
         return RunResult(
             robot=self.robot.name,
@@ -352,4 +391,12 @@ class Simulation:
             tick_time_us=tick_us[:n],
             fallback_ticks=ctrl.fallback_ticks,
             pushes=self.pushes,
+            info={
+                "output_names": tuple(ctrl.planner.output_names),
+                "actuator_names": tuple(self.robot.actuated.names),
+                "control_dt_s": ctrl.dt_s,
+                "planar": bool(self.robot.is_planar),
+                "seed": self.seed,
+                "noise": self.noise is not None,
+            },
         )

@@ -1,0 +1,163 @@
+"""Handlers of ``amlip-qp walk`` and ``amlip-qp compare`` (parsers in :mod:`amlip_qp.cli`).
+
+``walk`` exit status: 0 when the run finished standing, 1 when the robot
+fell (the summary, log, plot and video are still written), 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from amlip_qp.sim.video import prefer_offscreen_gl
+
+prefer_offscreen_gl()  # before anything imports mujoco
+
+import numpy as np  # noqa: E402
+
+from amlip_qp.exceptions import InputError  # noqa: E402
+from amlip_qp.sim.harness import Push, RunResult, SensorNoise  # noqa: E402
+from amlip_qp.sim.scenarios import Scenario, SpeedProfile, get_scenario  # noqa: E402
+
+#: Runs at least this long (simulated s) show a progress bar on stderr.
+PROGRESS_MIN_DURATION_S = 3.0
+#: Default simulated time of ``walk`` without a scenario, s.
+DEFAULT_WALK_DURATION_S = 10.0
+
+
+def scenario_from_args(args: argparse.Namespace) -> Scenario:
+    """The :class:`Scenario` ``walk`` runs: ``--scenario`` (or a steady walk) with the explicit options applied.
+
+    Speeds are m/s, ``--turn-rate`` is deg/s (converted to rad/s here, once),
+    pushes come pre-parsed as ``(t_s, (fx, fy, fz), duration_s)``.
+    """
+    if args.scenario is not None:
+        base = get_scenario(args.scenario)
+        if args.robot is not None and args.robot != base.robot:
+            raise InputError(f"scenario {base.name!r} is for {base.robot}, but --robot {args.robot} was given")
+    else:
+        base = Scenario("custom", args.robot or "cassie", DEFAULT_WALK_DURATION_S)
+    changes: dict = {}
+    if args.speed_profile is not None:
+        changes["vx"] = SpeedProfile.parse(args.speed_profile)
+    elif args.vx is not None:
+        changes["vx"] = SpeedProfile.constant(args.vx)
+    if args.vy is not None:
+        changes["vy_mps"] = args.vy
+    if args.turn_rate is not None:
+        changes["turn_rate_radps"] = math.radians(args.turn_rate)
+        changes["turn_start_s"] = 0.0
+        changes["turn_angle_rad"] = math.inf
+    if args.duration is not None:
+        changes["duration_s"] = args.duration
+    if args.push:
+        changes["pushes"] = tuple(base.pushes) + tuple(Push(t, f, d) for t, f, d in args.push)
+    if base.robot == "rabbit" and (changes.get("vy_mps", 0.0) != 0.0 or changes.get("turn_rate_radps", 0.0) != 0.0):
+        raise InputError("rabbit is planar: --vy and --turn-rate must be 0")
+    if base.robot == "rabbit" and any(p.force_N[1] != 0.0 for p in changes.get("pushes", ())):
+        raise InputError("rabbit is planar: a push must have FY = 0")
+    if changes and base.name != "custom":
+        changes["name"] = f"{base.name}+options"
+    return base.with_(**changes) if changes else base
+
+
+def save_log(result: RunResult, path: str) -> None:
+    """Write the per-tick log and the per-step records as a compressed ``.npz`` (SI units)."""
+    steps = result.steps
+    arrays = {f"log_{k}": v for k, v in result.log.items()}
+    arrays.update(
+        tick_time_us=np.asarray(result.tick_time_us),
+        step_t_start_s=np.array([s.t_start_s for s in steps]),
+        step_t_end_s=np.array([s.t_end_s for s in steps]),
+        step_stance_left=np.array([s.stance == "left" for s in steps], dtype=bool),
+        step_swing_target_m=np.array([s.swing_target_m for s in steps]).reshape(-1, 3),
+        step_swing_actual_m=np.array([s.swing_actual_m for s in steps]).reshape(-1, 3),
+        step_L_end_Nms=np.array([s.L_end_Nms for s in steps]).reshape(-1, 2),
+        step_L_target_Nms=np.array([s.L_target_Nms for s in steps]).reshape(-1, 2),
+        step_heading_rad=np.array([s.heading_rad for s in steps]),
+        output_names=np.array(result.info.get("output_names", ()), dtype=str),
+        actuator_names=np.array(result.info.get("actuator_names", ()), dtype=str),
+    )
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+
+
+def _write_text(path: str, text: str) -> None:
+    if path == "-":
+        sys.stdout.write(text + "\n")
+    else:
+        with open(path, "w") as fh:
+            fh.write(text + "\n")
+
+
+def _check_output_paths(args: argparse.Namespace) -> None:
+    """Fail early (exit 2) on output paths that cannot be written, before a long run."""
+    from pathlib import Path
+
+    from amlip_qp.sim.video import check_video_path
+
+    if args.video is not None:
+        check_video_path(args.video)
+    for opt in ("json", "log", "plot", "video"):
+        value = getattr(args, opt)
+        if value is None or value == "-":
+            continue
+        parent = Path(value).expanduser().resolve().parent
+        if not parent.is_dir():
+            raise InputError(f"--{opt} {value}: folder {parent} does not exist")
+
+
+def run_walk(args: argparse.Namespace) -> int:
+    """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
+    from amlip_qp.sim import factory, summary
+
+    scenario = scenario_from_args(args)
+    _check_output_paths(args)
+    noise = SensorNoise() if args.noise else None
+    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
+    recorder = None
+    if args.video is not None:
+        from amlip_qp.sim.video import VideoRecorder
+
+        recorder = VideoRecorder(sim.model, args.video, fps=args.video_fps)
+    progress = not args.no_progress and scenario.duration_s >= PROGRESS_MIN_DURATION_S
+    try:
+        result = sim.run(scenario.duration_s, progress=progress, on_tick=recorder)
+    finally:
+        if recorder is not None:
+            recorder.close()
+    result.info["scenario"] = scenario.name
+    summ = summary.summarize(result)
+    if args.json is not None:
+        _write_text(args.json, summary.dumps(summ))
+    if args.log is not None:
+        save_log(result, args.log)
+    if args.plot is not None:
+        from amlip_qp.sim.plots import walk_figure
+
+        walk_figure(result, args.plot, title=f"{scenario.name}: {result.robot} / {result.tracker}")
+    if args.json != "-":
+        sys.stdout.write(_one_line(summ) + "\n")
+    return 1 if result.fell else 0
+
+
+def _one_line(s: dict) -> str:
+    def f(v, fmt):
+        return "n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
+
+    state = f"FELL at {s['fall_time_s']:.2f} s" if s["fell"] else "walked"
+    mv = s["mean_velocity"]
+    return (
+        f"{s['robot']}/{s['tracker']} {state}: {s['sim_time_s']:.2f} s simulated, {s['steps']} steps, "
+        f"mean v = [{f(mv[0], '.3f')}, {f(mv[1], '.3f')}] m/s, velocity error RMS {f(s['velocity_error_rms'], '.3f')} m/s, "
+        f"foot placement error RMS {f(s['foot_placement_error_rms_m'], '.3f')} m, "
+        f"realtime factor {f(s['realtime_factor'], '.2f')}"
+    )
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    """``amlip-qp compare``: both trackers on the same scenarios and seed; a table, a figure, optional JSON."""
+    from amlip_qp.sim import compare
+
+    return compare.main(args)

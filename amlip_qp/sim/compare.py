@@ -1,0 +1,431 @@
+"""PBC vs QP: the same scenarios, the same seed, one table row per (robot, tracker).
+
+Per robot and tracker, three experiments (independent runs, spread over
+``jobs`` worker processes; each run is deterministic for its seed):
+
+1. the **nominal** scenario (default ``cassie-1mps`` / ``rabbit-0.5mps``,
+   at most 10 s):
+   the :mod:`~amlip_qp.sim.summary` metrics (velocity, foot-placement and
+   end-of-step ``L`` errors, output tracking, torques, tick time);
+2. a **speed ramp**: :func:`highest_steady_speed`;
+3. **pushes** on the base while walking at the nominal scenario's speed
+   profile: the largest sagittal (+x) and lateral (+y, 3-D robots only)
+   impulse survived, by bisection (:func:`max_survived_impulse`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim.harness import Push, RunResult, SensorNoise
+from amlip_qp.sim.scenarios import Scenario, SpeedProfile, get_scenario
+from amlip_qp.sim.summary import heading_frame_xy, summarize
+
+#: Default nominal scenario per robot.
+NOMINAL_SCENARIOS: dict[str, str] = {"cassie": "cassie-1mps", "rabbit": "rabbit-0.5mps"}
+
+#: Push duration of the bisection, s.
+PUSH_DURATION_S = 0.2
+#: Push start time of the bisection runs, s.
+PUSH_TIME_S = 3.0
+#: Time a pushed robot must stay up after the push ends to count as surviving, s.
+PUSH_SURVIVE_S = 2.0
+
+
+@dataclass(frozen=True)
+class CompareSettings:
+    """Durations and search ranges of a comparison (SI units).
+
+    Attributes:
+        nominal_duration_s: Cap on the nominal run's simulated time, s (``None``: the scenario's).
+        ramp_end_mps: Per robot, the speed the ramp reaches, m/s.
+        ramp_duration_s: Ramp time from 0 to ``ramp_end_mps`` (starting at 1 s), s.
+        ramp_hold_s: Time the final speed is held, s.
+        push_time_s: When the push starts, s.
+        push_survive_s: Time after the push's end the robot must stay up, s.
+        push_max_impulse_Ns: Per robot, the upper end of the bisection, N s.
+        push_iterations: Bisection iterations per direction.
+        window_s: Moving-mean window of the highest-steady-speed test, s.
+        tolerance: Relative tolerance of the highest-steady-speed test.
+    """
+
+    nominal_duration_s: float | None = 10.0
+    ramp_end_mps: tuple[tuple[str, float], ...] = (("cassie", 2.1), ("rabbit", 1.5))
+    ramp_duration_s: float = 7.0
+    ramp_hold_s: float = 1.5
+    push_time_s: float = PUSH_TIME_S
+    push_survive_s: float = PUSH_SURVIVE_S
+    push_max_impulse_Ns: tuple[tuple[str, float], ...] = (("cassie", 60.0), ("rabbit", 40.0))
+    push_iterations: int = 3
+    window_s: float = 2.0
+    tolerance: float = 0.10
+
+
+#: The ``--quick`` settings: short runs, one bisection iteration (a coarse smoke test of the comparison).
+QUICK = CompareSettings(
+    nominal_duration_s=4.0,
+    ramp_duration_s=3.0,
+    ramp_hold_s=1.0,
+    push_time_s=2.0,
+    push_survive_s=1.0,
+    push_iterations=1,
+)
+
+
+# --------------------------------------------------------------- metrics
+def highest_steady_speed(
+    result: RunResult, window_s: float = 2.0, tolerance: float = 0.10, min_speed_mps: float = 0.1
+) -> float:
+    """The highest speed (m/s) held within ``tolerance`` of the command on a ramp.
+
+    For every window of ``window_s`` seconds of the run (ending at each tick,
+    up to the fall or the end), compare the moving mean of the measured
+    forward CoM velocity (heading frame) with the moving mean of the commanded
+    ``vx``. The result is the largest commanded window mean ``>= min_speed_mps``
+    whose measured mean is within ``tolerance`` (relative) of it; 0 if none.
+    """
+    log = result.log
+    t = log["t"]
+    if t.size < 2:
+        return 0.0
+    dt = float(np.median(np.diff(t)))
+    n = int(round(window_s / dt))
+    if n < 1 or t.size < n:
+        return 0.0
+    v = heading_frame_xy(log["com_vel"], log["heading"])[:, 0]
+    cmd = np.asarray(log["cmd_vx"], dtype=float)
+    kernel = np.ones(n) / n
+    v_mean = np.convolve(v, kernel, mode="valid")
+    c_mean = np.convolve(cmd, kernel, mode="valid")
+    ok = (c_mean >= min_speed_mps) & (np.abs(v_mean - c_mean) <= tolerance * c_mean)
+    return float(np.max(c_mean[ok])) if np.any(ok) else 0.0
+
+
+def max_survived_impulse(survives: Callable[[float], bool], max_impulse_Ns: float, iterations: int) -> tuple[float, bool]:
+    """Largest impulse (N s) that ``survives``, by bisection on ``[0, max_impulse_Ns]``.
+
+    The upper end is tried first: if it survives the answer is
+    ``(max_impulse_Ns, True)`` (at least that much). Otherwise ``iterations``
+    bisection steps keep ``lo`` surviving and ``hi`` failing; returns
+    ``(lo, False)``. ``survives(0)`` is assumed true (it is the unpushed walk).
+    """
+    if not (max_impulse_Ns > 0 and math.isfinite(max_impulse_Ns)) or iterations < 0:
+        raise InputError(f"need max_impulse_Ns > 0 and iterations >= 0, got {max_impulse_Ns!r}, {iterations!r}")
+    if survives(max_impulse_Ns):
+        return float(max_impulse_Ns), True
+    lo, hi = 0.0, float(max_impulse_Ns)
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        if survives(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo, False
+
+
+# ------------------------------------------------------------ scenarios
+def _lookup(pairs: tuple[tuple[str, float], ...], robot: str) -> float:
+    return dict(pairs)[robot]
+
+
+def ramp_scenario(robot: str, settings: CompareSettings) -> Scenario:
+    """0 m/s for 1 s, a linear ramp to the robot's ramp speed, then hold."""
+    v_end = _lookup(settings.ramp_end_mps, robot)
+    t1 = 1.0 + settings.ramp_duration_s
+    return Scenario(
+        f"{robot}-ramp-{v_end:g}",
+        robot,
+        t1 + settings.ramp_hold_s,
+        vx=SpeedProfile((0.0, 1.0, t1), (0.0, 0.0, v_end)),
+        description=f"{robot} ramps to {v_end:g} m/s",
+    )
+
+
+def push_scenario(nominal: Scenario, impulse_Ns: float, axis: int, settings: CompareSettings) -> Scenario:
+    """``nominal`` with one push of ``impulse_Ns`` along world ``axis`` (0 = x, 1 = y), cut short after it."""
+    force = [0.0, 0.0, 0.0]
+    force[axis] = impulse_Ns / PUSH_DURATION_S
+    duration = settings.push_time_s + PUSH_DURATION_S + settings.push_survive_s
+    pushes = (Push(settings.push_time_s, tuple(force), PUSH_DURATION_S),) if impulse_Ns > 0 else ()
+    return nominal.with_(name=f"{nominal.name}-push", duration_s=duration, pushes=pushes)
+
+
+def nominal_scenario(robot: str, names: list[str], settings: CompareSettings) -> Scenario:
+    """The robot's nominal scenario: the one in ``names`` for this robot, else :data:`NOMINAL_SCENARIOS`."""
+    chosen = [get_scenario(n) for n in names]
+    mine = [s for s in chosen if s.robot == robot]
+    if len(mine) > 1:
+        raise InputError(f"give at most one --scenario per robot; got {', '.join(s.name for s in mine)} for {robot}")
+    sc = mine[0] if mine else get_scenario(NOMINAL_SCENARIOS[robot])
+    if settings.nominal_duration_s is not None:
+        sc = sc.with_(duration_s=min(sc.duration_s, settings.nominal_duration_s))
+    return sc
+
+
+# ---------------------------------------------------------------- tasks
+@dataclass(frozen=True)
+class _Task:
+    kind: str  # "nominal", "ramp", "push-x", "push-y"
+    robot: str
+    tracker: str
+    scenario: Scenario
+    settings: CompareSettings
+    seed: int
+    noise: bool
+
+
+def _run(scenario: Scenario, tracker: str, seed: int, noise: bool) -> RunResult:
+    from amlip_qp.sim.factory import run_scenario
+
+    return run_scenario(scenario, tracker, seed=seed, noise=SensorNoise() if noise else None)
+
+
+def _execute(task: _Task) -> dict[str, Any]:
+    """Run one experiment (in a worker process); returns the row fields it measures."""
+    import warnings
+
+    warnings.simplefilter("ignore", RuntimeWarning)
+    t0, c0 = time.perf_counter(), time.process_time()
+    s = task.settings
+    if task.kind == "nominal":
+        res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        summ = summarize(res)
+        out: dict[str, Any] = {"nominal": summ}
+    elif task.kind == "ramp":
+        res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        out = {
+            "highest_steady_speed_mps": highest_steady_speed(res, s.window_s, s.tolerance),
+            "ramp_fell": bool(res.fell),
+            "ramp_scenario": task.scenario.name,
+        }
+    else:
+        axis = 0 if task.kind == "push-x" else 1
+        trials: list[tuple[float, bool]] = []
+
+        def survives(impulse: float) -> bool:
+            res = _run(push_scenario(task.scenario, impulse, axis, s), task.tracker, task.seed, task.noise)
+            trials.append((impulse, not res.fell))
+            return not res.fell
+
+        value, capped = max_survived_impulse(survives, _lookup(s.push_max_impulse_Ns, task.robot), s.push_iterations)
+        prefix = "sagittal" if axis == 0 else "lateral"
+        out = {
+            f"max_{prefix}_impulse_Ns": value,
+            f"{prefix}_impulse_at_upper_bound": capped,
+            f"{prefix}_push_trials": trials,
+        }
+    out["_wall_s"] = time.perf_counter() - t0
+    out["_cpu_s"] = time.process_time() - c0
+    return out
+
+
+def build_tasks(
+    robots: list[str],
+    trackers: list[str],
+    scenario_names: list[str],
+    settings: CompareSettings,
+    seed: int = 0,
+    noise: bool = False,
+    ramp: bool = True,
+    push: bool = True,
+) -> list[_Task]:
+    """Every experiment of a comparison, longest first (better packing on the workers)."""
+    from amlip_qp.sim.factory import load
+
+    tasks = []
+    for robot in robots:
+        nominal = nominal_scenario(robot, scenario_names, settings)
+        planar = load(robot).is_planar
+        for trk in trackers:
+            tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise))
+            if ramp:
+                tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), settings, seed, noise))
+            if push:
+                tasks.append(_Task("push-x", robot, trk, nominal, settings, seed, noise))
+                if not planar:
+                    tasks.append(_Task("push-y", robot, trk, nominal, settings, seed, noise))
+    unknown = [n for n in scenario_names if get_scenario(n).robot not in robots]
+    if unknown:
+        raise InputError(f"--scenario {', '.join(unknown)} is for a robot not in --robots {','.join(robots)}")
+    return tasks
+
+
+def _expected_cost(task: _Task) -> float:
+    """Rough relative cost (simulated seconds x robot weight) used to start long experiments first."""
+    s = task.settings
+    weight = 3.0 if task.robot == "cassie" else 1.0
+    if task.kind.startswith("push"):
+        return weight * (s.push_iterations + 1) * (s.push_time_s + PUSH_DURATION_S + s.push_survive_s)
+    return weight * task.scenario.duration_s
+
+
+def _row(robot: str, tracker: str, parts: list[dict[str, Any]]) -> dict[str, Any]:
+    row: dict[str, Any] = {"robot": robot, "tracker": tracker}
+    for p in parts:
+        row.update({k: v for k, v in p.items() if k not in ("nominal", "_wall_s", "_cpu_s")})
+        if "nominal" in p:
+            n = p["nominal"]
+            track = [v for v in n["output_tracking_rms"].values() if v is not None and math.isfinite(v)]
+            row.update(
+                scenario=n["scenario"],
+                fell=n["fell"],
+                steps=n["steps"],
+                velocity_error_rms=n["velocity_error_rms"],
+                foot_placement_error_rms_m=n["foot_placement_error_rms_m"],
+                L_end_of_step_error_rms=n["L_end_of_step_error_rms"],
+                output_tracking_rms=n["output_tracking_rms"],
+                output_tracking_rms_mean=float(np.mean(track)) if track else None,
+                torque_peak_Nm=n["torque_peak_Nm"],
+                torque_rms_Nm=n["torque_rms_Nm"],
+                torque_peak_max_Nm=max(n["torque_peak_Nm"].values()) if n["torque_peak_Nm"] else None,
+                torque_rms_mean_Nm=float(np.mean(list(n["torque_rms_Nm"].values()))) if n["torque_rms_Nm"] else None,
+                tick_time_median_us=n["tick_time_us"]["median"],
+                tick_time_p99_us=n["tick_time_us"]["p99"],
+                realtime_factor=n["realtime_factor"],
+                fallback_ticks=n["fallback_ticks"],
+            )
+    row.setdefault("max_lateral_impulse_Ns", None)
+    return row
+
+
+def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+    """Execute ``tasks`` on ``jobs`` processes (1: in this process); one row per (robot, tracker), in task order."""
+    results: list[dict[str, Any] | None] = [None] * len(tasks)
+    if jobs <= 1 or len(tasks) <= 1:
+        for i, task in enumerate(tasks):
+            results[i] = _execute(task)
+            if log:
+                log(f"  done {task.robot}/{task.tracker} {task.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)")
+    else:
+        import multiprocessing as mp
+
+        order = sorted(range(len(tasks)), key=lambda i: -_expected_cost(tasks[i]))
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn")) as pool:
+            futures = {pool.submit(_execute, tasks[i]): i for i in order}
+            from concurrent.futures import as_completed
+
+            for fut in as_completed(futures):
+                i = futures[fut]
+                results[i] = fut.result()
+                if log:
+                    t = tasks[i]
+                    log(f"  done {t.robot}/{t.tracker} {t.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)")
+    rows = []
+    keys = list(dict.fromkeys((t.robot, t.tracker) for t in tasks))
+    for robot, trk in keys:
+        parts = [r for t, r in zip(tasks, results) if (t.robot, t.tracker) == (robot, trk)]
+        rows.append(_row(robot, trk, parts))  # type: ignore[arg-type]
+    return rows
+
+
+# ----------------------------------------------------------------- table
+#: (row key, column header, format) of the printed table.
+TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ("robot", "robot", "s"),
+    ("tracker", "tracker", "s"),
+    ("fell", "fell", "s"),
+    ("velocity_error_rms", "v err m/s", ".3f"),
+    ("foot_placement_error_rms_m", "foot err m", ".3f"),
+    ("L_end_of_step_error_rms", "L err Nms", ".2f"),
+    ("output_tracking_rms_mean", "track rms", ".4f"),
+    ("torque_peak_max_Nm", "tau pk Nm", ".1f"),
+    ("torque_rms_mean_Nm", "tau rms Nm", ".1f"),
+    ("highest_steady_speed_mps", "v max m/s", ".2f"),
+    ("max_sagittal_impulse_Ns", "push x Ns", ".1f"),
+    ("max_lateral_impulse_Ns", "push y Ns", ".1f"),
+    ("tick_time_median_us", "tick med us", ".0f"),
+    ("tick_time_p99_us", "tick p99 us", ".0f"),
+)
+
+
+def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
+    v = row.get(key)
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    text = format(v, fmt)
+    bound = {"max_sagittal_impulse_Ns": "sagittal_impulse_at_upper_bound", "max_lateral_impulse_Ns": "lateral_impulse_at_upper_bound"}
+    if key in bound and row.get(bound[key]):
+        text = ">=" + text
+    return text
+
+
+def format_table(rows: list[dict[str, Any]]) -> str:
+    """A fixed-width text table, one line per (robot, tracker)."""
+    header = [h for _, h, _ in TABLE_COLUMNS]
+    body = [[_cell(r, k, f) for k, _, f in TABLE_COLUMNS] for r in rows]
+    widths = [max(len(c) for c in col) for col in zip(header, *body)]
+    lines = ["  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(line, widths))) for line in [header, *body]]
+    lines.insert(1, "-" * len(lines[0]))
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ main
+def settings_from_args(args: argparse.Namespace) -> CompareSettings:
+    """:data:`QUICK` or the default settings, with ``--push-iterations`` applied."""
+    s = QUICK if args.quick else CompareSettings()
+    if args.push_iterations is not None:
+        from dataclasses import replace
+
+        s = replace(s, push_iterations=args.push_iterations)
+    return s
+
+
+def main(args: argparse.Namespace) -> int:
+    """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
+    from amlip_qp.sim import summary
+
+    if args.json is not None and args.json != "-":
+        parent = os.path.dirname(os.path.abspath(args.json))
+        if not os.path.isdir(parent):
+            raise InputError(f"--json {args.json}: folder {parent} does not exist")
+    settings = settings_from_args(args)
+    for trk in args.trackers:
+        from amlip_qp.sim.factory import tracker_class
+
+        tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
+    tasks = build_tasks(
+        args.robots, args.trackers, args.scenario, settings, seed=args.seed, noise=args.noise, ramp=not args.no_ramp, push=not args.no_push
+    )
+
+    def log(msg: str) -> None:
+        sys.stderr.write(msg + "\n")
+        sys.stderr.flush()
+
+    log(f"compare: {len(tasks)} experiments on {args.jobs} process(es)...")
+    t0 = time.perf_counter()
+    rows = run_comparison(tasks, jobs=args.jobs, log=log)
+    log(f"compare: finished in {time.perf_counter() - t0:.0f} s")
+    table = format_table(rows)
+    if args.json == "-":
+        sys.stdout.write(summary.dumps({"rows": rows, "settings": _settings_dict(settings, args)}) + "\n")
+    else:
+        sys.stdout.write(table + "\n")
+        if args.json is not None:
+            with open(args.json, "w") as fh:
+                fh.write(summary.dumps({"rows": rows, "settings": _settings_dict(settings, args)}) + "\n")
+    if not args.no_plot and args.plot:
+        from amlip_qp.sim.plots import comparison_figure
+
+        path = comparison_figure(rows, args.plot)
+        log(f"compare: figure written to {path}")
+    return 0
+
+
+def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[str, Any]:
+    from dataclasses import asdict
+
+    d = asdict(settings)
+    d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
+    return d

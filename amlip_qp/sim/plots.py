@@ -1,0 +1,140 @@
+"""Figures of a walking run and of a tracker comparison (matplotlib, Agg backend: no display needed)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from amlip_qp.sim.harness import RunResult  # noqa: E402
+from amlip_qp.sim.summary import heading_frame_xy, step_velocities  # noqa: E402
+
+
+def _save(fig, path: str | os.PathLike) -> Path:
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p
+
+
+def _legend(ax, **kw) -> None:
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(**kw)
+
+
+def _mark_fall(ax, result: RunResult) -> None:
+    if result.fell:
+        ax.axvline(result.fall_time_s, color="k", ls=":", lw=1.0, label="fall")
+
+
+def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = None) -> Path:
+    """Four panels: speed, ``L`` and its prediction, foot-placement error, output tracking errors. Returns the path."""
+    log = result.log
+    t = log["t"]
+    planar = bool(result.info.get("planar", False))
+    fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True)
+    fig.suptitle(title or f"{result.robot} / {result.tracker}" + (" (fell)" if result.fell else ""))
+
+    ax = axes[0]
+    v_h = heading_frame_xy(log["com_vel"], log["heading"])
+    ax.plot(t, v_h[:, 0], color="C0", lw=0.6, alpha=0.5, label="$v_x$ CoM (heading frame)")
+    ax.plot(t, log["cmd_vx"], color="C0", ls="--", label="$v_x$ command")
+    t0, vm, _ = step_velocities(result)
+    if t0.size:
+        ends = np.array([s.t_end_s for s in result.steps][: t0.size])
+        ax.step(ends, vm[:, 0], where="pre", color="C3", label="$v_x$ step mean")
+    if not planar:
+        ax.plot(t, v_h[:, 1], color="C1", lw=0.6, alpha=0.5, label="$v_y$ CoM")
+        ax.plot(t, log["cmd_vy"], color="C1", ls="--", label="$v_y$ command")
+    ax.set_ylabel("speed [m/s]")
+    _mark_fall(ax, result)
+    _legend(ax, loc="upper left", fontsize=7, ncol=3)
+
+    ax = axes[1]
+    ax.plot(t, log["L"][:, 1], color="C0", lw=0.8, label="$L_y$ (filtered)")
+    ax.plot(t, log["L_hat"][:, 1], color="C3", lw=0.8, label=r"$\hat L_y(T^-)$ predicted")
+    ax.plot(t, log["L_des"][:, 1], color="C2", ls="--", lw=0.8, label=r"$L_y^{des}$ (next step end)")
+    ends = [s.t_end_s for s in result.steps]
+    if ends:
+        ax.plot(ends, [s.L_end_Nms[1] for s in result.steps], "k.", ms=4, label="$L_y$ at step end")
+    if not planar:
+        ax.plot(t, log["L"][:, 0], color="C1", lw=0.6, alpha=0.7, label="$L_x$ (filtered)")
+        ax.plot(t, log["L_hat"][:, 0], color="C4", lw=0.6, alpha=0.7, label=r"$\hat L_x(T^-)$")
+    ax.set_ylabel("L about stance contact [kg m²/s]")
+    _mark_fall(ax, result)
+    _legend(ax, loc="upper left", fontsize=7, ncol=3)
+
+    ax = axes[2]
+    if result.steps:
+        err = np.array([np.asarray(s.swing_actual_m)[:2] - np.asarray(s.swing_target_m)[:2] for s in result.steps])
+        ax.plot(ends, err[:, 0], "o-", ms=3, label="x (actual - target)")
+        if not planar:
+            ax.plot(ends, err[:, 1], "s-", ms=3, label="y (actual - target)")
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_ylabel("foot placement error\nat touchdown [m]")
+    _mark_fall(ax, result)
+    _legend(ax, loc="upper left", fontsize=7)
+
+    ax = axes[3]
+    names = result.info.get("output_names") or [f"h{i}" for i in range(log["h"].shape[1])]
+    err = log["h"] - log["h_d"]
+    for i, name in enumerate(names):
+        ax.plot(t, err[:, i], lw=0.6, label=name)
+    ax.set_ylabel("output error $h - h_d$\n[m or rad]")
+    ax.set_xlabel("time [s]")
+    _mark_fall(ax, result)
+    _legend(ax, loc="upper left", fontsize=6, ncol=3)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+#: (key in a comparison row, axis label) of the comparison figure's panels.
+COMPARISON_METRICS: tuple[tuple[str, str], ...] = (
+    ("velocity_error_rms", "velocity error RMS [m/s]"),
+    ("foot_placement_error_rms_m", "foot placement error RMS [m]"),
+    ("L_end_of_step_error_rms", "L end-of-step error RMS [kg m²/s]"),
+    ("output_tracking_rms_mean", "mean output tracking RMS [m|rad]"),
+    ("torque_rms_mean_Nm", "mean torque RMS [N m]"),
+    ("highest_steady_speed_mps", "highest steady speed [m/s]"),
+    ("max_sagittal_impulse_Ns", "largest sagittal push survived [N s]"),
+    ("max_lateral_impulse_Ns", "largest lateral push survived [N s]"),
+    ("tick_time_median_us", "tick time median [µs]"),
+)
+
+
+def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -> Path:
+    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker. Returns the path.
+
+    ``rows`` are the per-(robot, tracker) dictionaries of :mod:`amlip_qp.sim.compare`
+    (missing or ``None`` values are drawn as empty bars).
+    """
+    robots = list(dict.fromkeys(r["robot"] for r in rows))
+    trackers = list(dict.fromkeys(r["tracker"] for r in rows))
+    ncol = 3
+    nrow = int(np.ceil(len(COMPARISON_METRICS) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow))
+    width = 0.8 / max(len(trackers), 1)
+    x = np.arange(len(robots))
+    for ax, (key, label) in zip(axes.flat, COMPARISON_METRICS):
+        for j, trk in enumerate(trackers):
+            vals = []
+            for rob in robots:
+                row = next((r for r in rows if r["robot"] == rob and r["tracker"] == trk), None)
+                v = None if row is None else row.get(key)
+                vals.append(np.nan if v is None else float(v))
+            ax.bar(x + (j - (len(trackers) - 1) / 2) * width, vals, width, label=trk, color=f"C{j}")
+        ax.set_xticks(x, robots)
+        ax.set_title(label, fontsize=9)
+    for ax in list(axes.flat)[len(COMPARISON_METRICS) :]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=8)
+    fig.suptitle("PBC vs QP tracker")
+    fig.tight_layout()
+    return _save(fig, path)

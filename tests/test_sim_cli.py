@@ -1,0 +1,208 @@
+"""``amlip-qp walk`` and ``amlip-qp compare``: bad input, outputs, determinism.
+
+Runs are tiny (a stand-in zero-torque tracker falls within half a second);
+walking quality is the trackers' own tests' business.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from amlip_qp import cli
+from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim import factory
+
+SUMMARY_KEYS = {
+    "robot", "tracker", "scenario", "seed", "noise", "duration_s", "sim_time_s", "fell", "fall_time_s", "steps",
+    "commanded_velocity", "mean_velocity", "velocity_error_rms", "heading_change_deg", "foot_placement_error_rms_m",
+    "L_end_of_step_error_rms", "L_end_of_step_error_rms_xy", "output_tracking_rms", "torque_peak_Nm", "torque_rms_Nm",
+    "tick_time_us", "realtime_factor", "fallback_ticks", "tracker_failed_ticks", "settle_s",
+}  # fmt: skip
+
+
+class ZeroTracker(Tracker):
+    name = "zero"
+
+    def __init__(self, robot):
+        self.nu = robot.nu
+
+    def compute(self, kin, target):
+        return TrackerResult(tau_Nm=np.zeros(self.nu))
+
+
+@pytest.fixture
+def stand_in(monkeypatch):
+    """Every tracker name builds the zero-torque stand-in."""
+    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    monkeypatch.setattr(factory, "tracker_class", lambda name: ZeroTracker)
+
+
+def _run(argv, capsys):
+    try:
+        code = cli.main(argv)
+    except SystemExit as exc:  # argparse errors
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["walk", "--push", "1:2,3:0.2"],
+        ["walk", "--push", "1:a,0,0:0.2"],
+        ["walk", "--push", "-1:1,0,0:0.2"],
+        ["walk", "--push", "1:1,0,0:0"],
+        ["walk", "--duration", "-1"],
+        ["walk", "--duration", "0"],
+        ["walk", "--vx", "nan"],
+        ["walk", "--vy", "inf"],
+        ["walk", "--turn-rate", "fast"],
+        ["walk", "--robot", "atlas"],
+        ["walk", "--tracker", "lqr"],
+        ["walk", "--vx", "1", "--speed-profile", "0:0,5:1"],
+        ["walk", "--speed-profile", "0:0,x:1", "--duration", "0.01"],
+        ["walk", "--speed-profile", "5:0,1:1", "--duration", "0.01"],
+        ["walk", "--scenario", "no-such-scenario"],
+        ["walk", "--scenario", "rabbit-1mps", "--robot", "cassie"],
+        ["walk", "--robot", "rabbit", "--vy", "0.2", "--duration", "0.01"],
+        ["walk", "--video", "out.avi", "--duration", "0.01"],
+        ["walk", "--json", "/no/such/folder/x.json", "--duration", "0.01"],
+        ["compare", "--robots", "cassie,atlas"],
+        ["compare", "--push-iterations", "-1"],
+        ["compare", "--scenario", "cassie-1mps", "--robots", "rabbit", "--jobs", "1"],
+    ],
+)
+def test_bad_input_exits_2_with_one_line(argv, capsys, stand_in):
+    code, out, err = _run(argv, capsys)
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert err.startswith("amlip-qp")
+
+
+def test_bad_input_in_a_subprocess_has_no_traceback():
+    proc = subprocess.run(
+        [sys.executable, "-m", "amlip_qp.cli", "walk", "--push", "oops"], capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 2
+    assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr
+
+
+def test_parse_push_spec():
+    assert cli.parse_push_spec("6:100,0,-5.5:0.2") == (6.0, (100.0, 0.0, -5.5), 0.2)
+    for bad in ("6:100,0:0.2", "6:100,0,0", "6:100,0,0:0.2:1", "6:nan,0,0:0.2", "x:1,0,0:1", "6:1,0,0:-1"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            cli.parse_push_spec(bad)
+
+
+def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
+    log, plot, summary_path = tmp_path / "run.npz", tmp_path / "run.png", tmp_path / "s.json"
+    argv = ["walk", "--robot", "rabbit", "--duration", "0.05", "--vx", "0.3", "--push", "0.01:20,0,0:0.02"]
+    code, out, err = _run(argv + ["--json", "-", "--log", str(log), "--plot", str(plot)], capsys)
+    assert code == 0, err
+    data = json.loads(out)
+    assert set(data) == SUMMARY_KEYS
+    assert data["robot"] == "rabbit" and data["tracker"] == "zero" and data["fell"] is False
+    assert data["duration_s"] == 0.05 and data["sim_time_s"] == pytest.approx(0.05)
+    assert data["commanded_velocity"] == [0.3, 0.0]
+    assert set(data["output_tracking_rms"]) == {"torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing"}
+    assert set(data["tick_time_us"]) == {"median", "p99"}
+    with np.load(log) as npz:
+        assert npz["log_t"].shape == (100,)
+        assert npz["log_push"][:, 0].max() == 20.0
+        assert list(npz["output_names"]) == list(data["output_tracking_rms"])
+    assert plot.stat().st_size > 10_000
+    code, out, err = _run(argv + ["--json", str(summary_path)], capsys)
+    assert code == 0 and "rabbit/zero walked" in out
+    assert json.loads(summary_path.read_text())["steps"] == data["steps"]
+
+
+def test_walk_is_deterministic_with_noise(capsys, stand_in):
+    argv = ["walk", "--robot", "cassie", "--duration", "0.05", "--noise", "--seed", "3", "--json", "-"]
+    a = json.loads(_run(argv, capsys)[1])
+    b = json.loads(_run(argv, capsys)[1])
+    c = json.loads(_run(argv[:-4] + ["--seed", "4", "--json", "-"], capsys)[1])
+    timing = {"tick_time_us", "realtime_factor"}
+    assert {k: v for k, v in a.items() if k not in timing} == {k: v for k, v in b.items() if k not in timing}
+    assert a["output_tracking_rms"] != c["output_tracking_rms"]
+
+
+def test_walk_reports_a_fall_with_exit_1(capsys, stand_in):
+    code, out, err = _run(["walk", "--robot", "rabbit", "--duration", "2", "--no-progress", "--json", "-"], capsys)
+    assert code == 1
+    data = json.loads(out)
+    assert data["fell"] is True and 0 < data["fall_time_s"] < 2 and data["sim_time_s"] < 2
+
+
+@pytest.mark.filterwarnings("ignore::Warning:glfw")  # GLFW (unused here) complains about the missing display
+def test_walk_video_gif(tmp_path, capsys, stand_in):
+    import imageio.v3 as iio
+
+    path = tmp_path / "walk.gif"
+    code, out, err = _run(["walk", "--robot", "cassie", "--duration", "0.2", "--video", str(path), "--video-fps", "20"], capsys)
+    assert code == 0, err
+    frames = iio.imread(path, index=None)
+    assert frames.shape[0] == 5 and frames.shape[-1] in (3, 4)  # t = 0, 0.05, ..., 0.2 s at 20 fps
+    assert frames[-1].std() > 5  # not a blank image
+
+
+def test_scenario_options_override(capsys, stand_in):
+    from amlip_qp.sim.cli import scenario_from_args
+
+    parser = cli.build_parser()
+    args = parser.parse_args(["walk", "--scenario", "cassie-turn-90", "--turn-rate", "-10", "--duration", "1", "--push", "0.5:0,30,0:0.1"])
+    sc = scenario_from_args(args)
+    assert sc.robot == "cassie" and sc.duration_s == 1.0
+    assert sc.turn_rate_at(0.0) == pytest.approx(np.radians(-10.0))
+    assert sc.vx(10.0) == pytest.approx(0.75)  # from the named scenario
+    assert len(sc.pushes) == 1 and sc.pushes[0].force_N == (0.0, 30.0, 0.0)
+    args = parser.parse_args(["walk", "--speed-profile", "0:0,5:2.1"])
+    sc = scenario_from_args(args)
+    assert sc.robot == "cassie" and sc.vx(2.5) == pytest.approx(1.05) and sc.duration_s == 10.0
+
+
+def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
+    out_json, fig = tmp_path / "cmp.json", tmp_path / "cmp.png"
+    argv = ["compare", "--quick", "--robots", "rabbit,cassie", "--jobs", "1", "--push-iterations", "2"]
+    code, out, err = _run(argv + ["--json", str(out_json), "--plot", str(fig)], capsys)
+    assert code == 0, err
+    lines = out.strip().splitlines()
+    assert lines[0].split()[:3] == ["robot", "tracker", "fell"] and len(lines) == 2 + 4
+    data = json.loads(out_json.read_text())
+    rows = data["rows"]
+    assert [(r["robot"], r["tracker"]) for r in rows] == [("rabbit", "pbc"), ("rabbit", "qp"), ("cassie", "pbc"), ("cassie", "qp")]
+    for r in rows:
+        assert r["fell"] is True  # zero torque
+        assert r["max_sagittal_impulse_Ns"] == 0.0 and r["highest_steady_speed_mps"] == 0.0
+        assert (r["max_lateral_impulse_Ns"] is None) == (r["robot"] == "rabbit")
+        assert len(r["sagittal_push_trials"]) == 3  # the upper bound, then 2 bisection steps
+    assert data["settings"]["push_iterations"] == 2
+    assert fig.stat().st_size > 10_000
+
+
+def test_factory_names_a_missing_tracker(monkeypatch):
+    monkeypatch.setitem(factory.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
+    with pytest.raises(InputError, match="'pbc' tracker is not available"):
+        factory.tracker_class("pbc")
+    with pytest.raises(InputError, match="unknown tracker"):
+        factory.tracker_class("lqr")
+
+
+@pytest.mark.parametrize("name", ["pbc", "qp"])
+def test_real_trackers_are_wired(name):
+    try:
+        cls = factory.tracker_class(name)
+    except InputError as exc:  # a tracker module under development
+        pytest.skip(str(exc))
+    assert cls.name == name
+    from amlip_qp.sim.scenarios import Scenario
+
+    res = factory.run_scenario(Scenario("tiny", "rabbit", 0.01), name)
+    assert res.tracker == name and res.log["t"].size == 20

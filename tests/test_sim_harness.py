@@ -1,0 +1,126 @@
+"""The MuJoCo harness: pushes, contact switches, noise determinism, the per-tick hook.
+
+Stand-in trackers only (zero torque, or a joint PD holding the stand
+keyframe); the trackers' own tests cover walking.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim import factory
+from amlip_qp.sim.harness import Push, SensorNoise
+from amlip_qp.sim.scenarios import Scenario
+
+
+class ZeroTracker(Tracker):
+    name = "zero"
+
+    def __init__(self, robot):
+        self.nu = robot.nu
+
+    def compute(self, kin, target):
+        return TrackerResult(tau_Nm=np.zeros(self.nu))
+
+
+class HoldTracker(Tracker):
+    """Joint PD to the stand keyframe (a robot that just stands)."""
+
+    name = "hold"
+
+    def __init__(self, robot, kp=400.0, kd=10.0):
+        self.q_idx = robot.actuated.pin_q_idx
+        self.v_idx = robot.actuated.pin_v_idx
+        self.q_ref = robot.q_stand[self.q_idx].copy()
+        self.kp, self.kd = kp, kd
+
+    def compute(self, kin, target):
+        return TrackerResult(tau_Nm=self.kp * (self.q_ref - kin.q[self.q_idx]) - self.kd * kin.v[self.v_idx])
+
+
+def _sim(robot, tracker_cls=ZeroTracker, duration=0.05, pushes=(), noise=None, seed=0):
+    sc = Scenario("test", robot, duration, pushes=tuple(pushes))
+    return factory.build_simulation(sc, tracker_cls(factory.load(robot)), seed=seed, noise=noise)
+
+
+def test_push_force_only_inside_its_window():
+    push = Push(0.010, (50.0, -20.0, 5.0), 0.020)
+    sim = _sim("rabbit", pushes=[push])
+    assert np.allclose(sim.push_force(0.0099), 0.0)
+    assert np.allclose(sim.push_force(0.010), [50.0, -20.0, 5.0])
+    assert np.allclose(sim.push_force(0.0299), [50.0, -20.0, 5.0])
+    assert np.allclose(sim.push_force(0.030), 0.0)
+    res = sim.run(0.05)
+    t, f = res.log["t"], res.log["push"]
+    inside = (t >= 0.010 - 1e-9) & (t < 0.030 - 1e-9)
+    assert inside.sum() == 40  # 20 ms at 2 kHz
+    assert np.allclose(f[inside], [50.0, -20.0, 5.0])
+    assert np.allclose(f[~inside], 0.0)
+    # the force acts on the base body only, and is cleared after the window
+    assert np.allclose(sim.data.xfrc_applied, 0.0)
+
+
+def test_push_changes_base_motion_on_the_base():
+    quiet = _sim("cassie", duration=0.03).run(0.03)
+    pushed = _sim("cassie", duration=0.03, pushes=[Push(0.0, (300.0, 0.0, 0.0), 0.03)]).run(0.03)
+    dx = pushed.log["base_pos"][-1, 0] - quiet.log["base_pos"][-1, 0]
+    assert dx > 1e-4  # pushed forward
+
+
+def test_pushes_sum_when_overlapping():
+    sim = _sim("rabbit", pushes=[Push(0.0, (10.0, 0.0, 0.0), 0.02), Push(0.01, (5.0, 0.0, 1.0), 0.02)])
+    assert np.allclose(sim.push_force(0.015), [15.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize("bad", [dict(t_s=-1.0), dict(duration_s=0.0), dict(force_N=(float("nan"), 0.0, 0.0))])
+def test_push_validation(bad):
+    kw = dict(t_s=0.0, force_N=(1.0, 0.0, 0.0), duration_s=0.1)
+    kw.update(bad)
+    with pytest.raises(InputError):
+        Push(**kw)
+
+
+@pytest.mark.parametrize("robot", ["cassie", "rabbit"])
+def test_contact_switches_on_when_standing(robot):
+    sim = _sim(robot, tracker_cls=HoldTracker, duration=0.1)
+    res = sim.run(0.1)
+    assert not res.fell
+    assert sim.foot_contact() == {"left": True, "right": True}
+
+
+def test_noise_is_deterministic_for_a_seed():
+    a = _sim("cassie", noise=SensorNoise(), seed=7)
+    b = _sim("cassie", noise=SensorNoise(), seed=7)
+    c = _sim("cassie", noise=SensorNoise(), seed=8)
+    ma, mb, mc = a.measure(), b.measure(), c.measure()
+    assert np.array_equal(ma.q, mb.q) and np.array_equal(ma.v, mb.v)
+    assert not np.array_equal(ma.q, mc.q)
+    exact = _sim("cassie").measure()
+    assert 0 < np.max(np.abs(ma.v - exact.v)) < 1.0
+    ra = a.run(0.02)
+    rb = b.run(0.02)
+    for key in ("com", "L", "tau", "h"):
+        assert np.array_equal(ra.log[key], rb.log[key])
+
+
+def test_on_tick_hook_and_log_keys():
+    seen = []
+    sim = _sim("rabbit", duration=0.01)
+    res = sim.run(0.01, on_tick=lambda t, d: seen.append(t))
+    assert len(seen) == res.log["t"].size == 20
+    assert np.allclose(np.diff(seen), 0.0005)
+    assert seen[0] == pytest.approx(res.log["t"][0] + 0.0005)
+    for key in ("p_st", "t_remaining", "base_yaw"):
+        assert res.log[key].shape[0] == 20
+    assert np.all(res.log["p_st"][:, 2] > 0.5)  # CoM well above the stance contact
+    assert np.allclose(res.log["t_remaining"], np.maximum(0.35 - res.log["t"], 0.0))
+    assert res.info["output_names"] == ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+    assert len(res.info["actuator_names"]) == 4 and res.info["planar"] is True
+
+
+def test_run_rejects_bad_duration():
+    with pytest.raises(InputError):
+        _sim("rabbit").run(float("nan"))
