@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.control.pbc import PBCGains, PBCTracker
+from amlip_qp.control.pbc import PBCGains, PBCTracker, default_gains
 from amlip_qp.control.springs import spring_deflections_rad, stance_knee_offset_rad
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.exceptions import InputError
@@ -27,6 +29,12 @@ def _state(robot, seed):
     return q, v
 
 
+def _encoder_tracker(robot):
+    """The default gains with the springs held at their estimates in the IK (no spring model):
+    then references equal to the measured outputs give zero tracking errors."""
+    return PBCTracker(robot, gains=dataclasses.replace(default_gains(robot), spring_model_offset=False))
+
+
 def _target_at_estimate(kin, stance, phase=0.5):
     """References equal to the current outputs and their rates: zero tracking errors."""
     h, J, jdv = kin.outputs(stance, 0.0)
@@ -40,7 +48,7 @@ def test_torques_reproduce_the_constrained_inverse_dynamics(robot, stance):
     q, v = _state(robot, 11)
     kin = RobotKinematics(robot)
     kin.update(q, v)
-    tracker = PBCTracker(robot)
+    tracker = _encoder_tracker(robot)
     res = tracker.compute(kin, _target_at_estimate(kin, stance))
     assert res.ok and np.all(np.isfinite(res.tau_Nm))
     # the IK reproduces the estimate: zero position errors
@@ -69,7 +77,7 @@ def test_torques_reproduce_the_constrained_inverse_dynamics(robot, stance):
 def test_static_standing_needs_about_the_weight_on_the_stance_foot(robot):
     kin = RobotKinematics(robot)
     kin.update(robot.q_stand, np.zeros(robot.nv))
-    tracker = PBCTracker(robot)
+    tracker = _encoder_tracker(robot)
     res = tracker.compute(kin, _target_at_estimate(kin, "left"))
     assert res.ok
     # single-support model on the standing pose: the stance foot carries the weight
@@ -143,3 +151,80 @@ def test_spring_model_rabbit_has_no_springs():
     kin.update(robot.q_stand, np.zeros(robot.nv))
     assert spring_deflections_rad(kin, "left").size == 0
     assert stance_knee_offset_rad(kin, "left") == 0.0
+
+
+def test_swing_torso_compensation_moves_the_swing_leg_to_the_measured_torso():
+    """Cassie: with a torso error, the swing joints' references become (to first order) those of
+    the IK solved for the measured torso orientation; the stance joints' stay on the reference."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    q, v = _state(robot, 13)
+    kin.update(q, v)
+    stance = "left"
+    h, J, _ = kin.outputs(stance, 0.0)
+    h_d = h.copy()
+    h_d[0] -= 0.03  # torso pitch reference 0.03 rad behind the measured pitch
+    h_d[1] += 0.02  # and roll
+    dh = np.zeros_like(h)
+    tgt = TrackingTarget(stance=stance, phase=0.5, heading_rad=0.0, h_d=h_d, dh_d=dh, ddh_d=dh)
+    on = PBCTracker(robot, gains=PBCGains(swing_torso_compensation=1.0))
+    off = PBCTracker(robot, gains=PBCGains(swing_torso_compensation=0.0))
+    lay = on._layout[stance]
+    r_on, r_off = on.compute(kin, tgt), off.compute(kin, tgt)
+    assert r_on.ok and r_off.ok
+    # the IK at the measured torso
+    h_meas = h_d.copy()
+    h_meas[:2] = h[:2]
+    ref = PBCTracker(robot).ik.solve(kin, stance, 0.0, h_meas, dh, dh, iterations=12).q_r
+    base = off.ik._prev.q_r
+    sw, st = lay.swing_mask, ~lay.swing_mask
+    np.testing.assert_allclose(on.ik._prev.q_r, base, atol=1e-12)  # same IK solution in both
+    q_r = base[lay.ctrl_q].copy()
+    v_r = on.ik._prev.v_r[lay.ctrl_v].copy()
+    on._compensate_swing(kin, tgt, lay, 1.0, q_r, v_r)
+    change = np.abs(ref[lay.ctrl_q[sw]] - base[lay.ctrl_q[sw]])
+    assert np.max(change) > 0.01  # the torso error matters for the swing leg
+    np.testing.assert_allclose(q_r[sw], ref[lay.ctrl_q[sw]], atol=0.1 * np.max(change))
+    np.testing.assert_array_equal(q_r[st], base[lay.ctrl_q[st]])
+    # the torques differ only through the swing joints' references
+    assert not np.allclose(r_on.tau_Nm, r_off.tau_Nm)
+    np.testing.assert_allclose(on.ik._prev.q_r[lay.ctrl_q[st]], base[lay.ctrl_q[st]], atol=1e-9)
+
+
+def test_spring_model_half_weight_matches_the_measured_double_support_stretch():
+    """Load share: standing on two feet each leg carries half the weight; the model then gives
+    the measured 0.031 rad achilles stretch of the stand keyframe (models/README.md)."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    half = np.array([0.0, 0.0, 0.5 * kin.mass_kg * 9.81])
+    shin, achilles = spring_deflections_rad(kin, "left", half)
+    assert achilles == pytest.approx(0.031, rel=0.1)
+    # linear in the load
+    np.testing.assert_allclose(2 * np.array([shin, achilles]), spring_deflections_rad(kin, "left"), rtol=1e-9)
+    assert stance_knee_offset_rad(kin, "left", half) == pytest.approx(0.5 * stance_knee_offset_rad(kin, "left"))
+
+
+def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
+    """With spring_model_offset the IK holds the stance shin/achilles at rest + the model's deflection
+    under the last commanded contact force, and the swing leg's springs at rest."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    q, v = _state(robot, 14)
+    kin.update(q, v)
+    tracker = PBCTracker(robot, gains=PBCGains(spring_model_offset=True))
+    tgt = _target_at_estimate(kin, "left")
+    assert tracker.compute(kin, tgt).ok
+    f = tracker._last_force["left"]
+    assert f is not None and f[2] > 0
+    res = tracker.compute(kin, tgt)
+    assert res.ok
+    q_r = tracker.ik._prev.q_r
+    smap = robot.state_map
+    shin, achilles = spring_deflections_rad(kin, "left", f)
+    assert q_r[smap.joint_pin_q["left-shin"]] == pytest.approx(shin, abs=1e-9)
+    assert q_r[smap.joint_pin_q["right-shin"]] == pytest.approx(0.0, abs=1e-9)
+    rest = tracker.ik.spring_rest_values()[-1]
+    for side, expect in (("left", rest + achilles), ("right", rest)):
+        length = q_r[smap.joint_pin_q[f"{side}-knee"]] + q_r[smap.joint_pin_q[f"{side}-tarsus"]]
+        assert length == pytest.approx(expect, abs=1e-9)

@@ -397,3 +397,50 @@ def test_cassie_stands_for_two_seconds():
         min_z = min(min_z, d.qpos[2])
     assert min_z > start[2] - 0.05, f"pelvis dropped to {min_z:.3f} m"
     assert max_drift < 0.02, f"pelvis drifted {max_drift:.4f} m"
+
+
+def test_update_positions_matches_full_update_without_velocity_terms(robot):
+    """The light update gives the same positions, Jacobians and outputs as update(q, 0);
+    velocity terms are zero and the dynamics getters refuse until the next full update."""
+    rng = np.random.default_rng(21)
+    q = pin.integrate(robot.pin_model, robot.q_stand, rng.normal(0.0, 0.05, robot.nv))
+    v = rng.normal(0.0, 0.5, robot.nv)
+    full, light = RobotKinematics(robot), RobotKinematics(robot)
+    light.update(q, v)  # a full update first: the light one must drop its caches
+    cid = robot.contact_frame_ids["left"]
+    light.frame_jacobian6(cid), light.frame_jdot_v6(cid), light.outputs("left", 0.2)
+    q2 = pin.integrate(robot.pin_model, q, rng.normal(0.0, 0.05, robot.nv))
+    light.update_positions(q2)
+    full.update(q2, np.zeros(robot.nv))
+    assert light.positions_only and not full.positions_only
+    np.testing.assert_array_equal(light.v, 0.0)
+    np.testing.assert_allclose(light.com(), full.com(), atol=1e-12)
+    np.testing.assert_allclose(light.com_jacobian(), full.com_jacobian(), atol=1e-12)
+    for fid in list(robot.contact_frame_ids.values()) + [robot.base_frame_id]:
+        np.testing.assert_allclose(light.frame_position(fid), full.frame_position(fid), atol=1e-12)
+        np.testing.assert_allclose(light.frame_rotation(fid), full.frame_rotation(fid), atol=1e-12)
+        np.testing.assert_allclose(light.frame_jacobian6(fid), full.frame_jacobian6(fid), atol=1e-12)
+        np.testing.assert_array_equal(light.frame_jdot_v6(fid), 0.0)
+    for stance in robot.foot_sides:
+        y, J, jdv = light.outputs(stance, 0.2)
+        y_f, J_f, _ = full.outputs(stance, 0.2)
+        np.testing.assert_allclose(y, y_f, atol=1e-12)
+        np.testing.assert_allclose(J, J_f, atol=1e-12)
+        np.testing.assert_array_equal(jdv, 0.0)
+    np.testing.assert_array_equal(light.com_velocity(), 0.0)
+    np.testing.assert_array_equal(light.com_jdot_v(), 0.0)
+    for getter in (light.mass_matrix, light.nonlinear_effects, light.centroidal_momentum_matrix,
+                   light.centroidal_momentum):
+        with pytest.raises(InputError):
+            getter()
+    # a full update makes everything valid again
+    light.update(q2, v)
+    assert not light.positions_only
+    np.testing.assert_allclose(light.mass_matrix(), full.mass_matrix(), atol=1e-12)
+    np.testing.assert_allclose(light.frame_jdot_v6(cid), _jdot_v6_at(robot, q2, v, cid), atol=1e-12)
+
+
+def _jdot_v6_at(robot, q, v, fid):
+    k = RobotKinematics(robot)
+    k.update(q, v)
+    return k.frame_jdot_v6(fid)

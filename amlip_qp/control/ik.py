@@ -42,19 +42,45 @@ stacked Jacobians of the equations above):
 - ``A v_r = [dh_d; b_fix]``, with ``b_fix`` the estimated rates of the held
   contact pose and stance ankle (they are the robot's unactuated motion,
   e.g. Rabbit's stance shin rotating) and 0 for the spring rows (rigid springs).
-- ``A a_r = [ddh_d; 0] - Adot v_r`` (drift by a finite difference of ``A``
-  along ``v_r``); the unactuated accelerations are taken as 0.
+- ``A a_r = [ddh_d; 0] - Adot v_r``; the unactuated accelerations are taken
+  as 0. The drift ``Adot v`` is exact (a finite difference of ``A`` along
+  ``v_r``) on cold solves and whenever ``iterations`` is given; on warm
+  default solves it is the analytic drift of the output map and contact frame
+  at the previous tick's ``v_r`` (one full kinematics update at ``(q, v_r^-)``
+  replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
+  in ``v``, so the error is about ``2 |dAdot/dv| |v_r| |v_r - v_r^-|``, i.e.
+  of the order of ``|a_r| dt`` relative to the drift (checked in
+  tests/test_control_ik.py).
 
-Robustness: each Newton step is a damped least-squares step, its joint part
-is limited to :attr:`IKSettings.max_step_rad`, the actuated joints are clamped
-to their ranges; any non-finite result falls back to the previous reference.
+Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
+:class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
+:class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
+through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
+
+Robustness: each Newton step solves ``A dq = -F`` (LU; a damped least-squares
+step ``(A^T A + mu I) dq = -A^T F`` only if the LU step is not finite), its
+joint part is limited to :attr:`IKSettings.max_step_rad`, the actuated joints
+are clamped to their ranges; any non-finite result falls back to the previous
+reference.
+
+Cost (per warm tick): the evaluation at the final ``q_r`` of one tick (its
+values, ``A`` and the LU of ``A``) is kept and gives the first Newton step of
+the next tick for free (``A`` depends on ``q`` only; the residual is rebuilt
+with the new targets and estimates), then one evaluation at the new ``q``
+(more steps only while the residual is above :attr:`IKSettings.tolerance`),
+which also gives the drift: typically one output-map evaluation per tick
+(about 160 us for Cassie, against about 1 ms with the previous duplicate
+output code and four evaluations).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg.lapack import dgetrf as _dgetrf
+from scipy.linalg.lapack import dgetrs as _dgetrs
 
 from amlip_qp.exceptions import InputError, MJCFError
 
@@ -64,26 +90,50 @@ class IKSettings:
     """Settings of :class:`IterativeIK`.
 
     Attributes:
-        iterations: Newton iterations per call when warm-started.
-        cold_iterations: Newton iterations when starting from the estimate
+        iterations: Most Newton iterations per call when warm-started (the
+            first one reuses the previous tick's final evaluation).
+        cold_iterations: Most Newton iterations when starting from the estimate
             (first call, after a stance switch or a failure).
-        damping: Levenberg damping ``mu`` of ``(A^T A + mu I) dq = A^T r``
-            (dimensionless; the rows are in m and rad).
+        tolerance: Stop iterating once the max-norm residual is below this
+            (m / rad); only for the default iteration counts, an explicit
+            ``iterations`` argument of :meth:`IterativeIK.solve` runs them all.
+        damping: Levenberg damping ``mu`` of the fallback step
+            ``(A^T A + mu I) dq = -A^T F``, used only when the LU step is not
+            finite (dimensionless; the rows are in m and rad).
         max_step_rad: Largest joint change per Newton step, rad (m for slide joints).
         fd_step_s: Time step of the finite difference for ``Adot v``, s.
+        knee_limit_swap: When the iterations end unconverged (max-norm
+            residual above ``swap_threshold``, m / rad) with a knee clamped at
+            its straight-leg range limit: if that knee's output is out of reach
+            (``com_z_over_stance`` for the stance knee, ``com_x_over_swing`` for
+            the swing knee, with ``|y| < |h_d|``) exchange it for "knee = limit"
+            (a square system again) and iterate on -- that output gives way
+            (CoM height; how far the swing foot reaches) and all the others
+            stay exact; otherwise restart the iterations with the knee moved
+            ``knee_back_off_rad`` off the limit (the straight leg is a
+            near-singular iterate). Without this the clamp breaks the rows
+            through the knee (Cassie's coupling), the next step undoes it, and
+            the iterates wander with residuals of order 1 (seen after the long
+            steps of a push recovery).
+        swap_threshold: See ``knee_limit_swap``.
+        knee_back_off_rad: See ``knee_limit_swap``, rad.
     """
 
     iterations: int = 2
     cold_iterations: int = 8
+    tolerance: float = 1e-6
     damping: float = 1e-10
     max_step_rad: float = 0.3
     fd_step_s: float = 1e-6
+    knee_limit_swap: bool = True
+    swap_threshold: float = 1e-3
+    knee_back_off_rad: float = 0.2
 
     def __post_init__(self):
         if self.iterations < 1 or self.cold_iterations < 1:
             raise InputError("IK iteration counts must be >= 1")
-        if not (self.damping >= 0 and self.max_step_rad > 0 and self.fd_step_s > 0):
-            raise InputError("IK damping must be >= 0, max_step_rad and fd_step_s > 0")
+        if not (self.damping >= 0 and self.max_step_rad > 0 and self.fd_step_s > 0 and self.tolerance >= 0):
+            raise InputError("IK damping and tolerance must be >= 0, max_step_rad and fd_step_s > 0")
 
 
 @dataclass
@@ -97,6 +147,9 @@ class IKResult:
         iterations: Newton iterations done.
         residual: Max-norm of the equation residual at ``q_r`` (m / rad).
         ok: False when the solve failed and the previous reference was kept.
+        knee_at_limit: A knee was held at its straight-leg limit in place of an
+            unreachable output (``com_z_over_stance`` for the stance knee,
+            ``com_x_over_swing`` for the swing knee).
     """
 
     q_r: np.ndarray
@@ -105,116 +158,35 @@ class IKResult:
     iterations: int
     residual: float
     ok: bool = True
+    knee_at_limit: bool = False
 
 
-class _OutputEval:
-    """``h_0(q)`` and its Jacobian on a private Pinocchio data (same definitions as
-    :class:`amlip_qp.robots.outputs.OutputMap`, without the drift terms)."""
+def _finite(*arrays) -> bool:
+    """True if every entry is finite (a NaN or inf makes the sum non-finite; cheaper than
+    ``np.all(np.isfinite(.))`` on these small arrays)."""
+    return all(math.isfinite(float(np.sum(a))) for a in arrays)
 
-    def __init__(self, robot):
-        import pinocchio as pin
 
-        from amlip_qp.robots.outputs import OutputMap
+def _lu_solve(lu, b: np.ndarray) -> np.ndarray:
+    """Solve with LU factors from :meth:`IterativeIK._lu` (LAPACK getrs)."""
+    x, info = _dgetrs(lu[0], lu[1], b)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"getrs info {info}")
+    return x
 
-        self._pin = pin
-        self.robot = robot
-        self.model = robot.pin_model
-        self.data = self.model.createData()
-        omap = OutputMap(robot)
-        self.layout = omap.layout
-        self.size = omap.size
-        if self.layout == "cassie":
-            smap = robot.state_map
-            self._yaw_v = {s: smap.joint_pin_v[f"{s}-hip-yaw"] for s in robot.foot_sides}
-            self._yaw_q = {s: smap.joint_pin_q[f"{s}-hip-yaw"] for s in robot.foot_sides}
-        self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
-    def compute(self, q) -> None:
-        """Kinematic passes at ``q`` (positions, joint Jacobians, CoM and its Jacobian)."""
-        pin, m, d = self._pin, self.model, self.data
-        pin.computeJointJacobians(m, d, q)
-        pin.updateFramePlacements(m, d)
-        pin.jacobianCenterOfMass(m, d, q, False)
+class _StanceRows:
+    """Per-stance constant parts of the system (built once)."""
 
-    def jac6(self, frame_id: int) -> np.ndarray:
-        return self._pin.getFrameJacobian(self.model, self.data, frame_id, self._lwa)
-
-    def pos(self, frame_id: int) -> np.ndarray:
-        return self.data.oMf[frame_id].translation
-
-    def rot(self, frame_id: int) -> np.ndarray:
-        return self.data.oMf[frame_id].rotation
-
-    def outputs(self, q, stance: str, heading_rad: float) -> tuple[np.ndarray, np.ndarray]:
-        """``(h, J_h)`` at the last :meth:`compute` (``q`` must be the same)."""
-        robot, d = self.robot, self.data
-        swing = "right" if stance == "left" else "left"
-        bid = robot.base_frame_id
-        R = self.rot(bid)
-        Jw = self.jac6(bid)[3:]
-        c, Jc = d.com[0], d.Jcom
-        cst, csw = robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]
-        p_st, J_st = c - self.pos(cst), Jc - self.jac6(cst)[:3]
-        p_sw, J_sw = c - self.pos(csw), Jc - self.jac6(csw)[:3]
-
-        col_jac: dict[int, np.ndarray] = {}
-
-        def entry_jac(i: int, j: int) -> np.ndarray:
-            # d/dt R_ij = e_i . (w x r_j) = (skew(r_j) w)_i ... with skew(r) w = r x w, sign flipped
-            cj = col_jac.get(j)
-            if cj is None:
-                x, y, z = R[:, j]
-                cj = np.array([[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]) @ Jw
-                col_jac[j] = cj
-            return cj[i]
-
-        if self.layout == "planar":
-            a, b = R[0, 2], R[2, 2]
-            r2 = a * a + b * b
-            pitch = np.arctan2(a, b)
-            J_pitch = (b * entry_jac(0, 2) - a * entry_jac(2, 2)) / r2
-            xD = np.array([np.cos(heading_rad), np.sin(heading_rad), 0.0])
-            h = np.array([pitch, p_st[2], xD @ p_sw, p_sw[2]])
-            J = np.vstack([J_pitch, J_st[2], xD @ J_sw, J_sw[2]])
-            return h, J
-        # Cassie layout
-        r00, r10, r20, r21, r22 = R[0, 0], R[1, 0], R[2, 0], R[2, 1], R[2, 2]
-        rho = np.hypot(r00, r10)
-        J_rho = (r00 * entry_jac(0, 0) + r10 * entry_jac(1, 0)) / rho
-        pitch = np.arctan2(-r20, rho)
-        den = r20 * r20 + rho * rho
-        J_pitch = (rho * -entry_jac(2, 0) - (-r20) * J_rho) / den
-        roll = np.arctan2(r21, r22)
-        J_roll = (r22 * entry_jac(2, 1) - r21 * entry_jac(2, 2)) / (r21 * r21 + r22 * r22)
-        nv = self.model.nv
-        J_yaw_st = np.zeros(nv)
-        J_yaw_st[self._yaw_v[stance]] = 1.0
-        J_yaw_sw = np.zeros(nv)
-        J_yaw_sw[self._yaw_v[swing]] = 1.0
-        xD = np.array([np.cos(heading_rad), np.sin(heading_rad), 0.0])
-        yD = np.array([-np.sin(heading_rad), np.cos(heading_rad), 0.0])
-        toe, heel = robot.force_frame_ids[swing]
-        dv = self.pos(toe) - self.pos(heel)
-        Jd = self.jac6(toe)[:3] - self.jac6(heel)[:3]
-        rxy = np.hypot(dv[0], dv[1])
-        J_rxy = (dv[0] * Jd[0] + dv[1] * Jd[1]) / rxy
-        toe_pitch = np.arctan2(-dv[2], rxy)
-        J_toe = (rxy * -Jd[2] - (-dv[2]) * J_rxy) / (dv[2] ** 2 + rxy**2)
-        h = np.array(
-            [
-                pitch,
-                roll,
-                q[self._yaw_q[stance]],
-                q[self._yaw_q[swing]],
-                p_st[2],
-                xD @ p_sw,
-                yD @ p_sw,
-                p_sw[2],
-                toe_pitch,
-            ]
-        )
-        J = np.vstack([J_pitch, J_roll, J_yaw_st, J_yaw_sw, J_st[2], xD @ J_sw, yD @ J_sw, J_sw[2], J_toe])
-        return h, J
+    def __init__(self, nv: int, n_out: int, n_pose: int, lin_q: np.ndarray, lin_v: np.ndarray, lin_rate: np.ndarray):
+        self.n_var = n_out + n_pose  # rows that change with q
+        self.lin_q = lin_q  # (n_lin, nq): linear residual rows  L_q q - b
+        self.lin_rate = lin_rate  # (n_lin, nv): held rates = lin_rate @ v_est
+        self.A = np.zeros((nv, nv))
+        self.A[self.n_var :] = lin_v
+        self.A_eps = self.A.copy()
+        self.drift = np.zeros(self.n_var)
+        self.F = np.zeros(nv)
 
 
 class IterativeIK:
@@ -224,6 +196,11 @@ class IterativeIK:
         robot: The :class:`~amlip_qp.robots.robot.Robot`.
         settings: Iteration settings.
 
+    Attributes:
+        kin: The IK's own :class:`~amlip_qp.robots.kinematics.RobotKinematics`
+            (light position updates at the iterates).
+        size: Number of outputs.
+
     Raises:
         MJCFError: The model does not give a square system (outputs + held
             coordinates != nv).
@@ -232,18 +209,19 @@ class IterativeIK:
     def __init__(self, robot, settings: IKSettings | None = None):
         import pinocchio as pin
 
+        from amlip_qp.robots.kinematics import RobotKinematics
+        from amlip_qp.robots.outputs import OutputMap
+
         self._pin = pin
         self.robot = robot
         self.settings = settings or IKSettings()
-        self.model = robot.pin_model
-        self.ev = _OutputEval(robot)
-        nv = self.model.nv
-        m = self.model
+        self.model = m = robot.pin_model
+        self.kin = RobotKinematics(robot)
+        self.size = OutputMap(robot).size
+        nv, nq = m.nv, m.nq
         # in-plane rows of the contact pose (planar robots: x, z, pitch)
-        if robot.is_planar:
-            self._pose_rows = np.array([0, 2, 4])
-        else:
-            self._pose_rows = np.arange(6)
+        self._pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
+        self._planar = robot.is_planar
         # spring rows: passive joints outside couplings, and coupling lengths
         coupled_v = {int(i) for c in robot.couplings for i in c.pin_v_idx}
         self._spring_q = np.array(
@@ -251,14 +229,14 @@ class IterativeIK:
         )
         self._spring_v = np.array([vi for vi in robot.passive_v_idx if int(vi) not in coupled_v], dtype=int)
         n_fixed = len(self._pose_rows) + len(self._spring_v) + len(robot.couplings)
+        need_ankle = nv - (self.size + n_fixed)
+        if need_ankle not in (0, 1):
+            raise MJCFError(
+                f"{robot.name}: IK needs {nv} equations, has {self.size} outputs + {n_fixed} held coordinates"
+            )
         # the stance ankle: the contact frame's parent joint, if actuated and needed
         self._ankle_v: dict[str, int | None] = {}
         self._ankle_q: dict[str, int | None] = {}
-        need_ankle = nv - (self.ev.size + n_fixed)
-        if need_ankle not in (0, 1):
-            raise MJCFError(
-                f"{robot.name}: IK needs {nv} equations, has {self.ev.size} outputs + {n_fixed} held coordinates"
-            )
         act_v = [int(i) for i in robot.actuated.pin_v_idx]
         for side in robot.foot_sides:
             jid = m.frames[robot.contact_frame_ids[side]].parentJoint
@@ -270,17 +248,68 @@ class IterativeIK:
             else:
                 self._ankle_v[side] = self._ankle_q[side] = None
         self._n_fixed = n_fixed + need_ankle
+        # linear rows per stance: ankle (held, with its estimated rate), springs and couplings (rate 0)
+        self._rows: dict[str, _StanceRows] = {}
+        for side in robot.foot_sides:
+            lq, lv, lr = [], [], []
+            if self._ankle_v[side] is not None:
+                r_q, r_v = np.zeros(nq), np.zeros(nv)
+                r_q[self._ankle_q[side]] = 1.0
+                r_v[self._ankle_v[side]] = 1.0
+                lq.append(r_q), lv.append(r_v), lr.append(r_v.copy())
+            for iq, iv in zip(self._spring_q, self._spring_v):
+                r_q, r_v = np.zeros(nq), np.zeros(nv)
+                r_q[iq], r_v[iv] = 1.0, 1.0
+                lq.append(r_q), lv.append(r_v), lr.append(np.zeros(nv))
+            for c in robot.couplings:
+                r_q, r_v = np.zeros(nq), np.zeros(nv)
+                np.add.at(r_q, c.pin_q_idx, c.coefficients)
+                np.add.at(r_v, c.pin_v_idx, c.coefficients)
+                lq.append(r_q), lv.append(r_v), lr.append(np.zeros(nv))
+            self._rows[side] = _StanceRows(
+                nv, self.size, len(self._pose_rows), np.array(lq).reshape(-1, nq),
+                np.array(lv).reshape(-1, nv), np.array(lr).reshape(-1, nv)
+            )
+        # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap):
+        # (output row, knee q index, knee v index, straight-leg limit)
+        names = list(OutputMap(robot).names)
+        smap = robot.state_map
+        self._knee_swap: dict[str, list] = {side: [] for side in robot.foot_sides}
+        if self.settings.knee_limit_swap and all(f"{sd}-knee" in smap.joint_pin_q for sd in robot.foot_sides):
+            from amlip_qp.robots.kinematics import RobotKinematics as _K
+
+            k0 = _K(robot)
+            k0.update_positions(robot.q_stand)
+            for side in robot.foot_sides:
+                other = robot.other_side(side)
+                _, J0, _ = k0.outputs(side, 0.0)
+                for row_name, knee_side in (("com_z_over_stance", side), ("com_x_over_swing", other)):
+                    if row_name not in names:
+                        continue
+                    iq, iv = smap.joint_pin_q[f"{knee_side}-knee"], smap.joint_pin_v[f"{knee_side}-knee"]
+                    # straight leg = the limit towards which the stance CoM height grows
+                    grow = J0[names.index("com_z_over_stance"), smap.joint_pin_v[f"{side}-knee"]]
+                    lo_, hi_ = float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])
+                    limit, other_end = (hi_, lo_) if grow > 0 else (lo_, hi_)
+                    self._knee_swap[side].append((names.index(row_name), iq, iv, limit, other_end))
         self._act_q = robot.actuated.pin_q_idx
         self._lo = m.lowerPositionLimit[self._act_q].copy()
         self._hi = m.upperPositionLimit[self._act_q].copy()
+        self._nb = nv - len(robot.actuated) - len(robot.passive_v_idx)  # base coordinates
+        self._eye = np.eye(nv)
         self._prev: IKResult | None = None
         self._prev_stance: str | None = None
-        self._prev_heading = 0.0
+        # the last final evaluation: (stance, heading, y, contact pos, contact rot, LU of A)
+        self._cache: tuple | None = None
+        #: LU factors of ``A(q_r)`` of the last successful solve (see :meth:`solve_linear`).
+        self.lu = None
 
     def reset(self) -> None:
         """Forget the warm start."""
         self._prev = None
         self._prev_stance = None
+        self._cache = None
+        self.lu = None
 
     # ---------------------------------------------------------------- pieces
     def controlled_actuated(self, stance: str) -> np.ndarray:
@@ -288,67 +317,143 @@ class IterativeIK:
         ankle = self._ankle_v[stance]
         return np.array([k for k, iv in enumerate(self.robot.actuated.pin_v_idx) if iv != ankle], dtype=int)
 
-    def _system(self, q, stance, heading, h_d, fixed) -> tuple[np.ndarray, np.ndarray]:
-        """Residual ``F(q)`` and matrix ``A(q)`` at ``q`` (kinematics computed here)."""
-        ev, robot = self.ev, self.robot
-        ev.compute(q)
-        h, Jh = ev.outputs(q, stance, heading)
-        cid = robot.contact_frame_ids[stance]
-        p_err = ev.pos(cid) - fixed["contact_pos"]
-        r_err = self._pin.log3(ev.rot(cid) @ fixed["contact_rot"].T)
-        pose_err = np.concatenate([p_err, r_err])[self._pose_rows]
-        J_pose = ev.jac6(cid)[self._pose_rows]
-        nv = self.model.nv
-        rows_F = [h - h_d, pose_err]
-        rows_A = [Jh, J_pose]
-        if self._ankle_v[stance] is not None:
-            e = np.zeros((1, nv))
-            e[0, self._ankle_v[stance]] = 1.0
-            rows_A.append(e)
-            rows_F.append(np.array([q[self._ankle_q[stance]] - fixed["ankle"]]))
-        if len(self._spring_v):
-            E = np.zeros((len(self._spring_v), nv))
-            E[np.arange(len(self._spring_v)), self._spring_v] = 1.0
-            rows_A.append(E)
-            rows_F.append(q[self._spring_q] - fixed["springs"])
-        for k, c in enumerate(robot.couplings):
-            g = np.zeros((1, nv))
-            np.add.at(g[0], c.pin_v_idx, c.coefficients)
-            rows_A.append(g)
-            rows_F.append(np.array([c.coefficients @ q[c.pin_q_idx] - fixed["couplings"][k]]))
-        return np.concatenate(rows_F), np.vstack(rows_A)
+    def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
+        """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
+
+        With a velocity ``v`` the IK's kinematics get a full update at ``(q, v)``
+        (then :meth:`_drift` gives ``Adot v``); without, the light position update.
+        """
+        kin = self.kin
+        if v is None:
+            kin.update_positions(q)
+        else:
+            kin.update(q, v)
+        y, J, _ = kin.outputs(stance, heading)
+        n = self.size
+        A[:n] = J
+        cid = self.robot.contact_frame_ids[stance]
+        A[n : n + len(self._pose_rows)] = kin.frame_jacobian6(cid)[self._pose_rows]
+        oMf = kin.data.oMf[cid]
+        return y, oMf.translation.copy(), oMf.rotation.copy()
+
+    def _drift(self, stance: str, heading: float, out: np.ndarray) -> None:
+        """``Adot v`` of the varying rows at the last full :meth:`_evaluate` (its ``v``) into ``out``."""
+        kin = self.kin
+        n = self.size
+        out[:n] = kin.outputs(stance, heading)[2]
+        out[n : n + len(self._pose_rows)] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose_rows]
+
+    def _residual(self, rows: _StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
+        """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
+        F, n = rows.F, self.size
+        np.subtract(y, h_d, out=F[:n])
+        p_err = pos - fixed["contact_pos"]
+        r_err = self._pin.log3(rot @ fixed["contact_rot"].T)
+        if self._planar:
+            F[n], F[n + 1], F[n + 2] = p_err[0], p_err[2], r_err[1]
+        else:
+            F[n : n + 3] = p_err
+            F[n + 3 : n + 6] = r_err
+        F[rows.n_var :] = rows.lin_q @ q - fixed["lin"]
+        return F
 
     def _fixed_from(self, kin, stance: str) -> dict:
         """The held quantities and their estimated rates, from the updated kinematics."""
-        robot = self.robot
+        rows = self._rows[stance]
         q, v = kin.q, kin.v
-        cid = robot.contact_frame_ids[stance]
+        cid = self.robot.contact_frame_ids[stance]
         twist = kin.frame_jacobian6(cid) @ v
-        fixed = {
+        rates = np.empty(self.model.nv - self.size)
+        npose = len(self._pose_rows)
+        rates[:npose] = twist[self._pose_rows]
+        rates[npose:] = rows.lin_rate @ v
+        return {
             "contact_pos": kin.frame_position(cid),
             "contact_rot": kin.frame_rotation(cid),
-            "springs": q[self._spring_q].copy(),
-            "couplings": np.array([c.coefficients @ q[c.pin_q_idx] for c in robot.couplings]),
+            "lin": rows.lin_q @ q,
+            "rates": rates,
         }
-        rates = [twist[self._pose_rows]]
-        if self._ankle_v[stance] is not None:
-            fixed["ankle"] = float(q[self._ankle_q[stance]])
-            rates.append(np.array([v[self._ankle_v[stance]]]))
-        rates.append(np.zeros(len(self._spring_v) + len(robot.couplings)))
-        fixed["rates"] = np.concatenate(rates)
-        return fixed
 
-    def _newton_step(self, F: np.ndarray, A: np.ndarray) -> np.ndarray:
-        mu = self.settings.damping
-        dq = np.linalg.solve(A.T @ A + mu * np.eye(A.shape[1]), -A.T @ F)
-        nb = self.model.nv - len(self.robot.actuated) - len(self.robot.passive_v_idx)
+    def _limit_handling(self, stance: str, q, F, y, h_d) -> tuple[list | None, list]:
+        """For an unconverged solve: the knees clamped at their straight-leg limit, split into
+        ``(swap, back_off)``.
+
+        A clamp breaks the rows through the knee (Cassie's coupling ``q_knee +
+        q_tarsus``), which the next step undoes: the iterates then wander with
+        residuals of order 1. If the knee's output is out of reach
+        (``|y| < |h_d|``: CoM too low over the stance foot, swing foot short
+        of its target) the output is exchanged for "knee = limit" (``swap``);
+        otherwise the straight leg is only a bad (near-singular) iterate and
+        the knee is moved back off the limit (``back_off``).
+        """
+        thr = self.settings.swap_threshold
+        if float(np.max(np.abs(F))) <= thr:
+            return None, []
+        swap, back = [], []
+        for sp in self._knee_swap[stance]:
+            row, iq = sp[0], sp[1]
+            if abs(q[iq] - sp[3]) < 1e-9:
+                (swap if abs(y[row]) < abs(h_d[row]) - thr else back).append(sp)
+        return (swap or None), back
+
+    @staticmethod
+    def _swap_rows(swap, q, A, F) -> None:
+        """Replace each exchanged output row by ``q_knee - limit`` (row of that knee)."""
+        if swap is None:
+            return
+        for row, iq, iv, limit, _ in swap:
+            A[row] = 0.0
+            A[row, iv] = 1.0
+            if F is not None:
+                F[row] = q[iq] - limit
+
+    def _newton_step(self, F: np.ndarray, A: np.ndarray, lu) -> np.ndarray:
+        dq = -_lu_solve(lu, F) if lu is not None else np.full(F.shape, np.nan)
+        if not _finite(dq):
+            mu = self.settings.damping
+            dq = np.linalg.solve(A.T @ A + mu * self._eye, -A.T @ F)
+        nb = self._nb
         jmax = float(np.max(np.abs(dq[nb:]))) if dq.size > nb else 0.0
         if jmax > self.settings.max_step_rad:
             dq *= self.settings.max_step_rad / jmax
         return dq
 
+    def _step(self, q, dq) -> np.ndarray:
+        q = self._pin.integrate(self.model, q, dq)
+        aq = self._act_q
+        q[aq] = np.minimum(np.maximum(q[aq], self._lo), self._hi)
+        return q
+
+    @staticmethod
+    def _lu(A: np.ndarray):
+        """LU factors of ``A`` (LAPACK getrf), or ``None`` if ``A`` is singular."""
+        lu, piv, info = _dgetrf(A)
+        return (lu, piv) if info == 0 else None
+
+    def solve_linear(self, rhs) -> np.ndarray:
+        """``A(q_r)^-1 rhs`` with the last successful solve's matrix (sensitivity of ``q_r`` to the
+        targets: a change ``[dh; 0]`` of the right-hand side moves ``q_r`` by ``A^-1 [dh; 0]``).
+
+        Raises:
+            InputError: No successful solve yet.
+        """
+        if self.lu is None:
+            raise InputError("IterativeIK.solve_linear: no successful solve yet")
+        return _lu_solve(self.lu, np.asarray(rhs, dtype=float))
+
     # ------------------------------------------------------------------ solve
-    def solve(self, kin, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None) -> IKResult:
+    def spring_rest_values(self) -> np.ndarray:
+        """Rest values of the held springs, in the order of ``held_springs`` of :meth:`solve`:
+        the passive joints outside couplings (their spring reference, rad), then each
+        coupling's rest length (rad)."""
+        from amlip_qp.robots.passive import coupling_target
+
+        ref = self.robot.dof_springref[self._spring_v] if len(self._spring_v) else np.zeros(0)
+        return np.concatenate([ref, [coupling_target(c) for c in self.robot.couplings]])
+
+    def solve(
+        self, kin, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
+    ) -> IKResult:
         """Joint references for the outputs ``h_d`` (m, rad) and their rates.
 
         Args:
@@ -357,7 +462,11 @@ class IterativeIK:
             stance: Stance side.
             heading_rad: Step heading ``D`` (rad).
             h_d, dh_d, ddh_d: Reference outputs and their first and second time derivatives.
-            iterations: Newton iterations (default: settings, cold or warm).
+            iterations: Newton iterations, all done (default: settings, cold or
+                warm, stopping early below the tolerance).
+            held_springs: Values at which to hold the springs instead of their
+                estimates (order of :meth:`spring_rest_values`; e.g. the rest
+                values, for the paper's rigid-spring IK plus a knee offset).
 
         Returns:
             An :class:`IKResult`; on failure (non-finite values or a singular
@@ -368,41 +477,103 @@ class IterativeIK:
         h_d = np.asarray(h_d, dtype=float)
         dh_d = np.asarray(dh_d, dtype=float)
         ddh_d = np.asarray(ddh_d, dtype=float)
-        n = self.ev.size
+        n = self.size
         if h_d.shape != (n,) or dh_d.shape != (n,) or ddh_d.shape != (n,):
             raise InputError(f"h_d, dh_d, ddh_d must have shape ({n},)")
+        if stance not in self._rows:
+            raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
+        if not _finite(h_d, dh_d, ddh_d) or not math.isfinite(heading_rad):
+            return self._failed(kin.q)
+        rows = self._rows[stance]
+        A = rows.A
+        s = self.settings
         try:
             fixed = self._fixed_from(kin, stance)
-            warm = (
-                self._prev is not None
-                and self._prev.ok
-                and self._prev_stance == stance
-                and np.all(np.isfinite(h_d))
-            )
+            if held_springs is not None:
+                ns = len(self._spring_v) + len(self.robot.couplings)
+                fixed["lin"][len(fixed["lin"]) - ns :] = held_springs
+            warm = self._prev is not None and self._prev.ok and self._prev_stance == stance
             # warm start: the previous solution (its held coordinates are pulled to
             # this tick's estimates by the linear rows in one step); cold: the estimate
             q = self._prev.q_r.copy() if warm else kin.q.copy()
-            n_it = iterations or (self.settings.iterations if warm else self.settings.cold_iterations)
-            for _ in range(n_it):
-                F, A = self._system(q, stance, heading_rad, h_d, fixed)
-                q = pin.integrate(self.model, q, self._newton_step(F, A))
-                q[self._act_q] = np.clip(q[self._act_q], self._lo, self._hi)
-            F, A = self._system(q, stance, heading_rad, h_d, fixed)
-            residual = float(np.max(np.abs(F)))
-            v_r = np.linalg.solve(A, np.concatenate([dh_d, fixed["rates"]]))
-            eps = self.settings.fd_step_s
-            q_eps = pin.integrate(self.model, q, eps * v_r)
-            _, A_eps = self._system(q_eps, stance, heading_rad, h_d, fixed)
-            adot_v = (A_eps - A) @ v_r / eps
-            a_r = np.linalg.solve(A, np.concatenate([ddh_d, np.zeros(self._n_fixed)]) - adot_v)
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v_r)) and np.all(np.isfinite(a_r))):
+            exact = iterations is not None
+            n_max = iterations if exact else (s.iterations if warm else s.cold_iterations)
+            it = 0
+            cache = self._cache
+            # warm default solves take the drift Adot v at the previous v_r (see the module docstring)
+            v_pred = self._prev.v_r if (warm and not exact) else None
+            swap = None
+            if warm and cache is not None and cache[0] == stance and cache[1] == heading_rad:
+                # first step from the previous tick's final evaluation (same q, A)
+                F = self._residual(rows, q, cache[2], cache[3], cache[4], h_d, fixed)
+                self._swap_rows(cache[6], q, A, F)
+                q = self._step(q, self._newton_step(F, A, cache[5]))
+                it = 1
+            self._cache = None
+            limit_handled = False
+            while True:
+                y, pos, rot = self._evaluate(q, stance, heading_rad, A, v_pred)
+                F = self._residual(rows, q, y, pos, rot, h_d, fixed)
+                self._swap_rows(swap, q, A, F)
+                residual = float(np.max(np.abs(F)))
+                lu = self._lu(A)
+                done = it >= n_max or (not exact and residual < s.tolerance)
+                if done and swap is None and self._knee_swap[stance] and not limit_handled:
+                    swap, back = self._limit_handling(stance, q, F, y, h_d)
+                    limit_handled = True
+                    if swap is not None:
+                        # out of iterations, a knee straight and its output out of reach: trade
+                        # that output for the knee held at the limit, and iterate on
+                        self._swap_rows(swap, q, A, F)
+                        residual = float(np.max(np.abs(F)))
+                        lu = self._lu(A)
+                        n_max = it + s.cold_iterations
+                        done = not exact and residual < s.tolerance
+                    elif back:
+                        # reachable: restart the iterations with the knee off the singular straight leg
+                        for sp in back:
+                            q[sp[1]] = sp[3] + (s.knee_back_off_rad if sp[3] < sp[4] else -s.knee_back_off_rad)
+                        n_max = it + s.cold_iterations
+                        continue
+                if done:
+                    break
+                q = self._step(q, self._newton_step(F, A, lu))
+                it += 1
+            if lu is None:
+                raise np.linalg.LinAlgError("singular IK system")
+            rhs_v = np.concatenate([dh_d, fixed["rates"]])
+            if swap is not None:
+                for sp in swap:
+                    rhs_v[sp[0]] = 0.0
+            v_r = _lu_solve(lu, rhs_v)
+            cache = (stance, heading_rad, y, pos, rot, lu, swap)
+            m = rows.n_var
+            rhs = np.zeros(self.model.nv)
+            if v_pred is not None:
+                self._drift(stance, heading_rad, rows.drift)
+                np.subtract(ddh_d, rows.drift[:n], out=rhs[:n])
+                rhs[n:m] = -rows.drift[n:m]
+            else:
+                # exact: finite difference of A along v_r
+                eps = s.fd_step_s
+                q_eps = pin.integrate(self.model, q, eps * v_r)
+                self._evaluate(q_eps, stance, heading_rad, rows.A_eps)
+                self._swap_rows(swap, q_eps, rows.A_eps, None)
+                rhs[:n] = ddh_d
+                rhs[:m] -= (rows.A_eps[:m] - A[:m]) @ v_r / eps
+            if swap is not None:
+                for sp in swap:
+                    rhs[sp[0]] = 0.0
+            a_r = _lu_solve(lu, rhs)
+            if not _finite(q, v_r, a_r):
                 raise FloatingPointError("non-finite IK result")
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             if isinstance(exc, InputError):
                 raise
             return self._failed(kin.q)
-        res = IKResult(q_r=q, v_r=v_r, a_r=a_r, iterations=n_it, residual=residual, ok=True)
+        res = IKResult(q_r=q, v_r=v_r, a_r=a_r, iterations=it, residual=residual, ok=True, knee_at_limit=swap is not None)
         self._prev, self._prev_stance = res, stance
+        self._cache, self.lu = cache, lu
         return res
 
     def _failed(self, q_est: np.ndarray) -> IKResult:
@@ -411,4 +582,6 @@ class IterativeIK:
         q_r = prev.q_r.copy() if prev is not None else q_est.copy()
         nv = self.model.nv
         self._prev = None
+        self._cache = None
+        self.lu = None
         return IKResult(q_r, np.zeros(nv), np.zeros(nv), 0, float("nan"), ok=False)

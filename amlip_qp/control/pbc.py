@@ -31,9 +31,17 @@ constraint rows and ``n_a`` controlled joints this is a square system of
 ``tau = Bbar^-1 (Mbar qdd_r + Cbar + Gbar) + Mbar-weighted PD``: the
 feed-forward from the references plus PD on the errors of the paper's PBC.
 
-Spring compensation: ``target.stance_knee_offset_rad`` (and, optionally,
-:func:`amlip_qp.control.springs.stance_knee_offset_rad`) is added to the
-stance knee reference.
+Springs: by default the IK holds the springs at their estimates (encoders),
+so the references already account for the deflection. With
+:attr:`PBCGains.spring_model_offset` (the paper's "Springs") the IK holds them
+at the simplified model's deflections instead (stance leg under the commanded
+contact force, swing leg rigid), which offsets the stance knee reference.
+``target.stance_knee_offset_rad`` is added to the stance knee reference.
+
+Swing torso compensation (:attr:`PBCGains.swing_torso_compensation`, on for
+Cassie): the swing joints' references are moved to the IK solution for the
+measured torso orientation, so a torso error (a push) does not carry the swing
+foot off its CoM-relative reference.
 
 Fallback: a failed or non-finite solve gives ``TrackerResult(ok=False,
 fallback=reason)`` with a joint PD towards the IK reference (or pure damping
@@ -42,13 +50,15 @@ if the IK failed too); never NaN.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg.lapack import dgesv as _dgesv
 
 from amlip_qp.control.ik import IKSettings, IterativeIK
-from amlip_qp.control.springs import stance_knee_offset_rad
+from amlip_qp.control.springs import spring_deflections_rad
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.exceptions import InputError
 
@@ -70,8 +80,19 @@ class PBCGains:
             ``target.swing_contact_weight`` goes from 0 to 1 (softer landing).
         fallback_kp_Nmprad: Fallback joint stiffness, N m/rad.
         fallback_kd_Nmsprad: Fallback joint damping, N m s/rad.
-        spring_model_offset: Add :func:`~amlip_qp.control.springs.stance_knee_offset_rad`
-            to the stance knee reference (use with IK that holds the springs at rest).
+        swing_torso_compensation: Fraction (0..1) of the torso-orientation error
+            the swing leg compensates: its joint references are moved to the IK
+            solution for the *measured* torso pitch/roll (first order, through
+            the IK's ``A^-1``), so the swing foot follows its output reference
+            relative to the CoM even when the torso is off its reference.
+        spring_model_offset: The paper's spring compensation ("Springs"): the IK
+            holds the springs at the deflections of the simplified model
+            (:func:`~amlip_qp.control.springs.spring_deflections_rad` on the
+            stance leg under the previous tick's commanded contact force; the
+            swing leg rigid at rest) instead of at their encoder estimates; the
+            stance knee reference then carries the compensating offset (exact,
+            through the IK, not the first-order
+            :func:`~amlip_qp.control.springs.stance_knee_offset_rad`).
     """
 
     kp_stance_ps2: float = 400.0
@@ -83,6 +104,7 @@ class PBCGains:
     touchdown_gain_drop: float = 0.0
     fallback_kp_Nmprad: float = 100.0
     fallback_kd_Nmsprad: float = 5.0
+    swing_torso_compensation: float = 0.0
     spring_model_offset: bool = False
 
     def __post_init__(self):
@@ -92,6 +114,7 @@ class PBCGains:
             or self.touchdown_gain_drop > 1
             or self.swing_start_fraction > 1
             or self.swing_ramp_phase <= 0
+            or self.swing_torso_compensation > 1
         ):
             raise InputError(
                 "PBC gains must be finite and >= 0 (touchdown_gain_drop, swing_start_fraction <= 1, "
@@ -100,8 +123,8 @@ class PBCGains:
 
     def swing_scale(self, phase: float, contact_weight: float) -> float:
         """Factor (dimensionless) on the swing leg's gains at this phase and touchdown weight."""
-        s = float(phase) if np.isfinite(phase) else 1.0
-        w = float(np.clip(contact_weight, 0.0, 1.0)) if np.isfinite(contact_weight) else 0.0
+        s = float(phase) if math.isfinite(phase) else 1.0
+        w = min(1.0, max(0.0, float(contact_weight))) if math.isfinite(contact_weight) else 0.0
         ramp = min(1.0, max(0.0, s) / self.swing_ramp_phase)
         start = self.swing_start_fraction + (1.0 - self.swing_start_fraction) * ramp
         return start * (1.0 - self.touchdown_gain_drop * w)
@@ -112,11 +135,27 @@ def default_gains(robot) -> PBCGains:
 
     Cassie's stance leg gets softer gains (``K_p`` 200 1/s^2, ``K_d`` 28 1/s):
     with stiffer stance gains (900 1/s^2) the joint PD in series with the leg
-    springs made the robot fall within 0.5 s. Rabbit (rigid) uses 400 / 40 on
-    both legs.
+    springs made the robot fall within 0.5 s. Cassie's swing leg compensates
+    the torso error (``swing_torso_compensation`` 1): the 100 N x 0.2 s push
+    pitches the pelvis about 0.12 rad forward, which without it left the swing
+    foot about 0.15 m behind and 5 cm below its reference, so it struck the
+    ground early and short (and the robot fell). Cassie uses the paper's spring
+    model (``spring_model_offset``) rather than the spring encoders in the IK:
+    walking is the same (in place 20 s drift 0.097 vs 0.096 m; 1 m/s 1.000 vs
+    1.001 m/s; ramp 2.096 vs 2.095 m/s; push survived, 0.986 vs 0.982 m/s).
+    Rabbit (rigid) uses 400 / 40
+    on both legs and no torso compensation: with it (1.0 or 0.5) Rabbit fell
+    within 6 s at 1 m/s.
     """
     if robot.couplings or len(robot.passive_v_idx):
-        return PBCGains(kp_stance_ps2=200.0, kd_stance_ps=28.0, kp_swing_ps2=400.0, kd_swing_ps=40.0)
+        return PBCGains(
+            kp_stance_ps2=200.0,
+            kd_stance_ps=28.0,
+            kp_swing_ps2=400.0,
+            kd_swing_ps=40.0,
+            swing_torso_compensation=1.0,
+            spring_model_offset=True,
+        )
     return PBCGains()
 
 
@@ -131,6 +170,9 @@ class _Layout:
     kd: np.ndarray = field(default_factory=lambda: np.zeros(0))
     swing_mask: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     knee_k: int | None = None  # position of the stance knee in ctrl
+    K: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # KKT matrix, constant entries preset
+    rhs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    n_contact: int = 0  # contact rows (the spring rows follow)
 
 
 class PBCTracker(Tracker):
@@ -188,30 +230,86 @@ class PBCTracker(Tracker):
             )
         self._blade = {s: len(robot.force_frame_ids[s]) == 2 for s in robot.foot_sides}
         self._planar = robot.is_planar
+        # preallocated KKT system per stance (unknowns: vdot, tau_ctrl, lambda)
+        ns = len(self._J_springs)
+        for side, lay in self._layout.items():
+            ncf = 2 if self._planar else (5 if self._blade[side] else 3)
+            na = len(lay.ctrl_v)
+            nc = ncf + ns
+            K = np.zeros((nv + nc + na, nv + na + nc))
+            K[lay.ctrl_v, nv + np.arange(na)] = -1.0
+            K[nv + nc + np.arange(na), lay.ctrl_v] = 1.0
+            if ns:
+                K[nv + ncf : nv + nc, :nv] = self._J_springs
+                K[:nv, nv + na + ncf :] = -self._J_springs.T
+            lay.K, lay.rhs, lay.n_contact = K, np.zeros(nv + nc + na), ncf
+        self._nv = nv
+        from amlip_qp.robots.outputs import OutputMap
+
+        names = OutputMap(robot).names
+        self._torso_rows = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
+        self._rhs_comp = np.zeros(nv)
+        # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
+        self._spring_rest = self.ik.spring_rest_values()
+        n_sp = len(self.ik._spring_v)
+        names_by_v = dict(zip((int(i) for i in robot.passive_v_idx), robot.passive_joint_names))
+        self._spring_idx = {
+            side: np.array(
+                [k for k, iv in enumerate(self.ik._spring_v) if names_by_v[int(iv)].startswith(side)]
+                + [n_sp + j for j, c in enumerate(robot.couplings) if c.name.startswith(side) and c.stiffness > 0],
+                dtype=int,
+            )
+            for side in robot.foot_sides
+        }
+        self._last_force: dict[str, np.ndarray | None] = {side: None for side in robot.foot_sides}
 
     def reset(self) -> None:
-        """Forget the IK warm start."""
+        """Forget the IK warm start and the last contact forces."""
         self.ik.reset()
+        self._last_force = {side: None for side in self.robot.foot_sides}
 
     # ---------------------------------------------------------------- model
-    def contact_constraints(self, kin, stance: str) -> tuple[np.ndarray, np.ndarray]:
-        """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
-        cid = self.robot.contact_frame_ids[stance]
+    def _contact_rows(self, kin, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
+        """Write the stance contact rows ``J`` (ncf x nv) and ``Jdot_v`` (ncf,) into the buffers."""
+        robot = self.robot
+        cid = robot.contact_frame_ids[stance]
         J6 = kin.frame_jacobian6(cid)
         a6 = kin.frame_jdot_v6(cid)
         if self._planar:
-            return J6[[0, 2]], a6[[0, 2]]
-        if self._blade[stance]:
-            toe, heel = kin.force_point_positions(stance)
-            u = (toe - heel) / np.linalg.norm(toe - heel)
-            n1 = np.cross(u, [0.0, 0.0, 1.0])
-            if np.linalg.norm(n1) < 1e-6:
-                n1 = np.cross(u, [1.0, 0.0, 0.0])
-            n1 /= np.linalg.norm(n1)
-            n2 = np.cross(u, n1)
-            N = np.vstack([n1, n2])
-            return np.vstack([J6[:3], N @ J6[3:]]), np.concatenate([a6[:3], N @ a6[3:]])
-        return J6[:3], a6[:3]
+            J_out[0], J_out[1] = J6[0], J6[2]
+            a_out[0], a_out[1] = a6[0], a6[2]
+            return
+        J_out[:3] = J6[:3]
+        a_out[:3] = a6[:3]
+        if not self._blade[stance]:
+            return
+        # the two rotation axes normal to the blade u: n1 = u x z (or u x x), n2 = u x n1 (scalar math)
+        toe_id, heel_id = robot.force_frame_ids[stance]
+        oMf = kin.data.oMf
+        t, h = oMf[toe_id].translation, oMf[heel_id].translation
+        ux, uy, uz = t[0] - h[0], t[1] - h[1], t[2] - h[2]
+        nu = math.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux / nu, uy / nu, uz / nu
+        ax, ay, az = uy, -ux, 0.0
+        na = math.sqrt(ax * ax + ay * ay)
+        if na < 1e-6:
+            ax, ay, az = 0.0, uz, -uy
+            na = math.sqrt(ay * ay + az * az)
+        ax, ay, az = ax / na, ay / na, az / na
+        bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
+        Jw = J6[3:]
+        N = np.array(((ax, ay, az), (bx, by, bz)))
+        J_out[3:5] = N @ Jw
+        w = a6[3:]
+        a_out[3] = ax * w[0] + ay * w[1] + az * w[2]
+        a_out[4] = bx * w[0] + by * w[1] + bz * w[2]
+
+    def contact_constraints(self, kin, stance: str) -> tuple[np.ndarray, np.ndarray]:
+        """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
+        ncf = self._layout[stance].n_contact
+        J, a = np.empty((ncf, self._nv)), np.empty(ncf)
+        self._contact_rows(kin, stance, J, a)
+        return J, a
 
     def constraints(self, kin, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """All constraint rows ``(J_c, Jdot_c v)``: stance contact, then the rigid springs."""
@@ -225,19 +323,19 @@ class PBCTracker(Tracker):
             numpy.linalg.LinAlgError: Singular system.
         """
         lay = self._layout[stance]
-        nv = kin.model.nv
-        M = kin.mass_matrix()
-        rhs_dyn = kin.passive_forces() - kin.nonlinear_effects()
-        Jc, jdv = self.constraints(kin, stance)
-        nc, na = Jc.shape[0], len(lay.ctrl_v)
-        K = np.zeros((nv + nc + na, nv + na + nc))
-        K[:nv, :nv] = M
-        K[lay.ctrl_v, nv + np.arange(na)] = -1.0
-        K[:nv, nv + na :] = -Jc.T
-        K[nv : nv + nc, :nv] = Jc
-        K[nv + nc + np.arange(na), lay.ctrl_v] = 1.0
-        rhs = np.concatenate([rhs_dyn, -jdv, vdot_ctrl])
-        x = np.linalg.solve(K, rhs)
+        nv, ncf = self._nv, lay.n_contact
+        na = len(lay.ctrl_v)
+        K, rhs = lay.K, lay.rhs
+        K[:nv, :nv] = kin.mass_matrix()
+        Jf = K[nv : nv + ncf, :nv]
+        self._contact_rows(kin, stance, Jf, rhs[nv : nv + ncf])
+        np.negative(rhs[nv : nv + ncf], out=rhs[nv : nv + ncf])
+        np.negative(Jf.T, out=K[:nv, nv + na : nv + na + ncf])
+        np.subtract(kin.passive_forces(), kin.data.nle, out=rhs[:nv])
+        rhs[len(rhs) - na :] = vdot_ctrl
+        _, _, x, info = _dgesv(K, rhs, overwrite_a=0, overwrite_b=0)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"singular PBC system (dgesv info {info})")
         return x[:nv], x[nv : nv + na], x[nv + na :]
 
     # ---------------------------------------------------------------- track
@@ -247,35 +345,72 @@ class PBCTracker(Tracker):
         stance = target.stance
         lay = self._layout[stance]
         q, v = kin.q, kin.v
-        ik = self.ik.solve(kin, stance, target.heading_rad, target.h_d, target.dh_d, target.ddh_d)
+        held = None
+        if self.gains.spring_model_offset and len(self._spring_rest):
+            held = self._spring_rest.copy()
+            defl = spring_deflections_rad(kin, stance, self._last_force[stance])
+            if len(defl) == len(self._spring_idx[stance]):
+                held[self._spring_idx[stance]] += defl
+        ik = self.ik.solve(kin, stance, target.heading_rad, target.h_d, target.dh_d, target.ddh_d, held_springs=held)
         info = {"ik_iterations": float(ik.iterations), "ik_residual": float(ik.residual)}
         q_r = ik.q_r[lay.ctrl_q].copy()
         v_r = ik.v_r[lay.ctrl_v]
         a_r = ik.a_r[lay.ctrl_v]
         if lay.knee_k is not None:
-            offset = float(target.stance_knee_offset_rad) if np.isfinite(target.stance_knee_offset_rad) else 0.0
-            if self.gains.spring_model_offset:
-                offset += stance_knee_offset_rad(kin, stance)
+            offset = float(target.stance_knee_offset_rad)
+            offset = offset if math.isfinite(offset) else 0.0
             q_r[lay.knee_k] += offset
             info["knee_offset_rad"] = offset
         if not ik.ok:
             return self._fallback(kin, lay, q_r, "ik_failed", info, t0, use_ref=False)
+        c = self.gains.swing_torso_compensation
+        if c > 0.0 and len(self._torso_rows):
+            v_r = v_r.copy()
+            self._compensate_swing(kin, target, lay, c, q_r, v_r)
         e = q_r - q[lay.ctrl_q]
         ed = v_r - v[lay.ctrl_v]
-        scale = np.where(lay.swing_mask, self.gains.swing_scale(target.phase, target.swing_contact_weight), 1.0)
-        vdot_ctrl = a_r + scale * (lay.kd * ed + lay.kp * e)
+        sw = self.gains.swing_scale(target.phase, target.swing_contact_weight)
+        vdot_ctrl = lay.kd * ed
+        vdot_ctrl += lay.kp * e
+        if sw != 1.0:
+            vdot_ctrl[lay.swing_mask] *= sw
+        vdot_ctrl += a_r
         info["tracking_error_rad"] = float(np.max(np.abs(e)))
         try:
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
-        if not (np.all(np.isfinite(tau_c)) and np.all(np.isfinite(lam))):
+        if not (math.isfinite(float(np.sum(tau_c))) and math.isfinite(float(np.sum(lam)))):
             return self._fallback(kin, lay, q_r, "non_finite_torque", info, t0)
         tau = np.zeros(self._nu)
         tau[lay.ctrl] = tau_c
         info["contact_force_z_N"] = float(lam[2] if not self._planar else lam[1])
+        if not self._planar:
+            f = lam[:3]
+            self._last_force[stance] = f.copy() if f[2] > 0.0 else np.zeros(3)
         info["solve_time_us"] = (time.perf_counter() - t0) * 1e6
         return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)
+
+    def _compensate_swing(self, kin, target, lay: _Layout, c: float, q_r, v_r) -> None:
+        """Move the swing joints' references to the IK solution at the measured torso orientation.
+
+        ``dq = A^-1 [dh; 0]`` with ``dh`` the torso rows' error (measured minus
+        reference, and the same for the rates) and zero elsewhere: the IK
+        solution whose torso is where the robot's is, with the same CoM-relative
+        swing foot, held stance foot and springs. Only its swing-leg part is
+        used (the stance leg keeps steering the torso to its reference).
+        """
+        y, J, _ = kin.outputs(target.stance, target.heading_rad)  # cached; the controller reuses it
+        rows = self._torso_rows
+        rhs = self._rhs_comp
+        rhs[rows] = c * (y[rows] - target.h_d[rows])
+        dq = self.ik.solve_linear(rhs)
+        rhs[rows] = c * (J[rows] @ kin.v - target.dh_d[rows])
+        dv = self.ik.solve_linear(rhs)
+        rhs[rows] = 0.0
+        sw = lay.swing_mask
+        q_r[sw] += dq[lay.ctrl_v[sw]]
+        v_r[sw] += dv[lay.ctrl_v[sw]]
 
     def _fallback(self, kin, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True) -> TrackerResult:
         """Damped joint PD towards the reference (or damping only), never NaN."""

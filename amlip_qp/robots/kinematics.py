@@ -7,6 +7,10 @@ joint Jacobians, CoM and its Jacobian, CRBA, nonlinear effects, centroidal
 momentum; then the zero-acceleration forward pass for the drift terms). The
 getters afterwards only read and combine cached results.
 
+:meth:`RobotKinematics.update_positions` is a lighter update for iterative
+kinematics (the IK): positions, Jacobians and the CoM at ``q`` with ``v = 0``;
+drifts and momenta are then zero and the dynamics getters raise.
+
 All vectors are in world axes and SI units. Jacobians are world-aligned
 (Pinocchio's ``LOCAL_WORLD_ALIGNED``) and map Pinocchio's ``v``; a
 "``jdot_v``" is the classical-acceleration drift ``Jdot v`` (the acceleration
@@ -50,6 +54,10 @@ class RobotKinematics:
         self._M: np.ndarray | None = None
         self._taup: np.ndarray | None = None
         self._lower = np.tril_indices(self.model.nv, -1)
+        #: True after :meth:`update_positions` (no dynamics, zero velocity).
+        self.positions_only = False
+        self._zero3 = np.zeros(3)
+        self._zero6 = np.zeros(6)
 
     # ------------------------------------------------------------------ update
     def update(self, q, v) -> None:
@@ -73,15 +81,49 @@ class RobotKinematics:
         pin.forwardKinematics(m, d, self.q, self.v, self._a0)
         pin.updateFramePlacements(m, d)
         pin.centerOfMass(m, d, pin.KinematicLevel.ACCELERATION, False)
+        self._invalidate(False)
+
+    def update_positions(self, q) -> None:
+        """Light update at the configuration ``q`` only, with ``v = 0``.
+
+        Runs the joint placements and Jacobians, the frame placements, the CoM
+        and its Jacobian: enough for the frame/contact/CoM positions and
+        Jacobians, the base rotation and :meth:`outputs` ``(y, J)``. No
+        velocity pass: ``v`` is set to zero, so every velocity-dependent term is
+        zero and returned as such (``com_velocity``, the ``*jdot_v`` drifts,
+        the momenta; the third item of :meth:`outputs` is zeros). The dynamics
+        (``mass_matrix``, ``nonlinear_effects``, ``centroidal_momentum_matrix``)
+        are not computed and raise :class:`~amlip_qp.exceptions.InputError`
+        until the next :meth:`update`. ``q`` is not checked (hot path of the IK):
+        pass a finite configuration of shape (nq,).
+        """
+        pin = self._pin
+        m, d = self.model, self.data
+        self.q = np.array(q, dtype=float)
+        if self.v is None or self.v.shape != (m.nv,) or not self.positions_only:
+            self.v = np.zeros(m.nv)
+        pin.computeJointJacobians(m, d, self.q)  # also the joint placements
+        pin.updateFramePlacements(m, d)
+        pin.jacobianCenterOfMass(m, d, self.q, False)  # also com[0]
+        self._invalidate(True)
+
+    def _invalidate(self, positions_only: bool) -> None:
+        """Drop the per-update caches (both update kinds)."""
         self._jac.clear()
         self._acc.clear()
         self._out_cache = None
         self._M = None
         self._taup = None
+        self.positions_only = positions_only
 
     def _ready(self) -> None:
         if self.q is None:
             raise InputError("RobotKinematics: call update(q, v) first")
+
+    def _dynamics_ready(self) -> None:
+        self._ready()
+        if self.positions_only:
+            raise InputError("RobotKinematics: dynamics not computed by update_positions(); call update(q, v)")
 
     # ------------------------------------------------------------- frames
     def frame_position(self, frame_id: int) -> np.ndarray:
@@ -107,6 +149,8 @@ class RobotKinematics:
     def frame_jdot_v6(self, frame_id: int) -> np.ndarray:
         """World-aligned classical acceleration drift of a frame (linear, angular), shape (6,)."""
         self._ready()
+        if self.positions_only:
+            return self._zero6
         acc = self._acc.get(frame_id)
         if acc is None:
             pin = self._pin
@@ -182,6 +226,8 @@ class RobotKinematics:
     def com_velocity(self) -> np.ndarray:
         """CoM velocity ``v_c`` (m/s), shape (3,)."""
         self._ready()
+        if self.positions_only:
+            return self._zero3.copy()
         return self.data.vcom[0].copy()
 
     def com_jacobian(self) -> np.ndarray:
@@ -192,17 +238,20 @@ class RobotKinematics:
     def com_jdot_v(self) -> np.ndarray:
         """CoM acceleration drift ``Jcom_dot v`` (m/s^2), shape (3,)."""
         self._ready()
+        if self.positions_only:
+            return self._zero3.copy()
         return self.data.acom[0].copy()
 
     # ------------------------------------------------------------ momentum
     def centroidal_momentum(self) -> tuple[np.ndarray, np.ndarray]:
         """``(m v_c, L_c)``: linear momentum (kg m/s) and angular momentum about the CoM (kg m^2/s), world axes."""
-        self._ready()
+        self._dynamics_ready()
         hg = self.data.hg
         return hg.linear.copy(), hg.angular.copy()
 
     def angular_momentum_about(self, point) -> np.ndarray:
         """Angular momentum ``L = L_c + (c - r) x m v_c`` (kg m^2/s) about a world point ``r`` (m)."""
+        self._dynamics_ready()
         r = np.asarray(point, dtype=float)
         if r.shape != (3,) or not np.all(np.isfinite(r)):
             raise InputError(f"point must be a finite 3-vector, got {r!r}")
@@ -224,7 +273,7 @@ class RobotKinematics:
 
     def centroidal_momentum_matrix(self) -> np.ndarray:
         """Centroidal momentum matrix ``A_g`` (6 x nv): ``(m v_c, L_c) = A_g v``."""
-        self._ready()
+        self._dynamics_ready()
         return self.data.Ag
 
     # ------------------------------------------------------------ dynamics
@@ -233,7 +282,7 @@ class RobotKinematics:
 
         Cached until the next :meth:`update` (treat as read-only).
         """
-        self._ready()
+        self._dynamics_ready()
         if self._M is None:
             # CRBA fills the upper triangle; mirror it once per update.
             M = self.data.M.copy()
@@ -243,7 +292,7 @@ class RobotKinematics:
 
     def nonlinear_effects(self) -> np.ndarray:
         """``h = C(q, v) v + g(q)`` (N m / N), shape (nv,)."""
-        self._ready()
+        self._dynamics_ready()
         return self.data.nle.copy()
 
     def passive_forces(self) -> np.ndarray:
