@@ -218,7 +218,8 @@ class WalkingController:
         planner_robot = "rabbit" if robot.is_planar else "cassie"
         self.planner = Planner(planner_robot, robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn)
         self.initial_stance = initial_stance
-        self._tau_lim = robot.actuated.torque_limit_Nm
+        self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
+        self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
         self._act_v = robot.actuated.pin_v_idx
         self._fallback_kd = float(fallback_damping_Nms)
         self.steps: list[StepRecord] = []
@@ -343,7 +344,7 @@ class WalkingController:
         result = self.tracker.compute(kin, target)
         tau = result.tau_Nm
         ok = result.ok
-        if tau.shape != (len(self._act_v),) or not np.all(np.isfinite(tau)):
+        if tau.shape != (len(self._act_v),) or not math.isfinite(float(tau.sum())):
             tau = -self._fallback_kd * kin.v[self._act_v]
             ok = False
             self.fallback_ticks += 1
@@ -354,7 +355,7 @@ class WalkingController:
                     RuntimeWarning,
                     stacklevel=2,
                 )
-        tau = np.clip(tau, self._tau_lim[:, 0], self._tau_lim[:, 1])
+        tau = np.minimum(np.maximum(tau, self._tau_lo), self._tau_hi)
         h, _, _ = kin.outputs(self._stance, plan.heading_rad)
         return TickInfo(
             t_s=t,

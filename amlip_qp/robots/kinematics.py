@@ -19,6 +19,8 @@ with ``vdot = 0``), so ``xddot = J vdot + jdot_v``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from amlip_qp.exceptions import InputError
@@ -73,7 +75,8 @@ class RobotKinematics:
             raise InputError(
                 f"q, v must have shapes ({self.model.nq},), ({self.model.nv},); got {q.shape}, {v.shape}"
             )
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        # One cheap test per tick: NaN and inf propagate through a sum.
+        if not math.isfinite(float(q.sum() + v.sum())) and not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             raise InputError("q or v contains NaN or inf")
         self.q, self.v = q.copy(), v.copy()
         m, d = self.model, self.data
