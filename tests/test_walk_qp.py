@@ -1,52 +1,140 @@
-"""Closed-loop acceptance with the whole-body QP tracker (MuJoCo plant).
+"""Closed-loop acceptance of the whole-body QP tracker in MuJoCo.
 
-Measured speed: the mean CoM velocity over the last 3 s, in the heading frame.
-Only the scenarios that pass reliably with the current tracker are here; the others
-are listed, with their measured numbers, in the hand-over report of issue 5.
+Every scenario below runs once (module-scoped fixture, two worker processes,
+one per core) and several tests read its summary numbers. Mean speed = mean
+CoM velocity over the last 3 s, in the heading frame. Durations are the
+scenarios' own where the issue fixes them (20 s for walking in place and for
+Rabbit); the others are shortened to what their check needs.
+
+Only the scenarios that pass reliably with the current tracker are here (see
+RUNS); the others are reported, with their measured numbers, in the hand-over.
 """
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pytest
 
-from amlip_qp.control.controller import WalkingController
-from amlip_qp.control.qp_tracker import QPTracker
-from amlip_qp.robots import load_robot
-from amlip_qp.robots.kinematics import RobotKinematics
-from amlip_qp.sim.harness import Simulation
-from amlip_qp.sim.scenarios import SCENARIOS
-
 pytestmark = pytest.mark.slow
 
-
-def _run(name: str):
-    scenario = SCENARIOS[name]
-    robot = load_robot(scenario.robot)
-    kin = RobotKinematics(robot)
-    tracker = QPTracker(robot)
-    ctrl = WalkingController(robot, tracker, kin)
-    result = Simulation(robot, ctrl, scenario.command).run(scenario.duration_s)
-    return scenario, tracker, result
-
-
-def _heading_frame_speed(log, window_s: float = 3.0) -> tuple[float, float]:
-    t = log["t"]
-    sel = t > t[-1] - window_s
-    heading = log["heading"][sel]
-    vel = log["com_vel"][sel]
-    vx = vel[:, 0] * np.cos(heading) + vel[:, 1] * np.sin(heading)
-    vy = -vel[:, 0] * np.sin(heading) + vel[:, 1] * np.cos(heading)
-    return float(np.mean(vx)), float(np.mean(vy))
+#: key -> (scenario name, duration s or None for the scenario's own, seed, sensor noise)
+RUNS: dict[str, tuple[str, float | None, int, bool]] = {
+    "cassie-in-place": ("cassie-in-place", None, 0, False),  # 20 s
+    "rabbit-0.5mps": ("rabbit-0.5mps", None, 0, False),  # 20 s
+    "rabbit-1mps": ("rabbit-1mps", None, 0, False),  # 20 s
+    "cassie-turn-90": ("cassie-turn-90", None, 0, False),  # 12 s: 90 deg done at 8 s
+    "cassie-push": ("cassie-push", 8.5, 0, True),  # push 6.0-6.2 s, then 2.3 s
+    "cassie-diagonal": ("cassie-diagonal", 8.0, 0, False),  # command reached at 2.5 s
+    "cassie-1mps": ("cassie-1mps", 7.0, 1, True),  # command reached at 3 s
+}
 
 
-@pytest.mark.parametrize("name", ["rabbit-0.5mps"])
-def test_walks_at_the_commanded_speed_without_falling(name):
-    scenario, tracker, result = _run(name)
-    assert not result.fell, f"{name}: fell at t = {result.fall_time_s:.2f} s"
-    assert result.sim_time_s >= scenario.duration_s - 1e-6
-    assert np.all(np.isfinite(result.log["tau"]))
-    vx, vy = _heading_frame_speed(result.log)
-    assert abs(vx - scenario.vx.final_mps) < 0.15, f"{name}: measured {vx:.3f} m/s"
-    assert abs(vy - scenario.vy_mps) < 0.15, f"{name}: lateral {vy:.3f} m/s"
-    # The tracker solved (almost) every tick; fallbacks are counted, not hidden.
-    assert result.fallback_ticks == 0
-    assert tracker.fallbacks <= 0.001 * len(result.log["t"])
+def _run(key: str) -> dict:
+    """Run one entry of RUNS with the QP tracker; summary numbers only (picklable)."""
+    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.sim.factory import build_simulation, load
+    from amlip_qp.sim.harness import SensorNoise
+    from amlip_qp.sim.scenarios import SCENARIOS
+
+    name, duration, seed, noise = RUNS[key]
+    sc = SCENARIOS[name]
+    if duration is not None:
+        sc = sc.with_(duration_s=duration)
+    tracker = QPTracker(load(sc.robot))
+    sim = build_simulation(sc, tracker, seed=seed, noise=SensorNoise() if noise else None)
+    res = sim.run(sc.duration_s)
+    log = res.log
+    last = log["t"] > log["t"][-1] - 3.0
+    D = log["heading"][last]
+    vel = log["com_vel"][last]
+    return {
+        "duration_s": float(sc.duration_s),
+        "final_vx_mps": float(sc.vx.final_mps),
+        "cmd_vy_mps": float(sc.vy_mps),
+        "fell": bool(res.fell),
+        "sim_time_s": float(res.sim_time_s),
+        "vx_mps": float(np.mean(vel[:, 0] * np.cos(D) + vel[:, 1] * np.sin(D))),
+        "vy_mps": float(np.mean(-vel[:, 0] * np.sin(D) + vel[:, 1] * np.cos(D))),
+        "drift_m": float(np.linalg.norm(log["com"][-1, :2] - log["com"][0, :2])),
+        "travel_dir_rad": float(np.arctan2(np.mean(vel[:, 1]), np.mean(vel[:, 0]))),
+        "world_speed_mps": float(np.linalg.norm(np.mean(vel[:, :2], axis=0))),
+        "vx_last_1_5s_mps": float(np.mean(log["com_vel"][log["t"] > log["t"][-1] - 1.5, 0])),
+        "heading_end_rad": float(log["heading"][-1]),
+        "yaw_end_rad": float(np.unwrap(log["base_yaw"])[-1]),
+        "fallback_ticks": int(res.fallback_ticks),
+        "tracker_fallbacks": int(tracker.fallbacks),
+        "ticks": int(len(log["t"])),
+        "tau_finite": bool(np.all(np.isfinite(log["tau"]))),
+    }
+
+
+@pytest.fixture(scope="module")
+def results() -> dict:
+    keys = list(RUNS)  # longest first, so the two workers finish together
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        return dict(zip(keys, pool.map(_run, keys)))
+
+
+def _walked(r: dict) -> None:
+    """No fall, the whole duration, finite torques, the QP solved (almost) every tick."""
+    assert not r["fell"], f"fell at t = {r['sim_time_s']:.2f} s"
+    assert r["sim_time_s"] >= r["duration_s"] - 1e-6
+    assert r["tau_finite"]
+    assert r["fallback_ticks"] == 0
+    assert r["tracker_fallbacks"] <= 0.001 * r["ticks"]
+
+
+def _speed_ok(r: dict, tol: float = 0.15) -> None:
+    assert abs(r["vx_mps"] - r["final_vx_mps"]) < tol, f"forward {r['vx_mps']:.3f} m/s, commanded {r['final_vx_mps']}"
+    assert abs(r["vy_mps"] - r["cmd_vy_mps"]) < tol, f"lateral {r['vy_mps']:.3f} m/s, commanded {r['cmd_vy_mps']}"
+
+
+def test_cassie_walks_in_place_20s_with_small_drift(results):
+    r = results["cassie-in-place"]
+    _walked(r)
+    assert r["duration_s"] == 20.0
+    assert r["drift_m"] < 0.3, f"drift {r['drift_m']:.3f} m"
+
+
+def test_cassie_walks_at_1mps_with_sensor_noise(results):
+    r = results["cassie-1mps"]
+    _walked(r)
+    _speed_ok(r)
+
+
+@pytest.mark.parametrize("key", ["rabbit-0.5mps", "rabbit-1mps"])
+def test_rabbit_walks_at_the_commanded_speed_for_20s(results, key):
+    r = results[key]
+    _walked(r)
+    assert r["duration_s"] == 20.0
+    _speed_ok(r)
+
+
+def test_cassie_walks_diagonally(results):
+    r = results["cassie-diagonal"]
+    _walked(r)
+    _speed_ok(r, tol=0.1)
+
+
+def test_cassie_turns_90_degrees_within_10s_at_walking_speed(results):
+    r = results["cassie-turn-90"]
+    _walked(r)
+    # The planner's heading turned 90 deg (turn 3 s -> 8 s; it advances by
+    # rate * T per step and steps end a little early, so it overshoots by up
+    # to one or two steps: 91.8 deg measured, 97.2 with sensor noise) and the
+    # robot travels along it, at 0.5-1.0 m/s, over the last 3 s.
+    assert math.radians(90.0) - 1e-9 <= r["heading_end_rad"] < math.radians(100.0)
+    err = r["travel_dir_rad"] - r["heading_end_rad"]
+    assert abs(err) < math.radians(5.0), f"travel {math.degrees(r['travel_dir_rad']):.1f} deg"
+    assert 0.5 <= r["world_speed_mps"] <= 1.0
+    _speed_ok(r)
+
+
+def test_cassie_survives_a_100N_sagittal_push_at_1mps_with_sensor_noise(results):
+    r = results["cassie-push"]
+    _walked(r)
+    # Still walking forward after the push (it ended 2.3 s before the end).
+    assert r["vx_last_1_5s_mps"] > 0.5

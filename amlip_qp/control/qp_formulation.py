@@ -110,6 +110,23 @@ class QPConfig:
         reg_force: Regularisation weight on forces, N^-2.
         reg_torque: Regularisation weight on joint torques, (N m)^-2.
         reg_coupling: Regularisation weight on coupling forces, (N m)^-2.
+        stance_foot_torque_max_Nm: Bound on the **stance** foot ("toe") motor
+            torque, N m (``inf``: only the motor limit). 0 leaves the stance toe
+            passive as in the paper (section "Implementing ... on a Real
+            Robot"): an ankle torque changes ``L`` about the contact directly
+            (``Ldot = p x m g + tau_ankle``), which the ALIP prediction ignores,
+            and it shifts the centre of pressure off the blade's middle,
+            unloading the toe or the heel (the foot then slips in yaw).
+            Applied by :meth:`WholeBodyQP.limit_stance_foot_torque` after
+            :meth:`WholeBodyQP.build`. No effect on robots without a foot motor.
+        stance_yaw_moment_weight: Cost weight on the yaw moment (about the
+            vertical) of the stance foot's contact forces, (N m)^-2. The plant's
+            line contact (two friction spheres) yields to a sustained yaw
+            moment: the foot creeps in yaw and the robot turns. The moment is
+            fixed by the accelerations, so the penalty makes the QP prefer
+            motions that need less of it (the pelvis yields in stance hip yaw).
+            0 disables. Added by :meth:`WholeBodyQP.add_stance_yaw_moment_cost`
+            after :meth:`WholeBodyQP.build`. 3-D feet with two force points only.
     """
 
     output_kp: tuple[float, ...]
@@ -136,6 +153,8 @@ class QPConfig:
     reg_force: float = 1e-6
     reg_torque: float = 1e-6
     reg_coupling: float = 1e-6
+    stance_foot_torque_max_Nm: float = math.inf
+    stance_yaw_moment_weight: float = 0.0
 
     def __post_init__(self):
         if self.rigid_springs not in ("swing", "all", "none"):
@@ -146,7 +165,8 @@ class QPConfig:
         scalars = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in ("rigid_springs",)}
         for name, val in scalars.items():
             arr = np.asarray(val, dtype=float)
-            if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+            may_be_inf = name == "stance_foot_torque_max_Nm"
+            if np.any(np.isnan(arr)) or np.any(arr < 0) or (not may_be_inf and not np.all(np.isfinite(arr))):
                 raise InputError(f"QPConfig.{name} must be finite and >= 0, got {val!r}")
         if not 0 < self.friction_mu:
             raise InputError("friction_mu must be > 0")
@@ -167,6 +187,18 @@ CASSIE_CONFIG = QPConfig(
     output_kd=(40.0, 40.0, 25.0, 25.0, 40.0, 40.0, 40.0, 40.0, 25.0),
     output_weight=(10.0, 10.0, 1.0, 1.0, 10.0, 3.0, 3.0, 3.0, 0.5),
     spring_weight=1e-2,
+    # The paper's passive stance toe. With the toe motor free (+-45 N m) the QP
+    # used it (mean |tau| 16 N m in place, saturated 6% of the ticks), moving
+    # the centre of pressure along the blade; the stance foot then slipped in
+    # yaw: 172 deg in 20 s walking in place (passive: 4.5 deg). A 0.01 N m band
+    # rather than exactly 0: l = u torque rows are degenerate for active-set
+    # solvers (quadprog, the cross-check, failed on 9 of 32 recorded problems).
+    stance_foot_torque_max_Nm=0.01,
+    # Without it the stance foot creeps in yaw at speed (the base yawed 30-60
+    # deg) and the 0 -> 2.1 m/s ramp fell at 12.05 s (1.71 m/s). Measured on
+    # that ramp: weight 1 held 2.04 m/s once and fell once (14.88 s); weight 3
+    # held it in 3 of 3 runs (2.07, 2.06, 2.00 m/s); weight 10 fell (12.35 s).
+    stance_yaw_moment_weight=3.0,
 )
 #: Rabbit outputs: torso pitch, com z over stance, com x/z over swing.
 RABBIT_CONFIG = QPConfig(
@@ -531,6 +563,51 @@ class WholeBodyQP:
             H += cfg.reg_torque * (T.T @ T)
             g += cfg.reg_torque * (T.T @ self._tau0)
         return P
+
+    # ------------------------------------------------------- stance foot
+    def _stance_foot_index(self, stance: str):
+        """Actuator index of the ``stance`` foot ("toe") motor, or ``None`` (no such motor)."""
+        cache = self.__dict__.setdefault("_stance_foot_idx", {})
+        if stance not in cache:
+            names = list(self.robot.actuated.joint_names)
+            name = f"{stance}-foot"
+            cache[stance] = names.index(name) if name in names else None
+        return cache[stance]
+
+    def limit_stance_foot_torque(self, problem: QPProblem, target) -> None:
+        """Bound the stance foot motor torque to ``+-config.stance_foot_torque_max_Nm``.
+
+        Call right after :meth:`build` (it edits that problem's torque rows, which
+        hold ``tau = T x + tau0``). No-op with an infinite bound or no foot motor.
+        """
+        lim = self.config.stance_foot_torque_max_Nm
+        i = self._stance_foot_index(target.stance)
+        if i is None or not math.isfinite(lim):
+            return
+        r = self._sl_tau.start + i
+        problem.l[r] = max(self._tau_lim[i, 0], -lim) - self._tau0[i]
+        problem.u[r] = min(self._tau_lim[i, 1], lim) - self._tau0[i]
+
+    def add_stance_yaw_moment_cost(self, problem: QPProblem, kin, target) -> None:
+        """Add ``w M_z^2`` to the cost of the problem just built (``w`` =
+        ``config.stance_yaw_moment_weight``), with ``M_z`` the yaw moment of the
+        stance foot's point forces about their mean point. No-op for ``w = 0``,
+        planar robots or one-point feet."""
+        w = self.config.stance_yaw_moment_weight
+        L = self._layout
+        if w <= 0 or self._planar or L.n_points != 2:
+            return
+        fids = self.robot.force_frame_ids[target.stance]
+        pts = [kin.frame_position(f) for f in fids]
+        mid = 0.5 * (pts[0] + pts[1])
+        a = np.zeros(L.n)
+        for p, r in enumerate(pts):
+            dx, dy = r[0] - mid[0], r[1] - mid[1]
+            c0 = L.sl_f_st.start + 3 * p
+            a[c0] = -dy
+            a[c0 + 1] = dx
+        idx = np.flatnonzero(a)
+        problem.H[np.ix_(idx, idx)] += w * np.outer(a[idx], a[idx])
 
     # ------------------------------------------------------------ recovery
     def torques(self, x: np.ndarray) -> np.ndarray:

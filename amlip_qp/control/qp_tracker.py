@@ -122,6 +122,8 @@ class QPTracker(Tracker):
         t0 = time.perf_counter_ns()
         try:
             problem = self.builder.build(kin, target)
+            self.builder.limit_stance_foot_torque(problem, target)
+            self.builder.add_stance_yaw_moment_cost(problem, kin, target)
             self.last_problem = problem
             problem.validate()
         except QPError as exc:
@@ -140,11 +142,11 @@ class QPTracker(Tracker):
         except QPError as exc:
             sol = self._solve_relaxed(problem)
             if sol is not None:
-                return self._finish(problem, sol, info, t0, t1, relaxed=True)
+                return self._finish(kin, problem, sol, info, t0, t1, relaxed=True)
             if self.record:
                 self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
             return self._fallback(kin, f"solver: {exc.status or exc}", info)
-        return self._finish(problem, sol, info, t0, t1, relaxed=False)
+        return self._finish(kin, problem, sol, info, t0, t1, relaxed=False)
 
     def _solve_relaxed(self, problem: QPProblem):
         """Second chance after an infeasible tick: drop the torque-limit rows
@@ -160,7 +162,7 @@ class QPTracker(Tracker):
         self.relaxed_solves += 1
         return sol
 
-    def _finish(self, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
+    def _finish(self, kin, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
         tau = self.builder.torques(sol.x)
         if not np.all(np.isfinite(tau)):
             return self._fallback(kin, "non-finite torques", info)

@@ -205,6 +205,15 @@ SCENARIOS: dict[str, Scenario] = {
             pushes=(Push(6.0, (100.0, 0.0, 0.0), 0.2),),
             description="Cassie at 1 m/s takes a 100 N sagittal push for 0.2 s",
         ),
+        Scenario(
+            "cassie-2.5mps",
+            "cassie",
+            16.0,
+            vx=SpeedProfile((0.0, 1.0, 13.0), (0.0, 0.0, 2.5)),
+            gait=GaitSettings(step_time_s=0.25, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
+            description="Cassie ramps from 0 to 2.5 m/s over 12 s and holds it (shorter steps, T = 0.25 s, "
+            "as the paper used a higher step frequency for fast walking)",
+        ),
         Scenario("rabbit-0.5mps", "rabbit", 20.0, vx=_ramp(0.5, 2.0), description="Rabbit walks at 0.5 m/s"),
         Scenario("rabbit-1mps", "rabbit", 20.0, vx=_ramp(1.0, 3.0), description="Rabbit walks at 1.0 m/s"),
     )
