@@ -1,0 +1,66 @@
+"""Run every acceptance scenario with both trackers and print the measured table (Markdown).
+
+Usage: ``python examples/acceptance_table.py [--trackers pbc,qp] [--jobs 2] [--json PATH]``
+
+Each row is one deterministic run (seed 0, exact sensors) of a named
+scenario of :data:`amlip_qp.sim.scenarios.SCENARIOS`; the numbers are the
+run summary's (``docs/SUMMARY_SCHEMA.md``): whether the robot fell, the
+mean velocity over the last 3 s in the heading frame, the CoM drift (in
+place), the yaw change (turn), and the controller tick time. The
+pass/fail thresholds live in ``tests/test_walk_pbc.py`` and
+``tests/test_walk_qp.py``; this script only measures. About 10 minutes on
+2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+from amlip_qp.sim.factory import run_scenario
+from amlip_qp.sim.scenarios import SCENARIOS
+from amlip_qp.sim.summary import summarize, to_jsonable
+
+
+def _run(job: tuple[str, str]) -> dict:
+    name, tracker = job
+    result = run_scenario(SCENARIOS[name], tracker)
+    row = summarize(result)
+    com = result.log["com"]
+    row["drift_m"] = float(np.linalg.norm(com[-1, :2] - com[0, :2]))
+    return to_jsonable(row)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--trackers", default="pbc,qp", help="comma-separated trackers (default pbc,qp)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument("--json", default=None, help="also write the rows as JSON to this path")
+    args = ap.parse_args(argv)
+    jobs = [(name, t) for name in SCENARIOS for t in args.trackers.split(",")]
+    jobs.sort(key=lambda j: -SCENARIOS[j[0]].duration_s)  # longest first
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        rows = dict(zip(jobs, pool.map(_run, jobs)))
+    print("| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg | tick median / p99 µs |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in SCENARIOS:
+        for t in args.trackers.split(","):
+            r = rows[(name, t)]
+            fell = f"yes, {r['fall_time_s']:.1f} s" if r["fell"] else "no"
+            vx, vy = r["mean_velocity"]
+            cx, cy = r["commanded_velocity"]
+            print(
+                f"| {name} | {t} | {fell} | {vx:.3f}, {vy:.3f} | {cx:.2f}, {cy:.2f} | {r['drift_m']:.3f} | "
+                f"{r['heading_change_deg']:.1f} | {r['tick_time_us']['median']:.0f} / {r['tick_time_us']['p99']:.0f} |"
+            )
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({f"{n}/{t}": r for (n, t), r in rows.items()}, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
