@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.control.qp_formulation import CASSIE_CONFIG, RABBIT_CONFIG, QPConfig, WholeBodyQP
+from amlip_qp.control.qp_formulation import CASSIE_CONFIG, RABBIT_CONFIG, WholeBodyQP
 from amlip_qp.control.qp_tracker import QPTracker
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.exceptions import InputError

@@ -8,7 +8,6 @@ import pinocchio as pin
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import (
     RobotKinematics,
     bias_mj_to_pin,
@@ -18,10 +17,8 @@ from amlip_qp.robots import (
     mj_to_pin,
     velocity_map,
 )
+from robot_states import ROBOTS, random_mj_state
 
-HAS_CASSIE = (MODELS_DIR / "cassie.xml").exists()
-needs_cassie = pytest.mark.skipif(not HAS_CASSIE, reason="models/cassie.xml not written yet")
-ROBOTS = ["rabbit", pytest.param("cassie", marks=needs_cassie)]
 TOL_MJ = 1e-8  # Pinocchio vs MuJoCo (both exact rigid-body algorithms; only round-off differs)
 TOL_FD = 1e-6  # central differences with h = 1e-6: truncation ~h^2, round-off ~1e-16/h
 
@@ -29,23 +26,6 @@ TOL_FD = 1e-6  # central differences with h = 1e-6: truncation ~h^2, round-off ~
 @pytest.fixture(scope="module", params=ROBOTS)
 def robot(request):
     return load_robot(request.param)
-
-
-def random_mj_state(robot, rng):
-    """Random MuJoCo state: joints within range, random base pose and velocities."""
-    m = robot.mj_model
-    qpos = m.qpos0.copy()
-    for j in range(m.njnt):
-        qa, jt = m.jnt_qposadr[j], m.jnt_type[j]
-        if jt == mujoco.mjtJoint.mjJNT_FREE:
-            qpos[qa : qa + 3] = rng.uniform(-1, 1, 3)
-            quat = rng.normal(size=4)
-            qpos[qa + 3 : qa + 7] = quat / np.linalg.norm(quat)
-        elif m.jnt_limited[j]:
-            qpos[qa] = rng.uniform(*m.jnt_range[j])
-        else:
-            qpos[qa] = rng.uniform(-1, 1)
-    return qpos, rng.normal(size=m.nv)
 
 
 def mujoco_at(robot, qpos, qvel):
@@ -253,7 +233,6 @@ def test_jacobians_and_drifts_by_finite_differences(robot):
         np.testing.assert_allclose(kin.base_angular_jacobian() @ v, rot_rate, atol=TOL_FD)
 
 
-@needs_cassie
 def test_cassie_coupling_constraint():
     robot = load_robot("cassie")
     kin = RobotKinematics(robot)
@@ -369,7 +348,6 @@ def quasi_static_torques(robot, kin, q):
     return (rhs - Jall.T @ lam)[robot.actuated.pin_v_idx]
 
 
-@needs_cassie
 def test_cassie_stands_for_two_seconds():
     """Joint PD + quasi-static gravity compensation + pelvis-pitch feedback on the foot motors."""
     robot = load_robot("cassie")

@@ -13,7 +13,6 @@ from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import load_robot
 
 CASSIE_XML = MODELS_DIR / "cassie.xml"
-needs_cassie = pytest.mark.skipif(not CASSIE_XML.exists(), reason="models/cassie.xml not written yet")
 
 
 @pytest.fixture(scope="module")
@@ -73,7 +72,6 @@ def test_lazy_top_level_export():
     assert out.stdout.strip() == "7"
 
 
-@needs_cassie
 def test_cassie_description():
     cassie = load_robot("cassie")
     assert cassie.is_floating and not cassie.is_planar

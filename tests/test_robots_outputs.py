@@ -8,11 +8,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap, RobotKinematics, load_robot
+from robot_states import ROBOTS
 
-needs_cassie = pytest.mark.skipif(not (MODELS_DIR / "cassie.xml").exists(), reason="models/cassie.xml not written yet")
-ROBOTS = ["rabbit", pytest.param("cassie", marks=needs_cassie)]
 
 
 @pytest.fixture(scope="module", params=ROBOTS)

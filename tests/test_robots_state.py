@@ -8,7 +8,6 @@ import pinocchio as pin
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import (
     force_mj_to_pin,
     force_pin_to_mj,
@@ -18,36 +17,13 @@ from amlip_qp.robots import (
     velocity_map,
     velocity_map_dot_v,
 )
+from robot_states import ROBOTS, random_mj_state
 
-ROBOTS = [
-    "rabbit",
-    pytest.param(
-        "cassie",
-        marks=pytest.mark.skipif(not (MODELS_DIR / "cassie.xml").exists(), reason="models/cassie.xml not written yet"),
-    ),
-]
 
 
 @pytest.fixture(scope="module", params=ROBOTS)
 def robot(request):
     return load_robot(request.param)
-
-
-def random_mj_state(robot, rng):
-    """Random MuJoCo state: joints within range, random base pose and velocities."""
-    m = robot.mj_model
-    qpos = m.qpos0.copy()
-    for j in range(m.njnt):
-        qa, jt = m.jnt_qposadr[j], m.jnt_type[j]
-        if jt == mujoco.mjtJoint.mjJNT_FREE:
-            qpos[qa : qa + 3] = rng.uniform(-1, 1, 3)
-            quat = rng.normal(size=4)
-            qpos[qa + 3 : qa + 7] = quat / np.linalg.norm(quat)
-        elif m.jnt_limited[j]:
-            qpos[qa] = rng.uniform(*m.jnt_range[j])
-        else:
-            qpos[qa] = rng.uniform(-1, 1)
-    return qpos, rng.normal(size=m.nv)
 
 
 def test_round_trips(robot):
