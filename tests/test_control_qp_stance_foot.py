@@ -114,6 +114,11 @@ def test_yaw_moment_cost_is_the_square_of_the_stance_force_yaw_moment(cassie, st
     f = x[sl].reshape(2, 3)
     Mz = sum(np.cross(p - mid, fi)[2] for p, fi in zip(pts, f))
     assert x @ dH @ x == pytest.approx(w * Mz**2, rel=1e-9)
+    # The same term on a problem whose H is not C-contiguous (a user's copy).
+    other = problem.copy()
+    other.H = np.asfortranarray(H0)
+    builder.add_stance_yaw_moment_cost(other, kin, target)
+    assert np.allclose(other.H, problem.H, rtol=0, atol=1e-12)
 
 
 def test_tracker_applies_both_terms(cassie):

@@ -108,3 +108,20 @@ def test_gains_reject_negative_or_nan():
         Gains.of(3, -1.0, 1.0, 1.0)
     with pytest.raises(InputError):
         Gains.of(3, 1.0, np.nan, 1.0)
+
+
+def test_joint_tasks_have_a_constant_jacobian_and_the_pd_law(robot):
+    q, v = _state(robot, 5)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    tasks = _tasks(robot)
+    target = _target(tasks[0].size)
+    assert not tasks[0].constant_jacobian  # the output map moves with the state
+    joint_tasks = [t for t in tasks if t.constant_jacobian]
+    assert joint_tasks, "the posture task is a JointTask"
+    for task in joint_tasks:
+        J = task.jacobian(None, None)
+        assert np.array_equal(J, task.jacobian(kin, target))
+        y, (y_d, yd_d, ydd_d) = task.value(kin, target), task.reference(kin, target)
+        expected = ydd_d + task.gains.kd * (yd_d - J @ v) + task.gains.kp * (y_d - y)
+        assert np.allclose(task.desired_acceleration(kin, target), expected, rtol=1e-12, atol=1e-12)

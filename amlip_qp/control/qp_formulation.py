@@ -340,6 +340,7 @@ class WholeBodyQP:
         C = self.problem.C
         r = nu
         d = len(self._axes)
+        nf = d * k
         for p in range(2 * k):
             c0 = L.nv + d * p
             for t in range(d - 1):
@@ -347,28 +348,74 @@ class WholeBodyQP:
                     C[r, c0 + t] = sign
                     C[r, c0 + d - 1] = -mu
                     r += 1
-        # Index helpers for the force boxes.
+        # Force boxes. The stance block always comes first, so its box is
+        # constant; the swing block's box is ``w`` times a unit box.
         self._fz_st = L.sl_f_st.start + d * np.arange(k) + d - 1
         self._fz_sw = L.sl_f_sw.start + d * np.arange(k) + d - 1
         self._ft_st = np.array([L.sl_f_st.start + d * p + t for p in range(k) for t in range(d - 1)], dtype=int)
         self._ft_sw = np.array([L.sl_f_sw.start + d * p + t for p in range(k) for t in range(d - 1)], dtype=int)
-        # Joint limits of the actuated joints.
+        fmax = config.max_normal_force_N
+        P = self.problem
+        P.lb[self._fz_st] = config.min_normal_force_N
+        P.ub[self._fz_st] = fmax
+        P.lb[self._ft_st] = -mu * fmax
+        P.ub[self._ft_st] = mu * fmax
+        self._sw_lb_unit = np.zeros(nf)
+        self._sw_ub_unit = np.zeros(nf)
+        self._sw_ub_unit[self._fz_sw - L.sl_f_sw.start] = fmax
+        self._sw_ub_unit[self._ft_sw - L.sl_f_sw.start] = mu * fmax
+        self._sw_lb_unit[self._ft_sw - L.sl_f_sw.start] = -mu * fmax
+        # Joint limits of the actuated joints, per leg (bounded on the swing leg only).
         lo = np.asarray(robot.pin_model.lowerPositionLimit)[self._act_q]
         hi = np.asarray(robot.pin_model.upperPositionLimit)[self._act_q]
         self._q_lo = np.where(hi > lo, lo, -inf)
         self._q_hi = np.where(hi > lo, hi, inf)
         self._tau_lim = np.asarray(robot.actuated.torque_limit_Nm, dtype=float)
+        self._tau_lo = np.ascontiguousarray(self._tau_lim[:, 0])
+        self._tau_hi = np.ascontiguousarray(self._tau_lim[:, 1])
         self._act_side = {
             side: np.array([nm.startswith(side) for nm in robot.actuated.joint_names]) for side in robot.foot_sides
         }
-        # Per-tick buffers.
-        self._Jf = np.zeros((2 * d * k, nv))
+        self._limits_by_swing = {}
+        for side in robot.foot_sides:
+            m = self._act_side[side]
+            self._limits_by_swing[side] = (
+                self._act_v[m], self._act_q[m], self._q_lo[m], self._q_hi[m], self._act_v[~m]
+            )  # fmt: skip
+        # Per-tick buffers. D = [M | -Jf^T | -G^T] (nv x n): its unactuated rows
+        # are the dynamics equalities, its actuated rows the torque map T.
+        self._Jf = np.zeros((2 * nf, nv))
+        self._D = np.zeros((nv, n))
         self._T = np.zeros((nu, n))
         self._tau0 = np.zeros(nu)
+        self._hp = np.zeros(nv)
         self._last_force_weight = 0.0
         self._G = np.zeros((n_lambda, nv))
         self._rigid_kp = np.r_[np.full(L.n_rigid_st, config.stance_coupling_kp), np.full(L.n_rigid_sw, config.coupling_kp)]
         self._rigid_kd = np.r_[np.full(L.n_rigid_st, config.stance_coupling_kd), np.full(L.n_rigid_sw, config.coupling_kd)]
+        # The constant part of the Hessian: regularisation and the tasks whose
+        # Jacobian never changes (posture, springs).
+        H0 = np.zeros((n, n))
+        di = np.arange(n)
+        H0[di[L.sl_vdot], di[L.sl_vdot]] += config.reg_vdot
+        fi = np.arange(L.sl_f_st.start, L.sl_f_sw.stop)
+        H0[fi, fi] += config.reg_force
+        if L.n_lambda:
+            li = np.arange(L.sl_lambda.start, L.sl_lambda.stop)
+            H0[li, li] += config.reg_coupling
+        for task in self.tasks:
+            if task.constant_jacobian:
+                J = task.jacobian(None, None)
+                H0[L.sl_vdot, L.sl_vdot] += (J.T * task.gains.weight) @ J
+        self._H0 = H0
+        self._varying_tasks = [t for t in self.tasks if not t.constant_jacobian]
+        self._constant_tasks = [t for t in self.tasks if t.constant_jacobian]
+        # Yaw moment of the stance foot: the nonzero entries of its row.
+        self._yaw_idx = None
+        if not self._planar and k == 2:
+            c = L.sl_f_st.start
+            self._yaw_idx = np.array([c, c + 1, c + 3, c + 4])
+            self._yaw_flat = (self._yaw_idx[:, None] * n + self._yaw_idx[None, :]).ravel()
 
     # ------------------------------------------------------------------ info
     @property
@@ -418,8 +465,8 @@ class WholeBodyQP:
         Gq, offs = self._spring_q[side]
         return Gq @ q - offs
 
-    def _stacked_springs(self, stance: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(G, Gq, offsets)`` of the rigidly held springs for this stance (cached per stance)."""
+    def _stacked_springs(self, stance: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(G, Gq, offsets, -G^T)`` of the rigidly held springs for this stance (cached per stance)."""
         cache = self.__dict__.setdefault("_springs_by_stance", {})
         hit = cache.get(stance)
         if hit is None:
@@ -431,6 +478,7 @@ class WholeBodyQP:
                 np.vstack([self._spring_q[s][0] for s in sides]),
                 np.concatenate([self._spring_q[s][1] for s in sides]),
             )
+            hit = (*hit, np.ascontiguousarray(-hit[0].T))
             cache[stance] = hit
         return hit
 
@@ -455,113 +503,101 @@ class WholeBodyQP:
         return min(max(w, 0.0), 1.0)
 
     def build(self, kin, target) -> QPProblem:
-        """Fill the problem for the state in ``kin`` (already updated) and the references in ``target``."""
+        """Fill the problem for the state in ``kin`` (already updated) and the references in ``target``.
+
+        Every block is written in place into the preallocated arrays; blocks
+        that never change (friction rows, the stance force box, the constant
+        Hessian part, zero blocks) are written once in the constructor.
+        """
         cfg, L, P = self.config, self._layout, self.problem
-        robot = self.robot
         stance = target.stance
         swing = "right" if stance == "left" else "left"
-        nv, d, k = L.nv, len(self._axes), L.n_points
+        nv, k = L.nv, L.n_points
+        sv = L.sl_vdot
+        sf = slice(L.sl_f_st.start, L.sl_f_sw.stop)
         v = kin.v
-        M = kin.mass_matrix()
-        h = kin.nonlinear_effects()
-        taup = kin.passive_forces()
-        nf = d * k
+        # h - taup: the dynamics' right-hand side without contact forces.
+        hp = np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=self._hp)
         # Force Jacobians (world-aligned, selected axes) stacked stance then swing.
+        nf = L.sl_f_st.stop - L.sl_f_st.start
         st_jacs = self._force_jacobians(kin, stance, slice(0, nf))
         self._force_jacobians(kin, swing, slice(nf, 2 * nf))
-        Jf = self._Jf
-        A, b = P.A, P.b
-        A.fill(0.0)
-        # Dynamics (unactuated rows): M_u vdot - Jf_u^T f - G_u^T lam = -(h_u - taup_u).
-        u = self._unact_v
-        A[self._sl_dyn, L.sl_vdot] = M[u]
-        A[self._sl_dyn, L.sl_f_st.start : L.sl_f_sw.stop] = -Jf[:, u].T
-        b[self._sl_dyn] = taup[u] - h[u]
-        # Torque map: tau = T x + tau0.
-        a = self._act_v
-        T = self._T
-        T[:, L.sl_vdot] = M[a]
-        T[:, L.sl_f_st.start : L.sl_f_sw.stop] = -Jf[:, a].T
-        self._tau0[:] = h[a] - taup[a]
-        # Coupling.
+        # D = [M | -Jf^T | -G^T]: unactuated rows -> dynamics equalities
+        # (M_u vdot - Jf_u^T f - G_u^T lam = -(h_u - taup_u)); actuated rows ->
+        # the torque map tau = T x + tau0 with tau0 = h_a - taup_a.
+        D, A, b = self._D, P.A, P.b
+        D[:, sv] = kin.mass_matrix()
+        np.negative(self._Jf.T, out=D[:, sf])
         if L.n_lambda:
-            G = self._G
-            G[:], Gq, offs = self._stacked_springs(stance)
+            G, Gq, offs, minus_Gt = self._stacked_springs(stance)
+            D[:, L.sl_lambda] = minus_Gt
+            A[self._sl_coup, sv] = G
             g_c = Gq @ kin.q - offs
-            A[self._sl_dyn, L.sl_lambda] = -G[:, u].T
-            T[:, L.sl_lambda] = -G[:, a].T
-            A[self._sl_coup, L.sl_vdot] = G
-            kp, kd = self._rigid_kp, self._rigid_kd
-            b[self._sl_coup] = -kp * g_c - kd * (G @ v)
-        # Stance contact acceleration.
+            b[self._sl_coup] = -self._rigid_kp * g_c - self._rigid_kd * (G @ v)
+            self._G[:] = G
+        u, a = self._unact_v, self._act_v
+        np.take(D, u, axis=0, out=A[self._sl_dyn])
+        np.negative(hp[u], out=b[self._sl_dyn])
+        T = np.take(D, a, axis=0, out=self._T)
+        tau0 = np.take(hp, a, out=self._tau0)
+        # Stance contact acceleration: J_c vdot = -Jdot_c v - K_c J_c v.
         rc = self._sl_contact
-        fids = robot.force_frame_ids[stance]
+        fids = self.robot.force_frame_ids[stance]
+        kc = cfg.contact_kd
         if k == 1:
             J0 = st_jacs[0][self._axes]
-            a0 = kin.frame_jdot_v(fids[0])[self._axes]
-            A[rc, L.sl_vdot] = J0
-            b[rc] = -a0 - cfg.contact_kd * (J0 @ v)
+            A[rc, sv] = J0
+            b[rc] = -kin.frame_jdot_v(fids[0])[self._axes] - kc * (J0 @ v)
         else:
             J0, J1 = st_jacs
-            a0, a1 = kin.frame_jdot_v(fids[0]), kin.frame_jdot_v(fids[1])
             ax = kin.frame_position(fids[0]) - kin.frame_position(fids[1])
             ax /= math.sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2])
             # n1: the vertical made orthogonal to the blade; n2 = axis x n1.
-            n1 = np.array([-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2]])
-            n1 /= math.sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2])
-            n2 = np.array(
-                [ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0]]
+            n1 = (-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2])
+            s1 = 1.0 / math.sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2])
+            n1 = (n1[0] * s1, n1[1] * s1, n1[2] * s1)
+            N = np.array(
+                [n1, (ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0])]
             )
-            Jh = np.vstack([n1 @ J1, n2 @ J1])
-            A[rc.start : rc.start + 3, L.sl_vdot] = J0
-            A[rc.start + 3 : rc.stop, L.sl_vdot] = Jh
-            b[rc.start : rc.start + 3] = -a0 - cfg.contact_kd * (J0 @ v)
-            b[rc.start + 3 : rc.stop] = -np.array([n1 @ a1, n2 @ a1]) - cfg.contact_kd * (Jh @ v)
-        # Torque limits.
+            r0, r1 = rc.start, rc.start + 3
+            A[r0:r1, sv] = J0
+            Jh = np.matmul(N, J1, out=A[r1 : rc.stop, sv])
+            b[r0:r1] = -kin.frame_jdot_v(fids[0]) - kc * (J0 @ v)
+            b[r1 : rc.stop] = -(N @ kin.frame_jdot_v(fids[1])) - kc * (Jh @ v)
+        # Torque limits: tau_lo - tau0 <= T x <= tau_hi - tau0.
         P.C[self._sl_tau] = T
-        P.l[self._sl_tau] = self._tau_lim[:, 0] - self._tau0
-        P.u[self._sl_tau] = self._tau_lim[:, 1] - self._tau0
-        # Box bounds: joint limits on actuated vdot, force ramps.
+        np.subtract(self._tau_lo, tau0, out=P.l[self._sl_tau])
+        np.subtract(self._tau_hi, tau0, out=P.u[self._sl_tau])
+        # Joint limits (swing leg): stop inside the range within the horizon.
+        vi, qi, q_lo, q_hi, other = self._limits_by_swing[swing]
         hz = cfg.joint_limit_horizon_s
-        q_a, v_a = kin.q[self._act_q], v[a]
-        a_hi = 2.0 * (self._q_hi - q_a - v_a * hz) / hz**2
-        a_lo = 2.0 * (self._q_lo - q_a - v_a * hz) / hz**2
+        c = 2.0 / (hz * hz)
         rec = cfg.joint_limit_max_recovery
-        sw = self._act_side[swing]
-        P.ub[a] = np.where(sw, np.maximum(a_hi, -rec), np.inf)
-        P.lb[a] = np.where(sw, np.minimum(a_lo, rec), -np.inf)
-        fmax, mu = cfg.max_normal_force_N, cfg.friction_mu
-        P.lb[self._fz_st] = cfg.min_normal_force_N
-        P.ub[self._fz_st] = fmax
-        P.lb[self._ft_st] = -mu * fmax
-        P.ub[self._ft_st] = mu * fmax
+        qs, vs = kin.q[qi], v[vi]
+        P.ub[vi] = np.maximum(c * (q_hi - qs - vs * hz), -rec)
+        P.lb[vi] = np.minimum(c * (q_lo - qs - vs * hz), rec)
+        P.ub[other] = np.inf
+        P.lb[other] = -np.inf
+        # Swing force box: w times the unit box (the ramp).
         w = self.swing_force_weight(target)
         self._last_force_weight = w
-        P.lb[self._fz_sw] = 0.0
-        P.ub[self._fz_sw] = w * fmax
-        P.lb[self._ft_sw] = -mu * w * fmax
-        P.ub[self._ft_sw] = mu * w * fmax
-        # Cost.
+        np.multiply(self._sw_ub_unit, w, out=P.ub[L.sl_f_sw])
+        np.multiply(self._sw_lb_unit, w, out=P.lb[L.sl_f_sw])
+        # Cost: constant Hessian part + varying tasks + torque regularisation.
         H, g = P.H, P.g
-        H.fill(0.0)
+        np.copyto(H, self._H0)
         g.fill(0.0)
-        sv = L.sl_vdot
-        for task in self.tasks:
+        for task in self._varying_tasks:
             J = task.jacobian(kin, target)
-            r = task.drift(kin, target) - task.desired_acceleration(kin, target)
             WJ = J.T * task.gains.weight
             H[sv, sv] += WJ @ J
-            g[sv] += WJ @ r
-        idx = np.arange(nv)
-        H[idx, idx] += cfg.reg_vdot
-        fi = np.arange(L.sl_f_st.start, L.sl_f_sw.stop)
-        H[fi, fi] += cfg.reg_force
-        if L.n_lambda:
-            li = np.arange(L.sl_lambda.start, L.sl_lambda.stop)
-            H[li, li] += cfg.reg_coupling
+            g[sv] += WJ @ (task.drift(kin, target) - task.desired_acceleration(kin, target))
+        for task in self._constant_tasks:
+            J = task.jacobian(kin, target)
+            g[sv] += (J.T * task.gains.weight) @ (task.drift(kin, target) - task.desired_acceleration(kin, target))
         if cfg.reg_torque > 0:
             H += cfg.reg_torque * (T.T @ T)
-            g += cfg.reg_torque * (T.T @ self._tau0)
+            g += cfg.reg_torque * (T.T @ tau0)
         return P
 
     # ------------------------------------------------------- stance foot
@@ -594,20 +630,19 @@ class WholeBodyQP:
         stance foot's point forces about their mean point. No-op for ``w = 0``,
         planar robots or one-point feet."""
         w = self.config.stance_yaw_moment_weight
-        L = self._layout
-        if w <= 0 or self._planar or L.n_points != 2:
+        idx = self._yaw_idx
+        if w <= 0 or idx is None:
             return
         fids = self.robot.force_frame_ids[target.stance]
-        pts = [kin.frame_position(f) for f in fids]
-        mid = 0.5 * (pts[0] + pts[1])
-        a = np.zeros(L.n)
-        for p, r in enumerate(pts):
-            dx, dy = r[0] - mid[0], r[1] - mid[1]
-            c0 = L.sl_f_st.start + 3 * p
-            a[c0] = -dy
-            a[c0 + 1] = dx
-        idx = np.flatnonzero(a)
-        problem.H[np.ix_(idx, idx)] += w * np.outer(a[idx], a[idx])
+        p0, p1 = kin.frame_position(fids[0]), kin.frame_position(fids[1])
+        # M_z = sum_p (r_p - mid) x f_p . e_z; r_0 - mid = -(r_1 - mid) = (p0 - p1) / 2.
+        dx, dy = 0.5 * (p0[0] - p1[0]), 0.5 * (p0[1] - p1[1])
+        a = np.array([-dy, dx, dy, -dx])
+        if problem.H.flags.c_contiguous:
+            Hf = problem.H.reshape(-1)  # a view of H
+            Hf[self._yaw_flat] += w * np.multiply.outer(a, a).reshape(-1)
+        else:
+            problem.H[np.ix_(idx, idx)] += w * np.outer(a, a)
 
     # ------------------------------------------------------------ recovery
     def torques(self, x: np.ndarray) -> np.ndarray:
@@ -619,6 +654,10 @@ class WholeBodyQP:
         L = self._layout
         d = len(self._axes)
         return {"stance": x[L.sl_f_st].reshape(-1, d), "swing": x[L.sl_f_sw].reshape(-1, d)}
+
+    def normal_force_totals(self, x: np.ndarray) -> tuple[float, float]:
+        """Total normal (vertical) force of the stance and of the swing foot in a solution, N."""
+        return float(x[self._fz_st].sum()), float(x[self._fz_sw].sum())
 
     def generalized_contact_force(self, x: np.ndarray) -> np.ndarray:
         """``J_f^T f + G^T lambda`` (nv,) of a solution of the last built problem (for checks)."""

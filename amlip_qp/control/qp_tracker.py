@@ -164,14 +164,14 @@ class QPTracker(Tracker):
 
     def _finish(self, kin, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
         tau = self.builder.torques(sol.x)
-        if not np.all(np.isfinite(tau)):
+        if not math.isfinite(tau.sum()):
             return self._fallback(kin, "non-finite torques", info)
         self.last_solution = sol.x
         if self.record:
             self.recorded.append((problem.copy(), sol.x.copy()))
         self._tau_prev[:] = tau
         self._fail_streak = 0
-        forces = self.builder.forces(sol.x)
+        stance_fz, swing_fz = self.builder.normal_force_totals(sol.x)
         info.update(
             qp_ok=1.0,
             build_us=(t1 - t0) * 1e-3,
@@ -181,8 +181,8 @@ class QPTracker(Tracker):
             cold_retries=self.cold_retries,
             relaxed_solves=self.relaxed_solves,
             relaxed=float(relaxed),
-            stance_fz_N=float(forces["stance"][:, -1].sum()),
-            swing_fz_N=float(forces["swing"][:, -1].sum()),
+            stance_fz_N=stance_fz,
+            swing_fz_N=swing_fz,
             swing_force_weight=self.builder._last_force_weight,
         )
         if not math.isfinite(info["stance_fz_N"]):

@@ -70,6 +70,9 @@ class Task(abc.ABC):
     """
 
     name: str = "task"
+    #: True when :meth:`jacobian` does not depend on the state (a builder may
+    #: then precompute its Hessian block once).
+    constant_jacobian: bool = False
 
     def __init__(self, gains: Gains):
         self.gains = gains
@@ -162,6 +165,8 @@ class JointTask(Task):
         gains: Gains (kp may be 0 for a pure damping task).
     """
 
+    constant_jacobian = True
+
     def __init__(self, name: str, rows_v: np.ndarray, q_idx: dict[int, int], y_ref, gains: Gains):
         super().__init__(gains)
         self.name = name
@@ -178,6 +183,15 @@ class JointTask(Task):
 
     def _evaluate(self, kin, target):
         return self._Cc @ kin.q[self._cols_q], self._C, self._zero
+
+    def jacobian(self, kin=None, target=None) -> np.ndarray:
+        """The constant matrix ``C`` (n, nv); no state needed."""
+        return self._C
+
+    def desired_acceleration(self, kin, target) -> np.ndarray:
+        """``K_d (0 - C v) + K_p (y_ref - C q)`` (rad/s^2), without the task cache."""
+        y = self._Cc @ kin.q[self._cols_q]
+        return self.gains.kp * (self._y_ref - y) - self.gains.kd * (self._Cc @ kin.v[self._cols_v])
 
     def reference(self, kin, target):
         return self._y_ref, self._zero, self._zero

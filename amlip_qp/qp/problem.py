@@ -78,15 +78,14 @@ class QPProblem:
 
     def validate(self) -> None:
         """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
-        n = self.n
-        shapes = {
-            "H": (n, n), "g": (n,), "A": (self.n_eq, n), "b": (self.n_eq,), "C": (self.n_in, n),
-            "l": (self.n_in,), "u": (self.n_in,), "lb": (n,), "ub": (n,),
-        }  # fmt: skip
-        for name, shape in shapes.items():
-            value = getattr(self, name)
-            if value.shape != shape:
-                raise QPError(f"QP field {name} has shape {value.shape}, expected {shape}", problem=self)
+        n, n_eq, n_in = self.n, self.n_eq, self.n_in
+        got = (self.H.shape, self.g.shape, self.A.shape, self.b.shape, self.C.shape,
+               self.l.shape, self.u.shape, self.lb.shape, self.ub.shape)  # fmt: skip
+        expected = ((n, n), (n,), (n_eq, n), (n_eq,), (n_in, n), (n_in,), (n_in,), (n,), (n,))
+        if got != expected:
+            for name, shape, want in zip(("H", "g", "A", "b", "C", "l", "u", "lb", "ub"), got, expected):
+                if shape != want:
+                    raise QPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
         # Fast path, once per control tick: NaN and inf propagate through a sum.
         total = float(self.H.sum() + self.g.sum() + self.A.sum() + self.b.sum() + self.C.sum())
         if not math.isfinite(total):
@@ -96,7 +95,7 @@ class QPProblem:
                         f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self
                     )
         # Bounds may be +-inf, but never NaN; a crossed pair is infeasible by construction.
-        if not (np.all(self.l <= self.u) and np.all(self.lb <= self.ub)):
+        if not ((self.l <= self.u).all() and (self.lb <= self.ub).all()):
             for name in ("l", "u", "lb", "ub"):
                 if np.any(np.isnan(getattr(self, name))):
                     raise QPError(f"QP bound {name} contains NaN", problem=self)

@@ -9,6 +9,7 @@ foot keeps its force variables, bounded to zero).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -137,7 +138,8 @@ class ProxQPSolver:
         info = self._qp.results.info
         status = info.status
         x = self._qp.results.x
-        if status not in _OK or not np.all(np.isfinite(x)):
+        # A sum of finite numbers is finite (NaN and inf propagate).
+        if status not in _OK or not math.isfinite(x.sum()):
             name = getattr(status, "name", str(status))
             # Do not warm-start the next tick from a failed iterate.
             self.reset()
