@@ -125,3 +125,19 @@ def test_joint_tasks_have_a_constant_jacobian_and_the_pd_law(robot):
         y, (y_d, yd_d, ydd_d) = task.value(kin, target), task.reference(kin, target)
         expected = ydd_d + task.gains.kd * (yd_d - J @ v) + task.gains.kp * (y_d - y)
         assert np.allclose(task.desired_acceleration(kin, target), expected, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_least_squares_terms_are_jacobian_and_drift_minus_desired(robot, stance):
+    q, v = _state(robot, 6)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    rng = np.random.default_rng(2)
+    for task in _tasks(robot):
+        n = task.size
+        target = TrackingTarget(stance, 0.3, 0.2, *rng.normal(size=(3, n)))
+        J, r = task.least_squares(kin, target)
+        assert np.array_equal(J, task.jacobian(kin, target))
+        expected = task.drift(kin, target) - task.desired_acceleration(kin, target)
+        assert np.allclose(r, expected, rtol=1e-12, atol=1e-12), task.name
+        assert r.shape == (n,)

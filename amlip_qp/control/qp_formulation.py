@@ -268,6 +268,8 @@ class WholeBodyQP:
         nv = robot.nv
         self._planar = bool(robot.is_planar)
         self._axes = np.array([0, 2]) if self._planar else np.array([0, 1, 2])
+        #: The same as an index that avoids a fancy-indexing copy in 3-D.
+        self._axes_index = self._axes if self._planar else slice(0, 3)
         n_points = {len(robot.force_frame_ids[s]) for s in robot.foot_sides}
         if len(n_points) != 1 or n_points == {0}:
             raise InputError("both feet need the same (nonzero) number of force points")
@@ -409,7 +411,8 @@ class WholeBodyQP:
                 H0[L.sl_vdot, L.sl_vdot] += (J.T * task.gains.weight) @ J
         self._H0 = H0
         self._varying_tasks = [t for t in self.tasks if not t.constant_jacobian]
-        self._constant_tasks = [t for t in self.tasks if t.constant_jacobian]
+        #: (task, W J^T) of the constant-Jacobian tasks.
+        self._constant_tasks = [(t, t.jacobian(None, None).T * t.gains.weight) for t in self.tasks if t.constant_jacobian]
         # Yaw moment of the stance foot: the nonzero entries of its row.
         self._yaw_idx = None
         if not self._planar and k == 2:
@@ -485,11 +488,11 @@ class WholeBodyQP:
     # ------------------------------------------------------------------ build
     def _force_jacobians(self, kin, side: str, rows: slice):
         """Fill the stacked force-point Jacobian rows of one foot; return the per-point (3, nv) list."""
-        d = len(self._axes)
+        d, axes = len(self._axes), self._axes_index
         jacs = []
         for p, fid in enumerate(self.robot.force_frame_ids[side]):
             J = kin.frame_jacobian(fid)
-            self._Jf[rows.start + d * p : rows.start + d * (p + 1)] = J[self._axes]
+            self._Jf[rows.start + d * p : rows.start + d * (p + 1)] = J[axes]
             jacs.append(J)
         return jacs
 
@@ -588,13 +591,12 @@ class WholeBodyQP:
         np.copyto(H, self._H0)
         g.fill(0.0)
         for task in self._varying_tasks:
-            J = task.jacobian(kin, target)
+            J, r = task.least_squares(kin, target)
             WJ = J.T * task.gains.weight
             H[sv, sv] += WJ @ J
-            g[sv] += WJ @ (task.drift(kin, target) - task.desired_acceleration(kin, target))
-        for task in self._constant_tasks:
-            J = task.jacobian(kin, target)
-            g[sv] += (J.T * task.gains.weight) @ (task.drift(kin, target) - task.desired_acceleration(kin, target))
+            g[sv] += WJ @ r
+        for task, WJ in self._constant_tasks:
+            g[sv] += WJ @ task.least_squares(kin, target)[1]
         if cfg.reg_torque > 0:
             H += cfg.reg_torque * (T.T @ T)
             g += cfg.reg_torque * (T.T @ tau0)

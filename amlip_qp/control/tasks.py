@@ -128,6 +128,13 @@ class Task(abc.ABC):
         y_d, yd_d, ydd_d = self.reference(kin, target)
         return ydd_d + self.gains.kd * (yd_d - J @ kin.v) + self.gains.kp * (y_d - y)
 
+    def least_squares(self, kin, target) -> tuple[np.ndarray, np.ndarray]:
+        """``(J, r)`` of the task's cost ``||W^(1/2) (J vdot + r)||^2``, with
+        ``r = Jdot v - ydd_des`` (task unit / s^2), from one evaluation."""
+        y, J, jdv = self._terms(kin, target)
+        y_d, yd_d, ydd_d = self.reference(kin, target)
+        return J, jdv - ydd_d - self.gains.kd * (yd_d - J @ kin.v) - self.gains.kp * (y_d - y)
+
 
 class OutputTask(Task):
     """All outputs ``h_0(q)`` of the robot (docs/ARCHITECTURE.md) in one task.
@@ -192,6 +199,10 @@ class JointTask(Task):
         """``K_d (0 - C v) + K_p (y_ref - C q)`` (rad/s^2), without the task cache."""
         y = self._Cc @ kin.q[self._cols_q]
         return self.gains.kp * (self._y_ref - y) - self.gains.kd * (self._Cc @ kin.v[self._cols_v])
+
+    def least_squares(self, kin, target) -> tuple[np.ndarray, np.ndarray]:
+        """``(C, -ydd_des)``: the drift of a linear task is zero."""
+        return self._C, -self.desired_acceleration(kin, target)
 
     def reference(self, kin, target):
         return self._y_ref, self._zero, self._zero
