@@ -38,10 +38,13 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
         scenario: A name of :data:`amlip_qp.sim.scenarios.SCENARIOS`.
         t_skip_s: Walking time to skip before recording starts (start-up), s.
 
+    The problems are copied by a harness callback after each timed tick, so
+    the tick times do not include the recording.
+
     Returns:
-        ``(problems, tick_time_us, fell)``: the recorded problems, the
-        controller tick wall times of the recorded ticks (µs), and whether the
-        robot fell.
+        ``(problems, tick_time_us, fell)``: the problems of the ticks solved
+        after ``t_skip_s``, the controller tick wall times of those ticks (µs),
+        and whether the robot fell.
     """
     from amlip_qp.control.controller import WalkingController
     from amlip_qp.control.qp_tracker import QPTracker
@@ -55,12 +58,21 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
     sc = get_scenario(scenario)
     robot = load_robot(sc.robot)
     kin = RobotKinematics(robot)
-    tracker = QPTracker(robot, record=True)
+    tracker = QPTracker(robot)
     ctrl = WalkingController(robot, tracker, kin)
     duration = t_skip_s + n_ticks * ctrl.dt_s
-    result = Simulation(robot, ctrl, sc.command).run(duration)
+    problems: list[QPProblem] = []
+    seen = {"x": None}
+
+    def keep(t_s, data) -> None:
+        # After the timed controller tick: copy the problem it solved.
+        x = tracker.last_solution
+        if t_s > t_skip_s + 1e-9 and x is not None and x is not seen["x"] and tracker.last_problem is not None:
+            problems.append(tracker.last_problem.copy())
+        seen["x"] = x
+
+    result = Simulation(robot, ctrl, sc.command).run(duration, on_tick=keep)
     skip = int(round(t_skip_s / ctrl.dt_s))
-    problems = [p for p, x in tracker.recorded[skip:] if np.all(np.isfinite(x))]
     return problems, result.tick_time_us[skip:], result.fell
 
 
