@@ -135,3 +135,46 @@ def test_config_validation_and_defaults():
         QPConfig(output_kp=(1.0,), output_kd=(1.0, 2.0), output_weight=(1.0,))
     with pytest.raises(InputError):
         default_config(cassie).with_(min_normal_force_N=2000.0)
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_hip_yaw_feedback_aims_the_swing_foot_at_the_heading_whatever_the_pelvis_yaw(stance):
+    import math
+
+    import pinocchio as pin
+
+    from amlip_qp.control.qp_formulation import CASSIE_CONFIG
+    from amlip_qp.robots import CASSIE_OUTPUTS
+
+    cassie = load_robot("cassie")
+    i_st, i_sw = CASSIE_OUTPUTS.index("stance_hip_yaw"), CASSIE_OUTPUTS.index("swing_hip_yaw")
+    q = cassie.q_stand.copy()
+    yaw = 0.3  # pelvis yawed 0.3 rad off the heading
+    q[3:7] = pin.Quaternion(pin.utils.rpyToMatrix(0.0, 0.0, yaw)).coeffs()  # xyzw
+    v = np.zeros(cassie.nv)
+    v[5] = 0.5  # yaw rate about the (level) base z, rad/s
+    kin = RobotKinematics(cassie)
+    kin.update(q, v)
+    n = len(CASSIE_OUTPUTS)
+    h_d, dh_d = np.zeros(n), np.zeros(n)
+    h_d[i_st], dh_d[i_st] = 0.05, 0.2
+    target = TrackingTarget(stance, 0.4, 0.1, h_d, dh_d, np.zeros(n))
+    k = 0.8
+    builder = WholeBodyQP(cassie, CASSIE_CONFIG.with_(hip_yaw_feedback=k))
+    out = builder.hip_yaw_feedback_target(kin, target)
+    e = yaw - (0.1 - 0.05)  # pelvis yaw minus its nominal D - h_d[stance_hip_yaw]
+    assert out.h_d[i_sw] == pytest.approx(-k * e, abs=1e-12)
+    assert out.dh_d[i_sw] == pytest.approx(-k * (0.5 + 0.2), abs=1e-12)
+    others = [i for i in range(n) if i != i_sw]
+    assert np.array_equal(out.h_d[others], h_d[others]) and np.array_equal(out.dh_d[others], dh_d[others])
+    assert np.array_equal(target.h_d, h_d), "the caller's target is not modified"
+    # The error wraps: a pelvis 2 pi further round is the same pelvis.
+    q[3:7] = pin.Quaternion(pin.utils.rpyToMatrix(0.0, 0.0, yaw - 2 * math.pi)).coeffs()
+    kin.update(q, v)
+    assert builder.hip_yaw_feedback_target(kin, target).h_d[i_sw] == pytest.approx(-k * e, abs=1e-9)
+    # Off by default in QPConfig, and for robots without hip-yaw outputs.
+    assert WholeBodyQP(cassie, CASSIE_CONFIG.with_(hip_yaw_feedback=0.0)).hip_yaw_feedback_target(kin, target) is target
+    rabbit = load_robot("rabbit")
+    kr = _kin(rabbit)
+    tr = _target(kr)
+    assert WholeBodyQP(rabbit, default_config(rabbit).with_(hip_yaw_feedback=1.0)).hip_yaw_feedback_target(kr, tr) is tr

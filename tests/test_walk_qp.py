@@ -6,8 +6,9 @@ CoM velocity over the last 3 s, in the heading frame. Durations are the
 scenarios' own where the issue fixes them (20 s for walking in place and for
 Rabbit); the others are shortened to what their check needs.
 
-Only the scenarios that pass reliably with the current tracker are here (see
-RUNS); the others are reported, with their measured numbers, in the hand-over.
+The same scenarios as the baseline tracker's acceptance (tests/test_walk_pbc.py),
+plus the pelvis yaw: the QP tracker's pelvis-yaw feedback
+(``QPConfig.hip_yaw_feedback``) keeps it on the heading.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ pytestmark = pytest.mark.slow
 #: key -> (scenario name, duration s or None for the scenario's own, seed, sensor noise)
 RUNS: dict[str, tuple[str, float | None, int, bool]] = {
     "cassie-in-place": ("cassie-in-place", None, 0, False),  # 20 s
+    "cassie-2.5mps": ("cassie-2.5mps", None, 0, False),  # 16 s: 2.5 m/s from 13 s
+    "cassie-ramp-2.1": ("cassie-ramp-2.1", None, 1, True),  # 15 s: 2.1 m/s from 10 s
     "rabbit-0.5mps": ("rabbit-0.5mps", None, 0, False),  # 20 s
     "rabbit-1mps": ("rabbit-1mps", None, 0, False),  # 20 s
     "cassie-turn-90": ("cassie-turn-90", None, 0, False),  # 12 s: 90 deg done at 8 s
@@ -97,6 +100,23 @@ def test_cassie_walks_in_place_20s_with_small_drift(results):
     _walked(r)
     assert r["duration_s"] == 20.0
     assert r["drift_m"] < 0.3, f"drift {r['drift_m']:.3f} m"
+    # Pelvis yaw stays on the (zero) heading: -62 deg in 20 s without the feedback.
+    assert abs(math.degrees(r["yaw_end_rad"])) < 10.0, f"pelvis yaw {math.degrees(r['yaw_end_rad']):.1f} deg"
+
+
+def test_cassie_ramps_to_2_1mps_and_holds_it_with_sensor_noise(results):
+    """0 -> 2.1 m/s over 10 s, held 5 s: the last 3 s average 2.1 m/s within the tolerance."""
+    r = results["cassie-ramp-2.1"]
+    _walked(r)
+    _speed_ok(r)
+
+
+def test_cassie_walks_at_2_5mps(results):
+    """0 -> 2.5 m/s over 1-13 s with T = 0.25 s steps, held 3 s."""
+    r = results["cassie-2.5mps"]
+    _walked(r)
+    assert r["duration_s"] == 16.0
+    _speed_ok(r)
 
 
 def test_cassie_walks_at_1mps_with_sensor_noise(results):
@@ -131,6 +151,10 @@ def test_cassie_turns_90_degrees_within_10s_at_walking_speed(results):
     assert abs(err) < math.radians(5.0), f"travel {math.degrees(r['travel_dir_rad']):.1f} deg"
     assert 0.5 <= r["world_speed_mps"] <= 1.0
     _speed_ok(r)
+    # The pelvis turned with the heading (118 deg for a 92 deg heading without
+    # the pelvis-yaw feedback).
+    yaw_err = math.degrees(r["yaw_end_rad"] - r["heading_end_rad"])
+    assert abs(yaw_err) < 10.0, f"pelvis yaw {yaw_err:.1f} deg off the heading"
 
 
 def test_cassie_survives_a_100N_sagittal_push_at_1mps_with_sensor_noise(results):

@@ -72,6 +72,7 @@ import numpy as np
 from amlip_qp.control.tasks import Gains, JointTask, OutputTask
 from amlip_qp.exceptions import InputError
 from amlip_qp.qp.problem import QPProblem
+from amlip_qp.robots.outputs import OutputMap
 
 
 @dataclass(frozen=True)
@@ -127,6 +128,20 @@ class QPConfig:
             motions that need less of it (the pelvis yields in stance hip yaw).
             0 disables. Added by :meth:`WholeBodyQP.add_stance_yaw_moment_cost`
             after :meth:`WholeBodyQP.build`. 3-D feet with two force points only.
+        hip_yaw_feedback: Gain (dimensionless, 0 disables) of the pelvis-yaw
+            feedback on the swing hip-yaw reference (beyond the paper, whose
+            hip-yaw references are open-loop straight lines). Both hip-yaw
+            outputs are joint angles, so yaw the stance foot creeps in the plant
+            carries over to the pelvis and then to every later step. With the
+            feedback the swing hip-yaw reference becomes
+            ``h_d[swing_hip_yaw] - k e_psi``, with ``e_psi = wrap(psi_pelvis -
+            (D_k - h_d[stance_hip_yaw]))`` the pelvis yaw error against its
+            nominal value, and its rate reference
+            ``dh_d[swing_hip_yaw] - k (psidot_pelvis + dh_d[stance_hip_yaw])``:
+            the swing foot lands along ``D_{k+1}`` (world yaw) whatever the
+            pelvis yaw error, and the next stance's hip-yaw line returns the
+            pelvis to the heading. Applied by :meth:`WholeBodyQP.build`;
+            robots without hip-yaw outputs ignore it.
     """
 
     output_kp: tuple[float, ...]
@@ -155,6 +170,7 @@ class QPConfig:
     reg_coupling: float = 1e-6
     stance_foot_torque_max_Nm: float = math.inf
     stance_yaw_moment_weight: float = 0.0
+    hip_yaw_feedback: float = 0.0
 
     def __post_init__(self):
         if self.rigid_springs not in ("swing", "all", "none"):
@@ -199,6 +215,19 @@ CASSIE_CONFIG = QPConfig(
     # that ramp: weight 1 held 2.04 m/s once and fell once (14.88 s); weight 3
     # held it in 3 of 3 runs (2.07, 2.06, 2.00 m/s); weight 10 fell (12.35 s).
     stance_yaw_moment_weight=3.0,
+    # The stance leg's spring-rate damping. At the default 40 1/s the stance
+    # foot bounced at ~17 Hz (plant normal force swinging 0-1000 N while the QP
+    # planned ~300 N; toe or heel unloaded in 18% of mid-stance ticks over
+    # 0-5 s at 2.5 m/s). Unloaded fraction against this gain: 0 -> 0.57,
+    # 40 -> 0.18, 80 -> 0.03, 150 -> 0.005, 300 -> 0.03, 600 -> 0.20.
+    stance_coupling_kd=150.0,
+    # The planned forces sat on the 0.7 pyramid in 80-90% of the ticks at
+    # 2.5 m/s; 0.9 is still inside the plant's 1.0.
+    friction_mu=0.9,
+    # Pelvis-yaw feedback (see QPConfig): without it the pelvis yawed -62 deg
+    # in 20 s walking in place and the 2.5 m/s run fell at 14.2 s after
+    # yawing ~90 deg; with it, 1.5 deg in place and no fall.
+    hip_yaw_feedback=1.0,
 )
 #: Rabbit outputs: torso pitch, com z over stance, com x/z over swing.
 RABBIT_CONFIG = QPConfig(
@@ -413,6 +442,11 @@ class WholeBodyQP:
         self._varying_tasks = [t for t in self.tasks if not t.constant_jacobian]
         #: (task, W J^T) of the constant-Jacobian tasks.
         self._constant_tasks = [(t, t.jacobian(None, None).T * t.gains.weight) for t in self.tasks if t.constant_jacobian]
+        # Hip-yaw outputs for the pelvis-yaw feedback (None: not this robot).
+        names = OutputMap(robot).names
+        self._hip_yaw = None
+        if config.hip_yaw_feedback > 0 and "stance_hip_yaw" in names and "swing_hip_yaw" in names:
+            self._hip_yaw = (names.index("stance_hip_yaw"), names.index("swing_hip_yaw"))
         # Yaw moment of the stance foot: the nonzero entries of its row.
         self._yaw_idx = None
         if not self._planar and k == 2:
@@ -513,6 +547,8 @@ class WholeBodyQP:
         Hessian part, zero blocks) are written once in the constructor.
         """
         cfg, L, P = self.config, self._layout, self.problem
+        if self._hip_yaw is not None:
+            target = self.hip_yaw_feedback_target(kin, target)
         stance = target.stance
         swing = "right" if stance == "left" else "left"
         nv, k = L.nv, L.n_points
@@ -601,6 +637,24 @@ class WholeBodyQP:
             H += cfg.reg_torque * (T.T @ T)
             g += cfg.reg_torque * (T.T @ tau0)
         return P
+
+    def hip_yaw_feedback_target(self, kin, target):
+        """``target`` with the pelvis-yaw feedback on the swing hip-yaw
+        reference (``config.hip_yaw_feedback``, see :class:`QPConfig`); the
+        same object when the feedback is off or the robot has no hip-yaw outputs."""
+        if self._hip_yaw is None:
+            return target
+        i_st, i_sw = self._hip_yaw
+        k = self.config.hip_yaw_feedback
+        R = kin.base_rotation()
+        psi = math.atan2(R[1, 0], R[0, 0])
+        psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
+        e = psi - (target.heading_rad - target.h_d[i_st])
+        e = (e + math.pi) % (2.0 * math.pi) - math.pi
+        h_d, dh_d = target.h_d.copy(), target.dh_d.copy()
+        h_d[i_sw] -= k * e
+        dh_d[i_sw] -= k * (psi_dot + target.dh_d[i_st])
+        return replace(target, h_d=h_d, dh_d=dh_d)
 
     # ------------------------------------------------------- stance foot
     def _stance_foot_index(self, stance: str):
