@@ -55,16 +55,18 @@ def test_recorded_solutions_satisfy_the_constraints(walk):
     _, tracker, _ = walk
     for problem, x in tracker.recorded[::10]:
         res = problem.residuals(x)
-        assert res["eq"] < 1e-3 and res["in"] < 1e-3 and res["box"] < 1e-3
+        tol = tracker.solver.eps_abs  # ProxQP's absolute primal tolerance
+        assert res["eq"] <= tol and res["in"] <= tol and res["box"] <= tol
 
 
 def test_swing_forces_are_zero_while_the_foot_is_in_the_air(walk):
     _, tracker, result = walk
     phase = result.log["phase"]
+    tol = tracker.solver.eps_abs  # the bound holds to the solver's tolerance, N
     seen = 0
     for k, (problem, x) in enumerate(tracker.recorded):
         if 0.2 < phase[k] < 0.8:
-            assert np.max(np.abs(x[problem.variables["forces_swing"]])) < 1e-4
+            assert np.max(np.abs(x[problem.variables["forces_swing"]])) <= tol
             seen += 1
     assert seen > 50
 
