@@ -101,3 +101,25 @@ def test_defaults_are_documented_values():
 def test_bad_input_raises_input_error(call, match):
     with pytest.raises(InputError, match=match):
         call()
+
+
+def test_step_is_predict_then_correct_bit_for_bit():
+    rng = np.random.default_rng(3)
+    a, b = kalman.MomentumFilter1D(M, -1.0), kalman.MomentumFilter1D(M, -1.0)
+    for _ in range(500):
+        p, z = rng.normal(0.0, 0.2), rng.normal(0.0, 5.0)
+        b.predict(p, DT)
+        assert a.step(p, z, DT) == b.correct(z)
+        assert (a.L, a.P) == (b.L, b.P)
+
+
+def test_step_with_bad_input_fails_like_predict_and_correct():
+    f = kalman.MomentumFilter1D(M, L0_Nms=1.0)
+    with pytest.raises(InputError, match="finite p_m"):
+        f.step(np.nan, 0.0, DT)
+    with pytest.raises(InputError, match="dT_s > 0"):
+        f.step(0.1, 0.0, -DT)
+    assert f.L == 1.0  # predict refused before changing the state
+    with pytest.raises(InputError, match="L_meas_Nms must be finite"):
+        f.step(0.1, np.inf, DT)
+    assert f.L == 1.0 + M * G * 0.1 * DT  # as predict() then correct(): the prediction stays

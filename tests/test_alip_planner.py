@@ -230,3 +230,39 @@ def test_bad_planner_use_raises_input_error():
         p.update(est(stance="right"), cmd())
     with pytest.raises(InputError, match="needs a StateEstimate and a Command"):
         p.update(est(), {"vx_mps": 1.0})
+
+
+def test_state_estimate_converts_other_inputs_to_float64():
+    """Lists, integer and float32 arrays take the checked conversion path; float64 arrays are kept."""
+    p = np.array([0.03, -0.1, H])
+    e = est(p_st_m=p, L_Nms=np.array([1, 12, 0]), com_m=np.array([1.0, 0.5, H], dtype=np.float32))
+    assert e.p_st_m is p
+    for a in (e.L_Nms, e.com_m):
+        assert isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (3,)
+    np.testing.assert_array_equal(e.L_Nms, [1.0, 12.0, 0.0])
+    with pytest.raises(InputError, match=r"com_m must have shape \(3,\)"):
+        est(com_m=np.zeros(4))
+    with pytest.raises(InputError, match=r"NaN or inf in \['L_Nms'\]"):
+        est(L_Nms=np.array([0.0, np.nan, 0.0]))
+
+
+def test_outputs_are_independent_of_the_kernels_shared_buffers():
+    """The generated kernels return one shared output buffer; each PlannerOutput owns its data."""
+    shared8, shared27 = np.zeros(8), np.zeros(27)
+
+    def plan_fn(u):
+        shared8[:] = kernels.alip_plan(u)
+        return shared8
+
+    def reference_fn(u):
+        shared27[:] = kernels.swing_reference(u)
+        return shared27
+
+    p = started(plan_fn=plan_fn, reference_fn=reference_fn)
+    first = p.update(est(), cmd())
+    fields = ("L_hat_Nms", "p_hat_m", "L_des_Nms", "p_sw_des_world_m", "h_d", "dh_d", "ddh_d")
+    kept = {k: np.array(getattr(first, k)) for k in fields}
+    p.update(est(t_in_step_s=0.2, L_Nms=[-3.0, 5.0, 0.0]), cmd(vx_mps=-0.4))
+    for k, value in kept.items():
+        np.testing.assert_array_equal(getattr(first, k), value)
+        assert not np.shares_memory(getattr(first, k), shared8) and not np.shares_memory(getattr(first, k), shared27)

@@ -100,3 +100,29 @@ def test_bad_initial_stance_and_backend_are_typed_errors(rabbit):
         WalkingController(rabbit, _NaNTracker(4), kin, initial_stance="middle")
     with pytest.raises(InputError, match="planner_backend"):
         WalkingController(rabbit, _NaNTracker(4), kin, planner_backend="fortran")
+
+
+def test_finite_but_huge_torques_are_saturated_not_replaced(rabbit):
+    """Torques whose sum overflows are still finite: saturated, no fallback."""
+
+    class _Enormous(_NaNTracker):
+        def compute(self, kin, target):
+            return TrackerResult(tau_Nm=np.full(self.nu, 1e308))
+
+    ctrl, tick = _tick(rabbit, _Enormous(rabbit.nu), np.zeros(rabbit.nv))
+    assert ctrl.fallback_ticks == 0 and tick.tracker_ok
+    np.testing.assert_allclose(tick.tau_Nm, rabbit.actuated.torque_limit_Nm[:, 1])
+
+
+def test_speed_correction_is_added_to_the_command_and_cached(rabbit):
+    ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), RobotKinematics(rabbit), planner_backend="numpy")
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5)
+    assert ctrl._corrected_command(cmd) is cmd  # no correction: the command itself
+    ctrl._correction[:] = (0.1, -0.05)
+    c1 = ctrl._corrected_command(cmd)
+    assert (c1.vx_mps, c1.vy_mps) == (0.5 + 0.1, 0.0 - 0.05) and c1.step_time_s == cmd.step_time_s
+    assert ctrl._corrected_command(cmd) is c1  # same command and correction: reused
+    ctrl._correction[0] = 0.2
+    assert ctrl._corrected_command(cmd).vx_mps == 0.5 + 0.2
+    other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
+    assert ctrl._corrected_command(other).vx_mps == 0.7 + 0.2

@@ -422,3 +422,152 @@ def _jdot_v6_at(robot, q, v, fid):
     k = RobotKinematics(robot)
     k.update(q, v)
     return k.frame_jdot_v6(fid)
+
+
+# ------------------------------------------------------- cached reads and views
+def _fresh_reads(kin, fid):
+    """The quantities the getters serve, read from Pinocchio's data afresh."""
+    d = kin.data
+    return {
+        "position": d.oMf[fid].translation.copy(),
+        "rotation": d.oMf[fid].rotation.copy(),
+        "com": d.com[0].copy(),
+        "vcom": d.vcom[0].copy(),
+        "acom": d.acom[0].copy(),
+        "hg": d.hg.vector.copy(),
+    }
+
+
+def test_getters_follow_every_update_exactly(robot):
+    """Frame placements, the CoM and the momentum are read through views made once:
+    after many updates (full and light), every getter equals a fresh read of the data."""
+    kin = RobotKinematics(robot)
+    fid = robot.contact_frame_ids["left"]
+    for k, (_, _, q, v) in enumerate(random_states(robot, 6, seed=31)):
+        if k % 3 == 2:
+            kin.update_positions(q)
+        else:
+            kin.update(q, v)
+        fresh = _fresh_reads(kin, fid)
+        np.testing.assert_array_equal(kin.frame_position(fid), fresh["position"])
+        np.testing.assert_array_equal(kin.frame_rotation(fid), fresh["rotation"])
+        np.testing.assert_array_equal(kin.com(), fresh["com"])
+        if kin.positions_only:
+            continue
+        np.testing.assert_array_equal(kin.com_velocity(), fresh["vcom"])
+        np.testing.assert_array_equal(kin.com_jdot_v(), fresh["acom"])
+        lin, ang = kin.centroidal_momentum()
+        np.testing.assert_array_equal(np.concatenate([lin, ang]), fresh["hg"])
+
+
+def test_getters_return_copies_that_later_updates_leave_alone(robot):
+    kin = RobotKinematics(robot)
+    states = list(random_states(robot, 2, seed=32))
+    fid = robot.contact_frame_ids["right"]
+    kin.update(states[0][2], states[0][3])
+    held = [kin.frame_position(fid), kin.com(), kin.com_velocity(), kin.frame_rotation(fid), kin.frame_jdot_v6(fid)]
+    snapshot = [h.copy() for h in held]
+    import gc
+
+    gc.collect()
+    kin.update(states[1][2], states[1][3])
+    kin.frame_jdot_v6(fid)
+    for h, s in zip(held, snapshot):
+        np.testing.assert_array_equal(h, s)
+    held[0][:] = 123.0  # writing into a returned copy does not reach the kinematics
+    assert not np.any(kin.frame_position(fid) == 123.0)
+
+
+def test_drifts_equal_a_separate_zero_acceleration_pass(robot):
+    """update() relies on computeAllTerms leaving data.a at vdot = 0: the drifts are
+    bit for bit those of an explicit forwardKinematics(q, v, 0) pass."""
+    kin = RobotKinematics(robot)
+    m = robot.pin_model
+    ref = m.createData()
+    for _, _, q, v in random_states(robot, 5, seed=33):
+        kin.update(q, v)
+        pin.computeAllTerms(m, ref, q, v)
+        pin.forwardKinematics(m, ref, q, v, np.zeros(m.nv))
+        pin.updateFramePlacements(m, ref)
+        pin.centerOfMass(m, ref, pin.KinematicLevel.ACCELERATION, False)
+        for fid in [robot.base_frame_id, *robot.contact_frame_ids.values()]:
+            a = pin.getFrameClassicalAcceleration(m, ref, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_array_equal(kin.frame_jdot_v6(fid), np.concatenate([a.linear, a.angular]))
+            np.testing.assert_array_equal(kin.frame_position(fid), ref.oMf[fid].translation)
+        np.testing.assert_array_equal(kin.com_jdot_v(), ref.acom[0])
+        np.testing.assert_array_equal(kin.com(), ref.com[0])
+
+
+def test_replacing_data_rebinds_the_views():
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    kin.data = robot.pin_model.createData()
+    q = robot.q_stand.copy()
+    q[0] += 0.25
+    kin.update(q, np.zeros(robot.nv))
+    fid = robot.contact_frame_ids["left"]
+    np.testing.assert_array_equal(kin.frame_position(fid), kin.data.oMf[fid].translation)
+    np.testing.assert_array_equal(kin.com(), kin.data.com[0])
+
+
+def test_huge_finite_states_pass_the_finiteness_test():
+    """The cheap per-tick test (a sum) may overflow for huge finite values; the exact
+    check then decides, so only NaN and inf are refused."""
+    robot = load_robot("rabbit")
+    kin = RobotKinematics(robot)
+    v = np.zeros(robot.nv)
+    v[:2] = 1e308
+    kin.update(robot.q_stand, v)  # sum overflows to inf, entries are finite
+    for bad in (np.inf, -np.inf, np.nan):
+        v[3] = bad
+        with pytest.raises(InputError, match="NaN or inf"):
+            kin.update(robot.q_stand, v)
+
+
+def _passive_reference(robot, q, v):
+    """passive_forces written plainly: damping, joint springs, tendon springs/dampers."""
+    from amlip_qp.robots.passive import tendon_force
+
+    sm = robot.state_map
+    f = -robot.dof_damping * v
+    pq, pv = sm.scalar_pin_q, sm.scalar_pin_v
+    f[pv] -= robot.dof_stiffness[pv] * (q[pq] - robot.dof_springref[pv])
+    for c in robot.couplings:
+        force = tendon_force(c, float(c.coefficients @ q[c.pin_q_idx]), float(c.coefficients @ v[c.pin_v_idx]))
+        f[c.pin_v_idx] += c.coefficients * force
+    return f
+
+
+def test_precomputed_passive_forces_equal_the_plain_formula():
+    """PassiveForces (kept by RobotKinematics) is bit for bit the plain formula, also with
+    general tendon coefficients, a dead band and non-contiguous joint indices."""
+    import dataclasses
+
+    from amlip_qp.robots import passive
+
+    rng = np.random.default_rng(34)
+    for name in ROBOTS:
+        robot = load_robot(name)
+        variants = [robot]
+        if robot.couplings:
+            variants.append(
+                dataclasses.replace(
+                    robot,
+                    couplings=tuple(
+                        dataclasses.replace(
+                            c, coefficients=rng.normal(size=c.coefficients.size), springlength=(-0.1, 0.2)
+                        )
+                        for c in robot.couplings
+                    ),
+                )
+            )
+        for r in variants:
+            forces = passive.PassiveForces(r)
+            for _, _, q, v in random_states(r, 5, seed=35):
+                expected = _passive_reference(r, q, v)
+                np.testing.assert_array_equal(forces(q, v), expected)
+                np.testing.assert_array_equal(passive.passive_forces(r, q, v), expected)
+    assert passive._index(np.arange(3, 7)) == slice(3, 7)
+    idx = np.array([1, 3])
+    assert passive._index(idx) is idx

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -116,3 +118,55 @@ def test_bad_arguments():
         kin.outputs("both")
     with pytest.raises(InputError, match="heading_rad must be finite"):
         kin.outputs("left", float("nan"))
+
+
+def test_results_are_new_arrays_that_later_evaluations_leave_alone(robot):
+    """evaluate() works in scratch buffers; what it returns is never overwritten."""
+    rng = np.random.default_rng(22)
+    kin, omap = RobotKinematics(robot), OutputMap(robot)
+    kin.update(*random_state(robot, rng))
+    first = omap.evaluate(kin, "left", 0.3)
+    snapshot = [a.copy() for a in first]
+    kin.update(*random_state(robot, rng))
+    second = omap.evaluate(kin, "right", -1.0)
+    for a, s, b in zip(first, snapshot, second):
+        np.testing.assert_array_equal(a, s)
+        assert not np.shares_memory(a, b)
+
+
+def test_position_rows_are_the_plain_formulas_bit_for_bit(robot):
+    """The CoM-over-contact rows (values, Jacobian rows, drifts) equal the plain numpy
+    expressions exactly: the row-wise evaluation changes no arithmetic."""
+    rng = np.random.default_rng(23)
+    kin = RobotKinematics(robot)
+    names = OutputMap(robot).names
+    row = {n: names.index(n) for n in names}
+    for _ in range(3):
+        kin.update(*random_state(robot, rng))
+        D = float(rng.uniform(-np.pi, np.pi))
+        cD, sD = math.cos(D), math.sin(D)  # what evaluate uses
+        for st in robot.foot_sides:
+            sw = robot.other_side(st)
+            y, J, jdv = kin.outputs(st, D)
+            c, Jc, dc = kin.com(), kin.com_jacobian(), kin.com_jdot_v()
+            p_st, J_st, d_st = c - kin.contact_position(st), Jc - kin.contact_jacobian(st), dc - kin.contact_jdot_v(st)
+            p_sw, J_sw, d_sw = c - kin.contact_position(sw), Jc - kin.contact_jacobian(sw), dc - kin.contact_jdot_v(sw)
+            expect = {
+                "com_z_over_stance": (p_st[2], J_st[2], d_st[2]),
+                "com_x_over_swing": (
+                    cD * p_sw[0] + sD * p_sw[1],
+                    cD * J_sw[0] + sD * J_sw[1],
+                    cD * d_sw[0] + sD * d_sw[1],
+                ),
+                "com_z_over_swing": (p_sw[2], J_sw[2], d_sw[2]),
+            }
+            if "com_y_over_swing" in row:
+                expect["com_y_over_swing"] = (
+                    -sD * p_sw[0] + cD * p_sw[1],
+                    -sD * J_sw[0] + cD * J_sw[1],
+                    -sD * d_sw[0] + cD * d_sw[1],
+                )
+            for name, (value, jac_row, drift) in expect.items():
+                k = row[name]
+                assert y[k] == value and jdv[k] == drift
+                np.testing.assert_array_equal(J[k], jac_row)

@@ -115,3 +115,23 @@ def test_bad_states(robot):
         bad[3:7] = 0.0
         with pytest.raises(InputError, match="zero quaternion"):
             mj_to_pin(robot, bad, qvel)
+
+
+def test_finiteness_check_refuses_only_nan_and_inf(robot):
+    """The per-tick check sums first (cheap); a sum that overflows is checked exactly."""
+    qpos, qvel = robot.qpos_stand.copy(), np.zeros(robot.nv)
+    qvel[-2:] = 1e308  # finite, but the sum overflows
+    q, v = mj_to_pin(robot, qpos, qvel)
+    assert np.all(np.isfinite(v))
+    qvel[-1] = -np.inf
+    with pytest.raises(InputError, match=rf"qvel contains NaN or inf at indices \[{robot.nv - 1}\]"):
+        mj_to_pin(robot, qpos, qvel)
+
+
+def test_norm_is_numpys_bit_for_bit():
+    from amlip_qp.robots.state import _norm
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        x = rng.normal(size=4) * 10.0 ** rng.uniform(-5, 5)
+        assert _norm(x) == np.linalg.norm(x)

@@ -85,26 +85,12 @@ def pack_swing_reference_input(
         out: optional (11,) float array to fill in place (no allocation).
     """
     u = np.empty(len(kernels.SWING_REFERENCE_INPUTS)) if out is None else out
-    u[0] = s
-    u[1] = T_s
-    u[2] = H_m
-    u[3] = z_cl_m
+    h0, p = h0_start, p_sw_des_heading_m
+    # One slice assignment per call (a control-rate hot path), in the layout of the kernels module doc.
     if robot == "cassie":
-        u[4] = h0_start[2]
-        u[5] = h0_start[3]
-        u[6] = h0_start[5]
-        u[7] = h0_start[6]
-        u[8] = p_sw_des_heading_m[0]
-        u[9] = p_sw_des_heading_m[1]
-        u[10] = turn_rad
+        u[:] = (s, T_s, H_m, z_cl_m, h0[2], h0[3], h0[5], h0[6], p[0], p[1], turn_rad)
     else:
-        u[4] = 0.0
-        u[5] = 0.0
-        u[6] = h0_start[2]
-        u[7] = 0.0
-        u[8] = p_sw_des_heading_m[0]
-        u[9] = 0.0
-        u[10] = 0.0
+        u[:] = (s, T_s, H_m, z_cl_m, 0.0, 0.0, h0[2], 0.0, p[0], 0.0, 0.0)
     return u
 
 
@@ -148,5 +134,6 @@ def split_reference(robot: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     """Split a SWING_REFERENCE output (27,) into the robot's ``(h_d, dh_d, ddh_d)`` (new arrays)."""
     n = kernels.N_CASSIE_OUTPUTS
     if robot == "cassie":
-        return y[:n].copy(), y[n : 2 * n].copy(), y[2 * n :].copy()
+        y = y.copy()  # one copy (the kernels may return a shared buffer), three views of it
+        return y[:n], y[n : 2 * n], y[2 * n :]
     return y[_RABBIT_IDX], y[n + _RABBIT_IDX], y[2 * n + _RABBIT_IDX]

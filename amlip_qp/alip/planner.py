@@ -61,6 +61,9 @@ VZ_CLAMP_FRACTION = 0.5
 
 _SPEED_REFERENCES = ("mean", "end_of_step")
 
+_F64 = np.dtype(np.float64)
+_VECTOR3 = (3,)
+
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class Command:
@@ -131,21 +134,39 @@ class StateEstimate:
     def __post_init__(self):
         if self.stance not in ("left", "right"):
             raise InputError(f"StateEstimate.stance must be 'left' or 'right', got {self.stance!r}")
-        arrays = []
-        for name in ("p_st_m", "L_Nms", "com_m"):
-            a = getattr(self, name)
-            if not (isinstance(a, np.ndarray) and a.dtype == np.float64):
-                try:
-                    a = np.asarray(a, dtype=float)
-                except (TypeError, ValueError) as exc:
-                    raise InputError(f"StateEstimate.{name} must be 3 numbers, got {a!r}") from exc
-                object.__setattr__(self, name, a)
-            if a.shape != (3,):
-                raise InputError(f"StateEstimate.{name} must have shape (3,), got {a.shape}")
-            arrays.append(a)
+        # Built every control tick: a fast path for three float64 3-vectors,
+        # plain-float arithmetic, no numpy reductions.
+        p, L, c = self.p_st_m, self.L_Nms, self.com_m
+        if (
+            type(p) is np.ndarray
+            and type(L) is np.ndarray
+            and type(c) is np.ndarray
+            and p.dtype is _F64
+            and L.dtype is _F64
+            and c.dtype is _F64
+            and p.shape == L.shape == c.shape == _VECTOR3
+        ):
+            p0, p1, p2 = p.tolist()
+            L0, L1, L2 = L.tolist()
+            c0, c1, c2 = c.tolist()
+            total = p0 + p1 + p2 + (L0 + L1 + L2) + (c0 + c1 + c2)
+        else:
+            total = 0.0
+            for name in ("p_st_m", "L_Nms", "com_m"):
+                a = getattr(self, name)
+                if not (isinstance(a, np.ndarray) and a.dtype is _F64):
+                    try:
+                        a = np.asarray(a, dtype=float)
+                    except (TypeError, ValueError) as exc:
+                        raise InputError(f"StateEstimate.{name} must be 3 numbers, got {a!r}") from exc
+                    object.__setattr__(self, name, a)
+                if a.shape != _VECTOR3:
+                    raise InputError(f"StateEstimate.{name} must have shape (3,), got {a.shape}")
+                x0, x1, x2 = a.tolist()
+                total += x0 + x1 + x2
         # One cheap finiteness test: NaN and inf propagate through a sum.
         try:
-            total = float(arrays[0].sum() + arrays[1].sum() + arrays[2].sum() + self.v_z_mps + self.t_in_step_s)
+            total = float(np.float64(total) + self.v_z_mps + self.t_in_step_s)
         except (TypeError, ValueError) as exc:
             raise InputError(
                 f"StateEstimate.v_z_mps and t_in_step_s must be numbers, got {self.v_z_mps!r} and {self.t_in_step_s!r}"
@@ -385,55 +406,40 @@ class Planner:
         elif v_z < -vz_max:
             v_z = -vz_max
 
-        p_st = estimate.p_st_m
-        L = estimate.L_Nms
-        u = self._u_plan
-        u[0] = p_st[0]
-        u[3] = L[1]
-        u[4] = t_rem
-        u[5] = v_z
-        u[6] = command.vx_mps * factor
-        u[9] = 1.0 if self._stance == "right" else -1.0  # the next stance leg is the other one
-        u[10] = m
-        u[11] = H
-        u[12] = T
-        u[14] = g
+        p0, p1, p2 = estimate.p_st_m.tolist()
+        L0, L1, _ = estimate.L_Nms.tolist()
         if self._planar:
             heading_next = 0.0
-            u[1] = u[2] = u[7] = u[8] = u[13] = 0.0
+            u_p1 = u_L0 = vy = width = 0.0
         else:
             heading_next = self._heading + command.turn_rate_radps * T
-            u[1] = p_st[1]
-            u[2] = L[0]
-            u[7] = command.vy_mps * factor
-            u[8] = heading_next
-            u[13] = command.step_width_m
+            u_p1, u_L0, vy, width = p1, L0, command.vy_mps * factor, command.step_width_m
         self._heading_next = heading_next
-        y = np.asarray(self.plan_fn(u), dtype=float).reshape(-1)
+        # The dense ALIP_PLAN layout (kernels module doc); the next stance leg is the other one.
+        sign = 1.0 if self._stance == "right" else -1.0
+        u = self._u_plan
+        u[:] = (p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g)
+        # The kernels may return a shared buffer: copy once, hand out views.
+        y = np.array(self.plan_fn(u), dtype=float).reshape(-1)
+        yl = y.tolist()
+        y2, y3, px_w, py_w = yl[2], yl[3], yl[6], yl[7]
 
         # p_sw_des into the current heading frame D_k for the swing-x/y references.
         c, sn = math.cos(self._heading), math.sin(self._heading)
-        px_w, py_w = float(y[6]), float(y[7])
         p_sw_h = np.array([c * px_w + sn * py_w, -sn * px_w + c * py_w])
         turn = heading_next - self._heading
         ur = O.pack_swing_reference_input(self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref)
         h_d, dh_d, ddh_d = O.split_reference(self.robot, np.asarray(self.reference_fn(ur), dtype=float).reshape(-1))
 
-        com = estimate.com_m
-        target = np.array(
-            [
-                com[0] - p_st[0] + y[2] - px_w,
-                com[1] - p_st[1] + y[3] - py_w,
-                com[2] - p_st[2],
-            ]
-        )
+        c0, c1, c2 = estimate.com_m.tolist()
+        target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2])
         return PlannerOutput(
             s=s,
             t_remaining_s=t_rem,
-            L_hat_Nms=y[0:2].copy(),
-            p_hat_m=y[2:4].copy(),
-            L_des_Nms=y[4:6].copy(),
-            p_sw_des_world_m=y[6:8].copy(),
+            L_hat_Nms=y[0:2],
+            p_hat_m=y[2:4],
+            L_des_Nms=y[4:6],
+            p_sw_des_world_m=y[6:8],
             p_sw_des_heading_m=p_sw_h,
             swing_target_world_m=target,
             h_d=h_d,

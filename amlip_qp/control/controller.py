@@ -221,6 +221,7 @@ class WalkingController:
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
         self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
         self._act_v = robot.actuated.pin_v_idx
+        self._tau_shape = (len(self._act_v),)
         self._fallback_kd = float(fallback_damping_Nms)
         self.steps: list[StepRecord] = []
         #: Ticks whose tracker output was replaced by the damped fallback.
@@ -233,6 +234,8 @@ class WalkingController:
         self._com_step_start = np.zeros(3)
         self._cmd_aimed = np.zeros(2)
         self._cmd_now = np.zeros(2)
+        self._corrected_key: tuple | None = None
+        self._corrected: Command | None = None
 
     @property
     def speed_correction_mps(self) -> np.ndarray:
@@ -295,30 +298,31 @@ class WalkingController:
     def step(self, measurement: Measurement, command: Command) -> TickInfo:
         """One control tick: joint torques (actuator order, joint side, N m) and signals."""
         t = float(measurement.t_s)
-        self.estimator.observe(measurement)
+        estimator = self.estimator
+        estimator.observe(measurement)
         kin = self.kin
         touchdown = False
         if self._stance is None:
             self._begin_step(self.initial_stance, t)
+            est = estimator.estimate(self._stance)
         else:
+            # The estimate for the current stance serves the touchdown test (the
+            # contact heights) and, without a touchdown, the planner; at a
+            # touchdown it closes the old step and a new one is made about the
+            # new stance contact (the filters restart there).
+            est = estimator.estimate(self._stance)
             T = command.step_time_s
             phase_raw = (t - self.planner.t_step_start_s) / T
             swing = "right" if self._stance == "left" else "left"
-            height = float(kin.contact_position(swing)[2] - kin.contact_position(self._stance)[2])
+            height = float(est.swing_contact_m[2] - est.stance_contact_m[2])
             contact = measurement.foot_contact.get(swing) if measurement.foot_contact else None
             if self._last_plan is not None and self.gait.touchdown(phase_raw, contact, height):
-                est_old = self.estimator.estimate(self._stance)
-                self._record_step(t, est_old)
+                self._record_step(t, est)
                 self._begin_step(swing, t)
                 touchdown = True
+                est = estimator.estimate(self._stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
-        if self._correction[0] != 0.0 or self._correction[1] != 0.0:
-            command = replace(
-                command,
-                vx_mps=command.vx_mps + float(self._correction[0]),
-                vy_mps=command.vy_mps + float(self._correction[1]),
-            )
-        est = self.estimator.estimate(self._stance, touchdown=touchdown)
+        command = self._corrected_command(command)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
             StateEstimate(
@@ -344,7 +348,8 @@ class WalkingController:
         result = self.tracker.compute(kin, target)
         tau = result.tau_Nm
         ok = result.ok
-        if tau.shape != (len(self._act_v),) or not math.isfinite(float(tau.sum())):
+        # A finite sum implies finite entries; only if it is not (or overflows), look closer.
+        if tau.shape != self._tau_shape or (not math.isfinite(sum(tau.tolist())) and not np.isfinite(tau).all()):
             tau = -self._fallback_kd * kin.v[self._act_v]
             ok = False
             self.fallback_ticks += 1
@@ -355,7 +360,8 @@ class WalkingController:
                     RuntimeWarning,
                     stacklevel=2,
                 )
-        tau = np.minimum(np.maximum(tau, self._tau_lo), self._tau_hi)
+        tau = np.maximum(tau, self._tau_lo)
+        np.minimum(tau, self._tau_hi, out=tau)
         h, _, _ = kin.outputs(self._stance, plan.heading_rad)
         return TickInfo(
             t_s=t,
@@ -369,6 +375,21 @@ class WalkingController:
             touchdown=touchdown,
             info=result.info,
         )
+
+    def _corrected_command(self, command: Command) -> Command:
+        """``command`` plus the integral speed correction (the same object if the correction is zero).
+
+        The corrected :class:`Command` is cached: it changes only when the
+        command or the correction (updated once per step) does.
+        """
+        cx, cy = self._correction.tolist()
+        if cx == 0.0 and cy == 0.0:
+            return command
+        key = (command, cx, cy)
+        if key != self._corrected_key:
+            self._corrected_key = key
+            self._corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
+        return self._corrected
 
     @staticmethod
     def _swing_contact_weight(phase: float) -> float:

@@ -19,6 +19,8 @@ import numpy as np
 from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, MomentumFilter1D
 from amlip_qp.exceptions import InputError
 
+_SWING_OF = {"left": "right", "right": "left"}
+
 
 @dataclass
 class Measurement:
@@ -114,27 +116,24 @@ class Estimator:
                 from the momentum measured about the new contact point.
         """
         kin = self.kin
-        swing = "right" if stance == "left" else "left"
-        r_st = kin.contact_position(stance)
-        r_sw = kin.contact_position(swing)
+        r_st = kin.contact_position(stance)  # raises InputError for a bad side
+        r_sw = kin.contact_position(_SWING_OF[stance])
         com = kin.com()
         p_st = com - r_st
         L_meas = kin.angular_momentum_about(r_st)
         if not self.kalman:
             L = L_meas.copy()
         elif touchdown or not self._initialised:
-            self._fy.reset(float(L_meas[1]))
-            self._fx.reset(float(L_meas[0]))
+            Lx, Ly, _ = L_meas.tolist()
+            self._fy.reset(Ly)
+            self._fx.reset(Lx)
             self._initialised = True
             L = L_meas.copy()
         else:
-            L = np.array(
-                [
-                    self._fx.step(float(p_st[1]), float(L_meas[0]), self.dt_s),
-                    self._fy.step(float(p_st[0]), float(L_meas[1]), self.dt_s),
-                    L_meas[2],
-                ]
-            )
+            Lx, Ly, Lz = L_meas.tolist()
+            px, py, _ = p_st.tolist()
+            dt = self.dt_s
+            L = np.array([self._fx.step(py, Lx, dt), self._fy.step(px, Ly, dt), Lz])
         return Estimate(
             com_m=com,
             com_vel_mps=kin.com_velocity(),

@@ -4,8 +4,13 @@ Usage: create one :class:`RobotKinematics` per controller, call
 :meth:`RobotKinematics.update` once per control tick with the Pinocchio state
 ``(q, v)``; it runs Pinocchio's passes once (``computeAllTerms``: kinematics,
 joint Jacobians, CoM and its Jacobian, CRBA, nonlinear effects, centroidal
-momentum; then the zero-acceleration forward pass for the drift terms). The
-getters afterwards only read and combine cached results.
+momentum, and the joint accelerations at zero ``vdot``, which give the drift
+terms; then the frame placements and the CoM acceleration). The getters
+afterwards only read and combine cached results: Jacobians and drifts are
+fetched from Pinocchio once per update, and frame placements, the CoM and the
+momentum are read through views into Pinocchio's data made once (a fresh
+Pinocchio accessor costs about a microsecond per item, a control tick needs
+dozens).
 
 :meth:`RobotKinematics.update_positions` is a lighter update for iterative
 kinematics (the IK): positions, Jacobians and the CoM at ``q`` with ``v = 0``;
@@ -46,15 +51,21 @@ class RobotKinematics:
         self.robot = robot
         self.model = robot.pin_model
         self.data = self.model.createData()
-        self._a0 = np.zeros(self.model.nv)
+        self._q_shape = (self.model.nq,)
+        self._v_shape = (self.model.nv,)
+        self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        self._com_acc_level = pin.KinematicLevel.ACCELERATION
         self.q: np.ndarray | None = None
         self.v: np.ndarray | None = None
+        # Per-update caches (cleared by _invalidate), filled on first use.
         self._jac: dict[int, np.ndarray] = {}
         self._acc: dict[int, np.ndarray] = {}
+        self._bind_views()
         self._output_map = None
         self._out_cache: tuple | None = None
         self._M: np.ndarray | None = None
         self._taup: np.ndarray | None = None
+        self._passive_forces = _passive.PassiveForces(robot)
         self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
@@ -69,21 +80,26 @@ class RobotKinematics:
             InputError: Wrong shapes or NaN/inf.
         """
         pin = self._pin
-        q = np.asarray(q, dtype=float)
-        v = np.asarray(v, dtype=float)
-        if q.shape != (self.model.nq,) or v.shape != (self.model.nv,):
+        q = np.array(q, dtype=float)  # own copies: the caller may reuse its arrays
+        v = np.array(v, dtype=float)
+        if q.shape != self._q_shape or v.shape != self._v_shape:
             raise InputError(
                 f"q, v must have shapes ({self.model.nq},), ({self.model.nv},); got {q.shape}, {v.shape}"
             )
-        # One cheap test per tick: NaN and inf propagate through a sum.
-        if not math.isfinite(float(q.sum() + v.sum())) and not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        # One cheap test per tick: a finite sum implies finite entries (NaN and
+        # inf propagate); only if it fails (NaN, inf or overflow) check exactly.
+        if not math.isfinite(sum(q.tolist()) + sum(v.tolist())) and not (np.isfinite(q).all() and np.isfinite(v).all()):
             raise InputError("q or v contains NaN or inf")
-        self.q, self.v = q.copy(), v.copy()
+        self.q, self.v = q, v
         m, d = self.model, self.data
-        pin.computeAllTerms(m, d, self.q, self.v)
-        pin.forwardKinematics(m, d, self.q, self.v, self._a0)
+        if d is not self._views_data:
+            self._bind_views()
+        # computeAllTerms' forward pass also leaves data.a at the joint
+        # accelerations for vdot = 0 (bitwise the same as a separate
+        # forwardKinematics(q, v, 0)); the frame drifts and acom use them.
+        pin.computeAllTerms(m, d, q, v)
         pin.updateFramePlacements(m, d)
-        pin.centerOfMass(m, d, pin.KinematicLevel.ACCELERATION, False)
+        pin.centerOfMass(m, d, self._com_acc_level, False)
         self._invalidate(False)
 
     def update_positions(self, q) -> None:
@@ -102,6 +118,8 @@ class RobotKinematics:
         """
         pin = self._pin
         m, d = self.model, self.data
+        if d is not self._views_data:
+            self._bind_views()
         self.q = np.array(q, dtype=float)
         if self.v is None or self.v.shape != (m.nv,) or not self.positions_only:
             self.v = np.zeros(m.nv)
@@ -109,6 +127,26 @@ class RobotKinematics:
         pin.updateFramePlacements(m, d)
         pin.jacobianCenterOfMass(m, d, self.q, False)  # also com[0]
         self._invalidate(True)
+
+    def _bind_views(self) -> None:
+        """Make the live views into :attr:`data` used by the getters.
+
+        eigenpy maps Pinocchio's C++ storage into numpy without copying, and
+        every update overwrites that storage in place, so a view taken once
+        always shows the last update. Reading a view costs ~0.1 µs where a
+        fresh accessor (``data.oMf[i].translation``, ``data.com[0]``) costs
+        1-2 µs. The views do not keep the data alive: ``_views_data`` does,
+        and the updates re-bind if :attr:`data` was replaced. Views are only
+        read (copied or converted to floats) right away, never handed out.
+        """
+        d = self.data
+        self._views_data = d
+        self._com_view = d.com[0]
+        self._vcom_view = d.vcom[0]
+        self._acom_view = d.acom[0]
+        self._hg_view = d.hg.vector  # (m v_c, L_c)
+        self._translation_views: dict[int, np.ndarray] = {}
+        self._rotation_views: dict[int, np.ndarray] = {}
 
     def _invalidate(self, positions_only: bool) -> None:
         """Drop the per-update caches (both update kinds)."""
@@ -132,36 +170,52 @@ class RobotKinematics:
     def frame_position(self, frame_id: int) -> np.ndarray:
         """World position (m) of a Pinocchio frame, shape (3,)."""
         self._ready()
-        return self.data.oMf[frame_id].translation.copy()
+        return self._translation_view(frame_id).copy()
+
+    def _translation_view(self, frame_id: int) -> np.ndarray:
+        """Live view of ``data.oMf[frame_id].translation`` (see :meth:`_bind_views`)."""
+        view = self._translation_views.get(frame_id)
+        if view is None:
+            view = self._translation_views[frame_id] = self.data.oMf[frame_id].translation
+        return view
 
     def frame_rotation(self, frame_id: int) -> np.ndarray:
         """World rotation matrix of a Pinocchio frame, shape (3, 3)."""
         self._ready()
-        return self.data.oMf[frame_id].rotation.copy()
+        return self._rotation_view(frame_id).copy()
+
+    def _rotation_view(self, frame_id: int) -> np.ndarray:
+        """Live view of ``data.oMf[frame_id].rotation`` (see :meth:`_bind_views`)."""
+        view = self._rotation_views.get(frame_id)
+        if view is None:
+            view = self._rotation_views[frame_id] = self.data.oMf[frame_id].rotation
+        return view
 
     def frame_jacobian6(self, frame_id: int) -> np.ndarray:
-        """World-aligned 6 x nv Jacobian (linear rows first, then angular) of a frame."""
-        self._ready()
+        """World-aligned 6 x nv Jacobian (linear rows first, then angular) of a frame.
+
+        Cached until the next update (treat as read-only).
+        """
         jac = self._jac.get(frame_id)
         if jac is None:
-            pin = self._pin
-            jac = pin.getFrameJacobian(self.model, self.data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            self._ready()
+            jac = self._pin.getFrameJacobian(self.model, self.data, frame_id, self._lwa)
             self._jac[frame_id] = jac
         return jac
 
     def frame_jdot_v6(self, frame_id: int) -> np.ndarray:
-        """World-aligned classical acceleration drift of a frame (linear, angular), shape (6,)."""
-        self._ready()
-        if self.positions_only:
-            return self._zero6
+        """World-aligned classical acceleration drift of a frame (linear, angular), shape (6,).
+
+        Cached until the next update (treat as read-only).
+        """
         acc = self._acc.get(frame_id)
         if acc is None:
-            pin = self._pin
-            a = pin.getFrameClassicalAcceleration(
-                self.model, self.data, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-            )
-            acc = np.concatenate([a.linear, a.angular])
-            self._acc[frame_id] = acc
+            self._ready()
+            if self.positions_only:
+                return self._zero6
+            a = self._pin.getFrameClassicalAcceleration(self.model, self.data, frame_id, self._lwa)
+            # (linear, angular); the view keeps this fresh Motion object (not Pinocchio's data) alive.
+            acc = self._acc[frame_id] = a.vector
         return acc
 
     def frame_jacobian(self, frame_id: int) -> np.ndarray:
@@ -187,7 +241,8 @@ class RobotKinematics:
 
     def force_point_positions(self, side: str) -> np.ndarray:
         """World positions (m) of the foot's force points (toe, heel or the contact), shape (k, 3)."""
-        return np.array([self.frame_position(f) for f in self.robot.force_frame_ids[self._side(side)]])
+        self._ready()
+        return np.array([self._translation_view(f) for f in self.robot.force_frame_ids[self._side(side)]])
 
     def force_point_jacobian(self, side: str) -> np.ndarray:
         """Stacked translational Jacobians (3k x nv) of the foot's force points."""
@@ -224,14 +279,14 @@ class RobotKinematics:
     def com(self) -> np.ndarray:
         """Centre of mass ``c`` (m), shape (3,)."""
         self._ready()
-        return self.data.com[0].copy()
+        return self._com_view.copy()
 
     def com_velocity(self) -> np.ndarray:
         """CoM velocity ``v_c`` (m/s), shape (3,)."""
         self._ready()
         if self.positions_only:
             return self._zero3.copy()
-        return self.data.vcom[0].copy()
+        return self._vcom_view.copy()
 
     def com_jacobian(self) -> np.ndarray:
         """CoM Jacobian (3 x nv)."""
@@ -243,30 +298,33 @@ class RobotKinematics:
         self._ready()
         if self.positions_only:
             return self._zero3.copy()
-        return self.data.acom[0].copy()
+        return self._acom_view.copy()
 
     # ------------------------------------------------------------ momentum
     def centroidal_momentum(self) -> tuple[np.ndarray, np.ndarray]:
         """``(m v_c, L_c)``: linear momentum (kg m/s) and angular momentum about the CoM (kg m^2/s), world axes."""
         self._dynamics_ready()
-        hg = self.data.hg
-        return hg.linear.copy(), hg.angular.copy()
+        hg = self._hg_view
+        return hg[:3].copy(), hg[3:].copy()
 
     def angular_momentum_about(self, point) -> np.ndarray:
         """Angular momentum ``L = L_c + (c - r) x m v_c`` (kg m^2/s) about a world point ``r`` (m)."""
         self._dynamics_ready()
+        l0, l1, l2, a0, a1, a2 = self._hg_view.tolist()
         r = np.asarray(point, dtype=float)
-        if r.shape != (3,) or not np.all(np.isfinite(r)):
+        if r.shape != (3,):
             raise InputError(f"point must be a finite 3-vector, got {r!r}")
-        hg = self.data.hg
-        lin, ang = hg.linear, hg.angular
-        p = self.data.com[0] - r
-        # p x (m v_c), written out: numpy's cross costs ~20 µs on 3-vectors.
+        r0, r1, r2 = r.tolist()
+        if not (math.isfinite(r0) and math.isfinite(r1) and math.isfinite(r2)):
+            raise InputError(f"point must be a finite 3-vector, got {r!r}")
+        c0, c1, c2 = self._com_view.tolist()
+        p0, p1, p2 = c0 - r0, c1 - r1, c2 - r2
+        # p x (m v_c), written out on floats: numpy's cross costs ~20 µs on 3-vectors.
         return np.array(
             [
-                ang[0] + p[1] * lin[2] - p[2] * lin[1],
-                ang[1] + p[2] * lin[0] - p[0] * lin[2],
-                ang[2] + p[0] * lin[1] - p[1] * lin[0],
+                a0 + p1 * l2 - p2 * l1,
+                a1 + p2 * l0 - p0 * l2,
+                a2 + p0 * l1 - p1 * l0,
             ]
         )
 
@@ -305,7 +363,7 @@ class RobotKinematics:
         """
         self._ready()
         if self._taup is None:
-            self._taup = _passive.passive_forces_unchecked(self.robot, self.q, self.v)
+            self._taup = self._passive_forces(self.q, self.v)
         return self._taup
 
     def coupling_constraints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -16,6 +16,13 @@ Each output is built from primitive quantities (rotation-matrix entries,
 points, joint angles) whose value, Jacobian row and drift are known, and the
 chain rule: ``J_y = grad f . J_x`` and
 ``Jdot_v_y = grad f . Jdot_v_x + xdot^T Hess f xdot``.
+
+This runs every control tick, so the scalar chain rule works on plain Python
+floats packed in tuples (a "chain scalar", below) and each Jacobian row is
+written with one or two numpy calls into preallocated scratch space; no
+per-scalar objects are created. The floating-point operations are those of
+the plain per-row formulas (no reordering, no fused BLAS products), so the
+results are the same to the last bit.
 """
 
 from __future__ import annotations
@@ -34,104 +41,83 @@ CASSIE_OUTPUTS: tuple[str, ...] = _alip_outputs.CASSIE_OUTPUTS
 PLANAR_OUTPUTS: tuple[str, ...] = _alip_outputs.RABBIT_OUTPUTS
 
 
-class _Scalar:
-    """A scalar function of the state, for the chain rule on plain floats.
-
-    ``val`` is its value, ``rate`` its time derivative ``J v``, ``jdv`` its drift
-    ``Jdot v``, and ``coef`` its Jacobian as three coefficients on the rows of a
-    3 x nv basis Jacobian chosen by the caller (the base's angular Jacobian for
-    rotation entries, the toe-minus-heel point Jacobian for the foot pitch).
-    """
-
-    __slots__ = ("val", "rate", "coef", "jdv")
-
-    def __init__(self, val: float, rate: float, coef: tuple, jdv: float):
-        self.val, self.rate, self.coef, self.jdv = val, rate, coef, jdv
+# A "chain scalar" is a tuple ``(val, rate, c0, c1, c2, jdv)``: a scalar
+# function of the state with its value, its time derivative ``J v``, its
+# Jacobian as three coefficients ``(c0, c1, c2)`` on the rows of a 3 x nv basis
+# Jacobian chosen by the caller (the base's angular Jacobian for rotation
+# entries, the toe-minus-heel point Jacobian for the foot pitch) and its drift
+# ``Jdot v``. Units follow the quantity (rad or m; per s; per s^2).
 
 
-def _lin(ka: float, a: tuple, kb: float, b: tuple) -> tuple:
-    return (ka * a[0] + kb * b[0], ka * a[1] + kb * b[1], ka * a[2] + kb * b[2])
-
-
-def _atan2(a: _Scalar, b: _Scalar) -> _Scalar:
-    """``atan2(a, b)`` with the chain rule.
+def _atan2(a: tuple, b: tuple) -> tuple:
+    """``atan2(a, b)`` of two chain scalars, with the chain rule.
 
     ``y' = (b a' - a b') / r^2`` and
     ``y'' = (b a'' - a b'') / r^2 - 2 (b a' - a b') (a a' + b b') / r^4``.
     """
-    r2 = a.val * a.val + b.val * b.val
-    num = b.val * a.rate - a.val * b.rate
-    coef = _lin(b.val / r2, a.coef, -a.val / r2, b.coef)
-    jdv = (b.val * a.jdv - a.val * b.jdv) / r2 - 2.0 * num * (a.val * a.rate + b.val * b.rate) / (r2 * r2)
-    return _Scalar(math.atan2(a.val, b.val), num / r2, coef, jdv)
+    av, ar, a0, a1, a2, aj = a
+    bv, br, b0, b1, b2, bj = b
+    r2 = av * av + bv * bv
+    num = bv * ar - av * br
+    ka, kb = bv / r2, -av / r2
+    jdv = (bv * aj - av * bj) / r2 - 2.0 * num * (av * ar + bv * br) / (r2 * r2)
+    return (math.atan2(av, bv), num / r2, ka * a0 + kb * b0, ka * a1 + kb * b1, ka * a2 + kb * b2, jdv)
 
 
-def _hypot(a: _Scalar, b: _Scalar) -> _Scalar:
-    """``sqrt(a^2 + b^2)`` with the chain rule.
+def _hypot(a: tuple, b: tuple) -> tuple:
+    """``sqrt(a^2 + b^2)`` of two chain scalars, with the chain rule.
 
     ``rho' = (a a' + b b') / rho`` and
     ``rho'' = (a a'' + b b'' + a'^2 + b'^2) / rho - (a a' + b b')^2 / rho^3``.
     """
-    rho = math.hypot(a.val, b.val)
-    dot = a.val * a.rate + b.val * b.rate
-    coef = _lin(a.val / rho, a.coef, b.val / rho, b.coef)
-    jdv = (a.val * a.jdv + b.val * b.jdv + a.rate * a.rate + b.rate * b.rate) / rho - dot * dot / rho**3
-    return _Scalar(rho, dot / rho, coef, jdv)
+    av, ar, a0, a1, a2, aj = a
+    bv, br, b0, b1, b2, bj = b
+    rho = math.hypot(av, bv)
+    dot = av * ar + bv * br
+    ka, kb = av / rho, bv / rho
+    jdv = (av * aj + bv * bj + ar * ar + br * br) / rho - dot * dot / rho**3
+    return (rho, dot / rho, ka * a0 + kb * b0, ka * a1 + kb * b1, ka * a2 + kb * b2, jdv)
 
 
-def _neg(a: _Scalar) -> _Scalar:
-    return _Scalar(-a.val, -a.rate, (-a.coef[0], -a.coef[1], -a.coef[2]), -a.jdv)
+def _neg(a: tuple) -> tuple:
+    """``-a`` of a chain scalar."""
+    return (-a[0], -a[1], -a[2], -a[3], -a[4], -a[5])
 
 
-def _cross(a, b) -> tuple[float, float, float]:
-    """``a x b`` for 3-vectors, on floats (numpy's cross costs ~20 µs on 3-vectors)."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+def _rotation_column(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
+    """Entries ``(R_0j, R_1j, R_2j)`` of a body's world rotation ``R`` (nested lists) as chain scalars.
 
-
-class _Rotation:
-    """Entries of a body's world rotation ``R`` as :class:`_Scalar` (``r_j`` = column j).
-
-    With ``w`` the world angular velocity, ``d/dt r_j = w x r_j``, so
-    ``d/dt R_ij = (w x r_j)_i = (r_j x e_i) . w`` (coefficients on the rows of
-    the angular Jacobian) and the drift of the second derivative is
-    ``(alpha_d x r_j + w x (w x r_j))_i``.
+    The basis is the body's angular Jacobian. With ``w`` the world angular
+    velocity (rad/s) and ``alpha`` the angular acceleration drift (rad/s^2),
+    the column ``r = r_j`` moves as ``dr = w x r``, its second-derivative drift
+    is ``alpha x r + w x dr``, and ``d/dt R_ij = (r x e_i) . w`` gives the
+    coefficients ``r x e_i``.
     """
-
-    def __init__(self, R, w, alpha_drift):
-        self.R = R
-        self.w = tuple(float(x) for x in w)
-        self.alpha = tuple(float(x) for x in alpha_drift)
-        self._cols: dict[int, tuple] = {}
-
-    def _column(self, j: int) -> tuple:
-        col = self._cols.get(j)
-        if col is None:
-            r = (float(self.R[0, j]), float(self.R[1, j]), float(self.R[2, j]))
-            dr = _cross(self.w, r)
-            ddr = _cross(self.alpha, r)
-            wdr = _cross(self.w, dr)
-            col = self._cols[j] = (r, dr, (ddr[0] + wdr[0], ddr[1] + wdr[1], ddr[2] + wdr[2]))
-        return col
-
-    def entry(self, i: int, j: int) -> _Scalar:
-        r, dr, drift = self._column(j)
-        if i == 0:
-            coef = (0.0, r[2], -r[1])
-        elif i == 1:
-            coef = (-r[2], 0.0, r[0])
-        else:
-            coef = (r[1], -r[0], 0.0)
-        return _Scalar(r[i], dr[i], coef, drift[i])
+    w0, w1, w2 = w
+    a0, a1, a2 = alpha
+    r0, r1, r2 = R[0][j], R[1][j], R[2][j]
+    dr0, dr1, dr2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0
+    return (
+        (r0, dr0, 0.0, r2, -r1, (a1 * r2 - a2 * r1) + (w1 * dr2 - w2 * dr1)),
+        (r1, dr1, -r2, 0.0, r0, (a2 * r0 - a0 * r2) + (w2 * dr0 - w0 * dr2)),
+        (r2, dr2, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0)),
+    )
 
 
-def _point(d, rate, drift, k: int) -> _Scalar:
-    """Component ``k`` of a point offset whose Jacobian is the basis itself."""
-    coef = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
-    return _Scalar(float(d[k]), float(rate[k]), coef, float(drift[k]))
+def _rotation_entry_z(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
+    """The entry ``R_2j`` alone of :func:`_rotation_column` (the same arithmetic, fewer terms)."""
+    w0, w1, w2 = w
+    a0, a1, _ = alpha
+    r0, r1, r2 = R[0][j], R[1][j], R[2][j]
+    dr0, dr1 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2
+    return (r2, w0 * r1 - w1 * r0, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0))
 
 
 class OutputMap:
     """``h_0(q)`` for one robot; evaluate on an updated :class:`RobotKinematics`.
+
+    One instance keeps scratch buffers for :meth:`evaluate`: do not share it
+    between threads.
 
     Attributes:
         layout: ``"cassie"`` or ``"planar"``.
@@ -159,6 +145,14 @@ class OutputMap:
                 f"{robot.path}: no output map: need a free root with {{side}}-hip-yaw joints and "
                 "toe/heel sites (Cassie layout), or a planar root (Rabbit layout)"
             )
+        self._swing_of = {s: robot.other_side(s) for s in robot.foot_sides}
+        nv = robot.nv
+        # Scratch (overwritten by every evaluate): J_c - J_sw, J_toe - J_heel (3 x nv each),
+        # the heading rotation [[cD, sD], [-sD, cD]] and its products with the first two rows of J_c - J_sw.
+        self._J_csw = np.empty((3, nv))
+        self._J_blade = np.empty((3, nv))
+        self._rot = np.empty((2, 2, 1))
+        self._rot_products = np.empty((2, 2, nv))
 
     @property
     def size(self) -> int:
@@ -174,67 +168,96 @@ class OutputMap:
             heading_rad: Step heading ``D`` (rad).
 
         Returns:
-            ``(y, J, Jdot_v)`` with shapes (n,), (n, nv), (n,).
+            ``(y, J, Jdot_v)`` with shapes (n,), (n, nv), (n,): outputs (rad or
+            m), their Jacobian on Pinocchio's ``v`` and their drift ``Jdot v``
+            (rad/s^2 or m/s^2). New arrays on every call.
 
         Raises:
             InputError: Bad side or a non-finite heading.
         """
-        if stance not in self.robot.foot_sides:
+        if stance not in self._swing_of:
             raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
-        if not np.isfinite(heading_rad):
+        if not math.isfinite(heading_rad):
             raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
-        swing = self.robot.other_side(stance)
+        swing = self._swing_of[stance]
+        robot = self.robot
         v = kin.v
-        n = len(self.names)
-        y = np.empty(n)
-        J = np.zeros((n, kin.model.nv))
-        jdv = np.empty(n)
-        Jw = kin.base_angular_jacobian()
-        rot = _Rotation(kin.base_rotation(), Jw @ v, kin.base_angular_jdot_v())
-        c, Jc, dc = kin.com(), kin.com_jacobian(), kin.com_jdot_v()
-        p_st = c - kin.contact_position(stance)
-        J_st = Jc - kin.contact_jacobian(stance)
-        d_st = dc - kin.contact_jdot_v(stance)
-        p_sw = c - kin.contact_position(swing)
-        J_sw = Jc - kin.contact_jacobian(swing)
-        d_sw = dc - kin.contact_jdot_v(swing)
+        jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
+        J = np.zeros((len(self.names), v.shape[0]))
+
+        # Base orientation: R, world angular velocity w = Jw v (rad/s), drift alpha (rad/s^2).
+        base = robot.base_frame_id
+        Jw = jac(base)[3:]
+        w = tuple((Jw @ v).tolist())
+        alpha = tuple(kin.frame_jdot_v6(base)[3:].tolist())
+        R = kin._rotation_view(base).tolist()
+
+        # CoM relative to the two contact points (m) and the drifts (m/s^2).
+        fid_st, fid_sw = robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]
+        c0, c1, c2 = kin._com_view.tolist()
+        dc0, dc1, dc2 = kin.com_jdot_v().tolist()
+        r0, r1, r2 = kin._translation_view(fid_st).tolist()
+        p_st_z = c2 - r2
+        d_st_z = dc2 - kin.frame_jdot_v6(fid_st).tolist()[2]
+        r0, r1, r2 = kin._translation_view(fid_sw).tolist()
+        p_sw = (c0 - r0, c1 - r1, c2 - r2)
+        a_sw = kin.frame_jdot_v6(fid_sw).tolist()
+        d_sw = (dc0 - a_sw[0], dc1 - a_sw[1], dc2 - a_sw[2])
         cD, sD = math.cos(heading_rad), math.sin(heading_rad)
+        ys = [p_st_z, cD * p_sw[0] + sD * p_sw[1]]
+        ds = [d_st_z, cD * d_sw[0] + sD * d_sw[1]]
 
-        def angle(row: int, a: _Scalar, basis: np.ndarray) -> None:
-            y[row] = a.val
-            np.dot(a.coef, basis, out=J[row])
-            jdv[row] = a.jdv
+        # Their Jacobian rows: c_z - r_st,z; (c - r_sw) . x_D; [(c - r_sw) . y_D]; c_z - r_sw,z.
+        cassie = self.layout == "cassie"
+        r_z, r_x, r_zs = (4, 5, 7) if cassie else (1, 2, 3)
+        Jc = np.ascontiguousarray(kin.com_jacobian())  # Pinocchio's is column-major; rows are used here
+        np.subtract(Jc[2], jac(fid_st)[2], out=J[r_z])
+        J_csw = np.subtract(Jc, jac(fid_sw)[:3], out=self._J_csw)
+        J[r_zs] = J_csw[2]
+        rot, prod = self._rot, self._rot_products
+        rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
+        np.multiply(rot, J_csw[:2], out=prod)  # prod[i, j] = rot[i, j] * J_csw[j]
+        if cassie:
+            np.add(prod[:, 0], prod[:, 1], out=J[r_x : r_x + 2])  # x_D and y_D rows
+            ys.append(-sD * p_sw[0] + cD * p_sw[1])
+            ds.append(-sD * d_sw[0] + cD * d_sw[1])
+        else:
+            np.add(prod[0, 0], prod[0, 1], out=J[r_x])
+        ys.append(p_sw[2])
+        ds.append(d_sw[2])
 
-        def positions(rows: tuple[int, ...]) -> None:
-            # com_z_over_stance, com_x_over_swing, (com_y_over_swing), com_z_over_swing
-            r_z, r_x, r_y, r_zs = rows
-            y[r_z], J[r_z], jdv[r_z] = p_st[2], J_st[2], d_st[2]
-            y[r_x] = cD * p_sw[0] + sD * p_sw[1]
-            J[r_x] = cD * J_sw[0] + sD * J_sw[1]
-            jdv[r_x] = cD * d_sw[0] + sD * d_sw[1]
-            if r_y is not None:
-                y[r_y] = -sD * p_sw[0] + cD * p_sw[1]
-                J[r_y] = -sD * J_sw[0] + cD * J_sw[1]
-                jdv[r_y] = -sD * d_sw[0] + cD * d_sw[1]
-            y[r_zs], J[r_zs], jdv[r_zs] = p_sw[2], J_sw[2], d_sw[2]
+        if not cassie:
+            R02, _, R22 = _rotation_column(R, 2, w, alpha)
+            pitch = _atan2(R02, R22)
+            np.dot(pitch[2:5], Jw, out=J[0])
+            return np.array([pitch[0], *ys]), J, np.array([pitch[5], *ds])
 
-        if self.layout == "planar":
-            angle(0, _atan2(rot.entry(0, 2), rot.entry(2, 2)), Jw)
-            positions((1, 2, None, 3))
-            return y, J, jdv
-
-        angle(0, _atan2(_neg(rot.entry(2, 0)), _hypot(rot.entry(0, 0), rot.entry(1, 0))), Jw)
-        angle(1, _atan2(rot.entry(2, 1), rot.entry(2, 2)), Jw)
-        for row, side in ((2, stance), (3, swing)):
-            y[row] = kin.q[self._yaw_q[side]]
-            J[row, self._yaw_v[side]] = 1.0
-            jdv[row] = 0.0
-        positions((4, 5, 6, 7))
-        toe_id, heel_id = self.robot.force_frame_ids[swing]
-        d = kin.frame_position(toe_id) - kin.frame_position(heel_id)
-        Jd = kin.frame_jacobian(toe_id) - kin.frame_jacobian(heel_id)
-        dd = kin.frame_jdot_v(toe_id) - kin.frame_jdot_v(heel_id)
-        rd = Jd @ v
-        dx, dy, dz = (_point(d, rd, dd, k) for k in range(3))
-        angle(8, _atan2(_neg(dz), _hypot(dx, dy)), Jd)
+        # Torso pitch and roll (intrinsic z-y-x Euler angles of the base).
+        R00, R10, R20 = _rotation_column(R, 0, w, alpha)
+        pitch = _atan2(_neg(R20), _hypot(R00, R10))
+        roll = _atan2(_rotation_entry_z(R, 1, w, alpha), _rotation_entry_z(R, 2, w, alpha))
+        np.dot(pitch[2:5], Jw, out=J[0])
+        np.dot(roll[2:5], Jw, out=J[1])
+        # Hip yaws: joint coordinates.
+        yaw_q, yaw_v = self._yaw_q, self._yaw_v
+        J[2, yaw_v[stance]] = 1.0
+        J[3, yaw_v[swing]] = 1.0
+        # Swing toe pitch from the blade vector d = toe - heel (m).
+        toe_id, heel_id = robot.force_frame_ids[swing]
+        t0, t1, t2 = kin._translation_view(toe_id).tolist()
+        h0, h1, h2 = kin._translation_view(heel_id).tolist()
+        d = (t0 - h0, t1 - h1, t2 - h2)
+        Jd = np.subtract(jac(toe_id)[:3], jac(heel_id)[:3], out=self._J_blade)
+        at, ah = kin.frame_jdot_v6(toe_id).tolist(), kin.frame_jdot_v6(heel_id).tolist()
+        dd = (at[0] - ah[0], at[1] - ah[1], at[2] - ah[2])
+        rd = (Jd @ v).tolist()
+        # The components of d as chain scalars on the blade Jacobian (coefficients: unit vectors).
+        dx = (d[0], rd[0], 1.0, 0.0, 0.0, dd[0])
+        dy = (d[1], rd[1], 0.0, 1.0, 0.0, dd[1])
+        dz = (d[2], rd[2], 0.0, 0.0, 1.0, dd[2])
+        toe = _atan2(_neg(dz), _hypot(dx, dy))
+        np.dot(toe[2:5], Jd, out=J[8])
+        q = kin.q
+        y = np.array([pitch[0], roll[0], q[yaw_q[stance]], q[yaw_q[swing]], *ys, toe[0]])
+        jdv = np.array([pitch[5], roll[5], 0.0, 0.0, *ds, toe[5]])
         return y, J, jdv

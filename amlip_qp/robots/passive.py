@@ -55,17 +55,53 @@ def passive_forces(robot, q, v) -> np.ndarray:
 
 
 def passive_forces_unchecked(robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """:func:`passive_forces` without input validation, for callers that already checked ``(q, v)``."""
-    smap = robot.state_map
-    f = -robot.dof_damping * v
-    pq, pv = smap.scalar_pin_q, smap.scalar_pin_v
-    f[pv] -= robot.dof_stiffness[pv] * (q[pq] - robot.dof_springref[pv])
-    for c in robot.couplings:
-        length = float(c.coefficients @ q[c.pin_q_idx])
-        rate = float(c.coefficients @ v[c.pin_v_idx])
-        # A tendon couples distinct joints, so plain fancy-index addition is exact.
-        f[c.pin_v_idx] += c.coefficients * tendon_force(c, length, rate)
-    return f
+    """:func:`passive_forces` without input validation, for callers that already checked ``(q, v)``.
+
+    A caller that evaluates the forces every tick should keep a
+    :class:`PassiveForces` instead (this builds one per call).
+    """
+    return PassiveForces(robot)(q, v)
+
+
+def _index(idx: np.ndarray) -> slice | np.ndarray:
+    """``idx`` as a slice when it is a contiguous increasing range (cheaper to index with), else unchanged."""
+    if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
+        return slice(int(idx[0]), int(idx[0]) + idx.size)
+    return idx
+
+
+class PassiveForces:
+    """:func:`passive_forces` for one robot with its constants precomputed (the per-tick path).
+
+    Call with a checked Pinocchio state ``(q, v)`` (shapes (nq,), (nv,)) to get
+    the passive generalized forces (N m or N), shape (nv,): the arithmetic of
+    :func:`passive_forces`, with the index gathers of the constant terms
+    done once here.
+    """
+
+    def __init__(self, robot):
+        smap = robot.state_map
+        pv = smap.scalar_pin_v
+        self._neg_damping = -robot.dof_damping
+        self._pq, self._pv = _index(smap.scalar_pin_q), _index(pv)
+        self._stiffness = robot.dof_stiffness[pv]
+        self._springref = robot.dof_springref[pv]
+        # Per tendon: the coupling, its coefficients, q and v indices, and (index, coefficient) pairs.
+        self._tendons = tuple(
+            (c, c.coefficients, c.pin_q_idx, c.pin_v_idx, tuple(zip(c.pin_v_idx.tolist(), c.coefficients.tolist())))
+            for c in robot.couplings
+        )
+
+    def __call__(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        f = self._neg_damping * v
+        pv = self._pv
+        f[pv] -= self._stiffness * (q[self._pq] - self._springref)
+        for c, coef, iq, iv, pairs in self._tendons:
+            force = tendon_force(c, float(coef.dot(q[iq])), float(coef.dot(v[iv])))
+            # A tendon couples distinct joints: one addition per joint.
+            for i, k in pairs:
+                f[i] += k * force
+        return f
 
 
 def coupling_target(coupling) -> float:

@@ -22,6 +22,7 @@ matrices ``M_pin = T^T M_mj T`` and, for bias forces,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -154,14 +155,20 @@ def _check(x, n: int, what: str) -> np.ndarray:
     arr = np.asarray(x, dtype=float)
     if arr.shape != (n,):
         raise InputError(f"{what} must have shape ({n},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    # Cheap test first (called every tick): a finite sum implies finite entries.
+    if not math.isfinite(sum(arr.tolist())) and not np.isfinite(arr).all():
         raise InputError(f"{what} contains NaN or inf at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}")
     return arr
 
 
+def _norm(x: np.ndarray) -> float:
+    """Euclidean norm of a 1-D array; the same arithmetic as ``np.linalg.norm`` (``sqrt(x . x)``), cheaper."""
+    return math.sqrt(x.dot(x))
+
+
 def _quat_wxyz_to_rot(qw: np.ndarray) -> np.ndarray:
     """Rotation matrix of a (normalized here) quaternion in w, x, y, z order."""
-    w, x, y, z = qw / np.linalg.norm(qw)
+    w, x, y, z = (qw / _norm(qw)).tolist()
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -172,7 +179,7 @@ def _quat_wxyz_to_rot(qw: np.ndarray) -> np.ndarray:
 
 
 def _normalized(quat: np.ndarray, what: str) -> np.ndarray:
-    n = np.linalg.norm(quat)
+    n = _norm(quat)
     if n < 1e-9:
         raise InputError(f"{what}: zero quaternion")
     return quat / n
@@ -187,10 +194,10 @@ def qpos_to_q(robot, qpos) -> np.ndarray:
     for qa, _, pq, _ in m.free:
         q[pq : pq + 3] = qpos[qa : qa + 3]
         wxyz = _normalized(qpos[qa + 3 : qa + 7], "qpos free-joint quaternion")
-        q[pq + 3 : pq + 7] = wxyz[[1, 2, 3, 0]]
+        q[pq + 3 : pq + 6], q[pq + 6] = wxyz[1:], wxyz[0]  # xyzw
     for qa, _, pq, _ in m.ball:
         wxyz = _normalized(qpos[qa : qa + 4], "qpos ball-joint quaternion")
-        q[pq : pq + 4] = wxyz[[1, 2, 3, 0]]
+        q[pq : pq + 3], q[pq + 3] = wxyz[1:], wxyz[0]
     return q
 
 
@@ -203,10 +210,10 @@ def q_to_qpos(robot, q) -> np.ndarray:
     for qa, _, pq, _ in m.free:
         qpos[qa : qa + 3] = q[pq : pq + 3]
         xyzw = _normalized(q[pq + 3 : pq + 7], "q free-flyer quaternion")
-        qpos[qa + 3 : qa + 7] = xyzw[[3, 0, 1, 2]]
+        qpos[qa + 3], qpos[qa + 4 : qa + 7] = xyzw[3], xyzw[:3]  # wxyz
     for qa, _, pq, _ in m.ball:
         xyzw = _normalized(q[pq : pq + 4], "q spherical-joint quaternion")
-        qpos[qa : qa + 4] = xyzw[[3, 0, 1, 2]]
+        qpos[qa], qpos[qa + 1 : qa + 4] = xyzw[3], xyzw[:3]
     return qpos
 
 
@@ -221,8 +228,7 @@ def velocity_map(robot, q) -> np.ndarray:
     T = np.zeros((m.nv, m.nv))
     T[m.scalar_mj_v, m.scalar_pin_v] = 1.0
     for _, da, pq, pv in m.free:
-        xyzw = q[pq + 3 : pq + 7]
-        T[da : da + 3, pv : pv + 3] = _quat_wxyz_to_rot(xyzw[[3, 0, 1, 2]])
+        T[da : da + 3, pv : pv + 3] = _quat_wxyz_to_rot(_wxyz(q[pq + 3 : pq + 7]))
         T[da + 3 : da + 6, pv + 3 : pv + 6] = np.eye(3)
     for _, da, _, pv in m.ball:
         T[da : da + 3, pv : pv + 3] = np.eye(3)
@@ -239,8 +245,7 @@ def velocity_map_dot_v(robot, q, v) -> np.ndarray:
     v = _check(v, m.nv, "v")
     out = np.zeros(m.nv)
     for _, da, pq, pv in m.free:
-        xyzw = q[pq + 3 : pq + 7]
-        R = _quat_wxyz_to_rot(xyzw[[3, 0, 1, 2]])
+        R = _quat_wxyz_to_rot(_wxyz(q[pq + 3 : pq + 7]))
         out[da : da + 3] = R @ np.cross(v[pv + 3 : pv + 6], v[pv : pv + 3])
     return out
 
@@ -248,13 +253,22 @@ def velocity_map_dot_v(robot, q, v) -> np.ndarray:
 def qvel_to_v(robot, q, qvel) -> np.ndarray:
     """MuJoCo ``qvel`` -> Pinocchio ``v`` at Pinocchio configuration ``q``."""
     m = _smap(robot)
-    q = _check(q, m.nq_pin, "q")
-    qvel = _check(qvel, m.nv, "qvel")
+    return _qvel_to_v(m, _check(q, m.nq_pin, "q"), _check(qvel, m.nv, "qvel"))
+
+
+def _wxyz(xyzw: np.ndarray) -> np.ndarray:
+    """A Pinocchio ``xyzw`` quaternion reordered to ``wxyz`` (new array)."""
+    wxyz = np.empty(4)
+    wxyz[0], wxyz[1:] = xyzw[3], xyzw[:3]
+    return wxyz
+
+
+def _qvel_to_v(m: StateMap, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+    """:func:`qvel_to_v` on checked float arrays."""
     v = np.zeros(m.nv)
     v[m.scalar_pin_v] = qvel[m.scalar_mj_v]
     for _, da, pq, pv in m.free:
-        xyzw = q[pq + 3 : pq + 7]
-        R = _quat_wxyz_to_rot(xyzw[[3, 0, 1, 2]])
+        R = _quat_wxyz_to_rot(_wxyz(q[pq + 3 : pq + 7]))
         v[pv : pv + 3] = R.T @ qvel[da : da + 3]
         v[pv + 3 : pv + 6] = qvel[da + 3 : da + 6]
     for _, da, _, pv in m.ball:
@@ -270,8 +284,7 @@ def v_to_qvel(robot, q, v) -> np.ndarray:
     qvel = np.zeros(m.nv)
     qvel[m.scalar_mj_v] = v[m.scalar_pin_v]
     for _, da, pq, pv in m.free:
-        xyzw = q[pq + 3 : pq + 7]
-        R = _quat_wxyz_to_rot(xyzw[[3, 0, 1, 2]])
+        R = _quat_wxyz_to_rot(_wxyz(q[pq + 3 : pq + 7]))
         qvel[da : da + 3] = R @ v[pv : pv + 3]
         qvel[da + 3 : da + 6] = v[pv + 3 : pv + 6]
     for _, da, _, pv in m.ball:
@@ -290,8 +303,9 @@ def mj_to_pin(robot, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
     Raises:
         InputError: Wrong shape, NaN/inf, or a zero quaternion.
     """
-    q = qpos_to_q(robot, qpos)
-    return q, qvel_to_v(robot, q, qvel)
+    m = _smap(robot)
+    q = qpos_to_q(m, qpos)  # checked; its output is finite with unit quaternions
+    return q, _qvel_to_v(m, q, _check(qvel, m.nv, "qvel"))
 
 
 def pin_to_mj(robot, q, v) -> tuple[np.ndarray, np.ndarray]:
