@@ -6,6 +6,7 @@ import pytest
 from amlip_qp.control.controller import WalkingController
 from amlip_qp.control.qp_tracker import QPTracker
 from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.sim.harness import Simulation
@@ -147,3 +148,18 @@ def test_bench_reports_every_solver_on_recorded_problems(walk):
     assert stats["proxsuite-warm"]["failures"] == 0 and stats["quadprog"]["failures"] == 0
     text = format_report({"scenario": "x", "n_problems": len(problems), "solvers": stats, "tick_us": {"median": 1.0, "p99": 2.0}})
     assert "proxsuite-warm" in text and "controller tick" in text
+
+
+def test_replaying_the_recorded_problems_is_bit_identical(walk):
+    """Determinism. With two OpenMP threads the replay differed by up to 3e-6
+    on a loaded machine (not when idle); the solver runs ProxSuite with one."""
+    from proxsuite import proxqp
+
+    _, tracker, _ = walk
+    problems = [p for p, x in tracker.recorded]
+    runs = []
+    for _ in range(2):
+        solver = ProxQPSolver(**tracker.solver.options)
+        runs.append(np.array([solver.solve(p).x for p in problems]))
+    assert np.array_equal(runs[0], runs[1])
+    assert proxqp.omp_get_max_threads() == 1  # this thread's OpenMP team after a solve
