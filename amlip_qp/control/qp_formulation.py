@@ -64,6 +64,7 @@ of ``vdot``, forces and torques.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field, replace
 
@@ -407,11 +408,13 @@ class WholeBodyQP:
         self._act_side = {
             side: np.array([nm.startswith(side) for nm in robot.actuated.joint_names]) for side in robot.foot_sides
         }
+        # Per swing side: (v indices, q indices, 2 q_lo / hz^2, 2 q_hi / hz^2, other side's v indices).
         self._limits_by_swing = {}
+        c = 2.0 / config.joint_limit_horizon_s**2
         for side in robot.foot_sides:
             m = self._act_side[side]
             self._limits_by_swing[side] = (
-                self._act_v[m], self._act_q[m], self._q_lo[m], self._q_hi[m], self._act_v[~m]
+                self._act_v[m], self._act_q[m], c * self._q_lo[m], c * self._q_hi[m], self._act_v[~m]
             )  # fmt: skip
         # Per-tick buffers. D = [M | -Jf^T | -G^T] (nv x n): its unactuated rows
         # are the dynamics equalities, its actuated rows the torque map T.
@@ -420,6 +423,7 @@ class WholeBodyQP:
         self._T = np.zeros((nu, n))
         self._tau0 = np.zeros(nu)
         self._hp = np.zeros(nv)
+        self._contact_drift = np.zeros(n_contact)
         self._last_force_weight = 0.0
         self._G = np.zeros((n_lambda, nv))
         self._rigid_kp = np.r_[np.full(L.n_rigid_st, config.stance_coupling_kp), np.full(L.n_rigid_sw, config.coupling_kp)]
@@ -498,24 +502,20 @@ class WholeBodyQP:
         G = np.array(rows) if rows else np.zeros((0, robot.nv))
         return G, qidx, coefs, np.array(offs)
 
-    def _deflection(self, q, side: str) -> np.ndarray:
-        Gq, offs = self._spring_q[side]
-        return Gq @ q - offs
-
-    def _stacked_springs(self, stance: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(G, Gq, offsets, -G^T)`` of the rigidly held springs for this stance (cached per stance)."""
+    def _stacked_springs(self, stance: str) -> tuple[np.ndarray, ...]:
+        """``(G, -G^T, kp Gq, kd G, kp offsets)`` of the rigidly held springs for
+        this stance (deflection ``g = Gq q - offsets``; cached per stance)."""
         cache = self.__dict__.setdefault("_springs_by_stance", {})
         hit = cache.get(stance)
         if hit is None:
             L = self._layout
             swing = "right" if stance == "left" else "left"
             sides = ([stance] if L.n_rigid_st else []) + ([swing] if L.n_rigid_sw else [])
-            hit = (
-                np.vstack([self._spring_rows[s][0] for s in sides]),
-                np.vstack([self._spring_q[s][0] for s in sides]),
-                np.concatenate([self._spring_q[s][1] for s in sides]),
-            )
-            hit = (*hit, np.ascontiguousarray(-hit[0].T))
+            G = np.vstack([self._spring_rows[s][0] for s in sides])
+            Gq = np.vstack([self._spring_q[s][0] for s in sides])
+            offs = np.concatenate([self._spring_q[s][1] for s in sides])
+            kp, kd = self._rigid_kp, self._rigid_kd
+            hit = (G, np.ascontiguousarray(-G.T), kp[:, None] * Gq, kd[:, None] * G, kp * offs)
             cache[stance] = hit
         return hit
 
@@ -568,12 +568,14 @@ class WholeBodyQP:
         D[:, sv] = kin.mass_matrix()
         np.negative(self._Jf.T, out=D[:, sf])
         if L.n_lambda:
-            G, Gq, offs, minus_Gt = self._stacked_springs(stance)
+            G, minus_Gt, kpGq, kdG, kp_offs = self._stacked_springs(stance)
             D[:, L.sl_lambda] = minus_Gt
             A[self._sl_coup, sv] = G
-            g_c = Gq @ kin.q - offs
-            b[self._sl_coup] = -self._rigid_kp * g_c - self._rigid_kd * (G @ v)
-            self._G[:] = G
+            # G vdot = -kp (Gq q - offsets) - kd G v.
+            bcp = np.matmul(kpGq, kin.q, out=b[self._sl_coup])
+            bcp += kdG @ v
+            np.subtract(kp_offs, bcp, out=bcp)
+            self._G = G
         u, a = self._unact_v, self._act_v
         np.take(D, u, axis=0, out=A[self._sl_dyn])
         np.negative(hp[u], out=b[self._sl_dyn])
@@ -582,11 +584,10 @@ class WholeBodyQP:
         # Stance contact acceleration: J_c vdot = -Jdot_c v - K_c J_c v.
         rc = self._sl_contact
         fids = self.robot.force_frame_ids[stance]
-        kc = cfg.contact_kd
+        Ac, drift = A[rc, sv], self._contact_drift
         if k == 1:
-            J0 = st_jacs[0][self._axes]
-            A[rc, sv] = J0
-            b[rc] = -kin.frame_jdot_v(fids[0])[self._axes] - kc * (J0 @ v)
+            Ac[:] = st_jacs[0][self._axes_index]
+            drift[:] = kin.frame_jdot_v(fids[0])[self._axes_index]
         else:
             J0, J1 = st_jacs
             ax = kin.frame_position(fids[0]) - kin.frame_position(fids[1])
@@ -598,23 +599,25 @@ class WholeBodyQP:
             N = np.array(
                 [n1, (ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0])]
             )
-            r0, r1 = rc.start, rc.start + 3
-            A[r0:r1, sv] = J0
-            Jh = np.matmul(N, J1, out=A[r1 : rc.stop, sv])
-            b[r0:r1] = -kin.frame_jdot_v(fids[0]) - kc * (J0 @ v)
-            b[r1 : rc.stop] = -(N @ kin.frame_jdot_v(fids[1])) - kc * (Jh @ v)
+            Ac[:3] = J0
+            np.matmul(N, J1, out=Ac[3:])
+            drift[:3] = kin.frame_jdot_v(fids[0])
+            np.matmul(N, kin.frame_jdot_v(fids[1]), out=drift[3:])
+        bc = np.multiply(Ac @ v, -cfg.contact_kd, out=b[rc])
+        bc -= drift
         # Torque limits: tau_lo - tau0 <= T x <= tau_hi - tau0.
         P.C[self._sl_tau] = T
         np.subtract(self._tau_lo, tau0, out=P.l[self._sl_tau])
         np.subtract(self._tau_hi, tau0, out=P.u[self._sl_tau])
         # Joint limits (swing leg): stop inside the range within the horizon.
-        vi, qi, q_lo, q_hi, other = self._limits_by_swing[swing]
+        vi, qi, c_lo, c_hi, other = self._limits_by_swing[swing]
         hz = cfg.joint_limit_horizon_s
-        c = 2.0 / (hz * hz)
         rec = cfg.joint_limit_max_recovery
-        qs, vs = kin.q[qi], v[vi]
-        P.ub[vi] = np.maximum(c * (q_hi - qs - vs * hz), -rec)
-        P.lb[vi] = np.minimum(c * (q_lo - qs - vs * hz), rec)
+        # a_max = 2 (q_hi - q - v hz) / hz^2 = c_hi - t, t = 2 (q + v hz) / hz^2.
+        t = kin.q[qi] + v[vi] * hz
+        t *= 2.0 / (hz * hz)
+        P.ub[vi] = np.maximum(c_hi - t, -rec)
+        P.lb[vi] = np.minimum(c_lo - t, rec)
         P.ub[other] = np.inf
         P.lb[other] = -np.inf
         # Swing force box: w times the unit box (the ramp).
@@ -651,10 +654,11 @@ class WholeBodyQP:
         psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
         e = psi - (target.heading_rad - target.h_d[i_st])
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
-        h_d, dh_d = target.h_d.copy(), target.dh_d.copy()
-        h_d[i_sw] -= k * e
-        dh_d[i_sw] -= k * (psi_dot + target.dh_d[i_st])
-        return replace(target, h_d=h_d, dh_d=dh_d)
+        out = copy.copy(target)  # a shallow copy with two new arrays
+        out.h_d, out.dh_d = target.h_d.copy(), target.dh_d.copy()
+        out.h_d[i_sw] -= k * e
+        out.dh_d[i_sw] -= k * (psi_dot + target.dh_d[i_st])
+        return out
 
     # ------------------------------------------------------- stance foot
     def _stance_foot_index(self, stance: str):
