@@ -141,3 +141,15 @@ def test_least_squares_terms_are_jacobian_and_drift_minus_desired(robot, stance)
         expected = task.drift(kin, target) - task.desired_acceleration(kin, target)
         assert np.allclose(r, expected, rtol=1e-12, atol=1e-12), task.name
         assert r.shape == (n,)
+
+
+def test_joint_task_residual_is_the_documented_affine_map_of_the_state(robot):
+    q, v = _state(robot, 7)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    tasks = [t for t in _tasks(robot) if t.constant_jacobian]
+    target = _target(_tasks(robot)[0].size)
+    for task in tasks:
+        cols_q, Rq, cols_v, Rv, r0 = task.affine_residual()
+        _, r = task.least_squares(kin, target)
+        assert np.allclose(Rq @ q[cols_q] + Rv @ v[cols_v] + r0, r, rtol=1e-12, atol=1e-10), task.name

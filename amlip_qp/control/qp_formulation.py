@@ -64,7 +64,6 @@ of ``vdot``, forces and torques.
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass, field, replace
 
@@ -444,8 +443,27 @@ class WholeBodyQP:
                 H0[L.sl_vdot, L.sl_vdot] += (J.T * task.gains.weight) @ J
         self._H0 = H0
         self._varying_tasks = [t for t in self.tasks if not t.constant_jacobian]
-        #: (task, W J^T) of the constant-Jacobian tasks.
-        self._constant_tasks = [(t, t.jacobian(None, None).T * t.gains.weight) for t in self.tasks if t.constant_jacobian]
+        # Constant-Jacobian tasks: their gradient W J^T r is affine in the
+        # state, g_c = Kq q + Kv v + k0, precomputed here.
+        self._Kq = np.zeros((nv, robot.nq))
+        self._Kv = np.zeros((nv, nv))
+        self._k0 = np.zeros(nv)
+        for task in self.tasks:
+            if task.constant_jacobian:
+                WJ = task.jacobian(None, None).T * task.gains.weight
+                cols_q, Rq, cols_v, Rv, r0 = task.affine_residual()
+                self._Kq[:, cols_q] += WJ @ Rq
+                self._Kv[:, cols_v] += WJ @ Rv
+                self._k0 += WJ @ r0
+        # The state-dependent least-squares terms stacked as ||E x + e||^2:
+        # sqrt(W) (J vdot + r) of each varying task, then sqrt(reg_torque) (T x + tau0).
+        rows = [t.size for t in self._varying_tasks] + ([nu] if config.reg_torque > 0 else [])
+        self._E = np.zeros((sum(rows), n))
+        self._e = np.zeros(sum(rows))
+        self._sqrt_w = [np.sqrt(t.gains.weight) for t in self._varying_tasks]
+        self._sqrt_reg_torque = math.sqrt(config.reg_torque)
+        self._EtE = np.zeros((n, n))
+
         # Hip-yaw outputs for the pelvis-yaw feedback (None: not this robot).
         names = OutputMap(robot).names
         self._hip_yaw = None
@@ -625,20 +643,27 @@ class WholeBodyQP:
         self._last_force_weight = w
         np.multiply(self._sw_ub_unit, w, out=P.ub[L.sl_f_sw])
         np.multiply(self._sw_lb_unit, w, out=P.lb[L.sl_f_sw])
-        # Cost: constant Hessian part + varying tasks + torque regularisation.
+        # Cost: constant Hessian part, the constant tasks' affine gradient, and
+        # the stacked state-dependent terms ||E x + e||^2 (varying tasks, torques).
         H, g = P.H, P.g
         np.copyto(H, self._H0)
         g.fill(0.0)
-        for task in self._varying_tasks:
+        gv = np.matmul(self._Kq, kin.q, out=g[sv])
+        gv += self._Kv @ v
+        gv += self._k0
+        E, e = self._E, self._e
+        row = 0
+        for task, sw in zip(self._varying_tasks, self._sqrt_w):
             J, r = task.least_squares(kin, target)
-            WJ = J.T * task.gains.weight
-            H[sv, sv] += WJ @ J
-            g[sv] += WJ @ r
-        for task, WJ in self._constant_tasks:
-            g[sv] += WJ @ task.least_squares(kin, target)[1]
-        if cfg.reg_torque > 0:
-            H += cfg.reg_torque * (T.T @ T)
-            g += cfg.reg_torque * (T.T @ tau0)
+            m = sw.shape[0]
+            np.multiply(J, sw[:, None], out=E[row : row + m, sv])
+            np.multiply(r, sw, out=e[row : row + m])
+            row += m
+        if row < e.shape[0]:
+            np.multiply(T, self._sqrt_reg_torque, out=E[row:])
+            np.multiply(tau0, self._sqrt_reg_torque, out=e[row:])
+        H += np.matmul(E.T, E, out=self._EtE)
+        g += E.T @ e
         return P
 
     def hip_yaw_feedback_target(self, kin, target):
@@ -654,7 +679,9 @@ class WholeBodyQP:
         psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
         e = psi - (target.heading_rad - target.h_d[i_st])
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
-        out = copy.copy(target)  # a shallow copy with two new arrays
+        # A shallow copy (cheaper than copy.copy for a plain dataclass) with two new arrays.
+        out = object.__new__(type(target))
+        out.__dict__.update(target.__dict__)
         out.h_d, out.dh_d = target.h_d.copy(), target.dh_d.copy()
         out.h_d[i_sw] -= k * e
         out.dh_d[i_sw] -= k * (psi_dot + target.dh_d[i_st])

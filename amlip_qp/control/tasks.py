@@ -71,7 +71,8 @@ class Task(abc.ABC):
 
     name: str = "task"
     #: True when :meth:`jacobian` does not depend on the state (a builder may
-    #: then precompute its Hessian block once).
+    #: then precompute its Hessian block once). Such tasks also implement
+    #: :meth:`affine_residual`.
     constant_jacobian: bool = False
 
     def __init__(self, gains: Gains):
@@ -203,6 +204,17 @@ class JointTask(Task):
     def least_squares(self, kin, target) -> tuple[np.ndarray, np.ndarray]:
         """``(C, -ydd_des)``: the drift of a linear task is zero."""
         return self._C, -self.desired_acceleration(kin, target)
+
+    def affine_residual(self):
+        """The residual ``r = -ydd_des`` of :meth:`least_squares` as an affine
+        map of the state: ``r = Rq q[cols_q] + Rv v[cols_v] + r0``.
+
+        Returns:
+            ``(cols_q, Rq, cols_v, Rv, r0)``; ``Rq = K_p C``, ``Rv = K_d C``
+            (per component), ``r0 = -K_p y_ref`` (rad/s^2).
+        """
+        kp, kd = self.gains.kp[:, None], self.gains.kd[:, None]
+        return self._cols_q, kp * self._Cc, self._cols_v, kd * self._Cc, -self.gains.kp * self._y_ref
 
     def reference(self, kin, target):
         return self._y_ref, self._zero, self._zero

@@ -89,10 +89,22 @@ def tracker_solver_options() -> dict:
     return QPTracker(load_robot("rabbit")).solver.options
 
 
+#: Problems solved untimed, by a throwaway solver, before each solver's timed
+#: pass (CPU frequency and caches settle; the first few hundred solves on an
+#: idle machine ran up to 1.5x slower).
+WARMUP_PROBLEMS = 200
+
+
 def _time_proxsuite(problems: list[QPProblem], warm: bool, options: dict) -> tuple[list[float], int, int]:
     """The tracker's path: solve; after a failure retry once from scratch (timed too)."""
     from amlip_qp.exceptions import QPError
 
+    warmup = ProxQPSolver(**{**options, "warm_start": warm})
+    for p in problems[:WARMUP_PROBLEMS]:
+        try:
+            warmup.solve(p)
+        except QPError:
+            pass
     solver = ProxQPSolver(**{**options, "warm_start": warm})
     times, failures, retries = [], 0, 0
     for p in problems:
@@ -115,6 +127,11 @@ def _time_qpsolvers(problems: list[QPProblem], backend: str) -> tuple[list[float
     times, failures = [], 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # osqp's dense-to-sparse conversion notices
+        for p in problems[:WARMUP_PROBLEMS]:
+            try:
+                p.solve_with(backend)
+            except QPError:
+                pass
         for p in problems:
             t0 = time.perf_counter_ns()
             try:
