@@ -12,7 +12,11 @@ sequence through
   (fixed variables substituted first, :meth:`QPProblem.without_fixed_variables`);
 
 and reports the median and 99th percentile solve time per solver (µs) and
-each one's ratio to the warm ProxSuite path.
+each one's ratio to the warm ProxSuite path. The solvers take turns in
+blocks of 50 consecutive problems (each keeping its own state), so the
+machine's slow speed drifts, which reached ±30 % between runs on the 2-core
+development machine, affect every solver alike and the ratios stay
+comparable.
 """
 
 from __future__ import annotations
@@ -89,57 +93,70 @@ def tracker_solver_options() -> dict:
     return QPTracker(load_robot("rabbit")).solver.options
 
 
-#: Problems solved untimed, by a throwaway solver, before each solver's timed
-#: pass (CPU frequency and caches settle; the first few hundred solves on an
-#: idle machine ran up to 1.5x slower).
+#: Problems solved untimed before the timed pass (CPU frequency and caches
+#: settle; the first few hundred solves on an idle machine ran up to 1.5x slower).
 WARMUP_PROBLEMS = 200
 
 
-def _time_proxsuite(problems: list[QPProblem], warm: bool, options: dict) -> tuple[list[float], int, int]:
+class _ProxSuiteRunner:
     """The tracker's path: solve; after a failure retry once from scratch (timed too)."""
-    from amlip_qp.exceptions import QPError
 
-    warmup = ProxQPSolver(**{**options, "warm_start": warm})
-    for p in problems[:WARMUP_PROBLEMS]:
+    def __init__(self, warm: bool, options: dict):
+        self.solver = ProxQPSolver(**{**options, "warm_start": warm})
+        self.failures = 0
+        self.retries = 0
+
+    def __call__(self, problem: QPProblem) -> None:
+        from amlip_qp.exceptions import QPError
+
         try:
-            warmup.solve(p)
+            self.solver.solve(problem)
         except QPError:
-            pass
-    solver = ProxQPSolver(**{**options, "warm_start": warm})
-    times, failures, retries = [], 0, 0
-    for p in problems:
-        t0 = time.perf_counter_ns()
+            self.retries += 1
+            try:
+                self.solver.solve(problem)
+            except QPError:
+                self.failures += 1
+
+
+class _QPSolversRunner:
+    """One ``qpsolvers`` backend (stateless: fixed variables substituted per problem)."""
+
+    def __init__(self, backend: str):
+        self.backend = backend
+        self.failures = 0
+
+    def __call__(self, problem: QPProblem) -> None:
+        from amlip_qp.exceptions import QPError
+
         try:
-            solver.solve(p)
+            problem.solve_with(self.backend)
         except QPError:
-            retries += 1
-            try:
-                solver.solve(p)
-            except QPError:
-                failures += 1
-        times.append((time.perf_counter_ns() - t0) * 1e-3)
-    return times, failures, retries
+            self.failures += 1
 
 
-def _time_qpsolvers(problems: list[QPProblem], backend: str) -> tuple[list[float], int]:
-    from amlip_qp.exceptions import QPError
+#: Problems per turn when the solvers take turns (see :func:`_time_interleaved`).
+BLOCK_PROBLEMS = 50
 
-    times, failures = [], 0
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # osqp's dense-to-sparse conversion notices
-        for p in problems[:WARMUP_PROBLEMS]:
-            try:
-                p.solve_with(backend)
-            except QPError:
-                pass
-        for p in problems:
-            t0 = time.perf_counter_ns()
-            try:
-                p.solve_with(backend)
-            except QPError:
-                failures += 1
-            times.append((time.perf_counter_ns() - t0) * 1e-3)
-    return times, failures
+
+def _time_interleaved(problems: list[QPProblem], runners: dict, block: int = BLOCK_PROBLEMS) -> dict[str, list[float]]:
+    """Time every runner on every problem, µs. The runners take turns in
+    blocks of ``block`` consecutive problems (each keeps its own state and sees
+    the problems in order): the machine's slow speed drifts hit every solver
+    alike, while within a block each solver runs with warm caches, as in the
+    tracker's loop (solving problem by problem in turn let osqp's large sparse
+    set-up evict the others' data and doubled their times)."""
+    times: dict[str, list[float]] = {name: [] for name in runners}
+    clock = time.perf_counter_ns
+    for start in range(0, len(problems), block):
+        chunk = problems[start : start + block]
+        for name, run in runners.items():
+            out = times[name]
+            for p in chunk:
+                t0 = clock()
+                run(p)
+                out.append((clock() - t0) * 1e-3)
+    return times
 
 
 def bench_solvers(
@@ -162,16 +179,25 @@ def bench_solvers(
     if not problems:
         raise InputError("bench_solvers needs at least one problem")
     options = solver_options if solver_options is not None else tracker_solver_options()
-    out: dict[str, dict] = {}
-    for name, warm in (("proxsuite-warm", True), ("proxsuite-init", False)):
-        times, fails, retries = _time_proxsuite(problems, warm, options)
-        out[name] = {**_stats(times), "failures": fails, "cold_retries": retries}
     wanted = backends if backends is not None else QPSOLVERS_BACKENDS
-    for backend in wanted:
-        if backend not in qpsolvers.available_solvers:
-            continue
-        times, fails = _time_qpsolvers(problems, backend)
-        out[backend] = {**_stats(times), "failures": fails}
+
+    def make_runners() -> dict:
+        runners = {"proxsuite-warm": _ProxSuiteRunner(True, options), "proxsuite-init": _ProxSuiteRunner(False, options)}
+        for backend in wanted:
+            if backend in qpsolvers.available_solvers:
+                runners[backend] = _QPSolversRunner(backend)
+        return runners
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # osqp's dense-to-sparse conversion notices
+        _time_interleaved(problems[:WARMUP_PROBLEMS], make_runners())  # untimed warm-up
+        runners = make_runners()
+        times = _time_interleaved(problems, runners)
+    out: dict[str, dict] = {}
+    for name, run in runners.items():
+        out[name] = {**_stats(times[name]), "failures": run.failures}
+        if isinstance(run, _ProxSuiteRunner):
+            out[name]["cold_retries"] = run.retries
     ref = out["proxsuite-warm"]["median_us"]
     for stats in out.values():
         stats["ratio_to_warm"] = stats["median_us"] / ref if ref > 0 else float("nan")
