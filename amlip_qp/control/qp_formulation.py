@@ -562,7 +562,11 @@ class WholeBodyQP:
 
         Every block is written in place into the preallocated arrays; blocks
         that never change (friction rows, the stance force box, the constant
-        Hessian part, zero blocks) are written once in the constructor.
+        Hessian part, zero blocks) are written once in the constructor, so
+        edit the returned problem only through this class's methods
+        (:meth:`limit_stance_foot_torque`, :meth:`add_stance_yaw_moment_cost`)
+        or on a :meth:`QPProblem.copy`: other in-place edits would persist
+        into later ticks.
         """
         cfg, L, P = self.config, self._layout, self.problem
         if self._hip_yaw is not None:

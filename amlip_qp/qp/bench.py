@@ -14,7 +14,7 @@ sequence through
 and reports the median and 99th percentile solve time per solver (µs) and
 each one's ratio to the warm ProxSuite path. The solvers take turns in
 blocks of 50 consecutive problems (each keeping its own state), so the
-machine's slow speed drifts, which reached ±30 % between runs on the 2-core
+machine's slow speed drifts, which reached 1.6x between runs on the 2-core
 development machine, affect every solver alike and the ratios stay
 comparable.
 """
