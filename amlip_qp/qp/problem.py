@@ -19,6 +19,8 @@ import numpy as np
 
 from amlip_qp.exceptions import QPError
 
+_sum = np.add.reduce
+
 
 @dataclass
 class QPProblem:
@@ -87,7 +89,9 @@ class QPProblem:
                 if shape != want:
                     raise QPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
         # Fast path, once per control tick: NaN and inf propagate through a sum.
-        total = float(self.H.sum() + self.g.sum() + self.A.sum() + self.b.sum() + self.C.sum())
+        total = 0.0
+        for arr in (self.H, self.g, self.A, self.b, self.C):
+            total += _sum(arr, axis=None)  # ndarray.sum() without its Python wrapper
         if not math.isfinite(total):
             for name in ("H", "g", "A", "b", "C"):
                 if not np.all(np.isfinite(getattr(self, name))):
