@@ -6,55 +6,23 @@ TSID re-initialises ProxQP at every control tick; here one
 That works because the tracker's problem keeps fixed dimensions (the swing
 foot keeps its force variables, bounded to zero).
 
-Determinism: the ProxSuite wheels link OpenMP, and with more than one OpenMP
-thread Eigen splits some products across threads, so the same problem
-sequence gave solutions differing by up to 3e-6 from run to run (measured on
-1200 recorded Cassie QPs). The solver therefore runs ProxSuite with one
-OpenMP thread (:func:`single_threaded_openmp`), which gave bit-identical
-solutions and no measurable slowdown on these small problems.
+Determinism: ProxSuite is imported through :mod:`amlip_qp.qp._proxsuite`,
+which loads its portable build (the vectorised builds are not bit-reproducible).
 """
 
 from __future__ import annotations
 
-import ctypes
 import math
-import os
-import threading
 import time
 from dataclasses import dataclass
 
 import numpy as np
-from proxsuite import proxqp
+from amlip_qp.qp._proxsuite import proxqp
 
 from amlip_qp.exceptions import QPError
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
-
-#: OpenMP runtimes that may be loaded with ProxSuite (Linux, macOS, Intel).
-_OPENMP_LIBRARIES = ("libgomp.so.1", "libomp.so", "libomp.dylib", "libiomp5.so")
-
-
-def single_threaded_openmp() -> bool:
-    """Set the calling thread's OpenMP team size to 1 in every OpenMP runtime
-    already loaded in the process (ProxSuite's). Returns whether one was found.
-
-    OpenMP's thread count is per calling thread, so this is called from the
-    thread that solves (:meth:`ProxQPSolver.solve` does it once per thread).
-    """
-    found = False
-    mode = getattr(os, "RTLD_NOLOAD", 0) | getattr(os, "RTLD_LAZY", 0)
-    for name in _OPENMP_LIBRARIES:
-        try:
-            lib = ctypes.CDLL(name, mode=mode)  # RTLD_NOLOAD: only if already loaded
-        except OSError:
-            continue
-        setter = getattr(lib, "omp_set_num_threads", None)
-        if setter is not None:
-            setter(1)
-            found = True
-    return found
-
 
 @dataclass
 class QPSolution:
@@ -121,7 +89,6 @@ class ProxQPSolver:
         self.update_preconditioner = bool(update_preconditioner)
         self._qp: proxqp.dense.QP | None = None
         self._dims: tuple[int, int, int] | None = None
-        self._omp_thread: int | None = None
         #: Number of (re-)initialisations so far (1 in steady warm-started use).
         self.n_init = 0
 
@@ -160,10 +127,6 @@ class ProxQPSolver:
     def solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
         dims = (problem.n, problem.n_eq, problem.n_in)
-        thread = threading.get_ident()
-        if thread != self._omp_thread:
-            single_threaded_openmp()
-            self._omp_thread = thread
         t0 = time.perf_counter_ns()
         args = (problem.H, problem.g, problem.A, problem.b, problem.C, problem.l, problem.u, problem.lb, problem.ub)
         if self._qp is None or dims != self._dims or not self.warm_start:
