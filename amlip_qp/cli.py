@@ -113,7 +113,7 @@ def _add_walk(sub) -> None:
         default=[],
         help="push the base with a world force (N) from T for DUR seconds; repeatable",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
     p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
@@ -144,7 +144,7 @@ def _add_compare(sub) -> None:
     p.add_argument("--push-iterations", type=_non_negative_int, default=None, metavar="N", help="bisection iterations per push direction")
     p.add_argument("--no-ramp", action="store_true", help="skip the speed-ramp test")
     p.add_argument("--no-push", action="store_true", help="skip the push tests")
-    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise")
     p.add_argument("--jobs", type=_positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")

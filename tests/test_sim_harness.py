@@ -124,3 +124,21 @@ def test_on_tick_hook_and_log_keys():
 def test_run_rejects_bad_duration():
     with pytest.raises(InputError):
         _sim("rabbit").run(float("nan"))
+
+
+def test_run_rejects_a_duration_below_one_tick_and_a_negative_seed():
+    with pytest.raises(InputError, match="shorter than one control tick"):
+        _sim("rabbit").run(1e-9)
+    with pytest.raises(InputError, match="seed"):
+        _sim("rabbit", seed=-1)
+
+
+def test_a_diverging_simulation_is_a_fall_not_a_restart():
+    # MuJoCo resets an unstable state to qpos0 and restarts its clock; the
+    # harness must report that as a fall at the tick it happened.
+    sim = _sim("cassie", pushes=[Push(0.004, (1e300, 0.0, 0.0), 0.01)])
+    res = sim.run(0.02)
+    assert res.fell
+    assert res.fall_time_s == pytest.approx(0.004, abs=1e-3)
+    assert res.sim_time_s <= 0.006
+    assert np.all(np.diff(res.log["t"]) > 0)

@@ -103,9 +103,11 @@ def _check_output_paths(args: argparse.Namespace) -> None:
         value = getattr(args, opt)
         if value is None or value == "-":
             continue
-        parent = Path(value).expanduser().resolve().parent
-        if not parent.is_dir():
-            raise InputError(f"--{opt} {value}: folder {parent} does not exist")
+        path = Path(value).expanduser().resolve()
+        if path.is_dir():
+            raise InputError(f"--{opt} {value}: is a folder; give a file name")
+        if not path.parent.is_dir():
+            raise InputError(f"--{opt} {value}: folder {path.parent} does not exist")
 
 
 def run_walk(args: argparse.Namespace) -> int:

@@ -33,6 +33,13 @@ _TIME_TOL_S = 1e-9
 #: (s) and MuJoCo's ``MjData`` (read only: do not modify it).
 TickCallback = Callable[[float, "mujoco.MjData"], None]
 
+#: MuJoCo warnings that mean the simulation diverged (it then resets the state).
+_DIVERGENCE_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQACC,
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+)
+
 
 @dataclass(frozen=True)
 class Push:
@@ -186,6 +193,8 @@ class Simulation:
         self.command_fn = command_fn
         self.pushes = tuple(pushes)
         self.noise = noise
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise InputError(f"seed must be a non-negative integer, got {seed!r}")
         self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self.contact_threshold_N = float(contact_threshold_N)
@@ -286,6 +295,8 @@ class Simulation:
         m, d, ctrl = self.model, self.data, self.controller
         ctrl.reset()
         n_ticks = int(round(duration_s / ctrl.dt_s))
+        if n_ticks < 1:
+            raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         nu = len(self._gear)
         n_out = ctrl.planner.n_outputs
         log = {
@@ -324,6 +335,8 @@ class Simulation:
 
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
+        warn0 = [d.warning[w].number for w in _DIVERGENCE_WARNINGS]
+        sim_time = float(d.time)
         k = 0
         for k in range(n_ticks):
             t = float(d.time)
@@ -363,8 +376,15 @@ class Simulation:
             log["cmd_vx"][k] = cmd.vx_mps
             log["cmd_vy"][k] = cmd.vy_mps
             log["cmd_turn_rate"][k] = cmd.turn_rate_radps
+            t_before = d.time
             for _ in range(self.substeps):
                 mujoco.mj_step(m, d)
+            # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
+            # counts a warning; that is a divergence, reported as a fall.
+            if d.time < t_before or any(d.warning[w].number > warn0[i] for i, w in enumerate(_DIVERGENCE_WARNINGS)):
+                fell, fall_time, sim_time = True, t, t
+                break
+            sim_time = float(d.time)
             if on_tick is not None:
                 on_tick(float(d.time), d)
             if bar is not None and (k + 1) % 200 == 0:
@@ -382,7 +402,7 @@ class Simulation:
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
             duration_s=float(duration_s),
-            sim_time_s=float(d.time),
+            sim_time_s=sim_time,
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
