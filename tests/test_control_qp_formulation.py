@@ -178,3 +178,24 @@ def test_hip_yaw_feedback_aims_the_swing_foot_at_the_heading_whatever_the_pelvis
     kr = _kin(rabbit)
     tr = _target(kr)
     assert WholeBodyQP(rabbit, default_config(rabbit).with_(hip_yaw_feedback=1.0)).hip_yaw_feedback_target(kr, tr) is tr
+
+
+def test_a_build_after_the_other_stance_equals_a_fresh_build(robot):
+    """The builder writes constant blocks once and refills the rest in place:
+    nothing from a previous tick (other stance, other state) may leak."""
+    from amlip_qp.control.qp_formulation import default_config
+
+    cfg = default_config(robot)
+    used = WholeBodyQP(robot, cfg)
+    kin_a, kin_b = _kin(robot, seed=1), _kin(robot, seed=2)
+    for kin, stance in ((kin_a, "right"), (kin_b, "left")):
+        target = _target(kin, stance, phase=0.03, weight=0.5, offset=0.01)
+        p = used.build(kin, target)
+        used.limit_stance_foot_torque(p, target)
+        used.add_stance_yaw_moment_cost(p, kin, target)
+    fresh = WholeBodyQP(robot, cfg)
+    q = fresh.build(kin_b, target)
+    fresh.limit_stance_foot_torque(q, target)
+    fresh.add_stance_yaw_moment_cost(q, kin_b, target)
+    for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+        assert np.array_equal(getattr(p, name), getattr(q, name)), name

@@ -164,3 +164,45 @@ def test_replaying_the_recorded_problems_is_bit_identical(walk):
         solver = ProxQPSolver(**tracker.solver.options)
         runs.append(np.array([solver.solve(p).x for p in problems]))
     assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
+
+
+def test_bad_arguments_and_targets_are_typed_errors():
+    from amlip_qp.control.qp_formulation import CASSIE_CONFIG
+    from amlip_qp.exceptions import InputError
+
+    cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
+    with pytest.raises(InputError, match="gains for 9 outputs but rabbit has 4"):
+        QPTracker(rabbit, CASSIE_CONFIG)
+    for kwargs in ({"fallback_decay": -5.0}, {"fallback_damping_Nms": -1.0}, {"eps_abs": -1.0}, {"max_iter": 0}):
+        with pytest.raises(InputError):
+            QPTracker(cassie, **kwargs)
+    tracker = QPTracker(cassie)
+    kin, target = _stand(cassie)
+    target.stance = "up"
+    with pytest.raises(InputError, match="stance"):
+        tracker.compute(kin, target)
+    kin, target = _stand(cassie)
+    target.h_d = target.h_d[:5]
+    with pytest.raises(InputError, match="h_d"):
+        tracker.compute(kin, target)
+
+
+def test_an_infeasible_fresh_solve_is_not_repeated():
+    """Re-initialising solver: a failed solve is already cold, so no cold retry."""
+    robot = load_robot("cassie")
+    tracker = QPTracker(robot, warm_start=False)
+    kin, target = _stand(robot)
+    build = tracker.builder.build
+
+    def contradictory(kin, target):
+        problem = build(kin, target)
+        problem.A[0] = 0.0
+        problem.b[0] = 1.0
+        return problem
+
+    tracker.builder.build = contradictory
+    before = tracker.solver.n_init
+    bad = tracker.compute(kin, target)
+    assert not bad.ok
+    assert tracker.cold_retries == 0
+    assert tracker.solver.n_init - before == 2  # the solve, then the relaxed solve; no repeat

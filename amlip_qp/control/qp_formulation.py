@@ -320,7 +320,13 @@ class WholeBodyQP:
         mode = config.rigid_springs
         L = self._layout = _Layout(nv, len(self._axes), k, n_r if mode == "all" else 0, 0 if mode == "none" else n_r)
         n_lambda = L.n_lambda
-        self.output_task = OutputTask(Gains.of(len(config.output_kp), config.output_kp, config.output_kd, config.output_weight))
+        n_out = OutputMap(robot).size
+        if len(config.output_kp) != n_out:
+            raise InputError(
+                f"QPConfig has gains for {len(config.output_kp)} outputs but {robot.name} has {n_out}: "
+                "use default_config(robot) or a config made for this robot"
+            )
+        self.output_task = OutputTask(Gains.of(n_out, config.output_kp, config.output_kd, config.output_weight))
         self._act_v = np.asarray(robot.actuated.pin_v_idx, dtype=int)
         self._act_q = np.asarray(robot.actuated.pin_q_idx, dtype=int)
         self._unact_v = np.setdiff1d(np.arange(nv), self._act_v)

@@ -24,7 +24,7 @@ import numpy as np
 
 from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP
 from amlip_qp.control.tracker import Tracker, TrackerResult
-from amlip_qp.exceptions import AmlipError, QPError
+from amlip_qp.exceptions import AmlipError, InputError, QPError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
 
@@ -70,8 +70,17 @@ class QPTracker(Tracker):
         fallback_decay: float = 0.9,
         fallback_damping_Nms: float = 5.0,
     ):
+        if not 0.0 <= fallback_decay <= 1.0:
+            raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
+        if not (fallback_damping_Nms >= 0.0 and math.isfinite(fallback_damping_Nms)):
+            raise InputError(f"fallback_damping_Nms must be finite and >= 0, got {fallback_damping_Nms!r}")
+        if not (eps_abs > 0.0 and math.isfinite(eps_abs)):
+            raise InputError(f"eps_abs must be a positive tolerance, got {eps_abs!r}")
+        if int(max_iter) < 1:
+            raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
+        self._n_outputs = self.builder.output_task.size
         self.config = self.builder.config
         self.solver = ProxQPSolver(
             eps_abs=eps_abs,
@@ -124,6 +133,10 @@ class QPTracker(Tracker):
     def compute(self, kin, target) -> TrackerResult:
         """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN)."""
         info: dict = {}
+        if target.stance not in self.robot.foot_sides:
+            raise InputError(f"target.stance must be one of {tuple(self.robot.foot_sides)}, got {target.stance!r}")
+        if np.shape(target.h_d) != (self._n_outputs,):
+            raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(target.h_d)}")
         t0 = time.perf_counter_ns()
         try:
             problem = self.builder.build(kin, target)
@@ -133,15 +146,20 @@ class QPTracker(Tracker):
             problem.validate()
         except QPError as exc:
             return self._fallback(kin, f"invalid problem: {exc}", info)
-        except (AmlipError, ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        except (AmlipError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            # ArithmeticError: e.g. a degenerate (vertical) blade in a fall.
             return self._fallback(kin, f"cannot build the QP: {exc}", info)
         t1 = time.perf_counter_ns()
         try:
+            n_init = self.solver.n_init
             try:
                 sol = self.solver.solve(problem)
             except QPError:
                 # A warm start from a far-away iterate can stall: retry once from
-                # scratch (the solver re-initialises after a failure).
+                # scratch (the solver re-initialises after a failure). A solve
+                # that was already a fresh start is not repeated.
+                if self.solver.n_init != n_init:
+                    raise
                 self.cold_retries += 1
                 sol = self.solver.solve(problem)
         except QPError as exc:
@@ -168,6 +186,8 @@ class QPTracker(Tracker):
         return sol
 
     def _finish(self, kin, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
+        # The solver rejects a non-finite x, so the forces are finite; the torques
+        # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
         if not math.isfinite(tau.sum()):
             return self._fallback(kin, "non-finite torques", info)
@@ -190,6 +210,4 @@ class QPTracker(Tracker):
             swing_fz_N=swing_fz,
             swing_force_weight=self.builder._last_force_weight,
         )
-        if not math.isfinite(info["stance_fz_N"]):
-            return self._fallback(kin, "non-finite forces", info)
         return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)
