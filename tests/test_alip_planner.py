@@ -266,3 +266,12 @@ def test_outputs_are_independent_of_the_kernels_shared_buffers():
     for k, value in kept.items():
         np.testing.assert_array_equal(getattr(first, k), value)
         assert not np.shares_memory(getattr(first, k), shared8) and not np.shares_memory(getattr(first, k), shared27)
+
+
+def test_kernels_with_the_wrong_output_size_and_boolean_commands_are_input_errors():
+    with pytest.raises(InputError, match="plan_fn returned 7 values"):
+        started(plan_fn=lambda u: np.zeros(7)).update(est(), cmd())
+    with pytest.raises(InputError, match="reference_fn returned 20 values"):
+        started(reference_fn=lambda u: np.zeros(20)).update(est(), cmd())
+    with pytest.raises(InputError, match="step_time_s"):
+        cmd(step_time_s=True)

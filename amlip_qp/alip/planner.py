@@ -92,7 +92,7 @@ class Command:
     def __post_init__(self):
         for name in ("step_time_s", "com_height_m", "clearance_m", "vx_mps", "vy_mps", "turn_rate_radps", "step_width_m"):
             v = getattr(self, name)
-            if not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
                 raise InputError(f"Command.{name} must be a finite number, got {v!r}")
         if not self.step_time_s > 0.0:
             raise InputError(f"Command.step_time_s (T) must be > 0 s, got {self.step_time_s!r}")
@@ -421,6 +421,8 @@ class Planner:
         u[:] = (p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g)
         # The kernels may return a shared buffer: copy once, hand out views.
         y = np.array(self.plan_fn(u), dtype=float).reshape(-1)
+        if y.size != len(kernels.ALIP_PLAN_OUTPUTS):
+            raise InputError(f"plan_fn returned {y.size} values; ALIP_PLAN has {len(kernels.ALIP_PLAN_OUTPUTS)} outputs")
         yl = y.tolist()
         y2, y3, px_w, py_w = yl[2], yl[3], yl[6], yl[7]
 
@@ -429,7 +431,10 @@ class Planner:
         p_sw_h = np.array([c * px_w + sn * py_w, -sn * px_w + c * py_w])
         turn = heading_next - self._heading
         ur = O.pack_swing_reference_input(self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref)
-        h_d, dh_d, ddh_d = O.split_reference(self.robot, np.asarray(self.reference_fn(ur), dtype=float).reshape(-1))
+        yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
+        if yr.size != kernels.SWING_REFERENCE_N_OUT:
+            raise InputError(f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}")
+        h_d, dh_d, ddh_d = O.split_reference(self.robot, yr)
 
         c0, c1, c2 = estimate.com_m.tolist()
         target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2])

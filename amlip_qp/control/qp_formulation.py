@@ -579,7 +579,7 @@ class WholeBodyQP:
             target = self.hip_yaw_feedback_target(kin, target)
         stance = target.stance
         swing = "right" if stance == "left" else "left"
-        nv, k = L.nv, L.n_points
+        k = L.n_points
         sv = L.sl_vdot
         sf = slice(L.sl_f_st.start, L.sl_f_sw.stop)
         v = kin.v
