@@ -123,3 +123,19 @@ def test_step_with_bad_input_fails_like_predict_and_correct():
     with pytest.raises(InputError, match="L_meas_Nms must be finite"):
         f.step(0.1, np.inf, DT)
     assert f.L == 1.0 + M * G * 0.1 * DT  # as predict() then correct(): the prediction stays
+
+
+def test_non_numbers_are_input_errors_and_a_bad_plane_leaves_both_untouched():
+    f = kalman.AngularMomentumFilter(32.0)
+    f.reset(1.0, 2.0)
+    for bad in ("a", None, np.array([1.0, 2.0]), True):
+        with pytest.raises(InputError):
+            f.x.correct(bad)
+        with pytest.raises(InputError):
+            f.x.predict(bad, 0.0005)
+    before = (f.x.L, f.x.P, f.y.L, f.y.P)
+    with pytest.raises(InputError):
+        f.step(0.01, 0.02, 1.0, float("nan"), 0.0005)
+    assert (f.x.L, f.x.P, f.y.L, f.y.P) == before
+    with pytest.raises(InputError):
+        kalman.AngularMomentumFilter(32.0, L0_Nms=(1.0,))

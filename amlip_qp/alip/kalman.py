@@ -37,6 +37,14 @@ from amlip_qp.alip import _checks as C
 from amlip_qp.alip.formulas import GRAVITY_MPS2
 from amlip_qp.exceptions import InputError
 
+
+def _finite(x) -> bool:
+    """Whether ``x`` is one finite real number (False for NaN, inf, bools, strings, arrays)."""
+    try:
+        return not isinstance(x, bool) and math.isfinite(x)
+    except TypeError:
+        return False
+
 #: Default process-noise intensity q, (kg m^2/s)^2 / s.
 DEFAULT_PROCESS_VAR_RATE = 4.0
 #: Default measurement-noise variance r, (kg m^2/s)^2.
@@ -91,7 +99,7 @@ class MomentumFilter1D:
 
         Call at touchdown with the momentum about the new contact.
         """
-        if not math.isfinite(L_Nms) or (var is not None and not (var >= 0.0 and math.isfinite(var))):
+        if not _finite(L_Nms) or (var is not None and not (_finite(var) and var >= 0.0)):
             raise InputError(f"reset needs a finite L_Nms and a finite var >= 0, got L_Nms={L_Nms!r}, var={var!r}")
         self.L = float(L_Nms)
         if var is not None:
@@ -100,7 +108,7 @@ class MomentumFilter1D:
     def predict(self, p_m: float, dT_s: float) -> float:
         """Propagate over ``dT_s`` seconds with the CoM offset ``p_m`` (m) from the
         stance contact along the driving axis; returns the predicted L (kg m^2/s)."""
-        if not (dT_s > 0.0 and math.isfinite(p_m) and math.isfinite(dT_s)):
+        if not (_finite(p_m) and _finite(dT_s) and dT_s > 0.0):
             raise InputError(f"predict needs a finite p_m and a finite dT_s > 0 s, got p_m={p_m!r}, dT_s={dT_s!r}")
         self.L += self._mg * p_m * dT_s
         self.P += self._q * dT_s
@@ -108,7 +116,7 @@ class MomentumFilter1D:
 
     def correct(self, L_meas_Nms: float) -> float:
         """Fuse a measurement ``L_meas_Nms`` (kg m^2/s); returns the filtered L (kg m^2/s)."""
-        if not math.isfinite(L_meas_Nms):
+        if not _finite(L_meas_Nms):
             raise InputError(f"L_meas_Nms must be finite, got {L_meas_Nms!r}; skip correct() for a missing measurement")
         k = self.P / (self.P + self._r)
         self.L += k * (L_meas_Nms - self.L)
@@ -122,7 +130,7 @@ class MomentumFilter1D:
         methods, inlined (the 2 kHz hot path); bad inputs go through them for
         their exact errors and state changes.
         """
-        if not (dT_s > 0.0 and math.isfinite(p_m) and math.isfinite(dT_s) and math.isfinite(L_meas_Nms)):
+        if not (_finite(p_m) and _finite(dT_s) and _finite(L_meas_Nms) and dT_s > 0.0):
             self.predict(p_m, dT_s)
             return self.correct(L_meas_Nms)
         L = self.L + self._mg * p_m * dT_s
@@ -153,6 +161,7 @@ class AngularMomentumFilter:
         var0: float = 1.0,
     ):
         #: Filter on L_x (lateral plane).
+        L0_Nms = C.vector("L0_Nms", L0_Nms, 2)
         self.x = MomentumFilter1D(mass_kg, -1.0, g_mps2, process_var_rate, measurement_var, L0_Nms[0], var0)
         #: Filter on L_y (sagittal plane).
         self.y = MomentumFilter1D(mass_kg, 1.0, g_mps2, process_var_rate, measurement_var, L0_Nms[1], var0)
@@ -168,6 +177,13 @@ class AngularMomentumFilter:
         ``p_st_x_m``, ``p_st_y_m``: CoM minus stance contact (m, world axes);
         ``L_*_meas_Nms``: measured momentum about the stance contact; ``dT_s``: tick (s).
         """
+        args = (p_st_x_m, p_st_y_m, L_x_meas_Nms, L_y_meas_Nms, dT_s)
+        if not (all(_finite(a) for a in args) and dT_s > 0.0):
+            # Check both planes before stepping either (no half-updated state).
+            raise InputError(
+                "AngularMomentumFilter.step: p_st_m and L_meas_Nms must be finite numbers and dT_s > 0 s, got "
+                f"p_st=({p_st_x_m!r}, {p_st_y_m!r}), L_meas=({L_x_meas_Nms!r}, {L_y_meas_Nms!r}), dT_s={dT_s!r}"
+            )
         return self.x.step(p_st_y_m, L_x_meas_Nms, dT_s), self.y.step(p_st_x_m, L_y_meas_Nms, dT_s)
 
     @property
