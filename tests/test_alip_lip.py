@@ -157,3 +157,9 @@ def test_bad_input_raises_input_error(call, match):
 def test_input_error_is_a_value_error():
     with pytest.raises(ValueError):
         lip.flow(0.1, 1.0, -1.0, M, H)
+
+
+@pytest.mark.parametrize("bad", ["a", 1j, [1.0, "x"]])
+def test_non_numeric_input_is_an_input_error(bad):
+    with pytest.raises(InputError, match="p_m must be a real number"):
+        lip.flow(bad, 1.0, 0.3, 32.0, 0.8)

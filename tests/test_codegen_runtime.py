@@ -248,3 +248,10 @@ def test_stale_committed_sources_warn_and_use_fresh(tmp_path, cache_dir, fast):
 def test_non_numeric_object_array_raises_input_error(fast):
     with pytest.raises(InputError, match="real numbers"):
         fast.alip_plan(np.array(["x"] * 15, dtype=object))
+
+
+def test_cache_key_changes_with_the_cpu_architecture(monkeypatch):
+    src = b"int f(void) { return 1; }"
+    key = runtime.cache_key(src, ["cc"])
+    monkeypatch.setattr(runtime.platform, "machine", lambda: "some-other-arch")
+    assert runtime.cache_key(src, ["cc"]) != key

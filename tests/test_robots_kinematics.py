@@ -571,3 +571,13 @@ def test_precomputed_passive_forces_equal_the_plain_formula():
     assert passive._index(np.arange(3, 7)) == slice(3, 7)
     idx = np.array([1, 3])
     assert passive._index(idx) is idx
+
+
+def test_position_only_drifts_are_read_only_shared_zeros(robot):
+    kin = RobotKinematics(robot)
+    kin.update_positions(robot.q_stand)
+    fid = robot.contact_frame_ids["left"]
+    a = kin.frame_jdot_v(fid)
+    assert np.all(a == 0.0)
+    with pytest.raises(ValueError):
+        a[0] = 1.0  # would corrupt every later drift

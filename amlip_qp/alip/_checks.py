@@ -19,7 +19,10 @@ def finite(name: str, value) -> None:
         if math.isfinite(value):
             return
     else:
-        arr = np.asarray(value, dtype=float)
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{name} must be a real number or array of them, got {value!r}") from None
         if np.all(np.isfinite(arr)):
             return
     raise InputError(f"{name} must be finite (no NaN or inf), got {value!r}; pass a finite value")

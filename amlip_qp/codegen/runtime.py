@@ -41,9 +41,11 @@ from __future__ import annotations
 
 import hashlib
 import os
+import platform
 import shlex
 import shutil
 import subprocess
+import sys
 import tempfile
 import warnings
 from pathlib import Path
@@ -132,10 +134,11 @@ def library_source(committed_dir: Path = CODEGEN_DIR) -> bytes:
 
 
 def cache_key(source: bytes, compiler: Sequence[str], flags: Sequence[str] = CFLAGS) -> str:
-    """SHA-256 (hex) of the source, the compiler command and the flags."""
+    """SHA-256 (hex) of the source, the compiler command, the flags and the
+    platform (OS and CPU architecture: a cache folder may be shared between machines)."""
     h = hashlib.sha256()
     h.update(source)
-    for part in (" ".join(compiler), " ".join(flags)):
+    for part in (" ".join(compiler), " ".join(flags), f"{sys.platform}-{platform.machine()}"):
         h.update(b"\0" + part.encode("utf-8"))
     return h.hexdigest()
 

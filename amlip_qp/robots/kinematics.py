@@ -69,8 +69,11 @@ class RobotKinematics:
         self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
+        # Shared zero drifts of update_positions(): read-only, as callers get views.
         self._zero3 = np.zeros(3)
         self._zero6 = np.zeros(6)
+        self._zero3.flags.writeable = False
+        self._zero6.flags.writeable = False
 
     # ------------------------------------------------------------------ update
     def update(self, q, v) -> None:
@@ -123,9 +126,10 @@ class RobotKinematics:
         self.q = np.array(q, dtype=float)
         if self.v is None or self.v.shape != (m.nv,) or not self.positions_only:
             self.v = np.zeros(m.nv)
-        pin.computeJointJacobians(m, d, self.q)  # also the joint placements
-        pin.updateFramePlacements(m, d)
+        # One pass: the CoM Jacobian computes the joint placements and the joint
+        # Jacobians (data.J) too (a separate computeJointJacobians gave the same bits).
         pin.jacobianCenterOfMass(m, d, self.q, False)  # also com[0]
+        pin.updateFramePlacements(m, d)
         self._invalidate(True)
 
     def _bind_views(self) -> None:
