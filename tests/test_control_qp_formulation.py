@@ -107,8 +107,11 @@ def test_dimensions_do_not_depend_on_the_stance(robot):
     b = builder.build(kin, _target(kin, "right")).copy()
     assert (a.n, a.n_eq, a.n_in) == (b.n, b.n_eq, b.n_in)
     nf = 2 * (2 if robot.is_planar else 6)
-    n_lambda = 0 if robot.is_planar else 4
-    assert a.n == robot.nv + nf + n_lambda
+    assert a.n == robot.nv + nf
+    # Rabbit: 3 floating-base rows + 2 contact rows; Cassie: 6 floating-base
+    # rows (the passive rows determine the eliminated rigid-spring forces),
+    # 5 contact rows and 4 rigid-spring rows.
+    assert a.n_eq == (5 if robot.is_planar else 15)
     assert {"vdot", "forces_stance", "forces_swing"} <= set(a.variables)
     assert [name for name, _ in a.in_rows] == ["torque", "friction"]
 
@@ -168,6 +171,14 @@ def test_hip_yaw_feedback_aims_the_swing_foot_at_the_heading_whatever_the_pelvis
     others = [i for i in range(n) if i != i_sw]
     assert np.array_equal(out.h_d[others], h_d[others]) and np.array_equal(out.dh_d[others], dh_d[others])
     assert np.array_equal(target.h_d, h_d), "the caller's target is not modified"
+    # build() applies the feedback in the cost: the same problem as a build
+    # without feedback on the corrected target.
+    plain = WholeBodyQP(cassie, CASSIE_CONFIG.with_(hip_yaw_feedback=0.0))
+    with_fb = builder.build(kin, target).copy()
+    without = plain.build(kin, out)
+    assert np.allclose(with_fb.g, without.g, rtol=1e-12, atol=1e-9)
+    assert np.array_equal(with_fb.H, without.H)
+    assert not np.allclose(with_fb.g, plain.build(kin, target).g, rtol=1e-6, atol=1e-6)
     # The error wraps: a pelvis 2 pi further round is the same pelvis.
     q[3:7] = pin.Quaternion(pin.utils.rpyToMatrix(0.0, 0.0, yaw - 2 * math.pi)).coeffs()
     kin.update(q, v)
@@ -199,3 +210,34 @@ def test_a_build_after_the_other_stance_equals_a_fresh_build(robot):
     fresh.add_stance_yaw_moment_cost(q, kin_b, target)
     for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
         assert np.array_equal(getattr(p, name), getattr(q, name)), name
+
+
+@pytest.mark.parametrize("mode, n_lambda", [("all", 4), ("swing", 2), ("none", 0)])
+def test_eliminated_rigid_spring_forces_satisfy_every_dynamics_row(mode, n_lambda):
+    """The rigid springs' constraint forces are not variables: recovered from the
+    passive rows, they must close the full dynamics (all nv rows) and hold the
+    springs' rate constraints, whichever legs are held rigid."""
+    cassie = load_robot("cassie")
+    builder = WholeBodyQP(cassie, default_config(cassie).with_(rigid_springs=mode))
+    for stance in ("left", "right"):
+        # At the standing springs (random spring deflections with free springs
+        # can need more than the motors' torque: infeasible by the torque rows).
+        kin = _kin(cassie, seed=11, scale=0.0)
+        problem, x = _solve(builder, kin, _target(kin, stance, phase=0.4, weight=0.0, offset=0.01))
+        assert problem.n == cassie.nv + 12
+        assert problem.n_eq == 6 + (4 - n_lambda) + 5 + n_lambda
+        lam = builder.rigid_forces(x)
+        assert lam.shape == (n_lambda,) and np.all(np.isfinite(lam))
+        vdot = x[problem.variables["vdot"]]
+        S_T_tau = np.zeros(cassie.nv)
+        S_T_tau[cassie.actuated.pin_v_idx] = builder.torques(x)
+        lhs = kin.mass_matrix() @ vdot + kin.nonlinear_effects() - kin.passive_forces()
+        rhs = S_T_tau + builder.generalized_contact_force(x)
+        assert np.max(np.abs(lhs - rhs)) < 1e-6 * max(1.0, np.max(np.abs(lhs)))
+        if n_lambda:
+            # The held springs' rows: G vdot = -kp g - kd G v (module docstring).
+            rows = dict(problem.eq_rows)
+            sl = slice(rows["rigid_stance"].start, rows["rigid_swing"].stop)
+            assert np.max(np.abs(problem.A[sl] @ x - problem.b[sl])) < 1e-6
+            # Held springs carry load: the tendon/shin forces are not all zero.
+            assert np.max(np.abs(lam)) > 1e-3
