@@ -83,6 +83,7 @@ from scipy.linalg.lapack import dgetrf as _dgetrf
 from scipy.linalg.lapack import dgetrs as _dgetrs
 
 from amlip_qp.exceptions import InputError, MJCFError
+from amlip_qp.robots.passive import spring_rows
 
 
 @dataclass(frozen=True)
@@ -222,13 +223,13 @@ class IterativeIK:
         # in-plane rows of the contact pose (planar robots: x, z, pitch)
         self._pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
         self._planar = robot.is_planar
-        # spring rows: passive joints outside couplings, and coupling lengths
-        coupled_v = {int(i) for c in robot.couplings for i in c.pin_v_idx}
-        self._spring_q = np.array(
-            [qi for qi, vi in zip(robot.passive_q_idx, robot.passive_v_idx) if int(vi) not in coupled_v], dtype=int
+        # Held springs: the passive joints outside couplings, then the coupling lengths.
+        springs = spring_rows(robot)
+        #: The springs the IK holds, in the order of ``held_springs`` of :meth:`solve`.
+        self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
+            r for r in springs if r.kind == "coupling"
         )
-        self._spring_v = np.array([vi for vi in robot.passive_v_idx if int(vi) not in coupled_v], dtype=int)
-        n_fixed = len(self._pose_rows) + len(self._spring_v) + len(robot.couplings)
+        n_fixed = len(self._pose_rows) + len(self.held_springs)
         need_ankle = nv - (self.size + n_fixed)
         if need_ankle not in (0, 1):
             raise MJCFError(
@@ -257,15 +258,8 @@ class IterativeIK:
                 r_q[self._ankle_q[side]] = 1.0
                 r_v[self._ankle_v[side]] = 1.0
                 lq.append(r_q), lv.append(r_v), lr.append(r_v.copy())
-            for iq, iv in zip(self._spring_q, self._spring_v):
-                r_q, r_v = np.zeros(nq), np.zeros(nv)
-                r_q[iq], r_v[iv] = 1.0, 1.0
-                lq.append(r_q), lv.append(r_v), lr.append(np.zeros(nv))
-            for c in robot.couplings:
-                r_q, r_v = np.zeros(nq), np.zeros(nv)
-                np.add.at(r_q, c.pin_q_idx, c.coefficients)
-                np.add.at(r_v, c.pin_v_idx, c.coefficients)
-                lq.append(r_q), lv.append(r_v), lr.append(np.zeros(nv))
+            for spring in self.held_springs:
+                lq.append(spring.row_q(nq)), lv.append(spring.row_v(nv)), lr.append(np.zeros(nv))
             self._rows[side] = _StanceRows(
                 nv, self.size, len(self._pose_rows), np.array(lq).reshape(-1, nq),
                 np.array(lv).reshape(-1, nv), np.array(lr).reshape(-1, nv)
@@ -443,13 +437,10 @@ class IterativeIK:
 
     # ------------------------------------------------------------------ solve
     def spring_rest_values(self) -> np.ndarray:
-        """Rest values of the held springs, in the order of ``held_springs`` of :meth:`solve`:
-        the passive joints outside couplings (their spring reference, rad), then each
-        coupling's rest length (rad)."""
-        from amlip_qp.robots.passive import coupling_target
-
-        ref = self.robot.dof_springref[self._spring_v] if len(self._spring_v) else np.zeros(0)
-        return np.concatenate([ref, [coupling_target(c) for c in self.robot.couplings]])
+        """Rest values (rad) of :attr:`held_springs`, in the order of ``held_springs`` of
+        :meth:`solve`: the passive joints outside couplings (their spring reference),
+        then each coupling's rest length."""
+        return np.array([spring.rest for spring in self.held_springs], dtype=float)
 
     def solve(
         self, kin, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
@@ -490,7 +481,7 @@ class IterativeIK:
         try:
             fixed = self._fixed_from(kin, stance)
             if held_springs is not None:
-                ns = len(self._spring_v) + len(self.robot.couplings)
+                ns = len(self.held_springs)
                 fixed["lin"][len(fixed["lin"]) - ns :] = held_springs
             warm = self._prev is not None and self._prev.ok and self._prev_stance == stance
             # warm start: the previous solution (its held coordinates are pulled to

@@ -61,6 +61,7 @@ from amlip_qp.control.ik import IKSettings, IterativeIK
 from amlip_qp.control.springs import spring_deflections_rad
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.exceptions import InputError
+from amlip_qp.robots.passive import spring_rows
 
 
 @dataclass(frozen=True)
@@ -193,17 +194,8 @@ class PBCTracker(Tracker):
         nv = robot.nv
         act = robot.actuated
         self._nu = len(act)
-        coupled = {int(i) for c in robot.couplings for i in c.pin_v_idx}
-        spring_v = [int(iv) for iv in robot.passive_v_idx if int(iv) not in coupled]
-        rows = []
-        for c in robot.couplings:
-            g = np.zeros(nv)
-            np.add.at(g, c.pin_v_idx, c.coefficients)
-            rows.append(g)
-        for iv in spring_v:
-            e = np.zeros(nv)
-            e[iv] = 1.0
-            rows.append(e)
+        # Rigid springs (couplings, then the passive joints outside them).
+        rows = [spring.row_v(nv) for spring in spring_rows(robot)]
         self._J_springs = np.array(rows).reshape(len(rows), nv)
         self._layout: dict[str, _Layout] = {}
         smap = robot.state_map
@@ -251,14 +243,14 @@ class PBCTracker(Tracker):
         self._rhs_comp = np.zeros(nv)
         # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
         self._spring_rest = self.ik.spring_rest_values()
-        n_sp = len(self.ik._spring_v)
-        names_by_v = dict(zip((int(i) for i in robot.passive_v_idx), robot.passive_joint_names))
+        # Per stance: the held springs whose deflection the model gives, in the order of
+        # spring_deflections_rad (that leg's joints, then its couplings with a spring).
         self._spring_idx = {
             side: np.array(
-                [k for k, iv in enumerate(self.ik._spring_v) if names_by_v[int(iv)].startswith(side)]
-                + [n_sp + j for j, c in enumerate(robot.couplings) if c.name.startswith(side) and c.stiffness > 0],
+                [k for k, s in enumerate(self.ik.held_springs)
+                 if s.side == side and (s.kind == "joint" or s.stiffness > 0)],
                 dtype=int,
-            )
+            )  # fmt: skip
             for side in robot.foot_sides
         }
         self._last_force: dict[str, np.ndarray | None] = {side: None for side in robot.foot_sides}

@@ -84,6 +84,7 @@ from amlip_qp.control.tasks import Gains, JointTask, OutputTask
 from amlip_qp.exceptions import InputError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.robots.outputs import OutputMap
+from amlip_qp.robots.passive import spring_rows
 
 
 @dataclass(frozen=True)
@@ -328,15 +329,17 @@ class WholeBodyQP:
         k = n_points.pop()
         if k > 2 or (k == 2 and self._planar):
             raise InputError("supported feet: one point (3-D or planar) or a 3-D blade of two points")
-        self._spring_rows = {side: self._leg_springs(robot, side) for side in robot.foot_sides}
-        # Deflections as one product: g = Gq q - offsets (the rows are linear in q).
-        self._spring_q: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        for side, (_, qidx, coefs, offs) in self._spring_rows.items():
-            Gq = np.zeros((len(qidx), robot.nq))
-            for row, (qi, c) in enumerate(zip(qidx, coefs)):
-                Gq[row, qi] += c
-            self._spring_q[side] = (Gq, np.asarray(offs, dtype=float))
-        n_r = {len(self._spring_rows[s][0]) for s in robot.foot_sides}
+        # Per leg, the springs the QP can hold rigid: its couplings and its
+        # passive joints with a spring. Deflection g = Gq q - rest, rate G v.
+        self._leg_springs: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        for side in robot.foot_sides:
+            rows = [r for r in spring_rows(robot) if r.side == side and (r.kind == "coupling" or r.stiffness > 0)]
+            self._leg_springs[side] = (
+                np.array([r.row_v(nv) for r in rows]).reshape(len(rows), nv),
+                np.array([r.row_q(robot.nq) for r in rows]).reshape(len(rows), robot.nq),
+                np.array([r.rest for r in rows], dtype=float),
+            )
+        n_r = {len(self._leg_springs[s][0]) for s in robot.foot_sides}
         if len(n_r) != 1:
             raise InputError("both legs need the same number of springs/couplings")
         n_r = n_r.pop()
@@ -531,36 +534,6 @@ class WholeBodyQP:
     def reset(self) -> None:
         """Nothing to forget between runs (the builder is stateless across ticks)."""
 
-    @staticmethod
-    def _leg_springs(robot, side: str):
-        """Rows ``(G (n_r, nv), q index lists, coefficients, offsets)`` of one leg's springs.
-
-        Deflection ``g_i = sum_j c_ij q_j - g0_i``: the couplings whose joints
-        all belong to ``side`` (rest length: their spring length) and the
-        passive joints of ``side`` with a spring (rest: ``springref``).
-        """
-        from amlip_qp.robots.passive import coupling_target
-
-        rows, qidx, coefs, offs = [], [], [], []
-        for c in robot.couplings:
-            if all(name.startswith(side) for name in c.joint_names):
-                row = np.zeros(robot.nv)
-                np.add.at(row, np.asarray(c.pin_v_idx, int), c.coefficients)
-                rows.append(row)
-                qidx.append(np.asarray(c.pin_q_idx, int))
-                coefs.append(np.asarray(c.coefficients, float))
-                offs.append(coupling_target(c))
-        for name, vi, qi in zip(robot.passive_joint_names, robot.passive_v_idx, robot.passive_q_idx):
-            if name.startswith(side) and robot.dof_stiffness[vi] > 0:
-                row = np.zeros(robot.nv)
-                row[vi] = 1.0
-                rows.append(row)
-                qidx.append(np.array([qi]))
-                coefs.append(np.array([1.0]))
-                offs.append(float(robot.dof_springref[vi]))
-        G = np.array(rows) if rows else np.zeros((0, robot.nv))
-        return G, qidx, coefs, np.array(offs)
-
     def _stance_rows(self, stance: str) -> _StanceRows:
         """The :class:`_StanceRows` of this stance (cached per stance).
 
@@ -584,9 +557,9 @@ class WholeBodyQP:
         sides = ([stance] if L.n_rigid_st else []) + ([swing] if L.n_rigid_sw else [])
         eye = np.eye(nv)
         if sides:
-            G = np.vstack([self._spring_rows[s][0] for s in sides])
-            Gq = np.vstack([self._spring_q[s][0] for s in sides])
-            offs = np.concatenate([self._spring_q[s][1] for s in sides])
+            G = np.vstack([self._leg_springs[s][0] for s in sides])
+            Gq = np.vstack([self._leg_springs[s][1] for s in sides])
+            offs = np.concatenate([self._leg_springs[s][2] for s in sides])
             P_rows = np.array(
                 [vi for nm, vi in zip(robot.passive_joint_names, robot.passive_v_idx) if nm.startswith(tuple(sides))],
                 dtype=int,

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from amlip_qp.alip.formulas import GRAVITY_MPS2
+from amlip_qp.robots.passive import spring_rows
 
 
 def spring_deflections_rad(kin, stance: str, force_N=None) -> np.ndarray:
@@ -55,22 +56,24 @@ def spring_deflections_rad(kin, stance: str, force_N=None) -> np.ndarray:
     else:
         f = np.asarray(force_N, dtype=float).reshape(3)
     tau_ext = kin.contact_jacobian(stance).T @ f  # generalized force of the ground reaction
+    joints, couplings = _stance_springs(robot, stance)
     out = []
-    coupled = {int(i) for c in robot.couplings for i in c.pin_v_idx}
-    for name, iv in zip(robot.passive_joint_names, robot.passive_v_idx):
-        if int(iv) in coupled or not name.startswith(stance):
-            continue
-        k = float(robot.dof_stiffness[iv])
+    for s in joints:
         # statics of the passive joint (link weights neglected): -k d + tau_ext = 0
-        out.append(tau_ext[iv] / k if k > 0 else 0.0)
-    for c in robot.couplings:
-        if not c.name.startswith(stance) or c.stiffness <= 0:
-            continue
+        iv = int(s.pin_v_idx[0])
+        out.append(tau_ext[iv] / s.stiffness if s.stiffness > 0 else 0.0)
+    for s in couplings:
         # the knee motor holds the knee; the tarsus balances its load with the
         # coupling spring: -k_c (L - L0) + tau_ext,tarsus = 0
-        tarsus = int(c.pin_v_idx[-1])
-        out.append(tau_ext[tarsus] / (c.stiffness * float(c.coefficients[-1])))
+        tarsus = int(s.pin_v_idx[-1])
+        out.append(tau_ext[tarsus] / (s.stiffness * float(s.coefficients[-1])))
     return np.array(out)
+
+
+def _stance_springs(robot, stance: str):
+    """The stance leg's springs: ``(passive joints outside couplings, couplings with a spring)``."""
+    rows = [s for s in spring_rows(robot) if s.side == stance]
+    return [s for s in rows if s.kind == "joint"], [s for s in rows if s.kind == "coupling" and s.stiffness > 0]
 
 
 def stance_knee_offset_rad(kin, stance: str, force_N=None, deflections=None) -> float:
@@ -94,17 +97,16 @@ def stance_knee_offset_rad(kin, stance: str, force_N=None, deflections=None) -> 
     robot = kin.robot
     smap = robot.state_map
     knee = f"{stance}-knee"
-    if knee not in smap.joint_pin_v or not robot.couplings and len(robot.passive_v_idx) == 0:
+    if knee not in smap.joint_pin_v or not spring_rows(robot):
         return 0.0
     defl = spring_deflections_rad(kin, stance, force_N) if deflections is None else np.asarray(deflections, float)
     if defl.size == 0:
         return 0.0
     # vertical distance hip -> contact and its sensitivity to the leg joints
     Jz = kin.contact_jacobian(stance)[2]
-    coupled = {int(i) for c in robot.couplings for i in c.pin_v_idx}
-    cols = [int(iv) for name, iv in zip(robot.passive_joint_names, robot.passive_v_idx)
-            if int(iv) not in coupled and name.startswith(stance)]
-    tarsi = [int(c.pin_v_idx[-1]) for c in robot.couplings if c.name.startswith(stance) and c.stiffness > 0]
+    joints, couplings = _stance_springs(robot, stance)
+    cols = [int(s.pin_v_idx[0]) for s in joints]
+    tarsi = [int(s.pin_v_idx[-1]) for s in couplings]
     dz = float(sum(Jz[i] * d for i, d in zip(cols + tarsi, defl)))
     iv_knee = smap.joint_pin_v[knee]
     dz_dknee = float(Jz[iv_knee] - sum(Jz[t] for t in tarsi))  # the tarsus follows the knee (rigid rod)

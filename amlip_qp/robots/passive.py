@@ -7,6 +7,8 @@ MuJoCo's ``qfrc_passive`` (converted to Pinocchio coordinates) for any model.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from amlip_qp.exceptions import InputError
@@ -102,6 +104,87 @@ class PassiveForces:
             for i, k in pairs:
                 f[i] += k * force
         return f
+
+
+@dataclass(frozen=True)
+class SpringRow:
+    """One spring of the robot as a linear function of the joint coordinates.
+
+    The deflection is ``g = sum_i coefficients[i] q[pin_q_idx[i]] - rest``
+    (rad for hinge joints) and its rate ``sum_i coefficients[i]
+    v[pin_v_idx[i]]``: for a passive joint with its own spring (``kind ==
+    "joint"``) the joint angle minus its ``springref``; for a fixed tendon
+    (``kind == "coupling"``, Cassie's achilles rod: knee + tarsus) its length
+    minus :func:`coupling_target`.
+
+    Attributes:
+        name: The joint's or the tendon's name.
+        kind: ``"joint"`` or ``"coupling"``.
+        side: The leg (``"left"``/``"right"``) whose joints carry the spring,
+            or ``None`` when its joints span both legs or neither.
+        pin_q_idx: Pinocchio configuration indices of the joints.
+        pin_v_idx: Pinocchio velocity indices of the joints.
+        coefficients: The row's coefficients.
+        rest: The rest value, rad.
+        stiffness: The spring stiffness, N m/rad (0: a joint without a spring).
+    """
+
+    name: str
+    kind: str
+    side: str | None
+    pin_q_idx: np.ndarray
+    pin_v_idx: np.ndarray
+    coefficients: np.ndarray
+    rest: float
+    stiffness: float
+
+    def row_q(self, nq: int) -> np.ndarray:
+        """The deflection's coefficients on the whole configuration, shape (nq,)."""
+        row = np.zeros(nq)
+        np.add.at(row, self.pin_q_idx, self.coefficients)
+        return row
+
+    def row_v(self, nv: int) -> np.ndarray:
+        """The deflection rate's coefficients on the whole velocity (its Jacobian), shape (nv,)."""
+        row = np.zeros(nv)
+        np.add.at(row, self.pin_v_idx, self.coefficients)
+        return row
+
+
+def _side_of(robot, joint_names) -> str | None:
+    sides = {s for s in robot.foot_sides for name in joint_names if name.startswith(s)}
+    counted = all(any(name.startswith(s) for s in robot.foot_sides) for name in joint_names)
+    return sides.pop() if len(sides) == 1 and counted else None
+
+
+def spring_rows(robot) -> tuple[SpringRow, ...]:
+    """The robot's springs, the one enumeration every tracker uses.
+
+    Order: the fixed tendons (couplings) in model order, then the passive
+    joints outside every coupling in model order (Cassie: per leg the achilles
+    rod, then the shin). Passive joints inside a coupling (Cassie's tarsus)
+    are not springs of their own: the coupling row holds them. A passive joint
+    outside the couplings is listed even without stiffness (``stiffness ==
+    0``); callers choose whether such a free joint is held.
+    """
+    rows = []
+    for c in robot.couplings:
+        rows.append(SpringRow(
+            name=c.name, kind="coupling", side=_side_of(robot, c.joint_names),
+            pin_q_idx=np.asarray(c.pin_q_idx, dtype=int), pin_v_idx=np.asarray(c.pin_v_idx, dtype=int),
+            coefficients=np.asarray(c.coefficients, dtype=float), rest=coupling_target(c),
+            stiffness=float(c.stiffness),
+        ))  # fmt: skip
+    coupled = {int(i) for c in robot.couplings for i in c.pin_v_idx}
+    for name, vi, qi in zip(robot.passive_joint_names, robot.passive_v_idx, robot.passive_q_idx):
+        if int(vi) in coupled:
+            continue
+        rows.append(SpringRow(
+            name=name, kind="joint", side=_side_of(robot, (name,)),
+            pin_q_idx=np.array([int(qi)]), pin_v_idx=np.array([int(vi)]), coefficients=np.ones(1),
+            rest=float(robot.dof_springref[vi]), stiffness=float(robot.dof_stiffness[vi]),
+        ))  # fmt: skip
+    return tuple(rows)
 
 
 def coupling_target(coupling) -> float:
