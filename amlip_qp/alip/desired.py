@@ -89,10 +89,10 @@ def desired_L_world(
 ) -> np.ndarray:
     """``L^des = (L_x, L_y)`` in world axes (kg m^2/s): :func:`desired_L_heading`
     rotated by the next step's heading ``heading_next_rad`` (rad)."""
-    L_h = desired_L_heading(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, next_stance, g_mps2)
+    desired_L_heading(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, next_stance, g_mps2)  # validates the inputs
     C.finite("heading_next_rad", heading_next_rad)
-    c, s = math.cos(heading_next_rad), math.sin(heading_next_rad)
-    return np.array([c * L_h[0] - s * L_h[1], s * L_h[0] + c * L_h[1]])
+    L = F.desired_L_world(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, stance_sign(next_stance), heading_next_rad, g_mps2)
+    return np.array(L, dtype=float)
 
 
 def mean_to_end_factor(T_s, H_m, g_mps2=GRAVITY_MPS2) -> float:

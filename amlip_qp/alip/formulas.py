@@ -102,6 +102,28 @@ def Lt_step_width(W_m, T_s, mass_kg, H_m, next_stance_sign, g_mps2=GRAVITY_MPS2)
     return -next_stance_sign * 0.5 * mass_kg * H_m * W_m * l * xp.sinh(l * T_s) / (1.0 + xp.cosh(l * T_s))
 
 
+def desired_L_world(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, next_stance_sign, heading_next_rad, g_mps2=GRAVITY_MPS2):
+    """``L^des = (L_x, L_y)`` in world axes at the end of the next step (paper section 3).
+
+    Decided in the next step's heading frame ``D_{k+1} = heading_next_rad``:
+    ``L_y = m H v_x`` and ``Lt = -L_x = m H v_y + Lt_step_width``, then
+    rotated by ``D_{k+1}`` to world axes. ``vx_mps``, ``vy_mps`` are
+    end-of-step CoM velocities in that heading frame; ``next_stance_sign`` as
+    in :func:`Lt_step_width`.
+    """
+    xp = backend(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, next_stance_sign, heading_next_rad, g_mps2)
+    Ly_h = L_from_velocity(vx_mps, mass_kg, H_m)
+    Lx_h = -(L_from_velocity(vy_mps, mass_kg, H_m) + Lt_step_width(W_m, T_s, mass_kg, H_m, next_stance_sign, g_mps2))
+    c, s = xp.cos(heading_next_rad), xp.sin(heading_next_rad)
+    return c * Lx_h - s * Ly_h, s * Lx_h + c * Ly_h
+
+
+def hip_yaw_split(turn_rad):
+    """A step's turn ``dD`` (rad) split between the hip yaws (paper section 4):
+    ``(stance, swing) = (-dD/2, +dD/2)``; the swing foot lands along ``D_{k+1}``."""
+    return -0.5 * turn_rad, 0.5 * turn_rad
+
+
 # --- phase-based reference shapes, with d/ds and d^2/ds^2 ---------------------
 
 

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from amlip_qp.alip import _checks as C
+from amlip_qp.alip import formulas as F
 from amlip_qp.exceptions import InputError
 
 
@@ -62,7 +63,8 @@ def hip_yaw_targets(turn_rad: float) -> tuple[float, float]:
     ``swing_hip_yaw``.
     """
     C.finite("turn_rad", turn_rad)
-    return -0.5 * float(turn_rad), 0.5 * float(turn_rad)
+    stance, swing = F.hip_yaw_split(float(turn_rad))
+    return stance, swing
 
 
 def yaw_of(xy_world) -> float:

@@ -70,17 +70,11 @@ RABBIT_FROM_CASSIE = (0, 4, 5, 7)
 def alip_plan_terms(u: Sequence) -> list:
     """Predict ``L(T-)``, choose ``L_des`` and place the foot (layout in the module doc)."""
     p_x, p_y, L_x, L_y, t_rem, v_z, vx_des, vy_des, D_next, sign, m, H, T, W, g = u
-    xp = F.backend(*u)
     # Prediction to the end of the current step, on the pairs (p_x, L_y) and (p_y, -L_x).
     p_hat_x, L_hat_y = F.flow(p_x, L_y, t_rem, m, H, g)
     p_hat_y, Lt_hat = F.flow(p_y, -L_x, t_rem, m, H, g)
     # Desired momentum at the end of the next step, decided in the next heading frame.
-    Ly_h = F.L_from_velocity(vx_des, m, H)
-    Lt_h = F.L_from_velocity(vy_des, m, H) + F.Lt_step_width(W, T, m, H, sign, g)
-    Lx_h = -Lt_h
-    c, s = xp.cos(D_next), xp.sin(D_next)
-    L_des_x = c * Lx_h - s * Ly_h
-    L_des_y = s * Lx_h + c * Ly_h
+    L_des_x, L_des_y = F.desired_L_world(vx_des, vy_des, W, T, m, H, sign, D_next, g)
     # Foot placement, deadbeat at the end of the next step, with the v_z transfer.
     p_sw_x = F.foot_placement(L_des_y, L_hat_y, p_hat_x, T, m, H, v_z, g)
     p_sw_y = F.foot_placement(-L_des_x, Lt_hat, p_hat_y, T, m, H, v_z, g)
@@ -90,11 +84,12 @@ def alip_plan_terms(u: Sequence) -> list:
 def swing_reference_terms(u: Sequence) -> list:
     """Cassie's ``h_d(s)`` and its first two time derivatives (layout in the module doc)."""
     s, T, H, z_cl, st_yaw0, sw_yaw0, x0, y0, x_des, y_des, dD = u
+    st_yaw1, sw_yaw1 = F.hip_yaw_split(dD)
     shapes = [
         F.constant(s, 0.0),  # torso pitch
         F.constant(s, 0.0),  # torso roll
-        F.line(s, st_yaw0, -0.5 * dD),  # stance hip yaw
-        F.line(s, sw_yaw0, 0.5 * dD),  # swing hip yaw
+        F.line(s, st_yaw0, st_yaw1),  # stance hip yaw
+        F.line(s, sw_yaw0, sw_yaw1),  # swing hip yaw
         F.constant(s, H),  # CoM z over stance
         F.cosine_blend(s, x0, x_des),  # CoM x over swing
         F.cosine_blend(s, y0, y_des),  # CoM y over swing
