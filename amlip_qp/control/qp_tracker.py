@@ -38,9 +38,11 @@ class QPTracker(Tracker):
         eps_abs: ProxQP absolute tolerance on the primal and dual residuals
             (N, N m, m/s^2 in the constraint rows). 1e-3 is far below the
             model's force and torque accuracy; on 1200 recorded Cassie QPs it
-            took 2.1 iterations per solve against 3.4 at 1e-5 (median torque
-            difference 8e-4 N m), and every closed-loop acceptance scenario
-            passed at both.
+            took 2.05 iterations per solve against 3.6 at 1e-5 (largest
+            torque difference per problem: median 2e-4 N m, p99 11 N m where
+            the active set differs), and every closed-loop acceptance
+            scenario passed at both (measured before the rigid-spring forces
+            were eliminated; at 1e-3 since).
         max_iter: ProxQP iteration cap per tick.
         warm_start: Warm-start from the previous solution (default) or re-initialise every tick.
         record: Keep a copy of every solved problem in :attr:`recorded` (bench, tests).
