@@ -241,3 +241,16 @@ def test_eliminated_rigid_spring_forces_satisfy_every_dynamics_row(mode, n_lambd
             assert np.max(np.abs(problem.A[sl] @ x - problem.b[sl])) < 1e-6
             # Held springs carry load: the tendon/shin forces are not all zero.
             assert np.max(np.abs(lam)) > 1e-3
+
+
+def test_rigid_springs_that_cannot_be_eliminated_are_a_clear_error():
+    """A held leg needs one passive joint per held spring (its rows give the
+    springs' constraint forces); otherwise the builder says what to change."""
+    cassie = load_robot("cassie")
+    builder = WholeBodyQP(cassie)
+    G, Gq, rest = builder._leg_springs["left"]
+    # A third spring on the left leg with only two passive joints (shin, tarsus).
+    builder._leg_springs["left"] = (np.vstack([G, G[:1]]), np.vstack([Gq, Gq[:1]]), np.r_[rest, rest[:1]])
+    builder.__dict__.pop("_rows_by_stance", None)
+    with pytest.raises(InputError, match="rigid_springs='none'"):
+        builder._stance_rows("left")
