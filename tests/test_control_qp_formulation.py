@@ -254,3 +254,13 @@ def test_rigid_springs_that_cannot_be_eliminated_are_a_clear_error():
     builder.__dict__.pop("_rows_by_stance", None)
     with pytest.raises(InputError, match="rigid_springs='none'"):
         builder._stance_rows("left")
+    # Two springs on the same pair of passive joints: square but singular.
+    builder = WholeBodyQP(cassie)
+    G, Gq, rest = builder._leg_springs["left"]
+    shin, tarsus = (int(np.flatnonzero(G[1])[0]), int(np.flatnonzero(G[0])[-1]))
+    both = np.zeros_like(G[:1])
+    both[0, [shin, tarsus]] = 1.0
+    builder._leg_springs["left"] = (np.vstack([both, both]), Gq, rest)
+    builder.__dict__.pop("_rows_by_stance", None)
+    with pytest.raises(InputError, match="singular"):
+        builder._stance_rows("left")

@@ -83,7 +83,6 @@ from scipy.linalg.lapack import dgetrf as _dgetrf
 from scipy.linalg.lapack import dgetrs as _dgetrs
 
 from amlip_qp.exceptions import InputError, MJCFError
-from amlip_qp.robots.passive import spring_rows
 
 
 @dataclass(frozen=True)
@@ -224,7 +223,7 @@ class IterativeIK:
         self._pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
         self._planar = robot.is_planar
         # Held springs: the passive joints outside couplings, then the coupling lengths.
-        springs = spring_rows(robot)
+        springs = robot.springs
         #: The springs the IK holds, in the order of ``held_springs`` of :meth:`solve`.
         self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
             r for r in springs if r.kind == "coupling"

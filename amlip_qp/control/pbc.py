@@ -61,7 +61,6 @@ from amlip_qp.control.ik import IKSettings, IterativeIK
 from amlip_qp.control.springs import spring_deflections_rad
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.exceptions import InputError
-from amlip_qp.robots.passive import spring_rows
 
 
 @dataclass(frozen=True)
@@ -195,7 +194,7 @@ class PBCTracker(Tracker):
         act = robot.actuated
         self._nu = len(act)
         # Rigid springs (couplings, then the passive joints outside them).
-        rows = [spring.row_v(nv) for spring in spring_rows(robot)]
+        rows = [spring.row_v(nv) for spring in robot.springs]
         self._J_springs = np.array(rows).reshape(len(rows), nv)
         self._layout: dict[str, _Layout] = {}
         smap = robot.state_map

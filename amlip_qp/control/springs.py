@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from amlip_qp.alip.formulas import GRAVITY_MPS2
-from amlip_qp.robots.passive import spring_rows
 
 
 def spring_deflections_rad(kin, stance: str, force_N=None) -> np.ndarray:
@@ -72,7 +71,7 @@ def spring_deflections_rad(kin, stance: str, force_N=None) -> np.ndarray:
 
 def _stance_springs(robot, stance: str):
     """The stance leg's springs: ``(passive joints outside couplings, couplings with a spring)``."""
-    rows = [s for s in spring_rows(robot) if s.side == stance]
+    rows = [s for s in robot.springs if s.side == stance]
     return [s for s in rows if s.kind == "joint"], [s for s in rows if s.kind == "coupling" and s.stiffness > 0]
 
 
@@ -97,7 +96,7 @@ def stance_knee_offset_rad(kin, stance: str, force_N=None, deflections=None) -> 
     robot = kin.robot
     smap = robot.state_map
     knee = f"{stance}-knee"
-    if knee not in smap.joint_pin_v or not spring_rows(robot):
+    if knee not in smap.joint_pin_v or not robot.springs:
         return 0.0
     defl = spring_deflections_rad(kin, stance, force_N) if deflections is None else np.asarray(deflections, float)
     if defl.size == 0:

@@ -158,7 +158,9 @@ def _side_of(robot, joint_names) -> str | None:
 
 
 def spring_rows(robot) -> tuple[SpringRow, ...]:
-    """The robot's springs, the one enumeration every tracker uses.
+    """The robot's springs, the one enumeration every tracker uses (read
+    them from :attr:`Robot.springs <amlip_qp.robots.robot.Robot.springs>`,
+    which builds them once).
 
     Order: the fixed tendons (couplings) in model order, then the passive
     joints outside every coupling in model order (Cassie: per leg the achilles

@@ -14,6 +14,7 @@ Index conventions: ``*_v_idx`` / ``*_q_idx`` index Pinocchio's ``v`` / ``q``;
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -211,6 +212,13 @@ class Robot:
     def new_pin_data(self) -> "pin.Data":
         """A fresh ``pinocchio.Data`` for this robot's Pinocchio model."""
         return self.pin_model.createData()
+
+    @cached_property
+    def springs(self) -> tuple:
+        """The robot's springs, :func:`amlip_qp.robots.passive.spring_rows`, built once."""
+        from amlip_qp.robots.passive import spring_rows
+
+        return spring_rows(self)
 
     def other_side(self, side: str) -> str:
         """The opposite foot side of ``"left"`` / ``"right"``."""
