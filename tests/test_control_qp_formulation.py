@@ -87,13 +87,21 @@ def test_friction_pyramid_and_minimum_normal_force_hold(robot):
 
 def test_swing_forces_are_zero_in_the_air_and_ramp_in(robot):
     kin = _kin(robot, 5)
-    builder = WholeBodyQP(robot)
+    builder = WholeBodyQP(robot, default_config(robot).with_(touchdown_blend=1.0))
     _, x = _solve(builder, kin, _target(kin, "right", phase=0.5, weight=0.0))
     assert np.max(np.abs(builder.forces(x)["swing"])) < 1e-6
     problem = builder.build(kin, _target(kin, "right", phase=0.95, weight=0.5))
     fz_cols = problem.variables["forces_swing"]
     ub = problem.ub[fz_cols][len(builder._axes) - 1 :: len(builder._axes)]
     assert np.allclose(ub, 0.5 * builder.config.max_normal_force_N)
+    # touchdown_blend scales the pre-touchdown ramp; 0 keeps the foot unloaded until touchdown.
+    for blend in (0.0, 0.4):
+        scaled = WholeBodyQP(robot, default_config(robot).with_(touchdown_blend=blend))
+        problem = scaled.build(kin, _target(kin, "right", phase=0.95, weight=0.5))
+        ub = problem.ub[fz_cols][len(builder._axes) - 1 :: len(builder._axes)]
+        assert np.allclose(ub, blend * 0.5 * builder.config.max_normal_force_N)
+    with pytest.raises(InputError, match="touchdown_blend"):
+        default_config(robot).with_(touchdown_blend=1.5)
     # Liftoff ramp: early in a step the previous stance foot may still carry load.
     problem = builder.build(kin, _target(kin, "right", phase=0.25 * builder.config.liftoff_phase, weight=0.0))
     ub = problem.ub[fz_cols][len(builder._axes) - 1 :: len(builder._axes)]

@@ -71,6 +71,7 @@ def _run(key: str) -> dict:
         "tracker_fallbacks": int(tracker.fallbacks),
         "ticks": int(len(log["t"])),
         "tau_finite": bool(np.all(np.isfinite(log["tau"]))),
+        "speed_correction_x_mps": float(sim.controller.steps[-1].speed_correction_mps[0]),
     }
 
 
@@ -130,7 +131,11 @@ def test_rabbit_walks_at_the_commanded_speed_for_20s(results, key):
     r = results[key]
     _walked(r)
     assert r["duration_s"] == 20.0
-    _speed_ok(r)
+    _speed_ok(r, tol=0.03)
+    # The planner's own speed, not the integral correction, carries the gait: with
+    # forces blended onto the airborne foot before touchdown (touchdown_blend=1)
+    # the correction saturated at 0.3 m/s and 1 m/s was walked at 0.964 m/s.
+    assert r["speed_correction_x_mps"] < 0.2, f"speed correction {r['speed_correction_x_mps']:.3f} m/s"
 
 
 def test_cassie_walks_diagonally(results):
