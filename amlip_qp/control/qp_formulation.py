@@ -277,10 +277,10 @@ RABBIT_CONFIG = QPConfig(
     min_normal_force_N=10.0,
     # No forces on the point foot before its touchdown is detected. With the
     # blend (1.0) the QP planned 70 % (up to 81 %) of the normal force on the
-    # airborne foot over the last 10 % of the step at 1 m/s; the CoM fell at 0.12 m/s at touchdown, and the
-    # momentum transfer lost the speed: at 1 m/s the integral speed correction
-    # saturated at +0.3 m/s and the robot still walked at 0.964 m/s, L
-    # end-of-step error rms 6.95 kg m^2/s. With 0: CoM v_z -0.011 m/s at
+    # airborne foot over the last 10 % of the step at 1 m/s; the CoM fell at
+    # 0.12 m/s at touchdown, and the momentum transfer lost the speed: the
+    # integral speed correction saturated at +0.3 m/s and the robot still
+    # walked at 0.964 m/s, L end-of-step error rms 6.95 kg m^2/s. With 0: CoM v_z -0.011 m/s at
     # touchdown, correction 0.077 m/s, 0.997 m/s, L error 1.19 kg m^2/s; the
     # 1.5 m/s ramp held 1.26 m/s (0.00 within 10 % of the command before).
     touchdown_blend=0.0,
