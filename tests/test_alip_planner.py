@@ -112,6 +112,30 @@ def test_heading_advances_at_start_step_and_targets_are_in_the_step_frame():
     assert p.t_step_start_s == pytest.approx(2 * T) and p.time_in_step(2 * T + 0.05) == pytest.approx(0.05)
 
 
+@pytest.mark.parametrize("early", [0.9, 1.0, 1.07])
+def test_a_turn_command_turns_by_its_time_integral_whatever_the_step_timing(early):
+    """Steps that end early (or late) must not add or lose heading: after the
+    command stops, the heading is the integral of the commanded rate (a per-step
+    increment of rate * T would give n_steps * rate * T instead)."""
+    p = Planner("cassie", M, G, heading_rad=0.2)
+    dt, rate, t_turn_end = 0.0005, 0.6, 1.234
+    stance, t_start = "left", 0.0
+    p.start_step(stance, t_start, H0)
+    for i in range(1, int(3.0 / dt)):
+        t = i * dt
+        if t - t_start >= early * T:  # touchdown
+            stance, t_start = ("right" if stance == "left" else "left"), t
+            p.start_step(stance, t_start, H0)
+        c = cmd(turn_rate_radps=rate if t < t_turn_end else 0.0)
+        out = p.update(est(t_in_step_s=t - t_start, stance=stance), c)
+    # The rate commanded at a tick holds until the next one (the first update's
+    # rate holds from the step start, t = 0): ticks 0, dt, ... before t_turn_end.
+    n_ticks = sum(1 for i in range(int(3.0 / dt)) if i * dt < t_turn_end)
+    turned = rate * n_ticks * dt
+    assert out.heading_next_rad == pytest.approx(0.2 + turned, abs=1e-9)
+    assert p.heading_rad == pytest.approx(0.2 + turned, abs=1e-9)
+
+
 def test_start_of_step_references_equal_the_measured_outputs():
     out = started().update(est(t_in_step_s=0.0), cmd())
     np.testing.assert_allclose(out.h_d[[2, 3, 5, 6]], H0[[2, 3, 5, 6]], atol=1e-15)

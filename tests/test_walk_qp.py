@@ -147,11 +147,12 @@ def test_cassie_walks_diagonally(results):
 def test_cassie_turns_90_degrees_within_10s_at_walking_speed(results):
     r = results["cassie-turn-90"]
     _walked(r)
-    # The planner's heading turned 90 deg (turn 3 s -> 8 s; it advances by
-    # rate * T per step and steps end a little early, so it overshoots by up
-    # to one or two steps: 91.8 deg measured, 97.2 with sensor noise) and the
-    # robot travels along it, at 0.5-1.0 m/s, over the last 3 s.
-    assert math.radians(90.0) - 1e-9 <= r["heading_end_rad"] < math.radians(100.0)
+    # The planner's heading turned 90 deg (turn 3 s -> 8 s; the planner
+    # integrates the commanded rate over time: 90.0 deg measured, 90.009 with
+    # sensor noise; it advanced by rate * T per step before and overshot to
+    # 91.8 and 97.2 deg) and the robot travels along it, at 0.5-1.0 m/s, over
+    # the last 3 s.
+    assert abs(math.degrees(r["heading_end_rad"]) - 90.0) < 0.5
     err = r["travel_dir_rad"] - r["heading_end_rad"]
     assert abs(err) < math.radians(5.0), f"travel {math.degrees(r['travel_dir_rad']):.1f} deg"
     assert 0.5 <= r["world_speed_mps"] <= 1.0

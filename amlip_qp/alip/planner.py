@@ -5,8 +5,13 @@ Per step ``k`` (stance leg ``st``, heading ``D_k``) the planner
 1. predicts ``L(T-)`` and ``p_st(T-)`` of the current step from the estimated
    ``p_st`` and ``L`` about the stance contact (paper eq. LIP_AM_Preiction);
 2. decides ``L^des`` at the end of the *next* step in the heading frame
-   ``D_{k+1} = D_k + turn_rate * T`` (forward speed, lateral speed, step width)
-   and rotates it to world axes;
+   ``D_{k+1}`` (forward speed, lateral speed, step width) and rotates it to
+   world axes. ``D_{k+1} = psi(t) + turn_rate * t_remaining`` with ``psi`` the
+   time integral of the commanded turn rate: the commanded heading at the end
+   of the current step. For steps of exactly ``T`` at a constant rate that is
+   the paper's ``D_{k+1} = D_k + turn_rate * T``; when steps end early or late
+   the headings stay on the commanded integral instead of advancing by a
+   fixed amount per step (a 90 degree turn command turns 90 degrees);
 3. places the swing foot, deadbeat in ``L`` at the end of the next step, with the
    ``v_z`` correction of the momentum transfer at touchdown;
 4. evaluates the reference outputs ``h_d(s)``, ``dh_d/dt``, ``d^2h_d/dt^2``.
@@ -76,8 +81,8 @@ class Command:
         vx_mps: forward CoM velocity in the heading frame, m/s (mean over a
             step unless the planner uses ``speed_reference="end_of_step"``).
         vy_mps: lateral (left positive) CoM velocity in the heading frame, m/s.
-        turn_rate_radps: heading rate, rad/s (positive turns left); the heading
-            advances by ``turn_rate * T`` per step.
+        turn_rate_radps: heading rate, rad/s (positive turns left); the
+            planner integrates it over time (module doc, step 2).
         step_width_m: lateral distance between the feet when walking in place, m (>= 0).
     """
 
@@ -277,6 +282,11 @@ class Planner:
         self._u_ref = np.zeros(len(kernels.SWING_REFERENCE_INPUTS))
         self._heading = 0.0 if self._planar else float(heading_rad)
         self._heading_next = self._heading
+        # The commanded heading psi (the turn-rate integral, rad) and the time
+        # (s) up to which it is integrated (None: before the first step).
+        self._heading_cmd = self._heading
+        self._t_heading_cmd: float | None = None
+        self._rate_cmd: float | None = None  # the turn rate of the last update, rad/s
         self._stance: str | None = None
         self._t_start = 0.0
         self._h0 = np.zeros(len(self.output_names))
@@ -337,8 +347,9 @@ class Planner:
                 (rad / m; ``com_x_over_swing``/``com_y_over_swing`` in the new
                 step's heading frame, see :attr:`heading_next_rad`).
             heading_rad: the new step's heading ``D_k`` (rad); by default the
-                ``D_{k+1}`` of the step that just ended, i.e. the previous heading
-                advanced by the commanded ``turn_rate * T`` (Rabbit: always 0).
+                ``D_{k+1}`` of the step that just ended (Rabbit: always 0).
+                Given, it also resets the commanded heading (the turn-rate
+                integral) to it.
         """
         C.side("stance", stance)
         C.finite("t_start_s", t_start_s)
@@ -347,11 +358,15 @@ class Planner:
             C.finite("heading_rad", heading_rad)
             if not self._planar:
                 self._heading = float(heading_rad)
+                self._heading_cmd = self._heading
         else:
             self._heading = self._heading_next
         self._heading_next = self._heading
         self._stance = stance
         self._t_start = float(t_start_s)
+        if self._t_heading_cmd is None:
+            # The turn-rate integral starts with the first step.
+            self._t_heading_cmd = self._t_start
         self._h0[:] = h0
         self._steps += 1
 
@@ -384,7 +399,7 @@ class Planner:
         m = self.mass_kg
         g = self.g
         # Inlined hot-path versions of phase.step_phase_clipped / phase.time_remaining,
-        # desired.mean_to_end_factor and heading.next_heading (inputs already validated).
+        # desired.mean_to_end_factor (inputs already validated).
         t_in = estimate.t_in_step_s
         s = t_in / T
         if s > 1.0:
@@ -412,7 +427,18 @@ class Planner:
             heading_next = 0.0
             u_p1 = u_L0 = vy = width = 0.0
         else:
-            heading_next = self._heading + command.turn_rate_radps * T
+            # Integrate the commanded turn rate up to now, then look ahead to
+            # the end of the step (module doc, step 2).
+            # The rate held since the last update applies to the time since
+            # (the first update of a run: its own rate, since the step start).
+            rate = command.turn_rate_radps
+            t_abs = self._t_start + t_in
+            if self._t_heading_cmd is not None and t_abs > self._t_heading_cmd:
+                held = rate if self._rate_cmd is None else self._rate_cmd
+                self._heading_cmd += held * (t_abs - self._t_heading_cmd)
+            self._t_heading_cmd = t_abs
+            self._rate_cmd = rate
+            heading_next = self._heading_cmd + rate * t_rem
             u_p1, u_L0, vy, width = p1, L0, command.vy_mps * factor, command.step_width_m
         self._heading_next = heading_next
         # The dense ALIP_PLAN layout (kernels module doc); the next stance leg is the other one.
