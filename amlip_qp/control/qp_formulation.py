@@ -110,12 +110,13 @@ class QPConfig:
             pre-touchdown ramp ``target.swing_contact_weight`` (0 until phase
             0.9, then up to 1 at the step's end) in the swing foot's force
             box ``w = max(touchdown_blend * swing_contact_weight, liftoff
-            ramp)``. 1 blends the landing foot's forces in before the
-            touchdown is detected; 0 keeps them at zero until the touchdown
+            ramp)``. 0 (default) keeps them at zero until the touchdown
             switches the stance, after which the liftoff ramp unloads the old
-            stance foot. Forces planned on a foot still in the air do not
-            happen, so the support they stand for is missing and the CoM
-            drops before the touchdown (see ``RABBIT_CONFIG``).
+            stance foot; 1 blends the landing foot's forces in before the
+            touchdown is detected. Forces planned on a foot still in the air
+            do not happen, so the support they stand for is missing and the
+            CoM drops before the touchdown (see ``CASSIE_CONFIG`` and
+            ``RABBIT_CONFIG``).
         contact_kd: Velocity Baumgarte gain of the stance contact rows, 1/s.
         rigid_springs: Which legs' springs (tendon coupling, passive spring
             joints) the QP holds rigid with constraint forces: ``"swing"``,
@@ -182,7 +183,7 @@ class QPConfig:
     min_normal_force_N: float = 5.0
     max_normal_force_N: float = 1500.0
     liftoff_phase: float = 0.08
-    touchdown_blend: float = 1.0
+    touchdown_blend: float = 0.0
     contact_kd: float = 10.0
     rigid_springs: str = "all"
     coupling_kp: float = 400.0
@@ -257,16 +258,21 @@ CASSIE_CONFIG = QPConfig(
     # in 20 s walking in place and the 2.5 m/s run fell at 14.2 s after
     # yawing ~90 deg; with it, 1.5 deg in place and no fall.
     hip_yaw_feedback=1.0,
-    # touchdown_blend stays 1 on Cassie, a measured trade-off (one run per
-    # scenario, seed 0). With 0 (no forces on the landing foot before its
-    # touchdown): at 2.5 m/s the speed correction settles at 0.05 m/s instead
-    # of its 0.3 m/s bound and the speed at 2.519 instead of 2.436 m/s, L
-    # end-of-step error rms 2.17 vs 4.84 kg m^2/s (0 -> 2.1 m/s ramp: 2.54 vs
-    # 5.53); but at 1 m/s the L error rises from 1.00 to 1.92 (with sensor
-    # noise, seeds 1 and 2: 1.28 and 1.31 -> 2.02 and 1.97) and in place
-    # from 1.84 to 2.90. 0.3 and 0.6 lie in between (L error at 2.5 m/s 3.74
-    # and 4.69, at 1 m/s 1.54 and 1.57).
-    touchdown_blend=1.0,
+    # No forces on the landing foot before its touchdown is detected (as on
+    # Rabbit). With the blend (1.0) the CoM dropped before each touchdown
+    # (v_z -0.053 m/s at 1 m/s, -0.156 m/s at 2.5 m/s), the foot landed early
+    # (phase 0.953 against 0.996) and the momentum transfer lost speed: at
+    # 2.5 m/s the integral speed correction sat at its 0.3 m/s bound and the
+    # robot reached 2.436 m/s (now 0.05 m/s and 2.519 m/s). amlip-qp compare,
+    # Cassie QP, blend 1 -> 0: foot placement error 0.014 -> 0.011 m, output
+    # tracking rms 0.0254 -> 0.0221, torque peak 195.2 (the knee limit) ->
+    # 139.3 N m, torque rms 26.2 -> 23.6 N m, velocity error, ramp and pushes
+    # unchanged. The end-of-step L error grows, 1.00 -> 1.92 kg m^2/s: a
+    # steady offset of the sagittal L (-0.67 kg m^2/s, std 0.05, at an exact
+    # 1.001 m/s) and a smaller lateral sway than planned (+-1.05 kg m^2/s by
+    # stance side); with the blend the errors were 0.09 and -0.05 kg m^2/s
+    # on average (std 0.35 each). 0.3 and 0.6 lie in between.
+    touchdown_blend=0.0,
 )
 #: Rabbit outputs: torso pitch, com z over stance, com x/z over swing.
 RABBIT_CONFIG = QPConfig(
