@@ -136,6 +136,22 @@ def test_a_turn_command_turns_by_its_time_integral_whatever_the_step_timing(earl
     assert p.heading_rad == pytest.approx(0.2 + turned, abs=1e-9)
 
 
+def test_reset_starts_a_new_walk_and_a_new_turn_integral():
+    p = Planner("cassie", M, G)
+    p.start_step("left", 5.0, H0)
+    p.update(est(t_in_step_s=0.2), cmd(turn_rate_radps=1.0))
+    p.start_step("right", 5.3, H0)
+    assert p.heading_rad == pytest.approx(0.3) and p.step_count == 2
+    p.reset(heading_rad=0.1)
+    assert (p.heading_rad, p.heading_next_rad, p.step_count, p.stance) == (0.1, 0.1, 0, None)
+    # A new run from t = 0: the integral restarts (times before the old run's are not skipped).
+    p.start_step("left", 0.0, H0)
+    out = p.update(est(t_in_step_s=0.1), cmd(turn_rate_radps=1.0))
+    assert out.heading_next_rad == pytest.approx(0.1 + T)
+    with pytest.raises(InputError):
+        p.reset(heading_rad=float("nan"))
+
+
 def test_start_of_step_references_equal_the_measured_outputs():
     out = started().update(est(t_in_step_s=0.0), cmd())
     np.testing.assert_allclose(out.h_d[[2, 3, 5, 6]], H0[[2, 3, 5, 6]], atol=1e-15)

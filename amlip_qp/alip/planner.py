@@ -280,6 +280,13 @@ class Planner:
         self._planar = robot == "rabbit"
         self._u_plan = np.zeros(len(kernels.ALIP_PLAN_INPUTS))
         self._u_ref = np.zeros(len(kernels.SWING_REFERENCE_INPUTS))
+        self._h0 = np.zeros(len(self.output_names))
+        self.reset(heading_rad)
+
+    def reset(self, heading_rad: float = 0.0) -> None:
+        """Forget the walk (a new run): no step yet, first heading ``heading_rad``
+        (rad; Rabbit: 0) and the commanded-heading integral restarted."""
+        C.finite("heading_rad", heading_rad)
         self._heading = 0.0 if self._planar else float(heading_rad)
         self._heading_next = self._heading
         # The commanded heading psi (the turn-rate integral, rad) and the time
@@ -289,7 +296,7 @@ class Planner:
         self._rate_cmd: float | None = None  # the turn rate of the last update, rad/s
         self._stance: str | None = None
         self._t_start = 0.0
-        self._h0 = np.zeros(len(self.output_names))
+        self._h0[:] = 0.0
         self._steps = 0
 
     # --- read-only state -----------------------------------------------------

@@ -251,6 +251,7 @@ class WalkingController:
         """Start over (a new run)."""
         self.tracker.reset()
         self.estimator.reset()
+        self.planner.reset()
         self.steps.clear()
         self.fallback_ticks = 0
         self._stance = None
