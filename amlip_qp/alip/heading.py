@@ -63,8 +63,7 @@ def hip_yaw_targets(turn_rad: float) -> tuple[float, float]:
     ``swing_hip_yaw``.
     """
     C.finite("turn_rad", turn_rad)
-    stance, swing = F.hip_yaw_split(float(turn_rad))
-    return stance, swing
+    return F.hip_yaw_split(float(turn_rad))
 
 
 def yaw_of(xy_world) -> float:

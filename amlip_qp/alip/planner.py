@@ -262,7 +262,6 @@ class Planner:
         self.robot = O.check_robot(robot)
         C.positive("mass_kg", mass_kg, "kg")
         C.positive("g (gravity magnitude)", g, "m/s^2")
-        C.finite("heading_rad", heading_rad)
         if speed_reference not in _SPEED_REFERENCES:
             raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
         if plan_fn is not None and not callable(plan_fn):
@@ -435,9 +434,9 @@ class Planner:
             u_p1 = u_L0 = vy = width = 0.0
         else:
             # Integrate the commanded turn rate up to now, then look ahead to
-            # the end of the step (module doc, step 2).
-            # The rate held since the last update applies to the time since
-            # (the first update of a run: its own rate, since the step start).
+            # the end of the step (module doc, step 2). The rate held since the
+            # last update applies to the time since (the first update of a run:
+            # its own rate, since the step start).
             rate = command.turn_rate_radps
             t_abs = self._t_start + t_in
             if self._t_heading_cmd is not None and t_abs > self._t_heading_cmd:
