@@ -8,7 +8,7 @@ run summary's (``docs/SUMMARY_SCHEMA.md``): whether the robot fell, the
 mean velocity over the last 3 s in the heading frame, the CoM drift (in
 place), the yaw change (turn), and the controller tick time. The
 pass/fail thresholds live in ``tests/test_walk_pbc.py`` and
-``tests/test_walk_qp.py``; this script only measures. About 10 minutes on
+``tests/test_walk_qp.py``; this script only measures. About 2.5 minutes on
 2 cores.
 """
 

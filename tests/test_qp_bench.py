@@ -16,3 +16,17 @@ def test_record_walk_keeps_one_distinct_problem_per_solved_tick():
     assert not np.array_equal(problems[0].b, problems[-1].b)
     for p in problems:
         p.validate()
+
+
+def test_report_names_the_backends_that_are_not_installed():
+    from amlip_qp.qp.bench import format_report
+
+    report = {
+        "n_problems": 3, "scenario": "cassie-1mps", "missing_backends": ["osqp"],
+        "solvers": {"proxsuite-warm": {"median_us": 70.0, "p99_us": 90.0, "ratio_to_warm": 1.0, "failures": 0}},
+        "tick_us": {"median": 380.0, "p99": 700.0},
+    }  # fmt: skip
+    text = format_report(report)
+    assert "not installed, not compared: osqp" in text and ".[bench]" in text
+    report["missing_backends"] = []
+    assert "not installed" not in format_report(report)

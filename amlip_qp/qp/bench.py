@@ -208,10 +208,15 @@ def run(n_ticks: int = 1200, scenario: str = "cassie-1mps") -> dict:
     """Record a walk, bench the solvers, and return the JSON-ready report.
 
     Returns:
-        ``{"solvers": {...}, "tick_us": {"median", "p99"}, "n_problems", "scenario", "fell"}``.
+        ``{"solvers": {...}, "tick_us": {"median", "p99"}, "n_problems", "scenario", "fell",
+        "missing_backends"}``; ``missing_backends`` lists the backends of
+        :data:`QPSOLVERS_BACKENDS` that are not installed (the ``bench`` extra).
     """
+    import qpsolvers
+
     problems, tick_us, fell = record_walk(n_ticks, scenario)
     return {
+        "missing_backends": [b for b in QPSOLVERS_BACKENDS if b not in qpsolvers.available_solvers],
         "scenario": scenario,
         "n_problems": len(problems),
         "fell": bool(fell),
@@ -230,4 +235,7 @@ def format_report(report: dict) -> str:
         lines.append(f"{name:<16}{s['median_us']:>12.1f}{s['p99_us']:>12.1f}{s['ratio_to_warm']:>9.2f}{s['failures']:>7d}")
     t = report["tick_us"]
     lines.append(f"controller tick (estimate, plan, build, solve): median {t['median']:.1f} µs, p99 {t['p99']:.1f} µs")
+    missing = report.get("missing_backends") or []
+    if missing:
+        lines.append(f"not installed, not compared: {', '.join(missing)} (pip install -e '.[bench]')")
     return "\n".join(lines)
