@@ -108,6 +108,25 @@ def test_swing_forces_are_zero_in_the_air_and_ramp_in(robot):
     assert np.allclose(ub, 0.75 * builder.config.max_normal_force_N)
 
 
+def test_swing_pyramid_rows_are_lifted_only_while_the_box_pins_the_forces(robot):
+    kin = _kin(robot, 8)
+    builder = WholeBodyQP(robot)
+    cfg = builder.config
+    rows = dict(builder.problem.in_rows)["friction"]
+    n_fric = rows.stop - rows.start
+    stance_rows = slice(rows.start, rows.start + n_fric // 2)
+    swing_rows = slice(rows.start + n_fric // 2, rows.stop)
+    # In the air: the swing rows are unbounded, the box pins the forces to zero.
+    problem, x = _solve(builder, kin, _target(kin, "left", phase=0.5))
+    assert np.all(problem.u[swing_rows] == np.inf) and np.all(problem.u[stance_rows] == 0.0)
+    assert np.max(np.abs(builder.forces(x)["swing"])) < 1e-6
+    # During the liftoff ramp the foot may carry load: the pyramid is back and holds.
+    problem, x = _solve(builder, kin, _target(kin, "left", phase=0.1 * cfg.liftoff_phase, offset=0.02))
+    assert np.all(problem.u[rows] == 0.0)
+    f = builder.forces(x)["swing"]
+    assert np.all(np.abs(f[:, :-1]) <= cfg.friction_mu * f[:, -1:] + 1e-6)
+
+
 def test_dimensions_do_not_depend_on_the_stance(robot):
     kin = _kin(robot, 6)
     builder = WholeBodyQP(robot)
