@@ -103,7 +103,7 @@ def test_infeasible_problem_falls_back_and_recovers():
     tracker = QPTracker(robot)
     kin, target = _stand(robot)
     good = tracker.compute(kin, target)
-    build = tracker.builder.build
+    build = tracker.build_problem
 
     def contradictory(kin, target):
         problem = build(kin, target)
@@ -111,12 +111,12 @@ def test_infeasible_problem_falls_back_and_recovers():
         problem.b[0] = 1.0  # 0 = 1: infeasible whatever the bounds
         return problem
 
-    tracker.builder.build = contradictory
+    tracker.build_problem = contradictory
     bad = tracker.compute(kin, target)
     assert not bad.ok and bad.fallback.startswith("solver")
     assert np.all(np.isfinite(bad.tau_Nm))
     assert np.allclose(bad.tau_Nm, tracker.fallback_decay * good.tau_Nm)
-    tracker.builder.build = build
+    tracker.build_problem = build
     recovered = tracker.compute(kin, target)
     assert recovered.ok and np.allclose(recovered.tau_Nm, good.tau_Nm, atol=1e-2)
 
@@ -192,7 +192,7 @@ def test_an_infeasible_fresh_solve_is_not_repeated():
     robot = load_robot("cassie")
     tracker = QPTracker(robot, warm_start=False)
     kin, target = _stand(robot)
-    build = tracker.builder.build
+    build = tracker.build_problem
 
     def contradictory(kin, target):
         problem = build(kin, target)
@@ -200,7 +200,7 @@ def test_an_infeasible_fresh_solve_is_not_repeated():
         problem.b[0] = 1.0
         return problem
 
-    tracker.builder.build = contradictory
+    tracker.build_problem = contradictory
     before = tracker.solver.n_init
     bad = tracker.compute(kin, target)
     assert not bad.ok

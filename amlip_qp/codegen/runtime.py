@@ -146,23 +146,32 @@ def cache_key(source: bytes, compiler: Sequence[str], flags: Sequence[str] = CFL
 # --- compilation ---------------------------------------------------------------
 
 
-def build_library(source: bytes, compiler: Sequence[str], cache_dir: Path | None = None) -> Path:
-    """Compile ``source`` into ``<cache>/<key>/libamlip_kernels.so`` unless it is there.
+def build_library(
+    source: bytes,
+    compiler: Sequence[str],
+    cache_dir: Path | None = None,
+    source_file: str = generate.SOURCE_FILE,
+    library_file: str = LIBRARY_FILE,
+) -> Path:
+    """Compile ``source`` into ``<cache>/<key>/<library_file>`` unless it is there.
 
+    ``source_file`` and ``library_file`` name the files in the cache folder
+    (default: the planner kernels'; other generated code, e.g. the whole-body
+    QP assembly of :mod:`amlip_qp.control.qp_compiled`, uses its own names).
     Returns the library path. Raises :class:`CodegenError` (with the
     compiler's output) when compilation fails, ``_NoCompiler`` when the
     compiler cannot be executed.
     """
     folder = (cache_root() if cache_dir is None else Path(cache_dir)) / cache_key(source, compiler)
-    lib = folder / LIBRARY_FILE
+    lib = folder / library_file
     if lib.is_file():
         return lib
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        src = folder / generate.SOURCE_FILE
+        src = folder / source_file
         if not (src.is_file() and src.read_bytes() == source):
             generate.atomic_write(src, source)
-        fd, tmp = tempfile.mkstemp(prefix=f".{LIBRARY_FILE}.", suffix=".tmp", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{library_file}.", suffix=".tmp", dir=folder)
         os.close(fd)
     except OSError as exc:
         raise CodegenError(f"cannot write the kernel cache {folder}: {exc}; set ${CACHE_ENV} to a writable folder") from exc

@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 
+from amlip_qp.codegen.runtime import CodegenFallbackWarning
+from amlip_qp.control.qp_compiled import CompiledBuild, CompiledBuildUnavailable
 from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import AmlipError, InputError, QPError
@@ -48,6 +51,14 @@ class QPTracker(Tracker):
         record: Keep a copy of every solved problem in :attr:`recorded` (bench, tests).
         fallback_decay: Factor applied to the last good torques per failed tick (0..1).
         fallback_damping_Nms: Joint damping of the fallback, N m s/rad.
+        compiled_build: Assemble the QP with the generated C of
+            :mod:`amlip_qp.control.qp_compiled` (the same problem to rounding,
+            about 3x less time; compiled once per robot and config into the
+            codegen cache, ~7 s for Cassie). ``None`` (default): when a C
+            compiler is available, else the Python
+            :meth:`~amlip_qp.control.qp_formulation.WholeBodyQP.build` with one
+            warning; ``True``: required (raises without a compiler);
+            ``False``: the Python build.
 
     Attributes:
         last_problem: The last built :class:`QPProblem` (the builder's live
@@ -57,6 +68,10 @@ class QPTracker(Tracker):
         fallbacks: Number of ticks that used the fallback.
         cold_retries: Ticks whose warm-started solve failed and was retried
             from scratch (once) before any fallback.
+        build_backend: ``"c"`` (compiled assembly) or ``"python"``.
+        build_problem: The assembly in use, ``(kin, target) -> QPProblem``
+            (the builder's live arrays, stance-foot torque bound and stance
+            yaw-moment cost included).
     """
 
     name = "qp"
@@ -71,6 +86,7 @@ class QPTracker(Tracker):
         record: bool = False,
         fallback_decay: float = 0.9,
         fallback_damping_Nms: float = 5.0,
+        compiled_build: bool | None = None,
     ):
         if not 0.0 <= fallback_decay <= 1.0:
             raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
@@ -83,6 +99,20 @@ class QPTracker(Tracker):
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
         self._n_outputs = self.builder.output_task.size
+        self.build_problem = self._python_build
+        self.build_backend = "python"
+        if compiled_build is None or compiled_build:
+            try:
+                self.build_problem = CompiledBuild(self.builder).build
+                self.build_backend = "c"
+            except CompiledBuildUnavailable as exc:
+                if compiled_build:
+                    raise
+                warnings.warn(
+                    f"QPTracker: no compiled QP assembly ({exc}); using the Python build (same problem, slower)",
+                    CodegenFallbackWarning,
+                    stacklevel=2,
+                )
         self.config = self.builder.config
         self.solver = ProxQPSolver(
             eps_abs=eps_abs,
@@ -141,9 +171,7 @@ class QPTracker(Tracker):
             raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(target.h_d)}")
         t0 = time.perf_counter_ns()
         try:
-            problem = self.builder.build(kin, target)
-            self.builder.limit_stance_foot_torque(problem, target)
-            self.builder.add_stance_yaw_moment_cost(problem, kin, target)
+            problem = self.build_problem(kin, target)
             self.last_problem = problem
             problem.validate()
         except QPError as exc:
@@ -172,6 +200,12 @@ class QPTracker(Tracker):
                 self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
             return self._fallback(kin, f"solver: {exc.status or exc}", info)
         return self._finish(kin, problem, sol, info, t0, t1, relaxed=False)
+
+    def _python_build(self, kin, target) -> QPProblem:
+        problem = self.builder.build(kin, target)
+        self.builder.limit_stance_foot_torque(problem, target)
+        self.builder.add_stance_yaw_moment_cost(problem, kin, target)
+        return problem
 
     def _solve_relaxed(self, problem: QPProblem):
         """Second chance after an infeasible tick: drop the torque-limit rows
