@@ -184,6 +184,11 @@ class WalkingController:
         speed_correction: Integral action on the step-to-step velocity error
             (:class:`SpeedCorrection`; ``SpeedCorrection(enabled=False)`` gives
             the paper's controller unchanged).
+        output_backend: ``"c"`` installs the generated-C output map
+            (:class:`~amlip_qp.control.outputs_compiled.CompiledOutputMap`, the
+            same outputs to rounding, about half the time) into
+            ``kinematics``; without a compiler it keeps the Python map with a
+            warning. ``"python"`` keeps :class:`~amlip_qp.robots.outputs.OutputMap`.
     """
 
     def __init__(
@@ -198,11 +203,27 @@ class WalkingController:
         initial_stance: str = "left",
         fallback_damping_Nms: float = 5.0,
         speed_correction: SpeedCorrection | None = None,
+        output_backend: str = "c",
     ):
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
         if planner_backend not in ("c", "numpy"):
             raise InputError(f"planner_backend must be 'c' or 'numpy', got {planner_backend!r}")
+        if output_backend not in ("c", "python"):
+            raise InputError(f"output_backend must be 'c' or 'python', got {output_backend!r}")
+        if output_backend == "c":
+            from amlip_qp.codegen.runtime import CodegenFallbackWarning
+            from amlip_qp.control.outputs_compiled import CompiledOutputMap
+            from amlip_qp.control.qp_compiled import CompiledBuildUnavailable
+
+            try:
+                kinematics.output_map = CompiledOutputMap(robot)
+            except CompiledBuildUnavailable as exc:
+                warnings.warn(
+                    f"no compiled output map ({exc}); using the Python OutputMap (same outputs, slower)",
+                    CodegenFallbackWarning,
+                    stacklevel=2,
+                )
         self.robot = robot
         self.tracker = tracker
         self.kin = kinematics

@@ -376,6 +376,28 @@ class RobotKinematics:
         return _passive.coupling_constraints(self.robot, self.q, self.v)
 
     # ------------------------------------------------------------- outputs
+    @property
+    def output_map(self):
+        """The evaluator of :meth:`outputs`: an :class:`~amlip_qp.robots.outputs.OutputMap`
+        (the default, created on first use) or a drop-in with the same
+        ``names`` and ``evaluate(kin, stance, heading_rad)``, e.g. the compiled
+        :class:`~amlip_qp.control.outputs_compiled.CompiledOutputMap`."""
+        if self._output_map is None:
+            from amlip_qp.robots.outputs import OutputMap
+
+            self._output_map = OutputMap(self.robot)
+        return self._output_map
+
+    @output_map.setter
+    def output_map(self, output_map) -> None:
+        from amlip_qp.robots.outputs import OutputMap
+
+        names = OutputMap(self.robot).names
+        if tuple(getattr(output_map, "names", ())) != tuple(names) or not callable(getattr(output_map, "evaluate", None)):
+            raise InputError(f"output_map must evaluate the outputs {names} of {self.robot.name}")
+        self._output_map = output_map
+        self._out_cache = None
+
     def outputs(self, stance: str, heading_rad: float = 0.0):
         """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`.
 
@@ -386,11 +408,7 @@ class RobotKinematics:
         cache = self._out_cache
         if cache is not None and cache[0] == stance and cache[1] == heading_rad:
             return cache[2]
-        if self._output_map is None:
-            from amlip_qp.robots.outputs import OutputMap
-
-            self._output_map = OutputMap(self.robot)
-        result = self._output_map.evaluate(self, stance, heading_rad)
+        result = self.output_map.evaluate(self, stance, heading_rad)
         self._out_cache = (stance, heading_rad, result)
         return result
 
