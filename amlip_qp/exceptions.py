@@ -37,6 +37,11 @@ class CodegenError(AmlipError):
     """Generating, compiling or loading the CasADi-generated C code failed."""
 
 
+class CompilerUnavailableError(CodegenError):
+    """No usable C compiler for generated code that has a Python equivalent
+    (the message says why; set ``$AMLIP_QP_CC`` to a compiler)."""
+
+
 class QPError(AmlipError):
     """A tracker QP could not be solved.
 

@@ -93,3 +93,17 @@ def test_controller_installs_the_compiled_map_unless_told_otherwise():
     assert type(kin.output_map) is OutputMap
     with pytest.raises(InputError, match="output_backend"):
         WalkingController(robot, QPTracker(robot), kin, output_backend="fortran")
+
+
+def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
+    from amlip_qp.codegen.runtime import CodegenFallbackWarning
+    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.qp_tracker import QPTracker
+
+    robot = load_robot("rabbit")
+    tracker = QPTracker(robot)
+    monkeypatch.setenv("AMLIP_QP_CC", "none")
+    kin = RobotKinematics(robot)
+    with pytest.warns(CodegenFallbackWarning, match="Python OutputMap"):
+        WalkingController(robot, tracker, kin)
+    assert type(kin.output_map) is OutputMap

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.qp_compiled import CompiledBuild, CompiledBuildUnavailable, generate_source
+from amlip_qp.control.qp_compiled import CompiledBuild, generate_source
 from amlip_qp.control.qp_formulation import WholeBodyQP, default_config
 from amlip_qp.control.qp_tracker import QPTracker
 from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.exceptions import CompilerUnavailableError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 
@@ -100,7 +101,7 @@ def test_tracker_uses_the_compiled_build_and_falls_back_without_a_compiler(monke
     with pytest.warns(CodegenFallbackWarning, match="Python build"):
         tracker = QPTracker(robot)
     assert tracker.build_backend == "python"
-    with pytest.raises(CompiledBuildUnavailable, match="AMLIP_QP_CC=none"):
+    with pytest.raises(CompilerUnavailableError, match="AMLIP_QP_CC=none"):
         QPTracker(robot, compiled_build=True)
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -214,11 +214,11 @@ class WalkingController:
         if output_backend == "c":
             from amlip_qp.codegen.runtime import CodegenFallbackWarning
             from amlip_qp.control.outputs_compiled import CompiledOutputMap
-            from amlip_qp.control.qp_compiled import CompiledBuildUnavailable
+            from amlip_qp.exceptions import CompilerUnavailableError
 
             try:
                 kinematics.output_map = CompiledOutputMap(robot)
-            except CompiledBuildUnavailable as exc:
+            except CompilerUnavailableError as exc:
                 warnings.warn(
                     f"no compiled output map ({exc}); using the Python OutputMap (same outputs, slower)",
                     CodegenFallbackWarning,

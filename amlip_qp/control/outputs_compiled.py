@@ -30,8 +30,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.control.qp_compiled import CompiledBuildUnavailable
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
 from amlip_qp.robots.outputs import OutputMap
 
 FUNCTION_NAME = "output_map"
@@ -137,7 +136,7 @@ class CompiledOutputMap:
     """Drop-in compiled :class:`~amlip_qp.robots.outputs.OutputMap` (see the module doc).
 
     Raises:
-        CompiledBuildUnavailable: No C compiler.
+        CompilerUnavailableError: No C compiler.
         CodegenError: The compiler rejected the source or the library does not load.
     """
 
@@ -156,7 +155,7 @@ class CompiledOutputMap:
                 source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE
             )
         except runtime._NoCompiler as exc:
-            raise CompiledBuildUnavailable(str(exc)) from None
+            raise CompilerUnavailableError(str(exc)) from None
         try:
             fn = ca.external(FUNCTION_NAME, str(self.library_path))
         except RuntimeError as exc:

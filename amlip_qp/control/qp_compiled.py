@@ -38,17 +38,13 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
 
 #: Name stem of the generated functions (``<stem>_left``, ``<stem>_right``).
 FUNCTION_STEM = "wbqp_build"
 #: File names inside the cache folder.
 SOURCE_FILE = "amlip_wbqp.c"
 LIBRARY_FILE = "libamlip_wbqp.so"
-
-
-class CompiledBuildUnavailable(CodegenError):
-    """No C compiler (the message says why): use the Python build."""
 
 
 def _dm(a) -> ca.DM:
@@ -220,7 +216,7 @@ class CompiledBuild:
         cache_dir: Overrides the codegen cache folder.
 
     Raises:
-        CompiledBuildUnavailable: No C compiler.
+        CompilerUnavailableError: No C compiler.
         CodegenError: The compiler rejected the source or the library does not load.
         InputError: A builder this assembly does not cover (other varying tasks).
     """
@@ -233,13 +229,13 @@ class CompiledBuild:
         try:
             compiler = runtime.find_compiler()
         except runtime._NoCompiler as exc:
-            raise CompiledBuildUnavailable(str(exc)) from None
+            raise CompilerUnavailableError(str(exc)) from None
         try:
             self.library_path = runtime.build_library(
                 source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE
             )
         except runtime._NoCompiler as exc:
-            raise CompiledBuildUnavailable(str(exc)) from None
+            raise CompilerUnavailableError(str(exc)) from None
         B, L = builder, builder._layout
         robot = B.robot
         nv = L.nv

@@ -24,10 +24,10 @@ import warnings
 import numpy as np
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.qp_compiled import CompiledBuild, CompiledBuildUnavailable
+from amlip_qp.control.qp_compiled import CompiledBuild
 from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP
 from amlip_qp.control.tracker import Tracker, TrackerResult
-from amlip_qp.exceptions import AmlipError, InputError, QPError
+from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
 
@@ -105,7 +105,7 @@ class QPTracker(Tracker):
             try:
                 self.build_problem = CompiledBuild(self.builder).build
                 self.build_backend = "c"
-            except CompiledBuildUnavailable as exc:
+            except CompilerUnavailableError as exc:
                 if compiled_build:
                     raise
                 warnings.warn(
