@@ -24,7 +24,12 @@ keyed by the source's hash) and called through ``Function.buffer()`` with
 inputs and outputs bound once to preallocated arrays, so a call costs about
 a microsecond plus the arithmetic. The results equal the Python build to
 rounding (tested to 1e-12 relative on random states, both robots, both
-stances, every rigid-spring mode).
+stances, three phases, the default configs and variants without rigid
+springs, with the pre-touchdown force blend and without the yaw penalty).
+
+Measured in isolation on Cassie (same states, same machine): 22 µs against
+62 µs for the Python build with its two add-ons; in the closed loop the
+tracker's build went from 185 to 116 µs median.
 """
 
 from __future__ import annotations
