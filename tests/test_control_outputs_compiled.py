@@ -105,5 +105,5 @@ def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
     monkeypatch.setenv("AMLIP_QP_CC", "none")
     kin = RobotKinematics(robot)
     with pytest.warns(CodegenFallbackWarning, match="Python OutputMap"):
-        WalkingController(robot, tracker, kin)
+        WalkingController(robot, tracker, kin, planner_backend="numpy")
     assert type(kin.output_map) is OutputMap

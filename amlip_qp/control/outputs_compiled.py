@@ -148,9 +148,9 @@ class CompiledOutputMap:
         self._yaw_q = getattr(ref, "_yaw_q", None)
         self._yaw_v = getattr(ref, "_yaw_v", None)
         nv = robot.nv
-        source = generate_source(self.layout, nv)
         try:
             compiler = runtime.find_compiler()
+            source = generate_source(self.layout, nv)
             self.library_path = runtime.build_library(
                 source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE
             )

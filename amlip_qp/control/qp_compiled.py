@@ -227,14 +227,14 @@ class CompiledBuild:
     """
 
     def __init__(self, builder, cache_dir: str | os.PathLike | None = None):
-        if [t for t in builder._varying_tasks] != [builder.output_task]:
+        if list(builder._varying_tasks) != [builder.output_task]:
             raise InputError("the compiled QP assembly covers one varying task, the output task")
         self.builder = builder
-        source, _ = generate_source(builder)
         try:
             compiler = runtime.find_compiler()
         except runtime._NoCompiler as exc:
             raise CompilerUnavailableError(str(exc)) from None
+        source, _ = generate_source(builder)
         try:
             self.library_path = runtime.build_library(
                 source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE

@@ -393,8 +393,13 @@ class RobotKinematics:
         from amlip_qp.robots.outputs import OutputMap
 
         names = OutputMap(self.robot).names
-        if tuple(getattr(output_map, "names", ())) != tuple(names) or not callable(getattr(output_map, "evaluate", None)):
-            raise InputError(f"output_map must evaluate the outputs {names} of {self.robot.name}")
+        other = getattr(output_map, "robot", self.robot)
+        if (
+            tuple(getattr(output_map, "names", ())) != tuple(names)
+            or not callable(getattr(output_map, "evaluate", None))
+            or other.nv != self.robot.nv
+        ):
+            raise InputError(f"output_map must evaluate the outputs {names} of {self.robot.name} (nv = {self.robot.nv})")
         self._output_map = output_map
         self._out_cache = None
 
