@@ -21,7 +21,6 @@ once into the codegen cache (see :mod:`amlip_qp.codegen.runtime`).
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 from pathlib import Path
@@ -30,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError
 from amlip_qp.robots.outputs import OutputMap
 
 FUNCTION_NAME = "output_map"
@@ -144,7 +143,7 @@ class CompiledOutputMap:
         ref = OutputMap(robot)
         self.robot = robot
         self.layout, self.names = ref.layout, ref.names
-        self._swing_of = ref._swing_of
+        self._ref = ref
         self._yaw_q = getattr(ref, "_yaw_q", None)
         self._yaw_v = getattr(ref, "_yaw_v", None)
         nv = robot.nv
@@ -181,11 +180,7 @@ class CompiledOutputMap:
 
     def evaluate(self, kin, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
-        if stance not in self._swing_of:
-            raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
-        if not math.isfinite(heading_rad):
-            raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
-        swing = self._swing_of[stance]
+        swing = self._ref.checked_swing(stance, heading_rad)
         robot = self.robot
         jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
         JT, p = self._JT, self._p

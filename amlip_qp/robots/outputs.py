@@ -159,6 +159,15 @@ class OutputMap:
         """Number of outputs."""
         return len(self.names)
 
+    def checked_swing(self, stance: str, heading_rad: float) -> str:
+        """The swing side of ``stance``; :class:`InputError` for a bad side or a non-finite heading."""
+        swing = self._swing_of.get(stance) if isinstance(stance, str) else None
+        if swing is None:
+            raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
+        if not math.isfinite(heading_rad):
+            raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
+        return swing
+
     def evaluate(self, kin, stance: str, heading_rad: float = 0.0):
         """Outputs, Jacobian and drift at the last ``kin.update``.
 
@@ -175,11 +184,7 @@ class OutputMap:
         Raises:
             InputError: Bad side or a non-finite heading.
         """
-        if stance not in self._swing_of:
-            raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
-        if not math.isfinite(heading_rad):
-            raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
-        swing = self._swing_of[stance]
+        swing = self.checked_swing(stance, heading_rad)
         robot = self.robot
         v = kin.v
         jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
