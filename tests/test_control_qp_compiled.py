@@ -10,7 +10,7 @@ from amlip_qp.control.qp_compiled import CompiledBuild, generate_source
 from amlip_qp.control.qp_formulation import WholeBodyQP, default_config
 from amlip_qp.control.qp_tracker import QPTracker
 from amlip_qp.control.tracker import TrackingTarget
-from amlip_qp.exceptions import CompilerUnavailableError
+from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 
@@ -97,6 +97,8 @@ def test_tracker_uses_the_compiled_build_and_falls_back_without_a_compiler(monke
     robot = load_robot("rabbit")
     assert QPTracker(robot).build_backend == "c"
     assert QPTracker(robot, compiled_build=False).build_backend == "python"
+    with pytest.raises(InputError, match="compiled_build"):
+        QPTracker(robot, compiled_build="yes")
     monkeypatch.setenv("AMLIP_QP_CC", "none")
     with pytest.warns(CodegenFallbackWarning, match="Python build"):
         tracker = QPTracker(robot)

@@ -94,6 +94,8 @@ class QPTracker(Tracker):
             raise InputError(f"fallback_damping_Nms must be finite and >= 0, got {fallback_damping_Nms!r}")
         if not (eps_abs > 0.0 and math.isfinite(eps_abs)):
             raise InputError(f"eps_abs must be a positive tolerance, got {eps_abs!r}")
+        if compiled_build not in (None, True, False):
+            raise InputError(f"compiled_build must be None, True or False, got {compiled_build!r}")
         if int(max_iter) < 1:
             raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
         self.robot = robot
