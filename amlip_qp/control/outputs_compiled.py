@@ -187,9 +187,9 @@ class CompiledOutputMap:
         base = robot.base_frame_id
         JT[0:3] = jac(base)[3:]
         JT[3:6] = kin.com_jacobian()
-        p[0:9] = kin._rotation_view(base).reshape(-1)
+        p[0:9] = kin.frame_rotation_view(base).reshape(-1)
         p[9:12] = acc(base)[3:]
-        p[12:15] = kin._com_view
+        p[12:15] = kin.com_view
         p[15:18] = kin.com_jdot_v()
         frames = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
         if self._cassie:
@@ -197,7 +197,7 @@ class CompiledOutputMap:
         at = 18
         for i, fid in enumerate(frames):
             JT[6 + 3 * i : 9 + 3 * i] = jac(fid)[:3]
-            p[at : at + 3] = kin._translation_view(fid)
+            p[at : at + 3] = kin.frame_translation_view(fid)
             p[at + 3 : at + 6] = acc(fid)[:3]
             at += 6
         q = kin.q

@@ -295,7 +295,7 @@ class CompiledBuild:
         swing = "right" if stance == "left" else "left"
         ev = self._eval[stance]
         nf = self._nf
-        kin._dynamics_ready()
+        kin.require_dynamics()
         np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=self._hp)
         B._force_jacobians(kin, stance, slice(0, nf))
         B._force_jacobians(kin, swing, slice(nf, 2 * nf))
@@ -306,8 +306,8 @@ class CompiledBuild:
         fids = B.robot.force_frame_ids[stance]
         c = sl["contact"].start
         if self._k == 2:
-            u[c : c + 3] = kin._translation_view(fids[0])
-            u[c + 3 : c + 6] = kin._translation_view(fids[1])
+            u[c : c + 3] = kin.frame_translation_view(fids[0])
+            u[c + 3 : c + 6] = kin.frame_translation_view(fids[1])
             u[c + 6 : c + 9] = kin.frame_jdot_v(fids[0])
             u[c + 9 : c + 12] = kin.frame_jdot_v(fids[1])
         else:

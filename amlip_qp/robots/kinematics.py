@@ -140,12 +140,15 @@ class RobotKinematics:
         always shows the last update. Reading a view costs ~0.1 µs where a
         fresh accessor (``data.oMf[i].translation``, ``data.com[0]``) costs
         1-2 µs. The views do not keep the data alive: ``_views_data`` does,
-        and the updates re-bind if :attr:`data` was replaced. Views are only
-        read (copied or converted to floats) right away, never handed out.
+        and the updates re-bind if :attr:`data` was replaced. The public views
+        (:meth:`frame_translation_view`, :meth:`frame_rotation_view`,
+        :attr:`com_view`) serve the output maps and the QP assembly, which
+        copy them (or convert them to floats) right away and never keep them.
         """
         d = self.data
         self._views_data = d
-        self._com_view = d.com[0]
+        #: Read-only live view of the CoM position (m); copy it at once, never keep or write it.
+        self.com_view = d.com[0]
         self._vcom_view = d.vcom[0]
         self._acom_view = d.acom[0]
         self._hg_view = d.hg.vector  # (m v_c, L_c)
@@ -165,7 +168,8 @@ class RobotKinematics:
         if self.q is None:
             raise InputError("RobotKinematics: call update(q, v) first")
 
-    def _dynamics_ready(self) -> None:
+    def require_dynamics(self) -> None:
+        """Raise :class:`InputError` unless the last update was a full ``update(q, v)``."""
         self._ready()
         if self.positions_only:
             raise InputError("RobotKinematics: dynamics not computed by update_positions(); call update(q, v)")
@@ -174,10 +178,13 @@ class RobotKinematics:
     def frame_position(self, frame_id: int) -> np.ndarray:
         """World position (m) of a Pinocchio frame, shape (3,)."""
         self._ready()
-        return self._translation_view(frame_id).copy()
+        return self.frame_translation_view(frame_id).copy()
 
-    def _translation_view(self, frame_id: int) -> np.ndarray:
-        """Live view of ``data.oMf[frame_id].translation`` (see :meth:`_bind_views`)."""
+    def frame_translation_view(self, frame_id: int) -> np.ndarray:
+        """Read-only live view of ``data.oMf[frame_id].translation``, m (see :meth:`_bind_views`).
+
+        For hot loops that copy the numbers at once; never keep or write it.
+        """
         view = self._translation_views.get(frame_id)
         if view is None:
             view = self._translation_views[frame_id] = self.data.oMf[frame_id].translation
@@ -186,10 +193,13 @@ class RobotKinematics:
     def frame_rotation(self, frame_id: int) -> np.ndarray:
         """World rotation matrix of a Pinocchio frame, shape (3, 3)."""
         self._ready()
-        return self._rotation_view(frame_id).copy()
+        return self.frame_rotation_view(frame_id).copy()
 
-    def _rotation_view(self, frame_id: int) -> np.ndarray:
-        """Live view of ``data.oMf[frame_id].rotation`` (see :meth:`_bind_views`)."""
+    def frame_rotation_view(self, frame_id: int) -> np.ndarray:
+        """Read-only live view of ``data.oMf[frame_id].rotation`` (see :meth:`_bind_views`).
+
+        For hot loops that copy the numbers at once; never keep or write it.
+        """
         view = self._rotation_views.get(frame_id)
         if view is None:
             view = self._rotation_views[frame_id] = self.data.oMf[frame_id].rotation
@@ -246,7 +256,7 @@ class RobotKinematics:
     def force_point_positions(self, side: str) -> np.ndarray:
         """World positions (m) of the foot's force points (toe, heel or the contact), shape (k, 3)."""
         self._ready()
-        return np.array([self._translation_view(f) for f in self.robot.force_frame_ids[self._side(side)]])
+        return np.array([self.frame_translation_view(f) for f in self.robot.force_frame_ids[self._side(side)]])
 
     def force_point_jacobian(self, side: str) -> np.ndarray:
         """Stacked translational Jacobians (3k x nv) of the foot's force points."""
@@ -283,7 +293,7 @@ class RobotKinematics:
     def com(self) -> np.ndarray:
         """Centre of mass ``c`` (m), shape (3,)."""
         self._ready()
-        return self._com_view.copy()
+        return self.com_view.copy()
 
     def com_velocity(self) -> np.ndarray:
         """CoM velocity ``v_c`` (m/s), shape (3,)."""
@@ -307,13 +317,13 @@ class RobotKinematics:
     # ------------------------------------------------------------ momentum
     def centroidal_momentum(self) -> tuple[np.ndarray, np.ndarray]:
         """``(m v_c, L_c)``: linear momentum (kg m/s) and angular momentum about the CoM (kg m^2/s), world axes."""
-        self._dynamics_ready()
+        self.require_dynamics()
         hg = self._hg_view
         return hg[:3].copy(), hg[3:].copy()
 
     def angular_momentum_about(self, point) -> np.ndarray:
         """Angular momentum ``L = L_c + (c - r) x m v_c`` (kg m^2/s) about a world point ``r`` (m)."""
-        self._dynamics_ready()
+        self.require_dynamics()
         l0, l1, l2, a0, a1, a2 = self._hg_view.tolist()
         r = np.asarray(point, dtype=float)
         if r.shape != (3,):
@@ -321,7 +331,7 @@ class RobotKinematics:
         r0, r1, r2 = r.tolist()
         if not (math.isfinite(r0) and math.isfinite(r1) and math.isfinite(r2)):
             raise InputError(f"point must be a finite 3-vector, got {r!r}")
-        c0, c1, c2 = self._com_view.tolist()
+        c0, c1, c2 = self.com_view.tolist()
         p0, p1, p2 = c0 - r0, c1 - r1, c2 - r2
         # p x (m v_c), written out on floats: numpy's cross costs ~20 µs on 3-vectors.
         return np.array(
@@ -338,7 +348,7 @@ class RobotKinematics:
 
     def centroidal_momentum_matrix(self) -> np.ndarray:
         """Centroidal momentum matrix ``A_g`` (6 x nv): ``(m v_c, L_c) = A_g v``."""
-        self._dynamics_ready()
+        self.require_dynamics()
         return self.data.Ag
 
     # ------------------------------------------------------------ dynamics
@@ -347,7 +357,7 @@ class RobotKinematics:
 
         Cached until the next :meth:`update` (treat as read-only).
         """
-        self._dynamics_ready()
+        self.require_dynamics()
         if self._M is None:
             # CRBA fills the upper triangle; mirror it once per update.
             M = self.data.M.copy()
@@ -357,7 +367,7 @@ class RobotKinematics:
 
     def nonlinear_effects(self) -> np.ndarray:
         """``h = C(q, v) v + g(q)`` (N m / N), shape (nv,)."""
-        self._dynamics_ready()
+        self.require_dynamics()
         return self.data.nle.copy()
 
     def passive_forces(self) -> np.ndarray:

@@ -195,16 +195,16 @@ class OutputMap:
         Jw = jac(base)[3:]
         w = tuple((Jw @ v).tolist())
         alpha = tuple(kin.frame_jdot_v6(base)[3:].tolist())
-        R = kin._rotation_view(base).tolist()
+        R = kin.frame_rotation_view(base).tolist()
 
         # CoM relative to the two contact points (m) and the drifts (m/s^2).
         fid_st, fid_sw = robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]
-        c0, c1, c2 = kin._com_view.tolist()
+        c0, c1, c2 = kin.com_view.tolist()
         dc0, dc1, dc2 = kin.com_jdot_v().tolist()
-        r0, r1, r2 = kin._translation_view(fid_st).tolist()
+        r0, r1, r2 = kin.frame_translation_view(fid_st).tolist()
         p_st_z = c2 - r2
         d_st_z = dc2 - kin.frame_jdot_v6(fid_st).tolist()[2]
-        r0, r1, r2 = kin._translation_view(fid_sw).tolist()
+        r0, r1, r2 = kin.frame_translation_view(fid_sw).tolist()
         p_sw = (c0 - r0, c1 - r1, c2 - r2)
         a_sw = kin.frame_jdot_v6(fid_sw).tolist()
         d_sw = (dc0 - a_sw[0], dc1 - a_sw[1], dc2 - a_sw[2])
@@ -249,8 +249,8 @@ class OutputMap:
         J[3, yaw_v[swing]] = 1.0
         # Swing toe pitch from the blade vector d = toe - heel (m).
         toe_id, heel_id = robot.force_frame_ids[swing]
-        t0, t1, t2 = kin._translation_view(toe_id).tolist()
-        h0, h1, h2 = kin._translation_view(heel_id).tolist()
+        t0, t1, t2 = kin.frame_translation_view(toe_id).tolist()
+        h0, h1, h2 = kin.frame_translation_view(heel_id).tolist()
         d = (t0 - h0, t1 - h1, t2 - h2)
         Jd = np.subtract(jac(toe_id)[:3], jac(heel_id)[:3], out=self._J_blade)
         at, ah = kin.frame_jdot_v6(toe_id).tolist(), kin.frame_jdot_v6(heel_id).tolist()
