@@ -173,7 +173,7 @@ def test_scenario_options_override(capsys, stand_in):
 
 
 def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
-    out_json, fig = tmp_path / "cmp.json", tmp_path / "cmp.png"
+    out_json, fig = tmp_path / "cmp.json", tmp_path / "figures" / "cmp.png"  # the figure's folder is created
     argv = ["compare", "--quick", "--robots", "rabbit,cassie", "--jobs", "1", "--push-iterations", "2"]
     code, out, err = _run(argv + ["--json", str(out_json), "--plot", str(fig)], capsys)
     assert code == 0, err

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -384,12 +383,9 @@ def settings_from_args(args: argparse.Namespace) -> CompareSettings:
 
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
+    from amlip_qp.cli import check_output_path, writing
     from amlip_qp.sim import summary
 
-    if args.json is not None and args.json != "-":
-        parent = os.path.dirname(os.path.abspath(args.json))
-        if not os.path.isdir(parent):
-            raise InputError(f"--json {args.json}: folder {parent} does not exist")
     settings = settings_from_args(args)
     for trk in args.trackers:
         from amlip_qp.sim.factory import tracker_class
@@ -398,6 +394,15 @@ def main(args: argparse.Namespace) -> int:
     tasks = build_tasks(
         args.robots, args.trackers, args.scenario, settings, seed=args.seed, noise=args.noise, ramp=not args.no_ramp, push=not args.no_push
     )
+    # Outputs are checked before anything runs; the figure's folder (default out/) is created.
+    check_output_path("--json", args.json)
+    if not args.no_plot and args.plot:
+        if args.plot == "-":
+            raise InputError("--plot cannot write to stdout ('-'); give a file name")
+        from amlip_qp.sim.plots import check_figure_path
+
+        check_figure_path(args.plot)
+        check_output_path("--plot", args.plot, create_folder=True)
 
     def log(msg: str) -> None:
         sys.stderr.write(msg + "\n")
@@ -413,12 +418,13 @@ def main(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(table + "\n")
         if args.json is not None:
-            with open(args.json, "w") as fh:
+            with writing("--json", args.json), open(args.json, "w") as fh:
                 fh.write(summary.dumps({"rows": rows, "settings": _settings_dict(settings, args)}) + "\n")
     if not args.no_plot and args.plot:
         from amlip_qp.sim.plots import comparison_figure
 
-        path = comparison_figure(rows, args.plot)
+        with writing("--plot", args.plot):
+            path = comparison_figure(rows, args.plot)
         log(f"compare: figure written to {path}")
     return 0
 

@@ -12,15 +12,33 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.sim.harness import RunResult  # noqa: E402
 from amlip_qp.sim.summary import heading_frame_xy, step_velocities  # noqa: E402
 
 
-def _save(fig, path: str | os.PathLike) -> Path:
+#: File suffixes the figures are written as (the format follows the suffix).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_figure_path(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if its suffix is one of :data:`FIGURE_SUFFIXES`; :class:`InputError` otherwise."""
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
+    if p.suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(f"figure file must end in {', '.join(FIGURE_SUFFIXES)}, got {str(path)!r}")
+    return p
+
+
+def _save(fig, path: str | os.PathLike) -> Path:
+    """Write ``fig`` to ``path`` (its folder created) and close it; a failed write raises :class:`OSError`."""
+    p = check_figure_path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        # Our own file object: Pillow, given a file name, ignores a failing close (a full disk).
+        with open(p, "wb") as fh:
+            fig.savefig(fh, format=p.suffix[1:].lower(), dpi=110)
+    finally:
+        plt.close(fig)
     return p
 
 
@@ -36,6 +54,7 @@ def _mark_fall(ax, result: RunResult) -> None:
 
 def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = None) -> Path:
     """Four panels: speed, ``L`` and its prediction, foot-placement error, output tracking errors. Returns the path."""
+    check_figure_path(path)
     log = result.log
     t = log["t"]
     planar = bool(result.info.get("planar", False))

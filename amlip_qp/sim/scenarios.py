@@ -64,7 +64,7 @@ class SpeedProfile:
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
             raise InputError("speed profile times and speeds must be finite numbers")
         if t[0] < 0 or np.any(np.diff(t) <= 0):
-            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {list(t)}")
+            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
 
     @classmethod
     def parse(cls, text: str) -> "SpeedProfile":
