@@ -10,6 +10,7 @@ import argparse
 import json
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -189,6 +190,22 @@ def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
         assert len(r["sagittal_push_trials"]) == 3  # the upper bound, then 2 bisection steps
     assert data["settings"]["push_iterations"] == 2
     assert fig.stat().st_size > 10_000
+
+
+def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
+    from amlip_qp.codegen.runtime import CodegenFallbackWarning
+
+    class FallbackTracker(ZeroTracker):
+        def __init__(self, robot):
+            super().__init__(robot)
+            warnings.warn("stand-in: no C compiler", CodegenFallbackWarning, stacklevel=2)
+
+    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: FallbackTracker(robot))
+    monkeypatch.setattr(factory, "tracker_class", lambda name: FallbackTracker)
+    argv = ["compare", "--quick", "--robots", "rabbit", "--trackers", "qp", "--no-ramp", "--no-push", "--jobs", "1", "--no-plot"]
+    with pytest.warns(CodegenFallbackWarning, match="no C compiler"):
+        code, out, err = _run(argv, capsys)
+    assert code == 0, err
 
 
 def test_factory_names_a_missing_tracker(monkeypatch):

@@ -191,9 +191,6 @@ def _run(scenario: Scenario, tracker: str, seed: int, noise: bool) -> RunResult:
 
 def _execute(task: _Task) -> dict[str, Any]:
     """Run one experiment (in a worker process); returns the row fields it measures."""
-    import warnings
-
-    warnings.simplefilter("ignore", RuntimeWarning)
     t0, c0 = time.perf_counter(), time.process_time()
     s = task.settings
     if task.kind == "nominal":
