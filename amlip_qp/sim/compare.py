@@ -199,8 +199,10 @@ def _execute(task: _Task) -> dict[str, Any]:
         out: dict[str, Any] = {"nominal": summ}
     elif task.kind == "ramp":
         res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        speed = highest_steady_speed(res, s.window_s, s.tolerance)
         out = {
-            "highest_steady_speed_mps": highest_steady_speed(res, s.window_s, s.tolerance),
+            "highest_steady_speed_mps": speed,
+            "speed_at_upper_bound": math.isclose(speed, task.scenario.vx.final_mps, rel_tol=1e-9),
             "ramp_fell": bool(res.fell),
             "ramp_scenario": task.scenario.name,
         }
@@ -344,6 +346,15 @@ TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
 )
 
 
+#: Row key of a searched value -> row key of the flag that says it reached the top of the search
+#: range (the robot did at least that: ">=" in the table and the figure).
+AT_UPPER_BOUND: dict[str, str] = {
+    "highest_steady_speed_mps": "speed_at_upper_bound",
+    "max_sagittal_impulse_Ns": "sagittal_impulse_at_upper_bound",
+    "max_lateral_impulse_Ns": "lateral_impulse_at_upper_bound",
+}
+
+
 def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
     v = row.get(key)
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -351,8 +362,7 @@ def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
     text = format(v, fmt)
-    bound = {"max_sagittal_impulse_Ns": "sagittal_impulse_at_upper_bound", "max_lateral_impulse_Ns": "lateral_impulse_at_upper_bound"}
-    if key in bound and row.get(bound[key]):
+    if key in AT_UPPER_BOUND and row.get(AT_UPPER_BOUND[key]):
         text = ">=" + text
     return text
 
