@@ -109,6 +109,8 @@ def _add_walk(sub) -> None:
         "walk",
         help="simulate one walk in MuJoCo and summarise it",
         description="Simulate one walk in MuJoCo with the PBC or QP tracker and print a summary. "
+        "Speeds, the turn rate, the duration and pushes must lie inside the robot's physical bounds "
+        "(amlip_qp.profiles.CommandBounds); output paths are checked before the run. "
         "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
     )
     p.add_argument("--robot", choices=_ROBOTS, default=None, help="robot (default cassie, or the scenario's)")
