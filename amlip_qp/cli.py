@@ -11,10 +11,14 @@ to stderr, never a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import math
+import os
+import re
 import sys
-from typing import Callable, Sequence
+from pathlib import Path
+from typing import Callable, Iterator, Sequence
 
 from amlip_qp.exceptions import AmlipError, InputError, ModelFileError, MJCFError, UnknownRobotError
 
@@ -24,8 +28,21 @@ PROG = "amlip-qp"
 _USAGE_ERRORS = (InputError, UnknownRobotError, ModelFileError, MJCFError)
 
 
+#: An argument argparse should read as a value, not an option: anything that starts like a
+#: negative number. Argparse's own pattern knows only ``-1`` and ``-1.5``; this one also takes
+#: exponents (``-1e-1``, ``-5E0``), ``-inf``/``-nan`` and a push at a negative time
+#: (``-1:0,0,0:1``), which the value checks then refuse with a clear message. No option of
+#: ``amlip-qp`` starts with ``-`` and a digit.
+_NEGATIVE_NUMBER = re.compile(r"^-(?:\.?\d|inf|nan)", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line and exit with status 2."""
+    """An ArgumentParser whose errors are one line and exit with status 2, and that reads ``-1e-1`` as a number."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse consults this (private) matcher to tell negative numbers from options.
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message: str) -> None:  # noqa: D401 (argparse API)
         sys.stderr.write(f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
@@ -92,6 +109,8 @@ def _add_walk(sub) -> None:
         "walk",
         help="simulate one walk in MuJoCo and summarise it",
         description="Simulate one walk in MuJoCo with the PBC or QP tracker and print a summary. "
+        "Speeds, the turn rate, the duration and pushes must lie inside the robot's physical bounds "
+        "(amlip_qp.profiles.CommandBounds); output paths are checked before the run. "
         "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
     )
     p.add_argument("--robot", choices=_ROBOTS, default=None, help="robot (default cassie, or the scenario's)")
@@ -117,7 +136,9 @@ def _add_walk(sub) -> None:
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
     p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
-    p.add_argument("--plot", metavar="PATH", default=None, help="write a PNG figure (speed, L, foot placement, tracking)")
+    p.add_argument(
+        "--plot", metavar="PATH", default=None, help="write a figure, .png, .pdf or .svg (speed, L, foot placement, tracking)"
+    )
     p.add_argument("--video", metavar="PATH", default=None, help="record the 'track' camera to PATH (.mp4 or .gif)")
     p.add_argument("--video-fps", type=_positive_float, default=30.0, metavar="FPS", help="video frames per second (default 30)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -148,7 +169,9 @@ def _add_compare(sub) -> None:
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise")
     p.add_argument("--jobs", type=_positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")
-    p.add_argument("--plot", metavar="PATH", default="out/compare.png", help="comparison figure (default out/compare.png)")
+    p.add_argument(
+        "--plot", metavar="PATH", default="out/compare.png", help="comparison figure, .png, .pdf or .svg (default out/compare.png; folder created)"
+    )
     p.add_argument("--no-plot", action="store_true", help="do not write the figure")
     p.set_defaults(func=_handler("amlip_qp.sim.cli:run_compare"))
 
@@ -221,6 +244,53 @@ _positive_int = _int_at_least(1, "positive integer")
 _non_negative_int = _int_at_least(0, "non-negative integer")
 
 
+def check_output_path(option: str, path: str | None, create_folder: bool = False) -> None:
+    """Refuse, before any work, an output ``path`` that cannot be written (``None`` and ``'-'`` pass).
+
+    A new file is created and removed again; an existing regular file is
+    opened for appending (its content is kept); other existing files (a
+    device, a pipe) must be writable by the user. With ``create_folder`` a
+    missing parent folder is created, otherwise it is an error.
+
+    Raises:
+        InputError: Naming ``option``, the path and what to do.
+    """
+    if path is None or path == "-":
+        return
+    target = Path(path).expanduser()
+    if target.is_dir():
+        raise InputError(f"{option} {path}: is a folder; give a file name")
+    folder = target.parent
+    if create_folder and not folder.exists():
+        try:
+            folder.mkdir(parents=True)
+        except OSError as exc:
+            raise InputError(f"{option} {path}: cannot create the folder {folder} ({exc.strerror or exc}); give a writable path") from None
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{option} {path}: {folder} is a file, not a folder; give a path in a folder")
+    if not folder.is_dir():
+        raise InputError(f"{option} {path}: folder {folder} does not exist; create it or give another path")
+    try:
+        if not target.exists():
+            os.close(os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL))
+            target.unlink()
+        elif target.is_file():
+            os.close(os.open(target, os.O_WRONLY | os.O_APPEND))
+        elif not os.access(target, os.W_OK):
+            raise PermissionError(13, "Permission denied")
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot write there ({exc.strerror or exc}); give a writable path") from None
+
+
+@contextlib.contextmanager
+def writing(option: str, path: str) -> Iterator[None]:
+    """Turn an :class:`OSError` raised while writing ``path`` into an :class:`InputError` naming ``option``."""
+    try:
+        yield
+    except OSError as exc:
+        raise InputError(f"{option} {path}: writing failed ({exc.strerror or exc}); give a writable path") from exc
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``amlip-qp`` console script."""
     parser = build_parser()
@@ -233,6 +303,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except AmlipError as exc:
         sys.stderr.write(f"{PROG}: error: {exc}\n")
         return 1
+    except OSError as exc:  # an output that failed after the early checks (disk full, folder removed, ...)
+        where = f"{exc.filename}: " if exc.filename else ""
+        sys.stderr.write(f"{PROG}: error: {where}{exc.strerror or exc}; check the path, its folder and the free space\n")
+        return 2
     except KeyboardInterrupt:
         sys.stderr.write(f"{PROG}: interrupted\n")
         return 130

@@ -24,7 +24,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from amlip_qp.exceptions import InputError, UnknownRobotError
 
@@ -48,23 +48,130 @@ class GaitSettings:
 
 @dataclass(frozen=True)
 class CommandBounds:
-    """The physical bounds of a robot's commands (SI units; the CLI names the bound it rejects).
+    """The physical bounds of a robot's commands (SI units; :meth:`check` names the bound it rejects).
+
+    A command outside these bounds is out of the robot's physical reach or
+    certainly a typo, so it is refused before anything is simulated. Inside
+    them a walk is not guaranteed: the step-command and acceptance tests say
+    what is verified.
+
+    The bundled robots' values and why:
+
+    - Cassie, ``vx_mps = (-1.0, 2.5)``: 2.5 m/s is the fastest walk the
+      acceptance verifies (``cassie-2.5mps``, T = 0.25 s), above the paper's
+      2.1 m/s on hardware, whose faster walking was limited by joint limits of
+      the hand-designed swing trajectories. Backward, 1.0 m/s asks for 0.3 m
+      steps behind the hip at T = 0.3 s, well within the leg's reach (the
+      step-command tests verify -0.5 m/s).
+    - Cassie, ``vy_max_mps = 0.5``: with the 0.25 m step width and T = 0.3 s,
+      the narrow step of a lateral walk leaves the feet ``W - vy T`` = 0.10 m
+      apart; faster, the legs would cross (leg collisions are not simulated).
+    - Cassie, ``turn_rate_max_radps`` = 60 deg/s: the heading changes by
+      18 deg per 0.3 s step, half of which each hip-yaw joint takes (the
+      paper's turning rule), 9 deg of their +-22.5 deg range.
+    - Rabbit, ``vx_mps = (-0.5, 1.5)``: 1.5 m/s is the top of the ``compare``
+      ramp, a Froude number ``v^2 / (g l)`` of 0.29 for its 0.8 m legs, under
+      the walk-run transition near 0.5. Backward, 0.5 m/s asks for 0.18 m
+      steps behind the hip at T = 0.35 s (backward walking is not verified).
+    - Rabbit is planar: ``vy_max_mps`` and ``turn_rate_max_radps`` are 0.
+    - Both robots weigh 32-33 kg and share the duration and push bounds below.
 
     Attributes:
         vx_mps: ``(min, max)`` forward speed in the heading frame, m/s.
         vy_max_mps: Largest lateral speed magnitude, m/s (0 for planar robots).
         turn_rate_max_radps: Largest turn-rate magnitude, rad/s (0 for planar robots).
-        duration_max_s: Longest simulated run, s (the per-tick log grows with it).
-        push_impulse_max_Ns: Largest impulse of one push (force magnitude times duration), N s.
-        push_force_max_N: Largest force magnitude of one push, N.
+        duration_max_s: Longest simulated run, s. The per-tick log is
+            preallocated: about 0.9 MB (Rabbit) to 1.1 MB (Cassie) per
+            simulated second at the 2 kHz control rate, so 600 s stay under
+            0.7 GB of memory (and take tens of minutes of wall time).
+        push_impulse_max_Ns: Largest impulse of one push (force magnitude
+            times duration), N s. 100 N s changes the speed of a 32-33 kg
+            robot by about 3 m/s, beyond every speed it can walk at; the
+            ``compare`` push search stops at 60 N s (Cassie) and 40 N s (Rabbit).
+        push_force_max_N: Largest force magnitude of one push, N. 3000 N is
+            about ten body weights of a 32-33 kg robot: above it a force is an
+            impact, not a push.
     """
 
     vx_mps: tuple[float, float]
     vy_max_mps: float
     turn_rate_max_radps: float
     duration_max_s: float = 600.0
-    push_impulse_max_Ns: float = 200.0
-    push_force_max_N: float = 2000.0
+    push_impulse_max_Ns: float = 100.0
+    push_force_max_N: float = 3000.0
+
+    def __post_init__(self) -> None:
+        lo, hi = self.vx_mps
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi):
+            raise InputError(f"CommandBounds.vx_mps must be finite (min, max) with min <= 0 <= max, got {self.vx_mps!r}")
+        for name in ("vy_max_mps", "turn_rate_max_radps", "duration_max_s", "push_impulse_max_Ns", "push_force_max_N"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InputError(f"CommandBounds.{name} must be a finite number >= 0, got {value!r}")
+
+    def check(
+        self,
+        robot: str,
+        *,
+        vx_mps: Iterable[float] = (),
+        vy_mps: float = 0.0,
+        turn_rate_radps: float = 0.0,
+        duration_s: float | None = None,
+        pushes: Iterable[tuple[float, Sequence[float], float]] = (),
+    ) -> None:
+        """Raise :class:`InputError` naming the first bound a command breaks.
+
+        Args:
+            robot: The robot's name (for the message).
+            vx_mps: Every forward speed commanded, m/s (for a piecewise-linear
+                profile, its knots: the extremes are among them).
+            vy_mps: Lateral speed, m/s.
+            turn_rate_radps: Turn rate, rad/s.
+            duration_s: Simulated time, s (``None``: not checked; pushes are then
+                not checked against it).
+            pushes: ``(t_s, (fx, fy, fz) N, duration_s)`` of each push; each
+                must start and end within ``duration_s``.
+        """
+        where = "in amlip_qp.profiles"
+        lo, hi = self.vx_mps
+        for v in vx_mps:
+            if not lo <= v <= hi:
+                raise InputError(
+                    f"forward speed {v:g} m/s is outside {robot}'s bounds [{lo:g}, {hi:g}] m/s (CommandBounds.vx_mps {where})"
+                )
+        if not abs(vy_mps) <= self.vy_max_mps:
+            raise InputError(
+                f"lateral speed {vy_mps:g} m/s is outside {robot}'s bound |vy| <= {self.vy_max_mps:g} m/s "
+                f"(CommandBounds.vy_max_mps {where})"
+            )
+        if not abs(turn_rate_radps) <= self.turn_rate_max_radps:
+            raise InputError(
+                f"turn rate {math.degrees(turn_rate_radps):g} deg/s is outside {robot}'s bound "
+                f"|turn rate| <= {math.degrees(self.turn_rate_max_radps):g} deg/s "
+                f"(CommandBounds.turn_rate_max_radps = {self.turn_rate_max_radps:.4g} rad/s {where})"
+            )
+        if duration_s is not None and not duration_s <= self.duration_max_s:
+            raise InputError(
+                f"duration {duration_s:g} s is above {robot}'s bound {self.duration_max_s:g} s "
+                f"(CommandBounds.duration_max_s {where}: the per-tick log is kept in memory)"
+            )
+        for t_s, force_N, push_s in pushes:
+            magnitude = math.sqrt(sum(f * f for f in force_N))
+            if not magnitude <= self.push_force_max_N:
+                raise InputError(
+                    f"push at {t_s:g} s: force {magnitude:g} N is above {robot}'s bound {self.push_force_max_N:g} N "
+                    f"(CommandBounds.push_force_max_N {where})"
+                )
+            if not magnitude * push_s <= self.push_impulse_max_Ns:
+                raise InputError(
+                    f"push at {t_s:g} s: impulse {magnitude * push_s:g} N s (force x duration) is above {robot}'s bound "
+                    f"{self.push_impulse_max_Ns:g} N s (CommandBounds.push_impulse_max_Ns {where})"
+                )
+            if duration_s is not None and not t_s + push_s <= duration_s + 1e-9:  # 1 ns: rounding of t + dur
+                raise InputError(
+                    f"push at {t_s:g} s lasting {push_s:g} s ends after the run's {duration_s:g} s; "
+                    "lengthen the run or push earlier"
+                )
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ import argparse
 import json
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -173,7 +174,7 @@ def test_scenario_options_override(capsys, stand_in):
 
 
 def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
-    out_json, fig = tmp_path / "cmp.json", tmp_path / "cmp.png"
+    out_json, fig = tmp_path / "cmp.json", tmp_path / "figures" / "cmp.png"  # the figure's folder is created
     argv = ["compare", "--quick", "--robots", "rabbit,cassie", "--jobs", "1", "--push-iterations", "2"]
     code, out, err = _run(argv + ["--json", str(out_json), "--plot", str(fig)], capsys)
     assert code == 0, err
@@ -189,6 +190,31 @@ def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
         assert len(r["sagittal_push_trials"]) == 3  # the upper bound, then 2 bisection steps
     assert data["settings"]["push_iterations"] == 2
     assert fig.stat().st_size > 10_000
+
+
+def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
+    from amlip_qp.codegen.runtime import CodegenFallbackWarning
+
+    class FallbackTracker(ZeroTracker):
+        def __init__(self, robot):
+            super().__init__(robot)
+            warnings.warn("stand-in: no C compiler", CodegenFallbackWarning, stacklevel=2)
+
+    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: FallbackTracker(robot))
+    monkeypatch.setattr(factory, "tracker_class", lambda name: FallbackTracker)
+    argv = ["compare", "--quick", "--robots", "rabbit", "--trackers", "qp", "--no-ramp", "--no-push", "--jobs", "1", "--no-plot"]
+    with pytest.warns(CodegenFallbackWarning, match="no C compiler"):
+        code, out, err = _run(argv, capsys)
+    assert code == 0, err
+
+
+def test_compare_table_marks_values_at_the_top_of_the_search():
+    from amlip_qp.sim.compare import format_table
+
+    row = {"robot": "cassie", "tracker": "qp", "fell": False, "highest_steady_speed_mps": 2.1, "speed_at_upper_bound": True}
+    row.update(max_sagittal_impulse_Ns=60.0, sagittal_impulse_at_upper_bound=True, max_lateral_impulse_Ns=22.5)
+    cells = format_table([row]).splitlines()[2].split()
+    assert cells[cells.index("no") + 7 :][:3] == [">=2.10", ">=60.0", "22.5"]
 
 
 def test_factory_names_a_missing_tracker(monkeypatch):

@@ -55,3 +55,57 @@ def test_scenario_validation_and_copy():
         Scenario("x", "cassie", 1.0, vy_mps=float("nan"))
     sc = get_scenario("cassie-push").with_(duration_s=7.0)
     assert sc.duration_s == 7.0 and sc.pushes == get_scenario("cassie-push").pushes
+
+
+def test_every_named_scenario_is_inside_its_robots_bounds():
+    from amlip_qp.sim.scenarios import check_scenario
+
+    for sc in SCENARIOS.values():
+        check_scenario(sc)
+
+
+@pytest.mark.parametrize(
+    "robot, vx",
+    [("cassie", 2.5), ("cassie", -0.5), ("cassie", -1.0), ("cassie", 1.0), ("rabbit", 0.5), ("rabbit", 0.8), ("rabbit", 1.0)],
+)
+def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
+    from amlip_qp.sim.scenarios import check_scenario
+
+    check_scenario(Scenario("step", robot, 10.0, vx=SpeedProfile.constant(vx)))
+
+
+@pytest.mark.parametrize(
+    "robot, changes, needle",
+    [
+        ("cassie", {"vx": SpeedProfile.constant(2.6)}, "forward speed 2.6 m/s is outside cassie's bounds [-1, 2.5] m/s"),
+        ("cassie", {"vx": SpeedProfile((0.0, 4.0, 8.0), (0.0, -1.5, 0.0))}, "forward speed -1.5 m/s"),
+        ("rabbit", {"vx": SpeedProfile.constant(1.6)}, "outside rabbit's bounds [-0.5, 1.5] m/s"),
+        ("cassie", {"vy_mps": -0.51}, "lateral speed -0.51 m/s is outside cassie's bound |vy| <= 0.5 m/s"),
+        ("cassie", {"turn_rate_radps": math.radians(61.0)}, "turn rate 61 deg/s is outside cassie's bound |turn rate| <= 60 deg/s"),
+        ("cassie", {"duration_s": 601.0}, "duration 601 s is above cassie's bound 600 s"),
+        ("rabbit", {"vy_mps": 0.1, "turn_rate_radps": 0.2}, "rabbit is planar: lateral speed (0.1 m/s), turn rate"),
+        ("rabbit", {"pushes": [(1.0, (0.0, 10.0, 0.0), 0.1)]}, "rabbit is planar: push FY (10 N at 1 s)"),
+        ("cassie", {"pushes": [(1.0, (0.0, 3001.0, 0.0), 0.01)]}, "force 3001 N is above cassie's bound 3000 N"),
+        ("cassie", {"pushes": [(1.0, (600.0, 0.0, 800.0), 0.2)]}, "impulse 200 N s (force x duration)"),
+        ("cassie", {"pushes": [(9.9, (100.0, 0.0, 0.0), 0.2)]}, "ends after the run's 10 s"),
+    ],
+)
+def test_check_scenario_names_the_bound(robot, changes, needle):
+    from amlip_qp.profiles import get_profile
+    from amlip_qp.sim.harness import Push
+    from amlip_qp.sim.scenarios import check_scenario
+
+    if "pushes" in changes:
+        changes = {"pushes": tuple(Push(*p) for p in changes["pushes"])}
+    sc = Scenario("x", robot, 10.0).with_(**changes)
+    with pytest.raises(InputError) as info:
+        check_scenario(sc)
+    assert needle in str(info.value) and "\n" not in str(info.value)
+    # The bound sits exactly where the message says it does: the same check with it widened passes
+    # (except for planar robots and pushes after the run, which no bound widening allows).
+    if "planar" not in needle and "after the run" not in needle:
+        from dataclasses import replace
+
+        wide = replace(get_profile(robot).bounds, vx_mps=(-99.0, 99.0), vy_max_mps=99.0, turn_rate_max_radps=99.0,
+                       duration_max_s=1e4, push_impulse_max_Ns=1e4, push_force_max_N=1e5)  # fmt: skip
+        check_scenario(sc, replace(get_profile(robot), bounds=wide))

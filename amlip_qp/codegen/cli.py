@@ -49,8 +49,10 @@ def run_codegen(args: argparse.Namespace) -> int:
 
 def run_bench(args: argparse.Namespace) -> int:
     """Time c-fast / casadi-function / numpy; print a table and optionally JSON (``--json PATH|-``)."""
+    from amlip_qp.cli import check_output_path, writing
     from amlip_qp.codegen.bench import format_table, run_benchmark
 
+    check_output_path("--json", args.json)
     result = run_benchmark(calls=args.calls)
     table = format_table(result)
     if args.json == "-":
@@ -60,9 +62,7 @@ def run_bench(args: argparse.Namespace) -> int:
         return 0
     print(table)
     if args.json:
-        try:
+        with writing("--json", args.json):
             Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
-        except OSError as exc:
-            raise CodegenError(f"cannot write {args.json}: {exc}; pass a writable path or '-'") from exc
         print(f"wrote {args.json}")
     return 0

@@ -16,9 +16,10 @@ prefer_offscreen_gl()  # before anything imports mujoco
 
 import numpy as np  # noqa: E402
 
+from amlip_qp.cli import check_output_path, writing  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.sim.harness import Push, RunResult, SensorNoise  # noqa: E402
-from amlip_qp.sim.scenarios import Scenario, SpeedProfile, get_scenario  # noqa: E402
+from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.
 PROGRESS_MIN_DURATION_S = 3.0
@@ -31,6 +32,11 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
 
     Speeds are m/s, ``--turn-rate`` is deg/s (converted to rad/s here, once),
     pushes come pre-parsed as ``(t_s, (fx, fy, fz), duration_s)``.
+
+    Raises:
+        InputError: An unknown scenario, a robot that contradicts it, or a
+            command, duration or push outside the robot's bounds
+            (:func:`~amlip_qp.sim.scenarios.check_scenario`).
     """
     if args.scenario is not None:
         base = get_scenario(args.scenario)
@@ -53,13 +59,11 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
         changes["duration_s"] = args.duration
     if args.push:
         changes["pushes"] = tuple(base.pushes) + tuple(Push(t, f, d) for t, f, d in args.push)
-    if base.robot == "rabbit" and (changes.get("vy_mps", 0.0) != 0.0 or changes.get("turn_rate_radps", 0.0) != 0.0):
-        raise InputError("rabbit is planar: --vy and --turn-rate must be 0")
-    if base.robot == "rabbit" and any(p.force_N[1] != 0.0 for p in changes.get("pushes", ())):
-        raise InputError("rabbit is planar: a push must have FY = 0")
     if changes and base.name != "custom":
         changes["name"] = f"{base.name}+options"
-    return base.with_(**changes) if changes else base
+    scenario = base.with_(**changes) if changes else base
+    check_scenario(scenario)
+    return scenario
 
 
 def save_log(result: RunResult, path: str) -> None:
@@ -83,31 +87,29 @@ def save_log(result: RunResult, path: str) -> None:
         np.savez_compressed(fh, **arrays)
 
 
-def _write_text(path: str, text: str) -> None:
+def _write_text(option: str, path: str, text: str) -> None:
     if path == "-":
         sys.stdout.write(text + "\n")
     else:
-        with open(path, "w") as fh:
+        with writing(option, path), open(path, "w") as fh:
             fh.write(text + "\n")
 
 
 def _check_output_paths(args: argparse.Namespace) -> None:
     """Fail early (exit 2) on output paths that cannot be written, before a long run."""
-    from pathlib import Path
-
     from amlip_qp.sim.video import check_video_path
 
     if args.video is not None:
         check_video_path(args.video)
+    if args.plot is not None and args.plot != "-":
+        from amlip_qp.sim.plots import check_figure_path
+
+        check_figure_path(args.plot)
     for opt in ("json", "log", "plot", "video"):
         value = getattr(args, opt)
-        if value is None or value == "-":
-            continue
-        path = Path(value).expanduser().resolve()
-        if path.is_dir():
-            raise InputError(f"--{opt} {value}: is a folder; give a file name")
-        if not path.parent.is_dir():
-            raise InputError(f"--{opt} {value}: folder {path.parent} does not exist")
+        if opt != "json" and value == "-":
+            raise InputError(f"--{opt} cannot write to stdout ('-'); give a file name")
+        check_output_path(f"--{opt}", value)
 
 
 def run_walk(args: argparse.Namespace) -> int:
@@ -132,13 +134,15 @@ def run_walk(args: argparse.Namespace) -> int:
     result.info["scenario"] = scenario.name
     summ = summary.summarize(result)
     if args.json is not None:
-        _write_text(args.json, summary.dumps(summ))
+        _write_text("--json", args.json, summary.dumps(summ))
     if args.log is not None:
-        save_log(result, args.log)
+        with writing("--log", args.log):
+            save_log(result, args.log)
     if args.plot is not None:
         from amlip_qp.sim.plots import walk_figure
 
-        walk_figure(result, args.plot, title=f"{scenario.name}: {result.robot} / {result.tracker}")
+        with writing("--plot", args.plot):
+            walk_figure(result, args.plot, title=f"{scenario.name}: {result.robot} / {result.tracker}")
     if args.json != "-":
         sys.stdout.write(_one_line(summ) + "\n")
     return 1 if result.fell else 0

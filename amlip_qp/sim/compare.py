@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -192,9 +191,6 @@ def _run(scenario: Scenario, tracker: str, seed: int, noise: bool) -> RunResult:
 
 def _execute(task: _Task) -> dict[str, Any]:
     """Run one experiment (in a worker process); returns the row fields it measures."""
-    import warnings
-
-    warnings.simplefilter("ignore", RuntimeWarning)
     t0, c0 = time.perf_counter(), time.process_time()
     s = task.settings
     if task.kind == "nominal":
@@ -203,8 +199,10 @@ def _execute(task: _Task) -> dict[str, Any]:
         out: dict[str, Any] = {"nominal": summ}
     elif task.kind == "ramp":
         res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        speed = highest_steady_speed(res, s.window_s, s.tolerance)
         out = {
-            "highest_steady_speed_mps": highest_steady_speed(res, s.window_s, s.tolerance),
+            "highest_steady_speed_mps": speed,
+            "speed_at_upper_bound": math.isclose(speed, task.scenario.vx.final_mps, rel_tol=1e-9),
             "ramp_fell": bool(res.fell),
             "ramp_scenario": task.scenario.name,
         }
@@ -348,6 +346,15 @@ TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
 )
 
 
+#: Row key of a searched value -> row key of the flag that says it reached the top of the search
+#: range (the robot did at least that: ">=" in the table and the figure).
+AT_UPPER_BOUND: dict[str, str] = {
+    "highest_steady_speed_mps": "speed_at_upper_bound",
+    "max_sagittal_impulse_Ns": "sagittal_impulse_at_upper_bound",
+    "max_lateral_impulse_Ns": "lateral_impulse_at_upper_bound",
+}
+
+
 def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
     v = row.get(key)
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -355,8 +362,7 @@ def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
     text = format(v, fmt)
-    bound = {"max_sagittal_impulse_Ns": "sagittal_impulse_at_upper_bound", "max_lateral_impulse_Ns": "lateral_impulse_at_upper_bound"}
-    if key in bound and row.get(bound[key]):
+    if key in AT_UPPER_BOUND and row.get(AT_UPPER_BOUND[key]):
         text = ">=" + text
     return text
 
@@ -384,12 +390,9 @@ def settings_from_args(args: argparse.Namespace) -> CompareSettings:
 
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
+    from amlip_qp.cli import check_output_path, writing
     from amlip_qp.sim import summary
 
-    if args.json is not None and args.json != "-":
-        parent = os.path.dirname(os.path.abspath(args.json))
-        if not os.path.isdir(parent):
-            raise InputError(f"--json {args.json}: folder {parent} does not exist")
     settings = settings_from_args(args)
     for trk in args.trackers:
         from amlip_qp.sim.factory import tracker_class
@@ -398,6 +401,15 @@ def main(args: argparse.Namespace) -> int:
     tasks = build_tasks(
         args.robots, args.trackers, args.scenario, settings, seed=args.seed, noise=args.noise, ramp=not args.no_ramp, push=not args.no_push
     )
+    # Outputs are checked before anything runs; the figure's folder (default out/) is created.
+    check_output_path("--json", args.json)
+    if not args.no_plot and args.plot:
+        if args.plot == "-":
+            raise InputError("--plot cannot write to stdout ('-'); give a file name")
+        from amlip_qp.sim.plots import check_figure_path
+
+        check_figure_path(args.plot)
+        check_output_path("--plot", args.plot, create_folder=True)
 
     def log(msg: str) -> None:
         sys.stderr.write(msg + "\n")
@@ -413,12 +425,13 @@ def main(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(table + "\n")
         if args.json is not None:
-            with open(args.json, "w") as fh:
+            with writing("--json", args.json), open(args.json, "w") as fh:
                 fh.write(summary.dumps({"rows": rows, "settings": _settings_dict(settings, args)}) + "\n")
     if not args.no_plot and args.plot:
         from amlip_qp.sim.plots import comparison_figure
 
-        path = comparison_figure(rows, args.plot)
+        with writing("--plot", args.plot):
+            path = comparison_figure(rows, args.plot)
         log(f"compare: figure written to {path}")
     return 0
 

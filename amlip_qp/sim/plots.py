@@ -11,16 +11,35 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
+from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.sim.harness import RunResult  # noqa: E402
 from amlip_qp.sim.summary import heading_frame_xy, step_velocities  # noqa: E402
 
 
-def _save(fig, path: str | os.PathLike) -> Path:
+#: File suffixes the figures are written as (the format follows the suffix).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_figure_path(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if its suffix is one of :data:`FIGURE_SUFFIXES`; :class:`InputError` otherwise."""
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
+    if p.suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(f"figure file must end in {', '.join(FIGURE_SUFFIXES)}, got {str(path)!r}")
+    return p
+
+
+def _save(fig, path: str | os.PathLike) -> Path:
+    """Write ``fig`` to ``path`` (its folder created) and close it; a failed write raises :class:`OSError`."""
+    p = check_figure_path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        # Our own file object: Pillow, given a file name, ignores a failing close (a full disk).
+        with open(p, "wb") as fh:
+            fig.savefig(fh, format=p.suffix[1:].lower(), dpi=110)
+    finally:
+        plt.close(fig)
     return p
 
 
@@ -36,6 +55,7 @@ def _mark_fall(ax, result: RunResult) -> None:
 
 def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = None) -> Path:
     """Four panels: speed, ``L`` and its prediction, foot-placement error, output tracking errors. Returns the path."""
+    check_figure_path(path)
     log = result.log
     t = log["t"]
     planar = bool(result.info.get("planar", False))
@@ -110,11 +130,23 @@ COMPARISON_METRICS: tuple[tuple[str, str], ...] = (
 
 
 def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -> Path:
-    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker. Returns the path.
+    """Write :func:`draw_comparison` of ``rows`` to ``path`` (PNG); returns the path."""
+    check_figure_path(path)
+    return _save(draw_comparison(rows), path)
 
-    ``rows`` are the per-(robot, tracker) dictionaries of :mod:`amlip_qp.sim.compare`
-    (missing or ``None`` values are drawn as empty bars).
+
+def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
+    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker (an open figure).
+
+    ``rows`` are the per-(robot, tracker) dictionaries of :mod:`amlip_qp.sim.compare`.
+    A value that reached the top of its search range (its flag in
+    :data:`~amlip_qp.sim.compare.AT_UPPER_BOUND` is true) is labelled
+    "≥ value" above its bar; a missing, ``None`` or non-finite value (the
+    lateral push of a planar robot, an experiment left out) is an empty bar
+    labelled "n/a".
     """
+    from amlip_qp.sim.compare import AT_UPPER_BOUND
+
     robots = list(dict.fromkeys(r["robot"] for r in rows))
     trackers = list(dict.fromkeys(r["tracker"] for r in rows))
     ncol = 3
@@ -124,17 +156,30 @@ def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -
     x = np.arange(len(robots))
     for ax, (key, label) in zip(axes.flat, COMPARISON_METRICS):
         for j, trk in enumerate(trackers):
-            vals = []
+            xs = x + (j - (len(trackers) - 1) / 2) * width
+            vals, capped = [], []
             for rob in robots:
                 row = next((r for r in rows if r["robot"] == rob and r["tracker"] == trk), None)
                 v = None if row is None else row.get(key)
                 vals.append(np.nan if v is None else float(v))
-            ax.bar(x + (j - (len(trackers) - 1) / 2) * width, vals, width, label=trk, color=f"C{j}")
+                capped.append(row is not None and key in AT_UPPER_BOUND and bool(row.get(AT_UPPER_BOUND[key])))
+            ax.bar(xs, vals, width, label=trk, color=f"C{j}")
+            for xi, v, cap in zip(xs, vals, capped):
+                if not np.isfinite(v):  # x in data, y in axes units: just above the axis, whatever the scale
+                    na_at = ax.get_xaxis_transform()
+                    ax.text(xi, 0.02, "n/a", ha="center", va="bottom", fontsize=8, color="0.35", transform=na_at)
+                elif cap:
+                    ax.text(xi, v, f"≥ {v:.3g}", ha="center", va="bottom", fontsize=8)
         ax.set_xticks(x, robots)
+        ax.set_xlim(-0.5, len(robots) - 0.5)
         ax.set_title(label, fontsize=9)
+        if all(not np.isfinite(p.get_height()) for p in ax.patches):
+            ax.set_yticks([])  # nothing measured: no scale
+        else:
+            ax.margins(y=0.15)  # room for the labels above the bars
     for ax in list(axes.flat)[len(COMPARISON_METRICS) :]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=8)
-    fig.suptitle("PBC vs QP tracker")
+    fig.suptitle("PBC vs QP tracker (≥: the top of the search range was reached)")
     fig.tight_layout()
-    return _save(fig, path)
+    return fig

@@ -15,6 +15,7 @@ import numpy as np
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import RobotProfile, get_profile
 from amlip_qp.sim.harness import Push
 
 
@@ -63,7 +64,7 @@ class SpeedProfile:
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
             raise InputError("speed profile times and speeds must be finite numbers")
         if t[0] < 0 or np.any(np.diff(t) <= 0):
-            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {list(t)}")
+            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
 
     @classmethod
     def parse(cls, text: str) -> "SpeedProfile":
@@ -226,3 +227,34 @@ def get_scenario(name: str) -> Scenario:
         return SCENARIOS[name]
     except KeyError:
         raise InputError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}") from None
+
+
+def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> None:
+    """Refuse a scenario whose commands, duration or pushes are outside its robot's physical bounds.
+
+    The bounds are the profile's :class:`~amlip_qp.profiles.CommandBounds`
+    (``profile``: the registry's profile of ``scenario.robot`` by default).
+    The CLI calls this before simulating; so may any caller that takes
+    commands from people.
+
+    Raises:
+        InputError: Naming the bound and the value, e.g. a forward speed
+            outside ``CommandBounds.vx_mps``, a lateral command for a planar
+            robot, or a push that ends after the run.
+    """
+    profile = profile or get_profile(scenario.robot)
+    if profile.planar:
+        lateral = [f"lateral speed ({scenario.vy_mps:g} m/s)"] if scenario.vy_mps != 0.0 else []
+        if scenario.turn_rate_radps != 0.0:
+            lateral.append(f"turn rate ({math.degrees(scenario.turn_rate_radps):g} deg/s)")
+        lateral += [f"push FY ({p.force_N[1]:g} N at {p.t_s:g} s)" for p in scenario.pushes if p.force_N[1] != 0.0]
+        if lateral:
+            raise InputError(f"{profile.name} is planar: {', '.join(lateral)} must be 0")
+    profile.bounds.check(
+        profile.name,
+        vx_mps=scenario.vx.speeds_mps,
+        vy_mps=scenario.vy_mps,
+        turn_rate_radps=scenario.turn_rate_radps,
+        duration_s=scenario.duration_s,
+        pushes=[(p.t_s, p.force_N, p.duration_s) for p in scenario.pushes],
+    )

@@ -1,0 +1,222 @@
+"""Bad input to ``amlip-qp``: exit status 2, one line on stderr, no traceback, and nothing simulated.
+
+Every case runs through :func:`amlip_qp.cli.main` in this process with the
+simulation builders replaced by a function that fails the test if called, so
+a check that comes too late (after the simulation) shows as a failure, not as
+a slow test. Two cases run in a real subprocess to see stderr exactly.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import types
+
+import numpy as np
+import pytest
+
+from amlip_qp import cli
+from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.sim import factory
+
+
+def _simulated(*args, **kwargs):
+    raise AssertionError("a simulation or benchmark ran although the input was bad")
+
+
+@pytest.fixture
+def no_simulation(monkeypatch):
+    """Make every way of simulating (walk, compare, bench codegen, bench qp) fail the test."""
+    from amlip_qp.codegen import bench as codegen_bench
+    from amlip_qp.sim import compare
+
+    monkeypatch.setattr(factory, "build_simulation", _simulated)
+    monkeypatch.setattr(factory, "run_scenario", _simulated)
+    monkeypatch.setattr(compare, "run_comparison", _simulated)
+    monkeypatch.setattr(codegen_bench, "run_benchmark", _simulated)
+    fake_qp_bench = types.ModuleType("amlip_qp.qp.bench")
+    fake_qp_bench.run = fake_qp_bench.format_report = _simulated
+    monkeypatch.setitem(sys.modules, "amlip_qp.qp.bench", fake_qp_bench)
+
+
+def _main(argv, capsys):
+    try:
+        code = cli.main(argv)
+    except SystemExit as exc:  # argparse errors
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+#: (argv, a piece of the error line). ``{tmp}`` is a fresh folder, ``{file}`` a file in it.
+BAD_INPUTS = [
+    # outputs that cannot be written, checked before simulating
+    (["walk", "--json", "/proc/x"], "--json /proc/x: cannot write"),
+    (["walk", "--plot", "/proc/x.png"], "--plot /proc/x.png: cannot write"),
+    (["walk", "--video", "/proc/x.mp4"], "--video /proc/x.mp4: cannot write"),
+    (["walk", "--log", "/proc/x.npz"], "--log /proc/x.npz: cannot write"),
+    (["walk", "--json", "/sys/amlip_qp_x.json"], "cannot write"),  # a folder nobody may write into
+    (["walk", "--json", "{tmp}/missing/x.json"], "does not exist"),
+    (["walk", "--log", "{tmp}"], "is a folder"),
+    (["walk", "--plot", "{file}/x.png"], "is a file, not a folder"),
+    (["walk", "--log", "-"], "cannot write to stdout"),
+    (["walk", "--video", "out.avi"], ".mp4 or .gif"),
+    (["walk", "--plot", "{tmp}/fig.xyz"], "figure file must end in .png, .pdf, .svg"),
+    # physical bounds (amlip_qp.profiles)
+    (["walk", "--duration", "1e12"], "CommandBounds.duration_max_s"),
+    (["walk", "--vx", "1e9"], "forward speed 1e+09 m/s is outside cassie's bounds [-1, 2.5] m/s"),
+    (["walk", "--vx", "-1e9"], "CommandBounds.vx_mps"),
+    (["walk", "--robot", "rabbit", "--vx", "2"], "outside rabbit's bounds"),
+    (["walk", "--speed-profile", "0:0,5:30"], "forward speed 30 m/s"),
+    (["walk", "--vy", "5"], "CommandBounds.vy_max_mps"),
+    (["walk", "--turn-rate", "-1e3"], "CommandBounds.turn_rate_max_radps"),
+    (["walk", "--push", "1:5000,0,0:0.01"], "CommandBounds.push_force_max_N"),
+    (["walk", "--push", "1:400,0,0:0.5"], "CommandBounds.push_impulse_max_Ns"),
+    (["walk", "--push", "9.9:100,0,0:0.2"], "ends after the run"),
+    (["walk", "--scenario", "cassie-push", "--duration", "5"], "ends after the run"),
+    (["walk", "--robot", "rabbit", "--vy", "0.2"], "rabbit is planar"),
+    (["walk", "--robot", "rabbit", "--turn-rate", "10"], "rabbit is planar"),
+    (["walk", "--robot", "rabbit", "--push", "1:0,50,0:0.2"], "rabbit is planar"),
+    # malformed values
+    (["walk", "--push", "1:2,3:0.2"], "expected T:FX,FY,FZ:DUR"),
+    (["walk", "--push", "1:a,0,0:0.2"], "expected T:FX,FY,FZ:DUR"),
+    (["walk", "--push", "-1:1,0,0:0.2"], "T >= 0 s"),
+    (["walk", "--push", "1:nan,0,0:0.2"], "expected T:FX,FY,FZ:DUR"),
+    (["walk", "--vx", "nan"], "finite"),
+    (["walk", "--vx", "inf"], "finite"),
+    (["walk", "--vx", "-inf"], "finite"),
+    (["walk", "--duration", "-1e1"], "positive"),
+    (["walk", "--speed-profile", "0:0,x:1"], "speed profile"),
+    (["walk", "--speed-profile", "5:0,1:1"], "increase strictly, got [5.0, 1.0]"),
+    # unknown names
+    (["walk", "--robot", "atlas"], "invalid choice"),
+    (["walk", "--tracker", "lqr"], "invalid choice"),
+    (["walk", "--scenario", "moonwalk"], "unknown scenario 'moonwalk'"),
+    (["walk", "--scenario", "rabbit-1mps", "--robot", "cassie"], "is for rabbit"),
+    # compare and the benchmarks
+    (["compare", "--jobs", "1", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
+    (["compare", "--jobs", "1", "--plot", "/proc/x.png"], "--plot /proc/x.png: cannot write"),
+    (["compare", "--jobs", "1", "--json", "{tmp}/missing/x.json"], "does not exist"),
+    (["compare", "--jobs", "1", "--plot", "{tmp}/cmp"], "figure file must end in"),
+    (["compare", "--jobs", "1", "--plot", "{file}/cmp.png"], "is a file, not a folder"),
+    (["compare", "--robots", "cassie,atlas"], "expected a comma-separated list"),
+    (["compare", "--jobs", "1", "--scenario", "moonwalk"], "unknown scenario"),
+    (["bench", "codegen", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
+    (["bench", "qp", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
+]
+
+
+@pytest.mark.parametrize("argv, needle", BAD_INPUTS, ids=[" ".join(a) for a, _ in BAD_INPUTS])
+def test_bad_input_exits_2_with_one_line_and_simulates_nothing(argv, needle, tmp_path, capsys, no_simulation):
+    a_file = tmp_path / "a_file.txt"
+    a_file.write_text("not a folder\n")
+    argv = [a.format(tmp=tmp_path, file=a_file) for a in argv]
+    code, out, err = _main(argv, capsys)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("amlip-qp"), err
+    assert "Traceback" not in err and "np.float64" not in err and out == ""
+    assert needle in lines[0]
+
+
+@pytest.mark.parametrize(
+    "argv, stderr",
+    [
+        (["walk", "--json", "/proc/x"], "amlip-qp: error: --json /proc/x: cannot write there (No such file or directory); give a writable path\n"),
+        (
+            ["walk", "--duration", "1e12"],
+            "amlip-qp: error: duration 1e+12 s is above cassie's bound 600 s "
+            "(CommandBounds.duration_max_s in amlip_qp.profiles: the per-tick log is kept in memory)\n",
+        ),
+    ],
+)
+def test_bad_input_in_a_subprocess_prints_exactly_one_line(argv, stderr):
+    proc = subprocess.run([sys.executable, "-m", "amlip_qp.cli", *argv], capture_output=True, text=True, timeout=120)
+    assert (proc.returncode, proc.stderr, proc.stdout) == (2, stderr, "")
+
+
+@pytest.mark.parametrize(
+    "argv, attribute, value",
+    [
+        (["walk", "--vx", "-1e-1"], "vx", -0.1),
+        (["walk", "--vx=-1e-1"], "vx", -0.1),
+        (["walk", "--turn-rate", "-5E0"], "turn_rate", -5.0),
+        (["walk", "--vy", "-.25"], "vy", -0.25),
+        (["walk", "--vx", "-2.5e+0"], "vx", -2.5),
+    ],
+)
+def test_negative_numbers_in_exponent_form_are_values(argv, attribute, value):
+    assert getattr(cli.build_parser().parse_args(argv), attribute) == value
+
+
+def test_an_option_is_still_an_option_after_a_value_taking_flag(capsys):
+    code, _, err = _main(["walk", "--vx", "--json", "-"], capsys)
+    assert code == 2 and "expected one argument" in err
+
+
+def test_commands_inside_the_bounds_pass_the_check():
+    from amlip_qp.sim.cli import scenario_from_args
+
+    parser = cli.build_parser()
+    for argv in (
+        ["--vx", "2.5"],
+        ["--vx", "-5e-1"],
+        ["--vx", "-1", "--vy", "-0.5", "--turn-rate", "-60"],
+        ["--robot", "rabbit", "--vx", "1.0"],
+        ["--robot", "rabbit", "--vx", "0.5", "--push", "1:100,0,0:0.2"],
+        ["--duration", "600", "--push", "599.8:500,0,0:0.2"],
+    ):
+        scenario = scenario_from_args(parser.parse_args(["walk", *argv]))
+        assert scenario.duration_s > 0
+
+
+class ZeroTracker(Tracker):
+    name = "zero"
+
+    def __init__(self, robot):
+        self.nu = robot.nu
+
+    def compute(self, kin, target):
+        return TrackerResult(tau_Nm=np.zeros(self.nu))
+
+
+@pytest.mark.parametrize("option, name", [("--json", "s.json"), ("--log", "run.npz"), ("--plot", "fig.png")])
+def test_an_os_error_while_writing_after_the_run_exits_2(option, name, tmp_path, monkeypatch, capsys):
+    """A link to ``/dev/full`` opens, then every write fails (ENOSPC): the early check passes, the write does not."""
+    path = tmp_path / name
+    path.symlink_to("/dev/full")
+    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    code, out, err = _main(["walk", "--robot", "rabbit", "--duration", "0.01", option, str(path)], capsys)
+    assert code == 2
+    assert err == f"amlip-qp: error: {option} {path}: writing failed (No space left on device); give a writable path\n"
+
+
+def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
+    from amlip_qp.sim import cli as sim_cli
+
+    def disk_full(args):
+        raise OSError(28, "No space left on device", "/data/run.npz")
+
+    monkeypatch.setattr(sim_cli, "run_walk", disk_full)
+    code, out, err = _main(["walk"], capsys)
+    assert code == 2
+    assert err == "amlip-qp: error: /data/run.npz: No space left on device; check the path, its folder and the free space\n"
+
+
+def test_check_output_path_keeps_files_and_creates_folders_only_when_asked(tmp_path):
+    from amlip_qp.exceptions import InputError
+
+    existing = tmp_path / "kept.json"
+    existing.write_text("old\n")
+    cli.check_output_path("--json", str(existing))
+    assert existing.read_text() == "old\n"  # opened for appending, not truncated
+    new = tmp_path / "new.json"
+    cli.check_output_path("--json", str(new))
+    assert not new.exists()  # the probe file is removed again
+    nested = tmp_path / "a" / "b" / "fig.png"
+    with pytest.raises(InputError, match="does not exist"):
+        cli.check_output_path("--plot", str(nested))
+    cli.check_output_path("--plot", str(nested), create_folder=True)
+    assert nested.parent.is_dir() and not nested.exists()
+    cli.check_output_path("--json", None)
+    cli.check_output_path("--json", "-")
