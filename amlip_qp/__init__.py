@@ -4,7 +4,7 @@ The layers, from the bottom up:
 
 - :mod:`amlip_qp.alip`: the pure ALIP planner math (numpy only, no robot model).
 - :mod:`amlip_qp.codegen`: CasADi definitions of the planner functions, the
-  generated C in the repository's ``codegen/`` folder, and a fast caller.
+  generated C in ``amlip_qp/codegen/generated/`` (package data), and a fast caller.
 - :mod:`amlip_qp.robots`: the MJCF models loaded into MuJoCo (plant) and
   Pinocchio (controller model), state conversion and model-side kinematics.
 """

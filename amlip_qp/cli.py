@@ -69,13 +69,15 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
 
     # codegen ---------------------------------------------------------------
-    p = sub.add_parser("codegen", help="regenerate the CasADi C code in codegen/")
+    p = sub.add_parser("codegen", help="regenerate the CasADi C code in amlip_qp/codegen/generated/ of a checkout")
     p.add_argument(
         "--check",
         action="store_true",
-        help="regenerate into a temporary folder and fail if codegen/ differs (names stale files)",
+        help="regenerate in memory and fail if the generated C differs (names stale files)",
     )
-    p.add_argument("--out", metavar="DIR", default=None, help="output folder (default: the repository's codegen/)")
+    p.add_argument(
+        "--out", metavar="DIR", default=None, help="output folder (default: amlip_qp/codegen/generated/ of a checkout)"
+    )
     p.set_defaults(func=_handler("amlip_qp.codegen.cli:run_codegen"))
 
     # bench -----------------------------------------------------------------

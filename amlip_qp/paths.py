@@ -1,14 +1,56 @@
-"""Where the repository's data folders (``models/``, ``codegen/``) are."""
+"""Where amlip_qp's package data is, and whether it runs from a source checkout.
+
+The data ships inside the package (in a wheel as in a checkout) and is found
+with :mod:`importlib.resources`:
+
+- :data:`MODELS_DIR`: ``amlip_qp/models/``, the MJCF robot models;
+- :data:`CODEGEN_DIR`: ``amlip_qp/codegen/generated/``, the committed
+  CasADi-generated C sources and header.
+
+MuJoCo and Pinocchio read the models by file path, so the package must be
+installed as files on disk (any pip install is; a zip import is not).
+"""
 
 from __future__ import annotations
 
+from importlib.resources import files
 from pathlib import Path
 
-#: The repository root (the folder holding ``pyproject.toml``).
-REPO_ROOT = Path(__file__).resolve().parent.parent
+#: The project name in ``pyproject.toml`` that marks a source checkout of amlip_qp.
+_PROJECT_LINE = 'name = "amlip_qp"'
 
-#: MJCF robot models shared by MuJoCo and Pinocchio.
-MODELS_DIR = REPO_ROOT / "models"
 
-#: Committed CasADi-generated C sources and headers.
-CODEGEN_DIR = REPO_ROOT / "codegen"
+def _package_dir() -> Path:
+    root = files("amlip_qp")
+    if not isinstance(root, Path):
+        raise ImportError(
+            f"amlip_qp is imported from {root}, not from files on disk; MuJoCo and Pinocchio read "
+            "its robot models by path: install it with pip (not as a zip)"
+        )
+    return root
+
+
+#: The folder of the imported ``amlip_qp`` package.
+PACKAGE_DIR = _package_dir()
+
+#: MJCF robot models shared by MuJoCo and Pinocchio (package data).
+MODELS_DIR = PACKAGE_DIR / "models"
+
+#: Committed CasADi-generated C source and header (package data).
+CODEGEN_DIR = PACKAGE_DIR / "codegen" / "generated"
+
+
+def checkout_root() -> Path | None:
+    """The source tree this ``amlip_qp`` runs from, or ``None`` for an installed package.
+
+    A source tree (a git checkout, an unpacked sdist; used through an editable
+    install or ``PYTHONPATH``) holds the package folder next to the project's
+    ``pyproject.toml``. A package installed by ``pip install .`` or from a
+    wheel lives in ``site-packages``, which has no such file.
+    """
+    root = PACKAGE_DIR.parent
+    try:
+        text = (root / "pyproject.toml").read_text(encoding="utf-8")
+    except OSError:
+        return None
+    return root if _PROJECT_LINE in text else None

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import shutil
+import subprocess
+import sys
 import threading
 import warnings
 
@@ -10,9 +13,10 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip import kernels
-from amlip_qp.codegen import generate, runtime
+from amlip_qp.codegen import generate, runtime, symbolic
 from amlip_qp.codegen.runtime import CodegenFallbackWarning, CodegenStaleWarning, FastFunction, Kernels
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
+from amlip_qp.paths import PACKAGE_DIR
 
 needs_cc = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 N = 1500  # random samples per robot and kernel
@@ -215,7 +219,8 @@ def test_parallel_builds_do_not_collide(tmp_path):
     assert not errors and len(set(results)) == 1
     folder = results[0].parent
     assert sorted(p.name for p in folder.iterdir()) == [generate.SOURCE_FILE, runtime.LIBRARY_FILE]
-    runtime.load_library(results[0])
+    lib, functions = runtime.compile_and_load(src, ["alip_plan"], cache_dir=tmp_path)
+    assert lib == results[0] and functions["alip_plan"].nnz_out(0) == 8
 
 
 @needs_cc
@@ -255,3 +260,48 @@ def test_cache_key_changes_with_the_cpu_architecture(monkeypatch):
     key = runtime.cache_key(src, ["cc"])
     monkeypatch.setattr(runtime.platform, "machine", lambda: "some-other-arch")
     assert runtime.cache_key(src, ["cc"]) != key
+
+
+LOAD_KERNELS = "from amlip_qp.codegen import load_kernels; print(load_kernels().backend)"
+
+
+@needs_cc
+def test_first_run_says_once_on_stderr_that_it_compiles(tmp_path):
+    env = dict(os.environ, AMLIP_QP_CACHE_DIR=str(tmp_path / "cache"))
+    env["PYTHONPATH"] = os.pathsep.join([str(PACKAGE_DIR.parent), os.environ.get("PYTHONPATH", "")])
+    env.pop(runtime.COMPILER_ENV, None)
+    runs = [subprocess.run([sys.executable, "-c", LOAD_KERNELS], capture_output=True, text=True, env=env, timeout=300)
+            for _ in range(2)]  # fmt: skip
+    cold, warm = runs
+    assert cold.returncode == warm.returncode == 0 and cold.stdout == warm.stdout == "c\n", cold.stderr
+    (line,) = cold.stderr.splitlines()
+    assert line.startswith("amlip_qp: compiling generated C once into ")
+    assert line.endswith(f"{os.sep}cache (up to about {runtime.COLD_COMPILE_S} s; later runs reuse it)")
+    assert warm.stderr == ""
+
+
+@needs_cc
+def test_compile_and_load_announces_once_per_process_and_cache(tmp_path, capsys):
+    src = generate.generate_files()[generate.SOURCE_FILE]
+    runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=tmp_path)
+    assert capsys.readouterr().err.count("compiling generated C once") == 1
+    # A second library into the same cache (as a walk compiles three) and a warm load stay silent.
+    lib, functions = runtime.compile_and_load(src + b"/* another */\n", ["swing_reference"], cache_dir=tmp_path)
+    runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=tmp_path)
+    assert capsys.readouterr().err == ""
+    assert lib.is_file() and functions["swing_reference"].nnz_out(0) == 27
+
+
+def test_compile_and_load_without_compiler_is_a_typed_error(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv(runtime.COMPILER_ENV, "none")
+    with pytest.raises(CompilerUnavailableError, match="AMLIP_QP_CC=none"):
+        runtime.compile_and_load(b"int f(void) { return 1; }\n", ["f"], cache_dir=tmp_path)
+    assert capsys.readouterr().err == "" and not any(tmp_path.iterdir())
+
+
+@needs_cc
+def test_compile_and_load_names_a_missing_function(tmp_path):
+    source = generate.generate_files()[generate.SOURCE_FILE]
+    with pytest.raises(CodegenError, match=r"cannot load no_such_kernel from .*no_such_kernel.*delete .* to rebuild") as info:
+        runtime.compile_and_load(source, ["no_such_kernel"], cache_dir=tmp_path)
+    assert "\n" not in str(info.value)

@@ -4,10 +4,11 @@ Modules (one job each):
 
 - :mod:`~amlip_qp.codegen.symbolic`: the SX ``casadi.Function`` objects
   ``alip_plan`` and ``swing_reference`` built from :mod:`amlip_qp.alip.kernels`.
-- :mod:`~amlip_qp.codegen.generate`: deterministic C generation into the
-  repository's ``codegen/`` and the staleness check.
+- :mod:`~amlip_qp.codegen.generate`: deterministic C generation into
+  ``amlip_qp/codegen/generated/`` (package data) and the staleness check.
 - :mod:`~amlip_qp.codegen.runtime`: compile-on-first-use into a per-user
-  cache and microsecond calls (:class:`Kernels`, :class:`FastFunction`).
+  cache (:func:`compile_and_load`, for every generated library of amlip_qp)
+  and microsecond calls (:class:`Kernels`, :class:`FastFunction`).
 - :mod:`~amlip_qp.codegen.bench`: timings of the fast path, the CasADi
   Function and the numpy reference.
 - :mod:`~amlip_qp.codegen.cli`: the ``amlip-qp codegen`` / ``bench codegen`` handlers.
@@ -21,7 +22,15 @@ from amlip_qp.codegen.runtime import (
     CodegenStaleWarning,
     FastFunction,
     Kernels,
+    compile_and_load,
     load_kernels,
 )
 
-__all__ = ["CodegenFallbackWarning", "CodegenStaleWarning", "FastFunction", "Kernels", "load_kernels"]
+__all__ = [
+    "CodegenFallbackWarning",
+    "CodegenStaleWarning",
+    "FastFunction",
+    "Kernels",
+    "compile_and_load",
+    "load_kernels",
+]

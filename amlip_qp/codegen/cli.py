@@ -7,16 +7,16 @@ import json
 import sys
 from pathlib import Path
 
-from amlip_qp.exceptions import CodegenError
-from amlip_qp.paths import CODEGEN_DIR, REPO_ROOT
+from amlip_qp import paths
+from amlip_qp.exceptions import CodegenError, InputError
 
 
-def _display(folder: Path) -> str:
-    """``codegen/`` for the repository's folder, else the path as given."""
+def _display(folder: Path, checkout: Path | None) -> str:
+    """A folder of the checkout relative to its root (``amlip_qp/codegen/generated/``), else as given."""
     try:
-        if folder.resolve() == CODEGEN_DIR.resolve():
-            return str(CODEGEN_DIR.relative_to(REPO_ROOT)) + "/"
-    except OSError:
+        if checkout is not None:
+            return str(folder.resolve().relative_to(checkout.resolve())) + "/"
+    except (OSError, ValueError):
         pass
     return str(folder).rstrip("/") + "/"
 
@@ -24,21 +24,43 @@ def _display(folder: Path) -> str:
 def run_codegen(args: argparse.Namespace) -> int:
     """Regenerate the C kernels (``--out DIR`` elsewhere) or, with ``--check``, compare.
 
-    ``--check`` exits 1 naming the stale or missing files in one line, 0 when
-    the folder matches a fresh generation.
+    Without ``--out`` the folder is the package's ``codegen/generated/``: it
+    is rewritten only in a source checkout (:func:`amlip_qp.paths.checkout_root`);
+    an installed package's data is left alone (exit 2, one line). ``--check``
+    compares the folder's files with a fresh generation in memory and exits
+    1 naming the stale or missing files in one line, 0 when they match; for
+    an installed package it says that it checked the installed files.
     """
+    import casadi
+
     from amlip_qp.codegen import generate
 
-    folder = Path(args.out) if args.out else CODEGEN_DIR
-    shown = _display(folder)
+    checkout = paths.checkout_root()
+    packaged = args.out is None
+    if packaged and checkout is None and not args.check:
+        raise InputError(
+            f"amlip_qp is an installed package ({paths.PACKAGE_DIR}), not a source checkout: its generated C "
+            "is package data and is not rewritten; pass --out DIR to write the sources elsewhere"
+        )
+    folder = paths.CODEGEN_DIR if packaged else Path(args.out)
+    shown = _display(folder, checkout)
     files = generate.generate_files()
     if args.check:
+        fresh = f"a fresh generation (CasADi {casadi.__version__})"
         stale = generate.stale_files(folder, files)
         if stale:
             names = ", ".join(f"{shown}{name} {state}" for name, state in stale)
-            sys.stderr.write(f"amlip-qp codegen --check: stale: {names} (run 'amlip-qp codegen' to regenerate)\n")
+            if packaged and checkout is None:
+                fix = (
+                    "an installed package, not a source checkout: the kernels compile from the fresh "
+                    "generation; reinstall amlip_qp with the CasADi version it pins to match"
+                )
+            else:
+                fix = "run 'amlip-qp codegen' to regenerate"
+            sys.stderr.write(f"amlip-qp codegen --check: stale: {names} against {fresh} ({fix})\n")
             return 1
-        print(f"{shown} is up to date ({', '.join(files)})")
+        kind = " (an installed package, not a source checkout)" if packaged and checkout is None else ""
+        print(f"{shown}{kind} is up to date: {', '.join(files)} equal {fresh}")
         return 0
     if folder.exists() and not folder.is_dir():
         raise CodegenError(f"--out {folder} is not a folder; pass a folder path")

@@ -1,4 +1,4 @@
-"""Generate the C sources of the planner kernels and compare them with ``codegen/``.
+"""Generate the C sources of the planner kernels and compare them with ``amlip_qp/codegen/generated/``.
 
 One library, ``amlip_kernels``, holds both kernels of
 :mod:`amlip_qp.codegen.symbolic`. Generation is byte-for-byte deterministic:

@@ -12,16 +12,23 @@ Use::
 Layouts and units are those of :mod:`amlip_qp.alip.kernels`.
 
 **Library.** The C source is ``generate.generate_files()``, i.e. the bytes of
-the committed ``codegen/amlip_kernels.c`` when that file is current (it is
-regenerated in memory, ~10 ms, and compared; a stale committed file triggers
-a :class:`CodegenStaleWarning` and the fresh source is used, a missing one,
-as in a non-editable install, is silently replaced by the fresh source). It
-is compiled with the system C compiler (``-O2 -fPIC -shared
--ffp-contract=off``) into ``<cache>/<key>/libamlip_kernels.so`` where
-``<key>`` is the SHA-256 of the source, the compiler command and the flags,
-and ``<cache>`` is ``$AMLIP_QP_CACHE_DIR``, else ``$XDG_CACHE_HOME/amlip_qp``,
-else ``~/.cache/amlip_qp``. The build writes a temporary file and renames it,
-so parallel processes never load a half-written library.
+the committed ``amlip_qp/codegen/generated/amlip_kernels.c`` (package data)
+when that file is current (it is regenerated in memory, ~10 ms, and compared;
+a stale committed file triggers a :class:`CodegenStaleWarning` and the fresh
+source is used, a missing one is silently replaced by the fresh source).
+
+**Compiling and binding.** :func:`compile_and_load` is the one way amlip_qp
+turns generated C into callable functions (the planner kernels here, the
+whole-body QP assembly and the output map in :mod:`amlip_qp.control`). It
+compiles with the system C compiler (``-O2 -fPIC -shared
+-ffp-contract=off``) into ``<cache>/<key>/<library>.so`` where ``<key>`` is
+the SHA-256 of the source, the compiler command and the flags, and
+``<cache>`` is ``$AMLIP_QP_CACHE_DIR``, else ``$XDG_CACHE_HOME/amlip_qp``,
+else ``~/.cache/amlip_qp``, then loads the named functions with
+``casadi.external``. The build writes a temporary file and renames it, so
+parallel processes never load a half-written library. The first compilation
+of a process into a cache folder says so in one line on stderr (a cold cache
+costs seconds once; later runs reuse the libraries silently).
 
 **Compiler.** ``$AMLIP_QP_CC`` (a command, e.g. ``"gcc"``; the value
 ``none`` means "no compiler"), else ``$CC``, else ``cc``, else ``gcc`` on the
@@ -55,7 +62,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, symbolic
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
 from amlip_qp.paths import CODEGEN_DIR
 
 #: Environment variable: cache folder for compiled libraries.
@@ -68,6 +75,13 @@ CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off")
 LIBRARY_FILE = f"lib{generate.LIBRARY_NAME}.so"
 #: Seconds before a compilation is abandoned.
 COMPILE_TIMEOUT_S = 300
+#: Seconds a cold cache costs once, at most about: a walk compiles the
+#: kernels, the output map and the QP assembly (measured with gcc 12 for a
+#: Cassie QP walk: 0.2 + 1.0 + 12.9 s of CPU time; Rabbit's are smaller).
+COLD_COMPILE_S = 15
+
+# Cache folders whose first compilation this process has announced on stderr.
+_announced_roots: set[Path] = set()
 
 
 class CodegenFallbackWarning(RuntimeWarning):
@@ -75,7 +89,7 @@ class CodegenFallbackWarning(RuntimeWarning):
 
 
 class CodegenStaleWarning(UserWarning):
-    """The committed ``codegen/`` sources differ from the symbolic definitions."""
+    """The committed ``amlip_qp/codegen/generated/`` sources differ from the symbolic definitions."""
 
 
 class _NoCompiler(Exception):
@@ -193,20 +207,70 @@ def build_library(
     return lib
 
 
-def load_library(lib: Path) -> dict[str, ca.Function]:
-    """Load every kernel of the compiled library with ``casadi.external``."""
-    loaded = {}
-    for kernel in symbolic.KERNEL_SPECS:
+def compile_and_load(
+    source: bytes,
+    function_names: Sequence[str],
+    source_file: str = generate.SOURCE_FILE,
+    library_file: str = LIBRARY_FILE,
+    cache_dir: str | os.PathLike | None = None,
+) -> tuple[Path, dict[str, ca.Function]]:
+    """Compile generated C once into the cache and load its functions.
+
+    Args:
+        source: The C source (its hash, with the compiler and flags, keys the cache folder).
+        function_names: The functions to load from the library with ``casadi.external``.
+        source_file, library_file: File names inside the cache folder (one pair
+            per kind of generated code, see :func:`build_library`).
+        cache_dir: Overrides :func:`cache_root`.
+
+    Returns:
+        ``(library path, {name: casadi.Function})``.
+
+    On a cache miss, the first of this process for that cache folder, one line
+    on stderr says that generated C is being compiled once, and where.
+
+    Raises:
+        CompilerUnavailableError: No usable C compiler (the message says why).
+        CodegenError: The compiler rejected the source, or a function does not load.
+    """
+    root = cache_root() if cache_dir is None else Path(cache_dir)
+    try:
+        compiler = find_compiler()
+        if not (root / cache_key(source, compiler) / library_file).is_file():
+            _announce_compilation(root)
+        lib = build_library(source, compiler, root, source_file, library_file)
+    except _NoCompiler as exc:
+        raise CompilerUnavailableError(str(exc)) from None
+    functions = {}
+    for name in function_names:
         try:
-            fn = ca.external(kernel.name, str(lib))
+            functions[name] = ca.external(name, str(lib))
         except RuntimeError as exc:
-            raise CodegenError(f"cannot load {kernel.name} from {lib}: {exc}; delete that folder to rebuild") from exc
+            reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+            raise CodegenError(f"cannot load {name} from {lib}: {reason}; delete {lib.parent} to rebuild") from exc
+    return lib, functions
+
+
+def _announce_compilation(root: Path) -> None:
+    """One stderr line per process and cache folder: generated C is being compiled once."""
+    if root in _announced_roots:
+        return
+    _announced_roots.add(root)
+    shown, home = str(root), str(Path.home())
+    if shown.startswith(home + os.sep):
+        shown = "~" + shown[len(home) :]
+    sys.stderr.write(
+        f"amlip_qp: compiling generated C once into {shown} (up to about {COLD_COMPILE_S} s; later runs reuse it)\n"
+    )
+    sys.stderr.flush()
+
+
+def _check_kernel_signatures(functions: dict[str, ca.Function], lib: Path) -> None:
+    """Raise :class:`CodegenError` if a loaded kernel's sizes differ from its spec."""
+    for kernel in symbolic.KERNEL_SPECS:
+        fn = functions[kernel.name]
         if fn.n_in() != 1 or fn.n_out() != 1 or fn.nnz_in(0) != kernel.n_in or fn.nnz_out(0) != kernel.n_out:
-            raise CodegenError(
-                f"{lib}: {kernel.name} has the wrong signature; delete that folder to rebuild"
-            )
-        loaded[kernel.name] = fn
-    return loaded
+            raise CodegenError(f"{lib}: {kernel.name} has the wrong signature; delete {lib.parent} to rebuild")
 
 
 # --- calling -------------------------------------------------------------------
@@ -288,7 +352,8 @@ class Kernels:
 
     Args:
         cache_dir: overrides :func:`cache_root` for the compiled library.
-        committed_dir: the folder of committed sources to check (default ``codegen/``).
+        committed_dir: the folder of committed sources to check (default
+            :data:`amlip_qp.paths.CODEGEN_DIR`).
     """
 
     def __init__(self, cache_dir: str | os.PathLike | None = None, committed_dir: str | os.PathLike = CODEGEN_DIR):
@@ -296,13 +361,11 @@ class Kernels:
         self.fallback_reason: str | None = None
         source = library_source(Path(committed_dir))
         try:
-            compiler = find_compiler()
-            self.library_path = build_library(source, compiler, None if cache_dir is None else Path(cache_dir))
-        except _NoCompiler as exc:
+            self.library_path, functions = compile_and_load(source, symbolic.KERNEL_NAMES, cache_dir=cache_dir)
+            _check_kernel_signatures(functions, self.library_path)
+            self.backend = "c"
+        except CompilerUnavailableError as exc:
             self.fallback_reason = str(exc)
-        if self.library_path is not None:
-            functions, self.backend = load_library(self.library_path), "c"
-        else:
             warnings.warn(
                 f"amlip_qp.codegen: no C compiler: {self.fallback_reason}; evaluating the planner kernels "
                 "with CasADi SX Functions instead of the generated C (same results, slower)",

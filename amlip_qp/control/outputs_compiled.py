@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.exceptions import CodegenError, CompilerUnavailableError
+from amlip_qp.exceptions import CodegenError
 from amlip_qp.robots.outputs import OutputMap
 
 FUNCTION_NAME = "output_map"
@@ -147,18 +147,11 @@ class CompiledOutputMap:
         self._yaw_q = getattr(ref, "_yaw_q", None)
         self._yaw_v = getattr(ref, "_yaw_v", None)
         nv = robot.nv
-        try:
-            compiler = runtime.find_compiler()
-            source = generate_source(self.layout, nv)
-            self.library_path = runtime.build_library(
-                source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE
-            )
-        except runtime._NoCompiler as exc:
-            raise CompilerUnavailableError(str(exc)) from None
-        try:
-            fn = ca.external(FUNCTION_NAME, str(self.library_path))
-        except RuntimeError as exc:
-            raise CodegenError(f"cannot load {FUNCTION_NAME} from {self.library_path}: {exc}") from exc
+        source = generate_source(self.layout, nv)
+        self.library_path, functions = runtime.compile_and_load(
+            source, [FUNCTION_NAME], SOURCE_FILE, LIBRARY_FILE, cache_dir
+        )
+        fn = functions[FUNCTION_NAME]
         n = len(self.names)
         self._JT = np.zeros((fn.nnz_in(0) // nv, nv))
         self._p = np.zeros(fn.nnz_in(1))

@@ -43,7 +43,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
+from amlip_qp.exceptions import CodegenError, InputError
 
 #: Name stem of the generated functions (``<stem>_left``, ``<stem>_right``).
 FUNCTION_STEM = "wbqp_build"
@@ -230,17 +230,9 @@ class CompiledBuild:
         if list(builder._varying_tasks) != [builder.output_task]:
             raise InputError("the compiled QP assembly covers one varying task, the output task")
         self.builder = builder
-        try:
-            compiler = runtime.find_compiler()
-        except runtime._NoCompiler as exc:
-            raise CompilerUnavailableError(str(exc)) from None
         source, _ = generate_source(builder)
-        try:
-            self.library_path = runtime.build_library(
-                source, compiler, None if cache_dir is None else Path(cache_dir), SOURCE_FILE, LIBRARY_FILE
-            )
-        except runtime._NoCompiler as exc:
-            raise CompilerUnavailableError(str(exc)) from None
+        names = [f"{FUNCTION_STEM}_{side}" for side in builder.robot.foot_sides]
+        self.library_path, functions = runtime.compile_and_load(source, names, SOURCE_FILE, LIBRARY_FILE, cache_dir)
         B, L = builder, builder._layout
         robot = B.robot
         nv = L.nv
@@ -269,10 +261,7 @@ class CompiledBuild:
         self._buffers = {}
         for side in robot.foot_sides:
             name = f"{FUNCTION_STEM}_{side}"
-            try:
-                fn = ca.external(name, str(self.library_path))
-            except RuntimeError as exc:
-                raise CodegenError(f"cannot load {name} from {self.library_path}: {exc}") from exc
+            fn = functions[name]
             buf, ev = fn.buffer()
             for i, arr in enumerate((self._Mu, self._hp, B._Jf, self._JoT, self._u)):
                 if fn.nnz_in(i) != arr.size:

@@ -309,7 +309,7 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     """Load a robot into MuJoCo and Pinocchio from one MJCF file.
 
     Args:
-        name_or_path: ``"cassie"``, ``"rabbit"`` (bundled in ``models/``) or
+        name_or_path: ``"cassie"``, ``"rabbit"`` (bundled in ``amlip_qp/models/``) or
             a path to an MJCF ``.xml`` file following the site conventions of
             ``docs/ARCHITECTURE.md``.
 
