@@ -21,7 +21,7 @@ from amlip_qp.sim.scenarios import Scenario
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
     "pbc": "amlip_qp.control.pbc",
-    "qp": "amlip_qp.control.qp_tracker",
+    "qp": "amlip_qp.control.wbc.tracker",
 }
 
 #: Robots the walking commands support.
