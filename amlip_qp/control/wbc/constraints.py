@@ -90,12 +90,12 @@ class DynamicsRows(Constraint):
     def __init__(self, n_dyn: int):
         super().__init__("dynamics", slice(0, n_dyn))
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         nd = self.size
         problem.A[self.rows] = dynamics.RD[:nd]
         np.negative(dynamics.Rhp[:nd], out=problem.b[self.rows])
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         nd = self.size
         return {"A": dyn.RD[:nd, :], "b": -dyn.Rhp[:nd]}
 
@@ -116,10 +116,10 @@ class StanceContact(Constraint):
         self.contact_kd = contact_kd
         self._drift = np.zeros(self.size)
 
-    def initialize(self, problem):
+    def initialize(self, problem: QPProblem) -> None:
         problem.A[self.rows, self.layout.sl_forces] = 0.0
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         L = self.layout
         Ac, drift = problem.A[self.rows, L.sl_vdot], self._drift
         if L.n_points == 1:
@@ -143,7 +143,7 @@ class StanceContact(Constraint):
         bc = np.multiply(Ac @ inputs.v, -self.contact_kd, out=problem.b[self.rows])
         bc -= drift
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         L = self.layout
         Jf, con = sym.JfT.T, sym.contact
         if L.n_points == 2:
@@ -171,14 +171,14 @@ class RigidSprings(Constraint):
         self.layout = layout
         self.elimination = elimination
 
-    def row_blocks(self):
+    def row_blocks(self) -> list[tuple[str, slice]]:
         mid = self.rows.start + self.layout.n_rigid_st
         return [("rigid_stance", slice(self.rows.start, mid)), ("rigid_swing", slice(mid, self.rows.stop))]
 
-    def initialize(self, problem):
+    def initialize(self, problem: QPProblem) -> None:
         problem.A[self.rows, self.layout.sl_forces] = 0.0
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         if not self.size:
             return
         rs = self.elimination.rows(inputs.stance)
@@ -188,7 +188,7 @@ class RigidSprings(Constraint):
         bcp += rs.kdG @ inputs.v
         np.subtract(rs.kp_offs, bcp, out=bcp)
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         if not self.size:
             return {}
         rs, L = self.elimination.rows(sym.stance), self.layout
@@ -222,13 +222,13 @@ class TorqueLimits(Constraint):
                 hi[i] = min(tau_lim[i, 1], lim)
             self.bounds[side] = (lo, hi)
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         lo, hi = self.bounds[inputs.stance]
         problem.C[self.rows] = dynamics.T
         np.subtract(lo, dynamics.tau0, out=problem.l[self.rows])
         np.subtract(hi, dynamics.tau0, out=problem.u[self.rows])
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         lo, hi = self.bounds[sym.stance]
         return {"C": dyn.T, "l": dm(lo) - dyn.tau0, "u": dm(hi) - dyn.tau0}
 
@@ -255,7 +255,7 @@ class FrictionPyramid(Constraint):
         """The swing foot's rows (the second half)."""
         return slice(self.rows.start + self.size // 2, self.rows.stop)
 
-    def initialize(self, problem):
+    def initialize(self, problem: QPProblem) -> None:
         L, C, r = self.layout, problem.C, self.rows.start
         C[self.rows] = 0.0
         d = L.point_dim
@@ -269,10 +269,10 @@ class FrictionPyramid(Constraint):
         problem.l[self.rows] = -math.inf
         problem.u[self.rows] = 0.0
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         problem.u[self.swing_rows] = math.inf if inputs.swing_force_weight == 0.0 else 0.0
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         half = self.size // 2
         lifted = ca.if_else(sym.swing_force_weight == 0.0, math.inf, 0.0)
         return {"C": None, "l": None, "u": ca.vertcat(ca.DM.zeros(half), ca.repmat(lifted, half, 1))}
@@ -304,11 +304,11 @@ class JointLimits(Constraint):
             m = np.array([nm.startswith(side) for nm in robot.actuated.joint_names])
             self.by_swing[side] = (act_v[m], act_q[m], c * q_lo[m], c * q_hi[m], act_v[~m])
 
-    def initialize(self, problem):
+    def initialize(self, problem: QPProblem) -> None:
         problem.lb[self.rows] = -np.inf  # the floating base and passive joints stay free
         problem.ub[self.rows] = np.inf
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         vi, qi, c_lo, c_hi, other = self.by_swing[inputs.swing]
         hz, rec = self.horizon_s, self.max_recovery
         # a_max = 2 (q_hi - q - v hz) / hz^2 = c_hi - t, t = 2 (q + v hz) / hz^2.
@@ -319,7 +319,7 @@ class JointLimits(Constraint):
         problem.ub[other] = np.inf
         problem.lb[other] = -np.inf
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         L = self.layout
         nv, nq, n = L.nv, sym.q.shape[0], L.n
         vi, qi, c_lo, c_hi, _ = self.by_swing[sym.swing]
@@ -359,7 +359,7 @@ class ForceBox(Constraint):
         self.swing_ub_unit[ft_sw] = mu * fmax
         self.swing_lb_unit[ft_sw] = -mu * fmax
 
-    def initialize(self, problem):
+    def initialize(self, problem: QPProblem) -> None:
         self._stance_box(problem.lb, problem.ub)
 
     def _stance_box(self, lb: np.ndarray, ub: np.ndarray) -> None:
@@ -370,12 +370,12 @@ class ForceBox(Constraint):
         lb[ft] = -self.mu * self.fmax
         ub[ft] = self.mu * self.fmax
 
-    def write(self, inputs, dynamics, problem):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         w, sw = inputs.swing_force_weight, self.layout.sl_f_sw
         np.multiply(self.swing_ub_unit, w, out=problem.ub[sw])
         np.multiply(self.swing_lb_unit, w, out=problem.lb[sw])
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         L, n = self.layout, self.layout.n
         lb0, ub0 = np.zeros(n), np.zeros(n)
         self._stance_box(lb0, ub0)

@@ -96,7 +96,7 @@ class Regularization(Cost):
         super().__init__("regularization")
         self.layout, self.reg_vdot, self.reg_force = layout, reg_vdot, reg_force
 
-    def fold(self, constant):
+    def fold(self, constant: ConstantCost) -> None:
         L, H0 = self.layout, constant.H0
         di = np.arange(L.n)
         H0[di[L.sl_vdot], di[L.sl_vdot]] += self.reg_vdot
@@ -112,7 +112,7 @@ class JointTaskCost(Cost):
         super().__init__(task.name)
         self.layout, self.task = layout, task
 
-    def fold(self, constant):
+    def fold(self, constant: ConstantCost) -> None:
         task, sv = self.task, self.layout.sl_vdot
         J = task.jacobian(None, None)
         constant.H0[sv, sv] += (J.T * task.gains.weight) @ J
@@ -135,7 +135,7 @@ class OutputTaskCost(Cost):
         self.layout, self.task = layout, task
         self.sqrt_weight = np.sqrt(task.gains.weight)
 
-    def write(self, inputs, dynamics, E, e):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, E: np.ndarray, e: np.ndarray) -> None:
         sw = self.sqrt_weight
         np.multiply(inputs.output_jacobian, sw[:, None], out=E[:, self.layout.sl_vdot])
         np.multiply(inputs.output_residual, sw, out=e)
@@ -143,7 +143,7 @@ class OutputTaskCost(Cost):
             i = inputs.feedback.swing_index
             e[i] -= sw[i] * inputs.residual_shift
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> list[tuple[ca.MX, ca.MX]]:
         L, sw = self.layout, self.sqrt_weight
         E = ca.horzcat(ca.mtimes(ca.diag(dm(sw)), sym.JoT.T), ca.MX(sw.size, L.n - L.nv))
         return [(E, dm(sw) * sym.output_residual)]
@@ -156,11 +156,11 @@ class TorqueRegularization(Cost):
         super().__init__("torque_regularization", nu if reg_torque > 0 else 0)
         self.scale = math.sqrt(reg_torque)
 
-    def write(self, inputs, dynamics, E, e):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, E: np.ndarray, e: np.ndarray) -> None:
         np.multiply(dynamics.T, self.scale, out=E)
         np.multiply(dynamics.tau0, self.scale, out=e)
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> list[tuple[ca.MX, ca.MX]]:
         return [(self.scale * dyn.T, self.scale * dyn.tau0)] if self.size else []
 
 
@@ -171,11 +171,11 @@ class RigidSpringForceRegularization(Cost):
         super().__init__("rigid_spring_force_regularization", n_lambda if reg_coupling > 0 else 0)
         self.scale = math.sqrt(reg_coupling)
 
-    def write(self, inputs, dynamics, E, e):
+    def write(self, inputs: TickInputs, dynamics: ReducedDynamics, E: np.ndarray, e: np.ndarray) -> None:
         np.multiply(dynamics.Lam, self.scale, out=E)
         np.multiply(dynamics.lam0, self.scale, out=e)
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> list[tuple[ca.MX, ca.MX]]:
         return [(self.scale * dyn.Lam, self.scale * dyn.lam0)] if self.size else []
 
 
@@ -201,7 +201,7 @@ class StanceYawMomentCost(Cost):
         """True for a positive weight and 3-D feet of two points."""
         return weight > 0 and not layout.planar and layout.n_points == 2
 
-    def add_to_hessian(self, inputs, H):
+    def add_to_hessian(self, inputs: TickInputs, H: np.ndarray) -> None:
         p0, p1 = inputs.point_positions
         # M_z = sum_p (r_p - mid) x f_p . e_z; r_0 - mid = -(r_1 - mid) = (p0 - p1) / 2.
         dx, dy = 0.5 * (p0[0] - p1[0]), 0.5 * (p0[1] - p1[1])
@@ -209,7 +209,7 @@ class StanceYawMomentCost(Cost):
         Hf = H.reshape(-1)  # a view of the C-contiguous H
         Hf[self._flat] += self.weight * np.multiply.outer(a, a).reshape(-1)
 
-    def symbolic(self, sym, dyn):
+    def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> list[tuple[ca.MX, ca.MX]]:
         con, n = sym.contact, self.layout.n
         dxy = 0.5 * (con[0:2] - con[3:5])
         a = ca.vertcat(-dxy[1], dxy[0], dxy[1], -dxy[0])
