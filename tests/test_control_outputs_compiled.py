@@ -82,7 +82,7 @@ def test_source_depends_on_layout_and_size():
 
 def test_controller_installs_the_compiled_map_unless_told_otherwise():
     from amlip_qp.control.controller import WalkingController
-    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.control.wbc.tracker import QPTracker
 
     robot = load_robot("rabbit")
     kin = RobotKinematics(robot)
@@ -98,7 +98,7 @@ def test_controller_installs_the_compiled_map_unless_told_otherwise():
 def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
     from amlip_qp.codegen.runtime import CodegenFallbackWarning
     from amlip_qp.control.controller import WalkingController
-    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.control.wbc.tracker import QPTracker
 
     robot = load_robot("rabbit")
     tracker = QPTracker(robot)

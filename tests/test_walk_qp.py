@@ -37,7 +37,7 @@ RUNS: dict[str, tuple[str, float | None, int, bool]] = {
 
 def _run(key: str) -> dict:
     """Run one entry of RUNS with the QP tracker; summary numbers only (picklable)."""
-    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.sim.factory import build_simulation, load
     from amlip_qp.sim.harness import SensorNoise
     from amlip_qp.sim.scenarios import SCENARIOS

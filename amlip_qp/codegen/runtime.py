@@ -55,8 +55,8 @@ import subprocess
 import sys
 import tempfile
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import casadi as ca
 import numpy as np
@@ -128,6 +128,20 @@ def find_compiler() -> list[str]:
     raise _NoCompiler("neither 'cc' nor 'gcc' is on the PATH (set $AMLIP_QP_CC to a C compiler)")
 
 
+def require_compiler() -> list[str]:
+    """The C compiler command, as :func:`find_compiler` finds it.
+
+    For callers that want to fail before spending seconds generating code.
+
+    Raises:
+        CompilerUnavailableError: No usable C compiler (the message says why).
+    """
+    try:
+        return find_compiler()
+    except _NoCompiler as exc:
+        raise CompilerUnavailableError(str(exc)) from None
+
+
 def library_source(committed_dir: Path = CODEGEN_DIR) -> bytes:
     """The C source to compile: the fresh generation, checked against ``committed_dir``.
 
@@ -171,7 +185,7 @@ def build_library(
 
     ``source_file`` and ``library_file`` name the files in the cache folder
     (default: the planner kernels'; other generated code, e.g. the whole-body
-    QP assembly of :mod:`amlip_qp.control.qp_compiled`, uses its own names).
+    QP assembly of :mod:`amlip_qp.control.wbc.compiled`, uses its own names).
     Returns the library path. Raises :class:`CodegenError` (with the
     compiler's output) when compilation fails, ``_NoCompiler`` when the
     compiler cannot be executed.

@@ -5,7 +5,7 @@ derivatives) into joint torques for the actuated joints, given the state
 estimate in Pinocchio coordinates (through the controller's kinematics
 object, updated once per tick). The paper's baseline (iterative IK plus a
 passivity-based controller, :mod:`amlip_qp.control.pbc`) and the task-space
-QP (:mod:`amlip_qp.control.qp_tracker`) both implement it, so the walking loop
+QP (:mod:`amlip_qp.control.wbc.tracker`) both implement it, so the walking loop
 (:class:`amlip_qp.control.controller.WalkingController`) runs either one.
 """
 

@@ -51,7 +51,7 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
         and whether the robot fell.
     """
     from amlip_qp.control.controller import WalkingController
-    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.robots import load_robot
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.sim.harness import Simulation
@@ -87,7 +87,7 @@ def _stats(times_us: list[float]) -> dict:
 
 def tracker_solver_options() -> dict:
     """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
-    from amlip_qp.control.qp_tracker import QPTracker
+    from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.robots import load_robot
 
     return QPTracker(load_robot("rabbit")).solver.options

@@ -1,7 +1,7 @@
 """Assemble a closed loop (robot, tracker, controller, plant) from names.
 
 The trackers live in their own modules (:mod:`amlip_qp.control.pbc`,
-:mod:`amlip_qp.control.qp_tracker`) and are imported only when asked for, so
+:mod:`amlip_qp.control.wbc.tracker`) and are imported only when asked for, so
 the CLI and the tests do not pay for (or depend on) a tracker they do not use.
 A tracker class is found in its module as the :class:`~amlip_qp.control.tracker.Tracker`
 subclass whose ``name`` attribute is the requested name.
@@ -21,7 +21,7 @@ from amlip_qp.sim.scenarios import Scenario
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
     "pbc": "amlip_qp.control.pbc",
-    "qp": "amlip_qp.control.qp_tracker",
+    "qp": "amlip_qp.control.wbc.tracker",
 }
 
 #: Robots the walking commands support.

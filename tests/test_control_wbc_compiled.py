@@ -4,45 +4,20 @@ import warnings
 
 import numpy as np
 import pytest
+from wbc_cases import FIELDS, random_cases
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.qp_compiled import CompiledBuild, generate_source
-from amlip_qp.control.qp_formulation import WholeBodyQP, default_config
-from amlip_qp.control.qp_tracker import QPTracker
-from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.control.wbc.builder import WholeBodyQP
+from amlip_qp.control.wbc.compiled import FUNCTION_STEM, CompiledBuild, assembly_function, generate_source
+from amlip_qp.control.wbc.config import default_config
+from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
-from amlip_qp.robots.kinematics import RobotKinematics
-
-FIELDS = ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")
-
-
-def _states(robot, n, seed=0):
-    rng = np.random.default_rng(seed)
-    for i in range(n):
-        q = robot.q_stand.copy()
-        q[robot.state_map.scalar_pin_q] += rng.normal(0.0, 0.05, robot.state_map.scalar_pin_q.size)
-        v = rng.normal(0.0, 0.3, robot.nv)
-        kin = RobotKinematics(robot)
-        kin.update(q, v)
-        stance = ("left", "right")[i % 2]
-        heading = float(rng.uniform(-1.0, 1.0))
-        y, _, _ = kin.outputs(stance, heading)
-        m = y.size
-        # Phases: mid-step (swing forces pinned), liftoff ramp, late step with the pre-touchdown ramp.
-        phase, weight = [(0.5, 0.0), (0.02, 0.0), (0.95, 0.5)][i % 3]
-        target = TrackingTarget(
-            stance, phase, heading, y + rng.normal(0.0, 0.01, m), rng.normal(0.0, 0.1, m), rng.normal(0.0, 1.0, m),
-            swing_contact_weight=weight,
-        )  # fmt: skip
-        yield kin, target
 
 
 def _python(builder, kin, target):
     problem = builder.build(kin, target)
-    builder.limit_stance_foot_torque(problem, target)
-    builder.add_stance_yaw_moment_cost(problem, kin, target)
-    return problem.copy(), builder._RD.copy(), builder._Rhp.copy()
+    return problem.copy(), builder.dynamics.RD.copy(), builder.dynamics.Rhp.copy()
 
 
 def _assert_same(ref, got, what):
@@ -60,29 +35,47 @@ def _assert_same(ref, got, what):
     [
         ("cassie", {}),
         ("cassie", {"rigid_springs": "none", "touchdown_blend": 1.0, "stance_yaw_moment_weight": 0.0}),
+        ("cassie", {"rigid_springs": "swing", "hip_yaw_feedback": 0.0, "stance_foot_torque_max_Nm": np.inf}),
         ("rabbit", {}),
-        ("rabbit", {"touchdown_blend": 0.5}),
+        ("rabbit", {"touchdown_blend": 0.5, "reg_torque": 0.0}),
     ],
 )
 def test_compiled_build_equals_the_python_build(name, changes):
     robot = load_robot(name)
     builder = WholeBodyQP(robot, default_config(robot).with_(**changes))
     compiled = CompiledBuild(builder)
-    for i, (kin, target) in enumerate(_states(robot, 8)):
+    for i, (kin, target) in enumerate(random_cases(robot, 8)):
         ref, RD, Rhp = _python(builder, kin, target)
         # Poison the shared arrays: the compiled build must write every varying entry.
-        for arr in (builder.problem.H, builder.problem.g, builder.problem.A, builder.problem.b, builder._RD):
+        P, dyn = builder.problem, builder.dynamics
+        for arr in (P.H, P.g, P.A, P.b, P.lb, P.ub, P.l[builder.constraint("torque").rows], P.u, dyn.RD, dyn.Rhp):
             arr[...] = np.nan
+        builder.inputs.swing_force_weight = np.nan
         got = compiled.build(kin, target)
         assert got is builder.problem
         _assert_same(ref, got, f"{name} state {i} ({target.stance}, phase {target.phase})")
-        assert np.max(np.abs(builder._RD - RD) / (1.0 + np.abs(RD))) < 1e-12
-        assert np.max(np.abs(builder._Rhp - Rhp) / (1.0 + np.abs(Rhp))) < 1e-12
+        assert np.max(np.abs(dyn.RD - RD) / (1.0 + np.abs(RD))) < 1e-12
+        assert np.max(np.abs(dyn.Rhp - Rhp) / (1.0 + np.abs(Rhp))) < 1e-12
         # The recovery maps read the same buffers.
         x = np.random.default_rng(i).normal(0.0, 10.0, builder.n_variables)
-        tau = builder.torques(x)
-        assert np.allclose(tau, RD[builder._sl_dyn.stop : builder._sl_dyn.stop + tau.size] @ x + Rhp[builder._sl_dyn.stop : builder._sl_dyn.stop + tau.size])
-        assert builder._last_force_weight == builder.swing_force_weight(target)
+        rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
+        assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
+        assert builder.inputs.swing_force_weight == builder.swing_force_weight(target)
+
+
+def test_the_functions_follow_the_constraint_and_cost_lists():
+    robot = load_robot("cassie")
+    builder = WholeBodyQP(robot)
+    fn = assembly_function(builder, "left")
+    assert fn.name() == f"{FUNCTION_STEM}_left"
+    assert [fn.name_in(i) for i in range(fn.n_in())] == ["M_upper", "hp", "JfT", "JoT", "packed"]
+    sizes = {fn.name_out(i): fn.size_out(i) for i in range(fn.n_out())}
+    P = builder.problem
+    assert sizes["AT"] == (P.n, P.n_eq) and sizes["u_in"] == (P.n_in, 1) and sizes["lb"] == (P.n, 1)
+    torque = builder.constraint("torque")
+    assert sizes["TT"] == (P.n, torque.size) and sizes["l_tau"] == (torque.size, 1)
+    # E: the numpy build's rows plus the yaw moment's one row.
+    assert sizes["ET"] == (P.n, sum(c.size for c in builder.costs) + 1)
 
 
 def test_source_bakes_in_the_robot_and_the_config():
@@ -105,6 +98,8 @@ def test_tracker_uses_the_compiled_build_and_falls_back_without_a_compiler(monke
     assert tracker.build_backend == "python"
     with pytest.raises(CompilerUnavailableError, match="AMLIP_QP_CC=none"):
         QPTracker(robot, compiled_build=True)
+    with pytest.raises(CompilerUnavailableError, match="AMLIP_QP_CC=none"):
+        CompiledBuild(WholeBodyQP(robot))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert QPTracker(robot, compiled_build=False).build_backend == "python"
@@ -117,7 +112,8 @@ def test_compiled_and_python_trackers_give_the_same_torques():
     opts = {"eps_abs": 1e-9, "warm_start": False}
     fast, slow = QPTracker(robot, **opts), QPTracker(robot, compiled_build=False, **opts)
     assert fast.build_backend == "c"
-    for kin, target in _states(robot, 6, seed=3):
+    for kin, target in random_cases(robot, 6, seed=3):
         a, b = fast.compute(kin, target), slow.compute(kin, target)
         assert a.ok and b.ok
         np.testing.assert_allclose(a.tau_Nm, b.tau_Nm, atol=1e-6)
+        assert a.info["swing_force_weight"] == b.info["swing_force_weight"]

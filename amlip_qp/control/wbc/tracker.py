@@ -1,6 +1,6 @@
 """The task-space whole-body QP tracker.
 
-Every tick: build the QP of :mod:`amlip_qp.control.qp_formulation` for the
+Every tick: build the QP of :mod:`amlip_qp.control.wbc.builder` for the
 current state and references, solve it with ONE persistent warm-started
 :class:`~amlip_qp.qp.solver.ProxQPSolver`, check the status, and recover the
 joint torques from the actuated rows of the dynamics.
@@ -20,43 +20,44 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.qp_compiled import CompiledBuild
-from amlip_qp.control.qp_formulation import QPConfig, WholeBodyQP
 from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.wbc.builder import WholeBodyQP
+from amlip_qp.control.wbc.compiled import CompiledBuild
+from amlip_qp.control.wbc.config import QPConfig
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
 from amlip_qp.qp.problem import QPProblem
-from amlip_qp.qp.solver import ProxQPSolver
+from amlip_qp.qp.solver import ProxQPSolver, QPSolution
+
+if TYPE_CHECKING:
+    from amlip_qp.control.tracker import TrackingTarget
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 
 class QPTracker(Tracker):
     """Whole-body QP tracker (one persistent ProxQP, warm-started).
 
     Args:
-        robot: The :class:`~amlip_qp.robots.robot.Robot`.
-        config: The :class:`~amlip_qp.control.qp_formulation.QPConfig` (default per robot).
+        robot: The robot.
+        config: The :class:`~amlip_qp.control.wbc.config.QPConfig` (default: the robot's profile's).
         eps_abs: ProxQP absolute tolerance on the primal and dual residuals
-            (N, N m, m/s^2 in the constraint rows). 1e-3 is far below the
-            model's force and torque accuracy; on 1200 recorded Cassie QPs it
-            took 2.05 iterations per solve against 3.6 at 1e-5 (largest
-            torque difference per problem: median 2e-4 N m, p99 11 N m where
-            the active set differs). Every closed-loop acceptance scenario
-            passed at both tolerances with the earlier formulation (rigid-spring
-            forces as variables), and passes at 1e-3 with this one.
+            (N, N m, m/s^2 in the constraint rows); measured: docs/TUNING.md.
         max_iter: ProxQP iteration cap per tick.
         warm_start: Warm-start from the previous solution (default) or re-initialise every tick.
         record: Keep a copy of every solved problem in :attr:`recorded` (bench, tests).
         fallback_decay: Factor applied to the last good torques per failed tick (0..1).
         fallback_damping_Nms: Joint damping of the fallback, N m s/rad.
         compiled_build: Assemble the QP with the generated C of
-            :mod:`amlip_qp.control.qp_compiled` (the same problem to rounding,
+            :mod:`amlip_qp.control.wbc.compiled` (the same problem to rounding,
             about 3x less time; compiled once per robot and config into the
             codegen cache, ~7 s for Cassie). ``None`` (default): when a C
             compiler is available, else the Python
-            :meth:`~amlip_qp.control.qp_formulation.WholeBodyQP.build` with one
+            :meth:`~amlip_qp.control.wbc.builder.WholeBodyQP.build` with one
             warning; ``True``: required (raises without a compiler);
             ``False``: the Python build.
 
@@ -70,15 +71,14 @@ class QPTracker(Tracker):
             from scratch (once) before any fallback.
         build_backend: ``"c"`` (compiled assembly) or ``"python"``.
         build_problem: The assembly in use, ``(kin, target) -> QPProblem``
-            (the builder's live arrays, stance-foot torque bound and stance
-            yaw-moment cost included).
+            (the builder's live arrays).
     """
 
     name = "qp"
 
     def __init__(
         self,
-        robot,
+        robot: Robot,
         config: QPConfig | None = None,
         eps_abs: float = 1e-3,
         max_iter: int = 200,
@@ -101,7 +101,7 @@ class QPTracker(Tracker):
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
         self._n_outputs = self.builder.output_task.size
-        self.build_problem = self._python_build
+        self.build_problem = self.builder.build
         self.build_backend = "python"
         if compiled_build is None or compiled_build:
             try:
@@ -154,7 +154,7 @@ class QPTracker(Tracker):
         self._tau_prev[:] = 0.0
         self._fail_streak = 0
 
-    def _fallback(self, kin, reason: str, info: dict) -> TrackerResult:
+    def _fallback(self, kin: RobotKinematics, reason: str, info: dict) -> TrackerResult:
         self.fallbacks += 1
         self._fail_streak += 1
         v_a = kin.v[self._act_v] if kin.v is not None else np.zeros_like(self._tau_prev)
@@ -164,7 +164,7 @@ class QPTracker(Tracker):
         info.update(fallbacks=self.fallbacks, qp_ok=0.0)
         return TrackerResult(tau_Nm=tau, ok=False, fallback=reason, info=info)
 
-    def compute(self, kin, target) -> TrackerResult:
+    def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:
         """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN)."""
         info: dict = {}
         if target.stance not in self.robot.foot_sides:
@@ -195,21 +195,15 @@ class QPTracker(Tracker):
                 self.cold_retries += 1
                 sol = self.solver.solve(problem)
         except QPError as exc:
-            sol = self._solve_relaxed(problem)
-            if sol is not None:
-                return self._finish(kin, problem, sol, info, t0, t1, relaxed=True)
+            relaxed = self._solve_relaxed(problem)
+            if relaxed is not None:
+                return self._finish(kin, problem, relaxed, info, t0, t1, relaxed=True)
             if self.record:
                 self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
             return self._fallback(kin, f"solver: {exc.status or exc}", info)
         return self._finish(kin, problem, sol, info, t0, t1, relaxed=False)
 
-    def _python_build(self, kin, target) -> QPProblem:
-        problem = self.builder.build(kin, target)
-        self.builder.limit_stance_foot_torque(problem, target)
-        self.builder.add_stance_yaw_moment_cost(problem, kin, target)
-        return problem
-
-    def _solve_relaxed(self, problem: QPProblem):
+    def _solve_relaxed(self, problem: QPProblem) -> QPSolution | None:
         """Second chance after an infeasible tick: drop the torque-limit rows
         (the controller saturates the torques anyway); ``None`` if that fails too."""
         relaxed = problem.copy()
@@ -223,7 +217,9 @@ class QPTracker(Tracker):
         self.relaxed_solves += 1
         return sol
 
-    def _finish(self, kin, problem, sol, info, t0, t1, relaxed: bool) -> TrackerResult:
+    def _finish(
+        self, kin: RobotKinematics, problem: QPProblem, sol: QPSolution, info: dict, t0: int, t1: int, relaxed: bool
+    ) -> TrackerResult:
         # The solver rejects a non-finite x, so the forces are finite; the torques
         # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
@@ -246,6 +242,6 @@ class QPTracker(Tracker):
             relaxed=float(relaxed),
             stance_fz_N=stance_fz,
             swing_fz_N=swing_fz,
-            swing_force_weight=self.builder._last_force_weight,
+            swing_force_weight=self.builder.inputs.swing_force_weight,
         )
         return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)

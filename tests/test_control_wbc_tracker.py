@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 from amlip_qp.control.controller import WalkingController
-from amlip_qp.control.qp_tracker import QPTracker
 from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.control.wbc.config import CASSIE_CONFIG
+from amlip_qp.control.wbc.tracker import QPTracker
+from amlip_qp.exceptions import InputError
 from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
@@ -26,7 +28,7 @@ def walk(request):
 
 
 def test_one_persistent_solver_warm_started(walk):
-    robot, tracker, result = walk
+    _, tracker, result = walk
     assert not result.fell
     assert len(tracker.recorded) == len(result.log["t"])
     # One initialisation, plus one per cold retry after a failed warm solve.
@@ -138,7 +140,7 @@ def test_nan_state_through_the_controller_never_gives_nan_torques():
 def test_bench_reports_every_solver_on_recorded_problems(walk):
     from amlip_qp.qp.bench import bench_solvers, format_report
 
-    robot, tracker, _ = walk
+    _, tracker, _ = walk
     problems = [p for p, _ in tracker.recorded[::20]]
     stats = bench_solvers(problems)
     assert {"proxsuite-warm", "proxsuite-init", "quadprog"} <= set(stats)
@@ -146,7 +148,9 @@ def test_bench_reports_every_solver_on_recorded_problems(walk):
     for s in stats.values():
         assert s["n"] == len(problems) and s["median_us"] > 0 and s["p99_us"] >= s["median_us"]
     assert stats["proxsuite-warm"]["failures"] == 0 and stats["quadprog"]["failures"] == 0
-    text = format_report({"scenario": "x", "n_problems": len(problems), "solvers": stats, "tick_us": {"median": 1.0, "p99": 2.0}})
+    text = format_report(
+        {"scenario": "x", "n_problems": len(problems), "solvers": stats, "tick_us": {"median": 1.0, "p99": 2.0}}
+    )
     assert "proxsuite-warm" in text and "controller tick" in text
 
 
@@ -167,9 +171,6 @@ def test_replaying_the_recorded_problems_is_bit_identical(walk):
 
 
 def test_bad_arguments_and_targets_are_typed_errors():
-    from amlip_qp.control.qp_formulation import CASSIE_CONFIG
-    from amlip_qp.exceptions import InputError
-
     cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
     with pytest.raises(InputError, match="gains for 9 outputs but rabbit has 4"):
         QPTracker(rabbit, CASSIE_CONFIG)
@@ -206,3 +207,15 @@ def test_an_infeasible_fresh_solve_is_not_repeated():
     assert not bad.ok
     assert tracker.cold_retries == 0
     assert tracker.solver.n_init - before == 2  # the solve, then the relaxed solve; no repeat
+
+
+def test_tracker_keeps_the_stance_toe_passive_and_reports_the_force_ramp():
+    cassie = load_robot("cassie")
+    tracker = QPTracker(cassie, CASSIE_CONFIG)
+    kin, target = _stand(cassie)
+    target.phase = 0.25 * CASSIE_CONFIG.liftoff_phase
+    res = tracker.compute(kin, target)
+    assert res.ok
+    i = list(cassie.actuated.joint_names).index("left-foot")
+    assert abs(res.tau_Nm[i]) <= CASSIE_CONFIG.stance_foot_torque_max_Nm + 1e-3  # the solver's tolerance, N m
+    assert res.info["swing_force_weight"] == pytest.approx(0.75)

@@ -24,10 +24,15 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
+
+if TYPE_CHECKING:
+    from amlip_qp.control.tracker import TrackingTarget
+    from amlip_qp.robots.kinematics import RobotKinematics
 
 
 @dataclass(frozen=True)
@@ -46,7 +51,7 @@ class Gains:
     weight: np.ndarray
 
     @classmethod
-    def of(cls, n: int, kp, kd, weight) -> "Gains":
+    def of(cls, n: int, kp, kd, weight) -> Gains:
         """Broadcast scalars or sequences to ``n`` components (validated, finite, >= 0)."""
         out = []
         for name, val in (("kp", kp), ("kd", kd), ("weight", weight)):
@@ -77,8 +82,8 @@ class Task(abc.ABC):
 
     def __init__(self, gains: Gains):
         self.gains = gains
-        self._q_ref = None
-        self._key = None
+        self._q_ref: np.ndarray | None = None
+        self._key: object = None
         self._cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
@@ -87,14 +92,14 @@ class Task(abc.ABC):
         return self.gains.kp.shape[0]
 
     @abc.abstractmethod
-    def _evaluate(self, kin, target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _evaluate(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(y, J, Jdot_v)`` at the state of ``kin`` (shapes (n,), (n, nv), (n,))."""
 
     @abc.abstractmethod
-    def reference(self, kin, target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def reference(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(y_d, yd_d, ydd_d)``: desired value, rate and acceleration, shape (n,) each."""
 
-    def _terms(self, kin, target):
+    def _terms(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         key = self._cache_key(target)
         # Holding a reference to kin.q keeps its id unique until the next update.
         if self._cache is None or self._q_ref is not kin.q or key != self._key:
@@ -103,33 +108,33 @@ class Task(abc.ABC):
             self._key = key
         return self._cache
 
-    def _cache_key(self, target):
+    def _cache_key(self, target: TrackingTarget) -> object:
         """What besides the state changes the map (e.g. the stance side)."""
         return None
 
-    def value(self, kin, target) -> np.ndarray:
+    def value(self, kin: RobotKinematics, target: TrackingTarget) -> np.ndarray:
         """Task value ``y`` (task unit: m or rad)."""
         return self._terms(kin, target)[0]
 
-    def error(self, kin, target) -> np.ndarray:
+    def error(self, kin: RobotKinematics, target: TrackingTarget) -> np.ndarray:
         """Task error ``e = y_d - y`` (m or rad)."""
         return self.reference(kin, target)[0] - self._terms(kin, target)[0]
 
-    def jacobian(self, kin, target) -> np.ndarray:
+    def jacobian(self, kin: RobotKinematics, target: TrackingTarget) -> np.ndarray:
         """Task Jacobian ``J`` (n, nv): ``dy/dt = J v``."""
         return self._terms(kin, target)[1]
 
-    def drift(self, kin, target) -> np.ndarray:
+    def drift(self, kin: RobotKinematics, target: TrackingTarget) -> np.ndarray:
         """``Jdot v`` (task unit / s^2): the task acceleration at ``vdot = 0``."""
         return self._terms(kin, target)[2]
 
-    def desired_acceleration(self, kin, target) -> np.ndarray:
+    def desired_acceleration(self, kin: RobotKinematics, target: TrackingTarget) -> np.ndarray:
         """``ydd_des = ydd_d + K_d (yd_d - J v) + K_p (y_d - y)`` (task unit / s^2)."""
         y, J, _ = self._terms(kin, target)
         y_d, yd_d, ydd_d = self.reference(kin, target)
         return ydd_d + self.gains.kd * (yd_d - J @ kin.v) + self.gains.kp * (y_d - y)
 
-    def least_squares(self, kin, target) -> tuple[np.ndarray, np.ndarray]:
+    def least_squares(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray]:
         """``(J, r)`` of the task's cost ``||W^(1/2) (J vdot + r)||^2``, with
         ``r = Jdot v - ydd_des`` (task unit / s^2), from one evaluation."""
         y, J, jdv = self._terms(kin, target)
@@ -147,13 +152,15 @@ class OutputTask(Task):
 
     name = "outputs"
 
-    def _cache_key(self, target):
+    def _cache_key(self, target: TrackingTarget) -> object:
         return (target.stance, float(target.heading_rad))
 
-    def _evaluate(self, kin, target):
+    def _evaluate(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return kin.outputs(target.stance, target.heading_rad)
 
-    def reference(self, kin, target):
+    def reference(
+        self, kin: RobotKinematics | None, target: TrackingTarget
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return target.h_d, target.dh_d, target.ddh_d
 
 
@@ -189,23 +196,25 @@ class JointTask(Task):
         self._y_ref = np.broadcast_to(np.asarray(y_ref, dtype=float), (self._C.shape[0],)).copy()
         self._zero = np.zeros(self._C.shape[0])
 
-    def _evaluate(self, kin, target):
-        return self._Cc @ kin.q[self._cols_q], self._C, self._zero
+    def _evaluate(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        q, _ = _state(kin)
+        return self._Cc @ q[self._cols_q], self._C, self._zero
 
-    def jacobian(self, kin=None, target=None) -> np.ndarray:
+    def jacobian(self, kin: RobotKinematics | None = None, target: TrackingTarget | None = None) -> np.ndarray:
         """The constant matrix ``C`` (n, nv); no state needed."""
         return self._C
 
-    def desired_acceleration(self, kin, target) -> np.ndarray:
+    def desired_acceleration(self, kin: RobotKinematics, target: TrackingTarget | None) -> np.ndarray:
         """``K_d (0 - C v) + K_p (y_ref - C q)`` (rad/s^2), without the task cache."""
-        y = self._Cc @ kin.q[self._cols_q]
-        return self.gains.kp * (self._y_ref - y) - self.gains.kd * (self._Cc @ kin.v[self._cols_v])
+        q, v = _state(kin)
+        y = self._Cc @ q[self._cols_q]
+        return self.gains.kp * (self._y_ref - y) - self.gains.kd * (self._Cc @ v[self._cols_v])
 
-    def least_squares(self, kin, target) -> tuple[np.ndarray, np.ndarray]:
+    def least_squares(self, kin: RobotKinematics, target: TrackingTarget | None) -> tuple[np.ndarray, np.ndarray]:
         """``(C, -ydd_des)``: the drift of a linear task is zero."""
         return self._C, -self.desired_acceleration(kin, target)
 
-    def affine_residual(self):
+    def affine_residual(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The residual ``r = -ydd_des`` of :meth:`least_squares` as an affine
         map of the state: ``r = Rq q[cols_q] + Rv v[cols_v] + r0``.
 
@@ -216,5 +225,14 @@ class JointTask(Task):
         kp, kd = self.gains.kp[:, None], self.gains.kd[:, None]
         return self._cols_q, kp * self._Cc, self._cols_v, kd * self._Cc, -self.gains.kp * self._y_ref
 
-    def reference(self, kin, target):
+    def reference(
+        self, kin: RobotKinematics | None, target: TrackingTarget | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self._y_ref, self._zero, self._zero
+
+
+def _state(kin: RobotKinematics) -> tuple[np.ndarray, np.ndarray]:
+    """``(kin.q, kin.v)``; :class:`InputError` before the first update."""
+    if kin.q is None or kin.v is None:
+        raise InputError("RobotKinematics: call update(q, v) first")
+    return kin.q, kin.v

@@ -1,0 +1,273 @@
+"""The per-tick inputs of the whole-body QP, gathered once for either build.
+
+Everything a tick's problem depends on besides the robot and the
+configuration is read from the kinematics and the target by ONE function,
+:func:`gather_inputs`, into a :class:`TickInputs`. The Python build
+(:meth:`WholeBodyQP.build <amlip_qp.control.wbc.builder.WholeBodyQP.build>`)
+and the compiled one (:class:`~amlip_qp.control.wbc.compiled.CompiledBuild`)
+both call it, so they cannot read different states. :class:`SymbolicInputs`
+are the same inputs as CasADi symbols, for the generated build.
+
+The inputs: the dynamics terms ``M`` (its upper triangle) and ``h - taup``; the force-point
+Jacobians ``Jf`` (world-aligned, the layout's axes, stance foot then swing
+foot); the stance points' Jacobians, positions and drifts ``Jdot v``; the
+output task's least-squares terms ``(J, r)`` and the pelvis-yaw feedback's
+shift of ``r``; the swing foot's force ramp ``w``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import casadi as ca
+import numpy as np
+
+from amlip_qp.alip import other_side
+
+if TYPE_CHECKING:
+    from amlip_qp.control.tracker import TrackingTarget
+    from amlip_qp.control.wbc.config import QPConfig
+    from amlip_qp.control.wbc.layout import VariableLayout
+    from amlip_qp.control.wbc.tasks import OutputTask
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
+
+
+def dm(a) -> ca.DM:
+    """A CasADi constant of the numbers in ``a`` (float64)."""
+    return ca.DM(np.asarray(a, dtype=float))
+
+
+def swing_force_weight(config: QPConfig, target: TrackingTarget) -> float:
+    """The force ramp ``w`` of the swing foot (0 in the air, 1 fully loaded):
+    ``max(touchdown_blend * swing_contact_weight, 1 - phase / liftoff_phase)``, clipped to [0, 1]."""
+    lift = config.liftoff_phase
+    w_lift = max(0.0, 1.0 - target.phase / lift) if lift > 0 else 0.0
+    w = max(config.touchdown_blend * float(target.swing_contact_weight), w_lift)
+    if not math.isfinite(w):
+        return 0.0
+    return min(max(w, 0.0), 1.0)
+
+
+class PelvisYawFeedback:
+    """The pelvis-yaw feedback on the swing hip-yaw reference (``QPConfig.hip_yaw_feedback``).
+
+    Args:
+        gain: The feedback gain ``k`` (dimensionless, > 0).
+        stance_index: Index of the ``stance_hip_yaw`` output.
+        swing_index: Index of the ``swing_hip_yaw`` output.
+    """
+
+    def __init__(self, gain: float, stance_index: int, swing_index: int):
+        self.gain = gain
+        self.stance_index = stance_index
+        self.swing_index = swing_index
+
+    @classmethod
+    def for_outputs(cls, names: tuple[str, ...], gain: float) -> PelvisYawFeedback | None:
+        """The feedback for outputs ``names``; ``None`` when off or without both hip-yaw outputs."""
+        if gain > 0 and "stance_hip_yaw" in names and "swing_hip_yaw" in names:
+            return cls(gain, names.index("stance_hip_yaw"), names.index("swing_hip_yaw"))
+        return None
+
+    def correction(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[float, float]:
+        """The change of the swing hip-yaw reference (rad) and of its rate
+        (rad/s): ``(-k e_psi, -k (psidot + dh_d[stance_hip_yaw]))``, with
+        ``e_psi`` the wrapped pelvis yaw minus ``D - h_d[stance_hip_yaw]``."""
+        i_st = self.stance_index
+        k = self.gain
+        R = kin.base_rotation()
+        psi = math.atan2(R[1, 0], R[0, 0])
+        psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
+        e = psi - (target.heading_rad - float(target.h_d[i_st]))
+        e = (e + math.pi) % (2.0 * math.pi) - math.pi
+        return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))
+
+    def residual_shift(self, kin: RobotKinematics, target: TrackingTarget, task: OutputTask) -> float:
+        """How much the feedback lowers the swing hip-yaw component of the
+        output task's residual ``r = ... - K_d (yd_d - J v) - K_p (y_d - y)``:
+        ``K_d ddh + K_p dh`` (rad/s^2) for the correction ``(dh, ddh)``."""
+        dh, ddh = self.correction(kin, target)
+        i = self.swing_index
+        return task.gains.kd[i] * ddh + task.gains.kp[i] * dh
+
+    def apply(self, kin: RobotKinematics, target: TrackingTarget) -> TrackingTarget:
+        """A copy of ``target`` with the corrected swing hip-yaw reference and rate."""
+        dh, ddh = self.correction(kin, target)
+        i_sw = self.swing_index
+        out = replace(target, h_d=target.h_d.copy(), dh_d=target.dh_d.copy())
+        out.h_d[i_sw] += dh
+        out.dh_d[i_sw] += ddh
+        return out
+
+
+class TickInputs:
+    """One tick's inputs (filled by :func:`gather_inputs`; SI units, world axes).
+
+    Arrays marked "kin's" are the kinematics' own cached arrays or live views:
+    valid until its next update, read-only.
+
+    Attributes:
+        stance: Stance side; ``swing`` the other.
+        q: Configuration (kin's), (nq,).
+        v: Velocity (kin's), (nv,).
+        mass_upper: ``M(q)`` (kin's Pinocchio data), (nv, nv): only its upper
+            triangle is filled (the CRBA's); the symmetric matrix is
+            :meth:`RobotKinematics.mass_matrix`, whose mirroring the generated
+            build does without.
+        hp: ``h - taup``: nonlinear effects minus passive forces, N m / N, (nv,).
+        Jf: Force-point Jacobians, the layout's axes of each point, stance
+            foot's points then swing foot's, (2 * n_force, nv).
+        point_jacobians: The stance points' translational Jacobians (kin's), 3 x nv each.
+        point_positions: The stance points' positions (kin's views), m.
+        point_drifts: The stance points' ``Jdot v`` (kin's), m/s^2.
+        output_jacobian: The output task's ``J`` (n_out, nv).
+        output_residual: The output task's ``r = Jdot v - ydd_des``, m/s^2 or rad/s^2.
+        residual_shift: The pelvis-yaw feedback's shift of
+            ``output_residual[feedback.swing_index]`` (subtracted), 0 without feedback.
+        swing_force_weight: The swing foot's force ramp ``w`` in [0, 1].
+        feedback: The :class:`PelvisYawFeedback`, or ``None``.
+    """
+
+    def __init__(self, robot: Robot, layout: VariableLayout, config: QPConfig, output_task: OutputTask, names):
+        self.robot = robot
+        self.layout = layout
+        self.config = config
+        self.output_task = output_task
+        self.feedback = PelvisYawFeedback.for_outputs(tuple(names), config.hip_yaw_feedback)
+        d, k = layout.point_dim, layout.n_points
+        #: Per side, the force frames and their rows of ``Jf`` as the stance (first) and as the swing foot.
+        self._points = {
+            side: (
+                robot.force_frame_ids[side],
+                [slice(d * p, d * (p + 1)) for p in range(k)],
+                [slice(d * (k + p), d * (k + p + 1)) for p in range(k)],
+            )
+            for side in robot.foot_sides
+        }
+        self.stance, self.swing = "left", "right"
+        self.q: np.ndarray = robot.q_stand
+        self.v: np.ndarray = np.zeros(robot.nv)
+        self.mass_upper: np.ndarray = np.zeros((robot.nv, robot.nv))
+        self.hp = np.zeros(robot.nv)
+        self.Jf = np.zeros((2 * layout.n_force, robot.nv))
+        self.point_jacobians: list[np.ndarray] = []
+        self.point_positions: list[np.ndarray] = []
+        self.point_drifts: list[np.ndarray] = []
+        self.output_jacobian = np.zeros((output_task.size, robot.nv))
+        self.output_residual = np.zeros(output_task.size)
+        self.residual_shift = 0.0
+        self.swing_force_weight = 0.0
+
+
+def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInputs) -> TickInputs:
+    """Fill ``inputs`` for the state in ``kin`` (updated this tick) and the references in ``target``.
+
+    Raises:
+        InputError: The kinematics has no dynamics (``update_positions`` only) or the stance is not a side.
+    """
+    stance = target.stance
+    swing = other_side(stance)
+    inputs.stance, inputs.swing = stance, swing
+    inputs.q, inputs.v = kin.q, kin.v
+    np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=inputs.hp)
+    inputs.mass_upper = kin.data.M
+    # Force-point Jacobians on the layout's axes: the stance foot's rows, then the swing foot's.
+    Jf, axes = inputs.Jf, inputs.layout.axes_index
+    fids, rows, _ = inputs._points[stance]
+    jacs = [kin.frame_jacobian(f) for f in fids]
+    for J, r in zip(jacs, rows):
+        Jf[r] = J[axes]
+    sw_fids, _, sw_rows = inputs._points[swing]
+    for f, r in zip(sw_fids, sw_rows):
+        Jf[r] = kin.frame_jacobian(f)[axes]
+    inputs.point_jacobians = jacs
+    inputs.point_positions = [kin.frame_translation_view(f) for f in fids]
+    inputs.point_drifts = [kin.frame_jdot_v(f) for f in fids]
+    task = inputs.output_task
+    inputs.output_jacobian, inputs.output_residual = task.least_squares(kin, target)
+    fb = inputs.feedback
+    inputs.residual_shift = 0.0 if fb is None else fb.residual_shift(kin, target, task)
+    inputs.swing_force_weight = swing_force_weight(inputs.config, target)
+    return inputs
+
+
+def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
+    """Slices of the generated build's packed small input: ``q``, ``v``,
+    ``contact`` (two points: stance toe and heel positions, m, then their
+    drifts, m/s^2; one point: its drift on the layout's axes), ``r`` (output
+    task residual, pelvis-yaw shift applied), ``w`` (swing force ramp); and its ``size``."""
+    n_con = 12 if layout.n_points == 2 else layout.point_dim
+    sizes = {"q": nq, "v": layout.nv, "contact": n_con, "r": n_outputs, "w": 1}
+    out: dict[str, Any] = {}
+    at = 0
+    for name, size in sizes.items():
+        out[name] = slice(at, at + size)
+        at += size
+    out["size"] = at
+    return out
+
+
+def pack_inputs(inputs: TickInputs, small: dict, u: np.ndarray) -> None:
+    """Write ``inputs`` into the packed small input ``u`` (slices ``small`` of :func:`packed_layout`)."""
+    u[small["q"]] = inputs.q
+    u[small["v"]] = inputs.v
+    c = small["contact"].start
+    if inputs.layout.n_points == 2:
+        u[c : c + 3] = inputs.point_positions[0]
+        u[c + 3 : c + 6] = inputs.point_positions[1]
+        u[c + 6 : c + 9] = inputs.point_drifts[0]
+        u[c + 9 : c + 12] = inputs.point_drifts[1]
+    else:
+        u[small["contact"]] = inputs.point_drifts[0][inputs.layout.axes_index]
+    rr = u[small["r"]]
+    rr[:] = inputs.output_residual
+    if inputs.feedback is not None:
+        rr[inputs.feedback.swing_index] -= inputs.residual_shift
+    u[small["w"]] = inputs.swing_force_weight
+
+
+@dataclass
+class SymbolicInputs:
+    """:class:`TickInputs` as CasADi symbols, for one stance (the generated build).
+
+    The function's arguments are ``M_upper`` (``M``'s upper triangle is read),
+    ``hp``, ``JfT`` (``Jf`` transposed), ``JoT`` (the output Jacobian
+    transposed) and ``packed`` (:func:`packed_layout`).
+    """
+
+    stance: str
+    arguments: tuple[ca.MX, ...]
+    argument_names: tuple[str, ...]
+    mass_matrix: ca.MX
+    hp: ca.MX
+    JfT: ca.MX
+    JoT: ca.MX
+    q: ca.MX
+    v: ca.MX
+    contact: ca.MX
+    output_residual: ca.MX
+    swing_force_weight: ca.MX
+
+    @property
+    def swing(self) -> str:
+        """The swing side."""
+        return other_side(self.stance)
+
+    @classmethod
+    def create(cls, stance: str, nq: int, layout: VariableLayout, n_outputs: int) -> SymbolicInputs:
+        """The symbols of ``stance``'s function."""
+        nv, nf = layout.nv, layout.n_force
+        small = packed_layout(nq, layout, n_outputs)
+        Mu = ca.MX.sym("M_upper", nv, nv)
+        hp = ca.MX.sym("hp", nv)
+        JfT = ca.MX.sym("JfT", nv, 2 * nf)
+        JoT = ca.MX.sym("JoT", nv, n_outputs)
+        u = ca.MX.sym("u", small["size"])
+        M = ca.triu(Mu) + ca.triu(Mu, False).T
+        return cls(
+            stance, (Mu, hp, JfT, JoT, u), ("M_upper", "hp", "JfT", "JoT", "packed"), M, hp, JfT, JoT,
+            u[small["q"]], u[small["v"]], u[small["contact"]], u[small["r"]], u[small["w"]],
+        )  # fmt: skip

@@ -1,0 +1,58 @@
+"""Shared helpers of the whole-body QP tests: states, targets, solves (not a test module)."""
+
+import numpy as np
+
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.qp.solver import ProxQPSolver
+from amlip_qp.robots.kinematics import RobotKinematics
+
+#: The problem's arrays.
+FIELDS = ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")
+
+
+def kin_at(robot, seed=0, scale=0.02, v_scale=0.2):
+    """Kinematics at a random state near the robot's stand pose."""
+    rng = np.random.default_rng(seed)
+    q = robot.q_stand.copy()
+    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, scale, robot.state_map.scalar_pin_q.size)
+    v = rng.normal(0.0, v_scale, robot.nv)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    return kin
+
+
+def target_for(kin, stance="left", phase=0.5, weight=0.0, offset=0.0, heading=0.0):
+    """References at the current outputs plus ``offset``, zero rates."""
+    y, _, _ = kin.outputs(stance, heading)
+    n = y.size
+    return TrackingTarget(stance, phase, heading, y + offset, np.zeros(n), np.zeros(n), swing_contact_weight=weight)
+
+
+def random_cases(robot, n, seed=0):
+    """``(kin, target)`` pairs: both stances, random headings and references, three phases
+    (mid-step with the swing forces pinned, the liftoff ramp, late with the pre-touchdown ramp)."""
+    rng = np.random.default_rng(seed)
+    for i in range(n):
+        kin = kin_at(robot, seed=seed * 1000 + i, scale=0.05, v_scale=0.3)
+        stance = ("left", "right")[i % 2]
+        heading = float(rng.uniform(-1.0, 1.0))
+        y, _, _ = kin.outputs(stance, heading)
+        m = y.size
+        phase, weight = [(0.5, 0.0), (0.02, 0.0), (0.95, 0.5)][i % 3]
+        target = TrackingTarget(
+            stance, phase, heading, y + rng.normal(0.0, 0.01, m), rng.normal(0.0, 0.1, m), rng.normal(0.0, 1.0, m),
+            swing_contact_weight=weight,
+        )  # fmt: skip
+        yield kin, target
+
+
+def solve(problem):
+    """A tight solve from scratch; the primal solution."""
+    return ProxQPSolver(eps_abs=1e-9, warm_start=False, eps_primal_inf=1e-9).solve(problem).x
+
+
+def build_and_solve(builder, kin, target):
+    """``(problem, x)`` of a validated build solved tightly."""
+    problem = builder.build(kin, target)
+    problem.validate()
+    return problem, solve(problem)
