@@ -75,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument("--ticks", type=_positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
-    b.set_defaults(func=_handler("amlip_qp.qp.cli:run_bench"))
+    b.set_defaults(func=_handler("amlip_qp.sim.bench_qp:run_bench"))
 
     _add_walk(sub)
     _add_compare(sub)
