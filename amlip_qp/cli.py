@@ -17,6 +17,7 @@ import sys
 from typing import Callable, Sequence
 
 from amlip_qp.exceptions import AmlipError, InputError, ModelFileError, MJCFError, UnknownRobotError
+from amlip_qp.profiles import ROBOT_NAMES
 
 PROG = "amlip-qp"
 
@@ -82,8 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: Robots and trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import).
-_ROBOTS = ("cassie", "rabbit")
+#: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
+#: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
 _TRACKERS = ("pbc", "qp")
 
 
@@ -94,7 +95,7 @@ def _add_walk(sub) -> None:
         description="Simulate one walk in MuJoCo with the PBC or QP tracker and print a summary. "
         "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
     )
-    p.add_argument("--robot", choices=_ROBOTS, default=None, help="robot (default cassie, or the scenario's)")
+    p.add_argument("--robot", choices=ROBOT_NAMES, default=None, help="robot (default cassie, or the scenario's)")
     p.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
     p.add_argument("--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)")
     speed = p.add_mutually_exclusive_group()
@@ -131,7 +132,7 @@ def _add_compare(sub) -> None:
         description="Run both trackers on the same scenarios with the same seed and print one table row per "
         "robot and tracker (see docs/SUMMARY_SCHEMA.md for the definitions).",
     )
-    p.add_argument("--robots", type=_name_list(_ROBOTS), default=["cassie", "rabbit"], metavar="R1,R2", help="robots (default cassie,rabbit)")
+    p.add_argument("--robots", type=_name_list(ROBOT_NAMES), default=list(ROBOT_NAMES), metavar="R1,R2", help=f"robots (default {','.join(ROBOT_NAMES)})")
     p.add_argument("--trackers", type=_name_list(_TRACKERS), default=list(_TRACKERS), metavar="T1,T2", help="trackers (default pbc,qp)")
     p.add_argument(
         "--scenario",

@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     import mujoco
     import pinocchio as pin
 
+    from amlip_qp.profiles import RobotProfile
     from amlip_qp.robots.state import StateMap
 
 #: The two foot sides, in the order used everywhere.
@@ -142,6 +143,9 @@ class Robot:
             (rad or m), shape (nv,).
         dof_damping: Joint damping per Pinocchio velocity index, shape (nv,).
         dof_armature: Rotor armature per Pinocchio velocity index, shape (nv,).
+        profile: The :class:`~amlip_qp.profiles.RobotProfile` of a bundled
+            robot (loaded by name or from its bundled file), ``None`` for any
+            other model: every robot-name-dependent fact comes from it.
     """
 
     name: str
@@ -175,6 +179,7 @@ class Robot:
     dof_damping: np.ndarray
     dof_armature: np.ndarray
     foot_sides: tuple[str, str] = field(default=FOOT_SIDES)
+    profile: "RobotProfile | None" = None
 
     @property
     def nq(self) -> int:
@@ -221,9 +226,7 @@ class Robot:
         return spring_rows(self)
 
     def other_side(self, side: str) -> str:
-        """The opposite foot side of ``"left"`` / ``"right"``."""
-        from amlip_qp.exceptions import InputError
+        """The opposite foot side of ``"left"`` / ``"right"`` (:func:`amlip_qp.alip.other_side`)."""
+        from amlip_qp.alip import other_side
 
-        if side not in self.foot_sides:
-            raise InputError(f"side must be 'left' or 'right', got {side!r}")
-        return "right" if side == "left" else "left"
+        return other_side(side)
