@@ -1,8 +1,8 @@
 """Assemble a closed loop (robot, tracker, controller, plant) from names.
 
-The trackers live in their own modules (:mod:`amlip_qp.control.pbc`,
-:mod:`amlip_qp.control.qp_tracker`) and are imported only when asked for, so
-the CLI and the tests do not pay for (or depend on) a tracker they do not use.
+The trackers live in their own modules (:data:`TRACKER_MODULES`) and are
+imported only when asked for, so the CLI and the tests do not pay for (or
+depend on) a tracker they do not use.
 A tracker class is found in its module as the :class:`~amlip_qp.control.tracker.Tracker`
 subclass whose ``name`` attribute is the requested name.
 """
@@ -20,12 +20,9 @@ from amlip_qp.sim.scenarios import Scenario
 
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
-    "pbc": "amlip_qp.control.pbc",
+    "pbc": "amlip_qp.control.pbc.tracker",
     "qp": "amlip_qp.control.qp_tracker",
 }
-
-#: Robots the walking commands support.
-ROBOTS: tuple[str, ...] = ("cassie", "rabbit")
 
 
 @functools.lru_cache(maxsize=None)
@@ -79,7 +76,7 @@ def build_simulation(
         noise: Sensor noise, or ``None`` for exact measurements.
         planner_backend: ``"c"`` (generated kernels) or ``"numpy"``.
     """
-    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
 
     robot = load(scenario.robot)

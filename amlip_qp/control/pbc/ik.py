@@ -77,12 +77,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg.lapack import dgetrf as _dgetrf
 from scipy.linalg.lapack import dgetrs as _dgetrs
 
+from amlip_qp.alip import other_side
 from amlip_qp.exceptions import InputError, MJCFError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -206,7 +212,7 @@ class IterativeIK:
             coordinates != nv).
     """
 
-    def __init__(self, robot, settings: IKSettings | None = None):
+    def __init__(self, robot: Robot, settings: IKSettings | None = None):
         import pinocchio as pin
 
         from amlip_qp.robots.kinematics import RobotKinematics
@@ -269,12 +275,10 @@ class IterativeIK:
         smap = robot.state_map
         self._knee_swap: dict[str, list] = {side: [] for side in robot.foot_sides}
         if self.settings.knee_limit_swap and all(f"{sd}-knee" in smap.joint_pin_q for sd in robot.foot_sides):
-            from amlip_qp.robots.kinematics import RobotKinematics as _K
-
-            k0 = _K(robot)
+            k0 = RobotKinematics(robot)
             k0.update_positions(robot.q_stand)
             for side in robot.foot_sides:
-                other = robot.other_side(side)
+                other = other_side(side)
                 _, J0, _ = k0.outputs(side, 0.0)
                 for row_name, knee_side in (("com_z_over_stance", side), ("com_x_over_swing", other)):
                     if row_name not in names:
@@ -350,7 +354,7 @@ class IterativeIK:
         F[rows.n_var :] = rows.lin_q @ q - fixed["lin"]
         return F
 
-    def _fixed_from(self, kin, stance: str) -> dict:
+    def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:
         """The held quantities and their estimated rates, from the updated kinematics."""
         rows = self._rows[stance]
         q, v = kin.q, kin.v
@@ -442,7 +446,7 @@ class IterativeIK:
         return np.array([spring.rest for spring in self.held_springs], dtype=float)
 
     def solve(
-        self, kin, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
+        self, kin: RobotKinematics, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
     ) -> IKResult:
         """Joint references for the outputs ``h_d`` (m, rad) and their rates.
 

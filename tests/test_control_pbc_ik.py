@@ -1,4 +1,4 @@
-"""Tests of the iterative IK (amlip_qp.control.ik) on Cassie and Rabbit."""
+"""Tests of the iterative IK (amlip_qp.control.pbc.ik) on Cassie and Rabbit."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.control.ik import IKSettings, IterativeIK
+from amlip_qp.control.pbc.ik import IKSettings, IterativeIK
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
