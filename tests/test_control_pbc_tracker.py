@@ -176,7 +176,7 @@ def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
     shin, achilles = spring_deflections_rad(kin, "left", f)
     assert q_r[smap.joint_pin_q["left-shin"]] == pytest.approx(shin, abs=1e-9)
     assert q_r[smap.joint_pin_q["right-shin"]] == pytest.approx(0.0, abs=1e-9)
-    rest = tracker.ik.spring_rest_values()[-1]
+    rest = tracker.ik.equations.spring_rest_values()[-1]
     for side, expect in (("left", rest + achilles), ("right", rest)):
         length = q_r[smap.joint_pin_q[f"{side}-knee"]] + q_r[smap.joint_pin_q[f"{side}-tarsus"]]
         assert length == pytest.approx(expect, abs=1e-9)

@@ -59,7 +59,8 @@ from scipy.linalg.lapack import dgesv as _dgesv
 
 from amlip_qp.alip import other_side
 from amlip_qp.control.pbc.gains import PBCGains, default_gains
-from amlip_qp.control.pbc.ik import IKSettings, IterativeIK
+from amlip_qp.control.pbc.ik import IterativeIK
+from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.robots.outputs import OutputMap
@@ -108,7 +109,7 @@ class PBCTracker(Tracker):
         self._layout: dict[str, _Layout] = {}
         g = self.gains
         for side in robot.foot_sides:
-            ctrl = self.ik.controlled_actuated(side)
+            ctrl = self.ik.equations.controlled_actuated(side)
             swing_side = other_side(side)
             swing_mask = np.array([act.joint_names[k].startswith(swing_side) for k in ctrl], dtype=bool)
             kp = np.where(swing_mask, g.kp_swing_ps2, g.kp_stance_ps2)
@@ -141,12 +142,12 @@ class PBCTracker(Tracker):
         self._torso_rows = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
         self._rhs_comp = np.zeros(nv)
         # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
-        self._spring_rest = self.ik.spring_rest_values()
+        self._spring_rest = self.ik.equations.spring_rest_values()
         # Per stance: the held springs whose deflection the model gives, in the order of
         # spring_deflections_rad (that leg's joints, then its couplings with a spring).
         self._spring_idx = {
             side: np.array(
-                [k for k, s in enumerate(self.ik.held_springs)
+                [k for k, s in enumerate(self.ik.equations.held_springs)
                  if s.side == side and (s.kind == "joint" or s.stiffness > 0)],
                 dtype=int,
             )  # fmt: skip
