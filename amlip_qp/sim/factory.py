@@ -12,11 +12,15 @@ from __future__ import annotations
 import functools
 import importlib
 import inspect
+from typing import TYPE_CHECKING
 
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.harness import RunResult, SensorNoise, Simulation, TickCallback
 from amlip_qp.sim.scenarios import Scenario
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
 
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
@@ -26,7 +30,7 @@ TRACKER_MODULES: dict[str, str] = {
 
 
 @functools.lru_cache(maxsize=None)
-def load(robot_name: str):
+def load(robot_name: str) -> Robot:
     """The :class:`~amlip_qp.robots.robot.Robot` named ``robot_name`` (loaded once per process)."""
     from amlip_qp.robots import load_robot
 
@@ -54,7 +58,7 @@ def tracker_class(name: str) -> type[Tracker]:
     raise InputError(f"the {name!r} tracker is not available: {module_name} defines no Tracker named {name!r}")
 
 
-def make_tracker(name: str, robot) -> Tracker:
+def make_tracker(name: str, robot: Robot) -> Tracker:
     """A new tracker ``name`` for ``robot`` (constructed as ``cls(robot)``)."""
     return tracker_class(name)(robot)
 

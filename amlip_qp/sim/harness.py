@@ -24,6 +24,7 @@ from amlip_qp.control.walking.controller import StepRecord, WalkingController
 from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import state as S
+from amlip_qp.robots.robot import Robot
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
@@ -178,7 +179,7 @@ class Simulation:
 
     def __init__(
         self,
-        robot,
+        robot: Robot,
         controller: WalkingController,
         command_fn: Callable[[float], Command],
         pushes: tuple[Push, ...] | list[Push] = (),

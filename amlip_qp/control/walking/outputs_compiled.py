@@ -17,6 +17,11 @@ The hip-yaw outputs are joint coordinates and stay in Python.
 
 The source depends only on the robot's layout and ``nv``: it is compiled
 once into the codegen cache (see :mod:`amlip_qp.codegen.runtime`).
+
+It lives in the walking loop: it needs CasADi and the codegen runtime, which
+``robots`` may not import, and the walking controller is what installs it
+(``WalkingController(output_backend="c")``); every tracker then reads it
+through ``kin.outputs``.
 """
 
 from __future__ import annotations
