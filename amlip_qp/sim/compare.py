@@ -27,7 +27,7 @@ from typing import Any, Callable
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import CompareRanges, get_profile
+from amlip_qp.profiles import ROBOT_NAMES, CompareRanges, get_profile
 from amlip_qp.sim.harness import Push, RunResult, SensorNoise
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, get_scenario
 from amlip_qp.sim.summary import heading_frame_xy, summarize
@@ -432,4 +432,9 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d = asdict(settings)
     d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
+    # the per-robot ranges of the profiles, as (robot, value) pairs
+    d.update(
+        ramp_end_mps=tuple((r, _ranges(r).ramp_end_mps) for r in ROBOT_NAMES),
+        push_max_impulse_Ns=tuple((r, _ranges(r).push_max_impulse_Ns) for r in ROBOT_NAMES),
+    )
     return d
