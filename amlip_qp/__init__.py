@@ -12,7 +12,6 @@ The layers, from the bottom up:
 from amlip_qp.exceptions import (
     AmlipError,
     CodegenError,
-    ControllerError,
     InputError,
     MJCFError,
     ModelFileError,
@@ -25,7 +24,6 @@ __version__ = "0.1.0"
 __all__ = [
     "AmlipError",
     "CodegenError",
-    "ControllerError",
     "InputError",
     "MJCFError",
     "ModelFileError",

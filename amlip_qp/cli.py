@@ -11,16 +11,14 @@ to stderr, never a traceback.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib
 import math
-import os
 import re
 import sys
-from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 
-from amlip_qp.exceptions import AmlipError, InputError, ModelFileError, MJCFError, UnknownRobotError
+from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
+from amlip_qp.profiles import ROBOT_NAMES
 
 PROG = "amlip-qp"
 
@@ -44,7 +42,7 @@ class _Parser(argparse.ArgumentParser):
         # argparse consults this (private) matcher to tell negative numbers from options.
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
-    def error(self, message: str) -> None:  # noqa: D401 (argparse API)
+    def error(self, message: str) -> None:
         sys.stderr.write(f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
         raise SystemExit(2)
 
@@ -94,15 +92,15 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument("--ticks", type=_positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
-    b.set_defaults(func=_handler("amlip_qp.qp.cli:run_bench"))
+    b.set_defaults(func=_handler("amlip_qp.sim.bench_qp:run_bench"))
 
     _add_walk(sub)
     _add_compare(sub)
     return parser
 
 
-#: Robots and trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import).
-_ROBOTS = ("cassie", "rabbit")
+#: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
+#: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
 _TRACKERS = ("pbc", "qp")
 
 
@@ -115,7 +113,7 @@ def _add_walk(sub) -> None:
         "(amlip_qp.profiles.CommandBounds); output paths are checked before the run. "
         "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
     )
-    p.add_argument("--robot", choices=_ROBOTS, default=None, help="robot (default cassie, or the scenario's)")
+    p.add_argument("--robot", choices=ROBOT_NAMES, default=None, help="robot (default cassie, or the scenario's)")
     p.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
     p.add_argument("--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)")
     speed = p.add_mutually_exclusive_group()
@@ -154,7 +152,7 @@ def _add_compare(sub) -> None:
         description="Run both trackers on the same scenarios with the same seed and print one table row per "
         "robot and tracker (see docs/SUMMARY_SCHEMA.md for the definitions).",
     )
-    p.add_argument("--robots", type=_name_list(_ROBOTS), default=["cassie", "rabbit"], metavar="R1,R2", help="robots (default cassie,rabbit)")
+    p.add_argument("--robots", type=_name_list(ROBOT_NAMES), default=list(ROBOT_NAMES), metavar="R1,R2", help=f"robots (default {','.join(ROBOT_NAMES)})")
     p.add_argument("--trackers", type=_name_list(_TRACKERS), default=list(_TRACKERS), metavar="T1,T2", help="trackers (default pbc,qp)")
     p.add_argument(
         "--scenario",
@@ -244,53 +242,6 @@ def _int_at_least(minimum: int, what: str):
 
 _positive_int = _int_at_least(1, "positive integer")
 _non_negative_int = _int_at_least(0, "non-negative integer")
-
-
-def check_output_path(option: str, path: str | None, create_folder: bool = False) -> None:
-    """Refuse, before any work, an output ``path`` that cannot be written (``None`` and ``'-'`` pass).
-
-    A new file is created and removed again; an existing regular file is
-    opened for appending (its content is kept); other existing files (a
-    device, a pipe) must be writable by the user. With ``create_folder`` a
-    missing parent folder is created, otherwise it is an error.
-
-    Raises:
-        InputError: Naming ``option``, the path and what to do.
-    """
-    if path is None or path == "-":
-        return
-    target = Path(path).expanduser()
-    if target.is_dir():
-        raise InputError(f"{option} {path}: is a folder; give a file name")
-    folder = target.parent
-    if create_folder and not folder.exists():
-        try:
-            folder.mkdir(parents=True)
-        except OSError as exc:
-            raise InputError(f"{option} {path}: cannot create the folder {folder} ({exc.strerror or exc}); give a writable path") from None
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"{option} {path}: {folder} is a file, not a folder; give a path in a folder")
-    if not folder.is_dir():
-        raise InputError(f"{option} {path}: folder {folder} does not exist; create it or give another path")
-    try:
-        if not target.exists():
-            os.close(os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL))
-            target.unlink()
-        elif target.is_file():
-            os.close(os.open(target, os.O_WRONLY | os.O_APPEND))
-        elif not os.access(target, os.W_OK):
-            raise PermissionError(13, "Permission denied")
-    except OSError as exc:
-        raise InputError(f"{option} {path}: cannot write there ({exc.strerror or exc}); give a writable path") from None
-
-
-@contextlib.contextmanager
-def writing(option: str, path: str) -> Iterator[None]:
-    """Turn an :class:`OSError` raised while writing ``path`` into an :class:`InputError` naming ``option``."""
-    try:
-        yield
-    except OSError as exc:
-        raise InputError(f"{option} {path}: writing failed ({exc.strerror or exc}); give a writable path") from exc
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -55,7 +55,3 @@ class QPError(AmlipError):
         super().__init__(message)
         self.problem = problem
         self.status = status
-
-
-class ControllerError(AmlipError):
-    """The walking controller cannot continue (for example a fall was detected)."""

@@ -267,7 +267,10 @@ PROFILES: dict[str, RobotProfile] = {
         gait=GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
         bounds=CommandBounds(vx_mps=(-1.0, 2.5), vy_max_mps=0.5, turn_rate_max_radps=math.radians(60.0)),
         shaping=CommandShaping(vx_accel_mps2=0.5, vy_accel_mps2=0.5, turn_accel_radps2=math.radians(60.0)),
-        tracker_configs={"qp": "amlip_qp.control.wbc.config:CASSIE_CONFIG"},
+        tracker_configs={
+            "pbc": "amlip_qp.control.pbc.gains:CASSIE_GAINS",
+            "qp": "amlip_qp.control.wbc.config:CASSIE_CONFIG",
+        },
         compare=CompareRanges(
             nominal_scenario="cassie-1mps", ramp_end_mps=2.1, push_max_impulse_Ns=60.0, relative_cost=3.0
         ),
@@ -280,7 +283,10 @@ PROFILES: dict[str, RobotProfile] = {
         gait=GaitSettings(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, step_width_m=0.0),
         bounds=CommandBounds(vx_mps=(-0.5, 1.5), vy_max_mps=0.0, turn_rate_max_radps=0.0),
         shaping=CommandShaping(vx_accel_mps2=0.33, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
-        tracker_configs={"qp": "amlip_qp.control.wbc.config:RABBIT_CONFIG"},
+        tracker_configs={
+            "pbc": "amlip_qp.control.pbc.gains:RABBIT_GAINS",
+            "qp": "amlip_qp.control.wbc.config:RABBIT_CONFIG",
+        },
         compare=CompareRanges(nominal_scenario="rabbit-0.5mps", ramp_end_mps=1.5, push_max_impulse_Ns=40.0),
     ),
 }

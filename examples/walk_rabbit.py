@@ -16,7 +16,7 @@ import argparse
 from pathlib import Path
 
 from amlip_qp import load_robot
-from amlip_qp.control.controller import WalkingController
+from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.robots import RobotKinematics
 from amlip_qp.sim import summary
 from amlip_qp.sim.factory import make_tracker

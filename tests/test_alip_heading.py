@@ -1,4 +1,6 @@
-"""Tests of amlip_qp.alip.heading: heading frames, next heading and the hip-yaw split."""
+"""Tests of amlip_qp.alip.heading: heading frames and the hip-yaw split."""
+
+import math
 
 import numpy as np
 import pytest
@@ -22,9 +24,18 @@ def test_rotations_round_trip_and_axes():
     assert heading.yaw_of([0.0, 2.0]) == pytest.approx(np.pi / 2)
 
 
-def test_next_heading_and_split():
-    assert heading.next_heading(0.2, 0.5, 0.4) == pytest.approx(0.4)
-    assert heading.next_heading(0.2, -1.0, 0.3) == pytest.approx(-0.1)
+def test_world_to_heading_is_the_formula_the_planner_and_output_map_use():
+    """The validated rotation and the unchecked formula give the same bits."""
+    from amlip_qp.alip.formulas import world_to_heading_xy
+
+    D, x, y = 0.7, 1.3, -0.4
+    assert tuple(heading.world_to_heading([x, y], D)) == world_to_heading_xy(x, y, math.cos(D), math.sin(D))
+    # the heading frame's x axis is (cos D, sin D): a world vector along it has no y component
+    hx, hy = world_to_heading_xy(math.cos(D), math.sin(D), math.cos(D), math.sin(D))
+    assert hx == pytest.approx(1.0) and hy == pytest.approx(0.0, abs=1e-15)
+
+
+def test_hip_yaw_split():
     st, sw = heading.hip_yaw_targets(0.3)
     assert (st, sw) == (pytest.approx(-0.15), pytest.approx(0.15))
     assert sw - st == pytest.approx(0.3)
@@ -33,8 +44,6 @@ def test_next_heading_and_split():
 @pytest.mark.parametrize(
     "call, match",
     [
-        (lambda: heading.next_heading(0.0, 1.0, 0.0), "T_s.*must be > 0"),
-        (lambda: heading.next_heading(0.0, np.nan, 0.3), "turn_rate_radps must be finite"),
         (lambda: heading.heading_to_world([1.0, 2.0, 3.0], 0.0), r"shape \(2,\)"),
         (lambda: heading.world_to_heading([1.0, np.inf], 0.0), "xy_world must be finite"),
         (lambda: heading.rotation(np.inf), "heading_rad must be finite"),

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import types
 
 import numpy as np
 import pytest
@@ -34,9 +33,10 @@ def no_simulation(monkeypatch):
     monkeypatch.setattr(factory, "run_scenario", _simulated)
     monkeypatch.setattr(compare, "run_comparison", _simulated)
     monkeypatch.setattr(codegen_bench, "run_benchmark", _simulated)
-    fake_qp_bench = types.ModuleType("amlip_qp.qp.bench")
-    fake_qp_bench.run = fake_qp_bench.format_report = _simulated
-    monkeypatch.setitem(sys.modules, "amlip_qp.qp.bench", fake_qp_bench)
+    from amlip_qp.sim import bench_qp
+
+    monkeypatch.setattr(bench_qp, "run", _simulated)
+    monkeypatch.setattr(bench_qp, "format_report", _simulated)
 
 
 def _main(argv, capsys):
@@ -201,22 +201,3 @@ def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
     code, out, err = _main(["walk"], capsys)
     assert code == 2
     assert err == "amlip-qp: error: /data/run.npz: No space left on device; check the path, its folder and the free space\n"
-
-
-def test_check_output_path_keeps_files_and_creates_folders_only_when_asked(tmp_path):
-    from amlip_qp.exceptions import InputError
-
-    existing = tmp_path / "kept.json"
-    existing.write_text("old\n")
-    cli.check_output_path("--json", str(existing))
-    assert existing.read_text() == "old\n"  # opened for appending, not truncated
-    new = tmp_path / "new.json"
-    cli.check_output_path("--json", str(new))
-    assert not new.exists()  # the probe file is removed again
-    nested = tmp_path / "a" / "b" / "fig.png"
-    with pytest.raises(InputError, match="does not exist"):
-        cli.check_output_path("--plot", str(nested))
-    cli.check_output_path("--plot", str(nested), create_folder=True)
-    assert nested.parent.is_dir() and not nested.exists()
-    cli.check_output_path("--json", None)
-    cli.check_output_path("--json", "-")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amlip_qp.control.controller import WalkingController
+from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.control.wbc.config import CASSIE_CONFIG
 from amlip_qp.control.wbc.tracker import QPTracker
@@ -138,7 +138,7 @@ def test_nan_state_through_the_controller_never_gives_nan_torques():
 
 
 def test_bench_reports_every_solver_on_recorded_problems(walk):
-    from amlip_qp.qp.bench import bench_solvers, format_report
+    from amlip_qp.sim.bench_qp import bench_solvers, format_report
 
     _, tracker, _ = walk
     problems = [p for p, _ in tracker.recorded[::20]]

@@ -10,6 +10,7 @@ import pytest
 
 from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, UnknownRobotError
 from amlip_qp.paths import MODELS_DIR
+from amlip_qp.profiles import PROFILES, get_profile
 from amlip_qp.robots import load_robot
 
 CASSIE_XML = MODELS_DIR / "cassie.xml"
@@ -51,16 +52,25 @@ def test_new_data(rabbit):
     assert rabbit.new_pin_data() is not rabbit.new_pin_data()
     with pytest.raises(InputError, match="no keyframe named 'sit'"):
         rabbit.new_mj_data("sit")
-    assert rabbit.other_side("left") == "right"
-    with pytest.raises(InputError, match="side"):
-        rabbit.other_side("middle")
 
 
 def test_path_and_name_are_equivalent(rabbit):
     by_path = load_robot(MODELS_DIR / "rabbit.xml")
     assert by_path.name == "rabbit" and by_path.nv == rabbit.nv
+    assert by_path.profile is rabbit.profile is get_profile("rabbit")  # the bundled file: its profile
     assert load_robot(str(MODELS_DIR / "rabbit.xml")).mass_kg == rabbit.mass_kg
     assert load_robot("  Rabbit ").name == "rabbit"
+
+
+def test_bundled_robots_are_the_profiles_and_a_copy_elsewhere_has_no_profile(rabbit, tmp_path):
+    from amlip_qp.robots import KNOWN_ROBOTS
+
+    assert {n: p.name for n, p in KNOWN_ROBOTS.items()} == {n: pr.model_file for n, pr in PROFILES.items()}
+    copy = tmp_path / "rabbit.xml"
+    copy.write_text((MODELS_DIR / "rabbit.xml").read_text())
+    other = load_robot(copy)
+    assert other.name == "rabbit" and other.nv == rabbit.nv
+    assert other.profile is None  # not the bundled file: its facts come from the model alone
 
 
 def test_lazy_top_level_export():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,8 +10,10 @@ import pinocchio as pin
 import pytest
 from scipy.spatial.transform import Rotation
 
-from amlip_qp.exceptions import InputError
+from amlip_qp.alip import other_side
+from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.robots import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap, RobotKinematics, load_robot
+from amlip_qp.robots.outputs import output_layout
 from robot_states import ROBOTS
 
 
@@ -38,6 +41,21 @@ def test_layout(robot):
     omap = OutputMap(robot)
     expect = CASSIE_OUTPUTS if robot.is_floating else PLANAR_OUTPUTS
     assert omap.names == expect and omap.size == len(expect)
+    # the layout is the robot profile's, also the planner's robot name
+    assert omap.layout == output_layout(robot) == robot.profile.output_layout == robot.name
+    if omap.layout == "cassie":
+        assert omap.yaw_q_idx["left"] == robot.state_map.joint_pin_q["left-hip-yaw"]
+        assert omap.yaw_v_idx["right"] == robot.state_map.joint_pin_v["right-hip-yaw"]
+    else:
+        assert omap.yaw_q_idx == omap.yaw_v_idx == {}
+
+
+def test_a_model_without_profile_gets_the_layout_it_fits_and_a_profile_must_fit(robot):
+    assert output_layout(dataclasses.replace(robot, profile=None)) == robot.name
+    other = "rabbit" if robot.name == "cassie" else "cassie"
+    wrong = dataclasses.replace(robot.profile, output_layout=other)
+    with pytest.raises(MJCFError, match=f"names the output layout '{other}'"):
+        output_layout(dataclasses.replace(robot, profile=wrong))
 
 
 def test_values_follow_the_definitions(robot):
@@ -48,7 +66,7 @@ def test_values_follow_the_definitions(robot):
         kin.update(q, v)
         D = rng.uniform(-np.pi, np.pi)
         for st in robot.foot_sides:
-            sw = robot.other_side(st)
+            sw = other_side(st)
             y, J, jdv = kin.outputs(st, D)
             c, r_st, r_sw = kin.com(), kin.contact_position(st), kin.contact_position(sw)
             xD, yD = np.array([np.cos(D), np.sin(D), 0]), np.array([-np.sin(D), np.cos(D), 0])
@@ -146,7 +164,7 @@ def test_position_rows_are_the_plain_formulas_bit_for_bit(robot):
         D = float(rng.uniform(-np.pi, np.pi))
         cD, sD = math.cos(D), math.sin(D)  # what evaluate uses
         for st in robot.foot_sides:
-            sw = robot.other_side(st)
+            sw = other_side(st)
             y, J, jdv = kin.outputs(st, D)
             c, Jc, dc = kin.com(), kin.com_jacobian(), kin.com_jdot_v()
             p_st, J_st, d_st = c - kin.contact_position(st), Jc - kin.contact_jacobian(st), dc - kin.contact_jdot_v(st)

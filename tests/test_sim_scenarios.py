@@ -7,7 +7,8 @@ import math
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.scenarios import DEFAULT_GAITS, SCENARIOS, Scenario, SpeedProfile, get_scenario
+from amlip_qp.profiles import PROFILES
+from amlip_qp.sim.scenarios import SCENARIOS, Scenario, SpeedProfile, get_scenario
 
 
 def test_speed_profile_parse_and_interpolate():
@@ -28,9 +29,11 @@ def test_speed_profile_rejects_bad_text(text):
 def test_named_scenarios_are_valid_and_known():
     assert {"cassie-in-place", "cassie-1mps", "cassie-ramp-2.1", "cassie-push", "rabbit-0.5mps"} <= set(SCENARIOS)
     for name, sc in SCENARIOS.items():
-        assert sc.name == name and sc.robot in DEFAULT_GAITS and sc.duration_s > 0
+        assert sc.name == name and sc.robot in PROFILES and sc.duration_s > 0
         cmd = sc.command(sc.duration_s)
         assert cmd.step_time_s == sc.gait_settings.step_time_s
+        if sc.gait is None:  # the robot's gait comes from its profile
+            assert sc.gait_settings is PROFILES[sc.robot].gait
         if sc.robot == "rabbit":
             assert cmd.vy_mps == 0.0 and cmd.turn_rate_radps == 0.0 and cmd.step_width_m == 0.0
     assert get_scenario("cassie-ramp-2.1").command(15.0).vx_mps == pytest.approx(2.1)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.control.controller import StepRecord
+from amlip_qp.control.walking.controller import StepRecord
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.compare import format_table, highest_steady_speed, max_survived_impulse
 from amlip_qp.sim.harness import RunResult

@@ -26,7 +26,7 @@ from amlip_qp.alip.desired import (
     stance_sign,
 )
 from amlip_qp.alip.formulas import GRAVITY_MPS2
-from amlip_qp.alip.heading import heading_to_world, hip_yaw_targets, next_heading, rotation, world_to_heading, yaw_of
+from amlip_qp.alip.heading import heading_to_world, hip_yaw_targets, rotation, world_to_heading, yaw_of
 from amlip_qp.alip.kalman import AngularMomentumFilter, MomentumFilter1D
 from amlip_qp.alip.kernels import RABBIT_FROM_CASSIE, alip_plan, swing_reference
 from amlip_qp.alip.lip import (
@@ -68,7 +68,6 @@ __all__ = [
     "hip_yaw_targets",
     "mean_step_velocity",
     "mean_to_end_factor",
-    "next_heading",
     "omega",
     "other_side",
     "output_names",

@@ -118,6 +118,16 @@ def desired_L_world(vx_mps, vy_mps, W_m, T_s, mass_kg, H_m, next_stance_sign, he
     return c * Lx_h - s * Ly_h, s * Lx_h + c * Ly_h
 
 
+def world_to_heading_xy(x, y, cos_D, sin_D):
+    """World ``(x, y)`` components (any unit) in the heading frame ``D``: ``(c x + s y, -s x + c y)``.
+
+    ``cos_D``, ``sin_D`` are ``cos D`` and ``sin D``: callers that rotate
+    several vectors by one heading compute them once. The one definition of
+    this rotation, for the planner, the output map and its generated C.
+    """
+    return cos_D * x + sin_D * y, -sin_D * x + cos_D * y
+
+
 def hip_yaw_split(turn_rad):
     """A step's turn ``dD`` (rad) split between the hip yaws (paper section 4):
     ``(stance, swing) = (-dD/2, +dD/2)``; the swing foot lands along ``D_{k+1}``."""

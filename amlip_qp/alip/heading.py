@@ -37,20 +37,7 @@ def world_to_heading(xy_world, heading_rad: float) -> np.ndarray:
     """Rotate a 2-vector (any unit) from world axes into the heading frame ``D = heading_rad``."""
     v = C.vector("xy_world", xy_world, 2)
     C.finite("heading_rad", heading_rad)
-    c, s = math.cos(heading_rad), math.sin(heading_rad)
-    return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1]])
-
-
-def next_heading(heading_rad: float, turn_rate_radps: float, T_s: float) -> float:
-    """Heading of the next step, ``D_{k+1} = D_k + turn_rate * T``, in rad.
-
-    ``turn_rate_radps`` in rad/s (positive = counter-clockwise seen from above,
-    i.e. turning left), ``T_s`` the step duration in s (> 0).
-    """
-    C.finite("heading_rad", heading_rad)
-    C.finite("turn_rate_radps", turn_rate_radps)
-    C.positive("T_s (step duration)", T_s, "s")
-    return float(heading_rad + turn_rate_radps * T_s)
+    return np.array(F.world_to_heading_xy(v[0], v[1], math.cos(heading_rad), math.sin(heading_rad)))
 
 
 def hip_yaw_targets(turn_rad: float) -> tuple[float, float]:

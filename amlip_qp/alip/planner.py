@@ -54,7 +54,7 @@ import numpy as np
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
-from amlip_qp.alip.formulas import GRAVITY_MPS2
+from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
 from amlip_qp.exceptions import InputError
 
 #: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
@@ -459,8 +459,7 @@ class Planner:
         y2, y3, px_w, py_w = yl[2], yl[3], yl[6], yl[7]
 
         # p_sw_des into the current heading frame D_k for the swing-x/y references.
-        c, sn = math.cos(self._heading), math.sin(self._heading)
-        p_sw_h = np.array([c * px_w + sn * py_w, -sn * px_w + c * py_w])
+        p_sw_h = np.array(world_to_heading_xy(px_w, py_w, math.cos(self._heading), math.sin(self._heading)))
         turn = heading_next - self._heading
         ur = O.pack_swing_reference_input(self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref)
         yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)

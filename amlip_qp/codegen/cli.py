@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from amlip_qp import paths
+import amlip_qp.paths as paths
 from amlip_qp.exceptions import CodegenError, InputError
 
 
@@ -71,8 +71,8 @@ def run_codegen(args: argparse.Namespace) -> int:
 
 def run_bench(args: argparse.Namespace) -> int:
     """Time c-fast / casadi-function / numpy; print a table and optionally JSON (``--json PATH|-``)."""
-    from amlip_qp.cli import check_output_path, writing
     from amlip_qp.codegen.bench import format_table, run_benchmark
+    from amlip_qp.output_paths import check_output_path, writing
 
     check_output_path("--json", args.json)
     result = run_benchmark(calls=args.calls)

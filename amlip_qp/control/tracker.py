@@ -4,17 +4,21 @@ A tracker turns the planner's reference outputs ``h_d(s)`` (with their time
 derivatives) into joint torques for the actuated joints, given the state
 estimate in Pinocchio coordinates (through the controller's kinematics
 object, updated once per tick). The paper's baseline (iterative IK plus a
-passivity-based controller, :mod:`amlip_qp.control.pbc`) and the task-space
-QP (:mod:`amlip_qp.control.wbc.tracker`) both implement it, so the walking loop
-(:class:`amlip_qp.control.controller.WalkingController`) runs either one.
+passivity-based controller, :mod:`amlip_qp.control.pbc`) and the whole-body
+QP both implement it, so the walking loop
+(:class:`amlip_qp.control.walking.controller.WalkingController`) runs either one.
 """
 
 from __future__ import annotations
 
 import abc
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
 
 
 @dataclass
@@ -30,8 +34,6 @@ class TrackingTarget:
         ddh_d: Their second time derivatives (m/s^2 or rad/s^2).
         swing_contact_weight: 0 while the swing foot is in the air, rising to 1
             when it touches down: trackers use it to ramp contact forces in.
-        stance_knee_offset_rad: Offset added to the stance knee reference to
-            compensate the spring deflection (0 for robots without springs).
     """
 
     stance: str
@@ -41,12 +43,6 @@ class TrackingTarget:
     dh_d: np.ndarray
     ddh_d: np.ndarray
     swing_contact_weight: float = 0.0
-    stance_knee_offset_rad: float = 0.0
-
-    @property
-    def swing(self) -> str:
-        """The swing side."""
-        return "right" if self.stance == "left" else "left"
 
 
 @dataclass
@@ -78,7 +74,7 @@ class Tracker(abc.ABC):
     name: str = "tracker"
 
     @abc.abstractmethod
-    def compute(self, kin, target: TrackingTarget) -> TrackerResult:
+    def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:
         """Torques for the state in ``kin`` and the references in ``target``.
 
         Args:

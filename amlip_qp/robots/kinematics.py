@@ -391,7 +391,7 @@ class RobotKinematics:
         """The evaluator of :meth:`outputs`: an :class:`~amlip_qp.robots.outputs.OutputMap`
         (the default, created on first use) or a drop-in with the same
         ``names`` and ``evaluate(kin, stance, heading_rad)``, e.g. the compiled
-        :class:`~amlip_qp.control.outputs_compiled.CompiledOutputMap`."""
+        :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`."""
         if self._output_map is None:
             from amlip_qp.robots.outputs import OutputMap
 

@@ -15,14 +15,12 @@ import numpy as np
 
 from amlip_qp.exceptions import MJCFError, ModelFileError, UnknownRobotError
 from amlip_qp.paths import MODELS_DIR
+from amlip_qp.profiles import PROFILES
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
 
-#: Bundled robots: name -> MJCF file.
-KNOWN_ROBOTS: dict[str, Path] = {
-    "cassie": MODELS_DIR / "cassie.xml",
-    "rabbit": MODELS_DIR / "rabbit.xml",
-}
+#: Bundled robots: name -> MJCF file (the profiles' ``model_file``).
+KNOWN_ROBOTS: dict[str, Path] = {name: MODELS_DIR / profile.model_file for name, profile in PROFILES.items()}
 
 #: Name of the keyframe used as the nominal standing configuration.
 STAND_KEYFRAME = "stand"
@@ -382,4 +380,5 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
         dof_springref=ref,
         dof_damping=damp,
         dof_armature=arm,
+        profile=PROFILES[name] if name in KNOWN_ROBOTS and path == KNOWN_ROBOTS[name].resolve() else None,
     )

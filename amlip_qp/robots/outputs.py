@@ -1,12 +1,14 @@
 """The output map ``h_0(q)`` of docs/ARCHITECTURE.md, with its Jacobian and drift.
 
-Two layouts, chosen from the model:
+Two layouts (:func:`output_layout`: a bundled robot's profile names it, any
+other model gets the one it fits), named like the planner's references
+(:data:`amlip_qp.alip.outputs.ROBOT_OUTPUTS`):
 
-- ``cassie`` (9 outputs; needs ``{side}-hip-yaw`` joints and toe/heel sites):
-  ``torso_pitch, torso_roll, stance_hip_yaw, swing_hip_yaw,
+- ``cassie`` (9 outputs; needs a free root, ``{side}-hip-yaw`` joints and
+  toe/heel sites): ``torso_pitch, torso_roll, stance_hip_yaw, swing_hip_yaw,
   com_z_over_stance, com_x_over_swing, com_y_over_swing, com_z_over_swing,
   swing_toe_pitch``.
-- ``planar`` (4 outputs; a planar root moving in the x-z plane, e.g. Rabbit):
+- ``rabbit`` (4 outputs; a planar root moving in the x-z plane):
   ``torso_pitch, com_z_over_stance, com_x_over_swing, com_z_over_swing``.
 
 Angles in rad, distances in m. ``heading_rad`` is the step's heading ``D``;
@@ -28,11 +30,18 @@ results are the same to the last bit.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.alip import other_side
 from amlip_qp.alip import outputs as _alip_outputs
+from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError, MJCFError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 # One definition of the output names, shared with the planner's references.
 #: Cassie's nine outputs, in order.
@@ -113,6 +122,41 @@ def _rotation_entry_z(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
     return (r2, w0 * r1 - w1 * r0, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0))
 
 
+def _fitting_layout(robot: Robot) -> str | None:
+    """The layout the model fits (``"cassie"``, ``"rabbit"``), or ``None``."""
+    has_yaw = all(f"{s}-hip-yaw" in robot.state_map.joint_pin_v for s in robot.foot_sides)
+    has_blade = all(len(robot.force_sites[s]) == 2 for s in robot.foot_sides)
+    if robot.is_floating and has_yaw and has_blade:
+        return "cassie"
+    if robot.is_planar:
+        return "rabbit"
+    return None
+
+
+def output_layout(robot: Robot) -> str:
+    """The output layout of ``robot``, ``"cassie"`` or ``"rabbit"`` (also the planner's robot name).
+
+    A bundled robot's comes from its profile (:mod:`amlip_qp.profiles`) and
+    must fit its model; any other model gets the layout it fits (module doc).
+
+    Raises:
+        MJCFError: The model fits no layout, or not its profile's.
+    """
+    fits = _fitting_layout(robot)
+    profile = robot.profile
+    if profile is not None and profile.output_layout != fits:
+        raise MJCFError(
+            f"{robot.path}: the {profile.name!r} profile names the output layout {profile.output_layout!r}, "
+            f"which this model does not fit (it fits {fits!r})"
+        )
+    if fits is None:
+        raise MJCFError(
+            f"{robot.path}: no output map: need a free root with {{side}}-hip-yaw joints and "
+            "toe/heel sites (Cassie layout), or a planar root (Rabbit layout)"
+        )
+    return fits
+
+
 class OutputMap:
     """``h_0(q)`` for one robot; evaluate on an updated :class:`RobotKinematics`.
 
@@ -120,32 +164,28 @@ class OutputMap:
     between threads.
 
     Attributes:
-        layout: ``"cassie"`` or ``"planar"``.
+        layout: ``"cassie"`` or ``"rabbit"`` (:func:`output_layout`).
         names: Output names, in order.
+        yaw_q_idx: Side -> Pinocchio ``q`` index of its hip-yaw joint (``cassie`` layout; empty otherwise).
+        yaw_v_idx: Side -> Pinocchio ``v`` index of its hip-yaw joint (``cassie`` layout; empty otherwise).
     """
 
-    def __init__(self, robot):
-        """Pick the layout from the model.
+    def __init__(self, robot: Robot):
+        """Pick the layout (:func:`output_layout`).
 
         Raises:
-            MJCFError: The model fits neither layout.
+            MJCFError: The model fits no layout, or not its profile's.
         """
         self.robot = robot
         smap = robot.state_map
-        has_yaw = all(f"{s}-hip-yaw" in smap.joint_pin_v for s in robot.foot_sides)
-        has_blade = all(len(robot.force_sites[s]) == 2 for s in robot.foot_sides)
-        if robot.is_floating and has_yaw and has_blade:
-            self.layout, self.names = "cassie", CASSIE_OUTPUTS
-            self._yaw_v = {s: smap.joint_pin_v[f"{s}-hip-yaw"] for s in robot.foot_sides}
-            self._yaw_q = {s: smap.joint_pin_q[f"{s}-hip-yaw"] for s in robot.foot_sides}
-        elif robot.is_planar:
-            self.layout, self.names = "planar", PLANAR_OUTPUTS
-        else:
-            raise MJCFError(
-                f"{robot.path}: no output map: need a free root with {{side}}-hip-yaw joints and "
-                "toe/heel sites (Cassie layout), or a planar root (Rabbit layout)"
-            )
-        self._swing_of = {s: robot.other_side(s) for s in robot.foot_sides}
+        self.layout = output_layout(robot)
+        self.names = _alip_outputs.ROBOT_OUTPUTS[self.layout]
+        self.yaw_q_idx: dict[str, int] = {}
+        self.yaw_v_idx: dict[str, int] = {}
+        if self.layout == "cassie":
+            self.yaw_v_idx = {s: smap.joint_pin_v[f"{s}-hip-yaw"] for s in robot.foot_sides}
+            self.yaw_q_idx = {s: smap.joint_pin_q[f"{s}-hip-yaw"] for s in robot.foot_sides}
+        self._swing_of = {s: other_side(s) for s in robot.foot_sides}
         nv = robot.nv
         # Scratch (overwritten by every evaluate): J_c - J_sw, J_toe - J_heel (3 x nv each),
         # the heading rotation [[cD, sD], [-sD, cD]] and its products with the first two rows of J_c - J_sw.
@@ -168,7 +208,7 @@ class OutputMap:
             raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
         return swing
 
-    def evaluate(self, kin, stance: str, heading_rad: float = 0.0):
+    def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Outputs, Jacobian and drift at the last ``kin.update``.
 
         Args:
@@ -209,8 +249,10 @@ class OutputMap:
         a_sw = kin.frame_jdot_v6(fid_sw).tolist()
         d_sw = (dc0 - a_sw[0], dc1 - a_sw[1], dc2 - a_sw[2])
         cD, sD = math.cos(heading_rad), math.sin(heading_rad)
-        ys = [p_st_z, cD * p_sw[0] + sD * p_sw[1]]
-        ds = [d_st_z, cD * d_sw[0] + sD * d_sw[1]]
+        p_sw_x, p_sw_y = world_to_heading_xy(p_sw[0], p_sw[1], cD, sD)
+        d_sw_x, d_sw_y = world_to_heading_xy(d_sw[0], d_sw[1], cD, sD)
+        ys = [p_st_z, p_sw_x]
+        ds = [d_st_z, d_sw_x]
 
         # Their Jacobian rows: c_z - r_st,z; (c - r_sw) . x_D; [(c - r_sw) . y_D]; c_z - r_sw,z.
         cassie = self.layout == "cassie"
@@ -224,8 +266,8 @@ class OutputMap:
         np.multiply(rot, J_csw[:2], out=prod)  # prod[i, j] = rot[i, j] * J_csw[j]
         if cassie:
             np.add(prod[:, 0], prod[:, 1], out=J[r_x : r_x + 2])  # x_D and y_D rows
-            ys.append(-sD * p_sw[0] + cD * p_sw[1])
-            ds.append(-sD * d_sw[0] + cD * d_sw[1])
+            ys.append(p_sw_y)
+            ds.append(d_sw_y)
         else:
             np.add(prod[0, 0], prod[0, 1], out=J[r_x])
         ys.append(p_sw[2])
@@ -244,7 +286,7 @@ class OutputMap:
         np.dot(pitch[2:5], Jw, out=J[0])
         np.dot(roll[2:5], Jw, out=J[1])
         # Hip yaws: joint coordinates.
-        yaw_q, yaw_v = self._yaw_q, self._yaw_v
+        yaw_q, yaw_v = self.yaw_q_idx, self.yaw_v_idx
         J[2, yaw_v[stance]] = 1.0
         J[3, yaw_v[swing]] = 1.0
         # Swing toe pitch from the blade vector d = toe - heel (m).

@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     import mujoco
     import pinocchio as pin
 
+    from amlip_qp.profiles import RobotProfile
     from amlip_qp.robots.state import StateMap
 
 #: The two foot sides, in the order used everywhere.
@@ -142,14 +143,17 @@ class Robot:
             (rad or m), shape (nv,).
         dof_damping: Joint damping per Pinocchio velocity index, shape (nv,).
         dof_armature: Rotor armature per Pinocchio velocity index, shape (nv,).
+        profile: The :class:`~amlip_qp.profiles.RobotProfile` of a bundled
+            robot (loaded by name or from its bundled file), ``None`` for any
+            other model: every robot-name-dependent fact comes from it.
     """
 
     name: str
     path: Path
-    mj_model: "mujoco.MjModel"
-    pin_model: "pin.Model"
-    pin_data: "pin.Data"
-    state_map: "StateMap"
+    mj_model: mujoco.MjModel
+    pin_model: pin.Model
+    pin_data: pin.Data
+    state_map: StateMap
     contact_sites: dict[str, str]
     contact_site_ids: dict[str, int]
     contact_frame_ids: dict[str, int]
@@ -175,6 +179,7 @@ class Robot:
     dof_damping: np.ndarray
     dof_armature: np.ndarray
     foot_sides: tuple[str, str] = field(default=FOOT_SIDES)
+    profile: RobotProfile | None = None
 
     @property
     def nq(self) -> int:
@@ -191,7 +196,7 @@ class Robot:
         """Number of actuators."""
         return len(self.actuated)
 
-    def new_mj_data(self, keyframe: str | None = None) -> "mujoco.MjData":
+    def new_mj_data(self, keyframe: str | None = None) -> mujoco.MjData:
         """A fresh ``mujoco.MjData``; set to the named keyframe if given (then forwarded)."""
         import mujoco
 
@@ -209,7 +214,7 @@ class Robot:
             mujoco.mj_forward(self.mj_model, data)
         return data
 
-    def new_pin_data(self) -> "pin.Data":
+    def new_pin_data(self) -> pin.Data:
         """A fresh ``pinocchio.Data`` for this robot's Pinocchio model."""
         return self.pin_model.createData()
 
@@ -219,11 +224,3 @@ class Robot:
         from amlip_qp.robots.passive import spring_rows
 
         return spring_rows(self)
-
-    def other_side(self, side: str) -> str:
-        """The opposite foot side of ``"left"`` / ``"right"``."""
-        from amlip_qp.exceptions import InputError
-
-        if side not in self.foot_sides:
-            raise InputError(f"side must be 'left' or 'right', got {side!r}")
-        return "right" if side == "left" else "left"

@@ -3,8 +3,8 @@
 Per robot and tracker, three experiments (independent runs, spread over
 ``jobs`` worker processes; each run is deterministic for its seed):
 
-1. the **nominal** scenario (default ``cassie-1mps`` / ``rabbit-0.5mps``,
-   at most 10 s):
+1. the **nominal** scenario (default: the robot profile's, ``cassie-1mps`` /
+   ``rabbit-0.5mps``, at most 10 s):
    the :mod:`~amlip_qp.sim.summary` metrics (velocity, foot-placement and
    end-of-step ``L`` errors, output tracking, torques, tick time);
 2. a **speed ramp**: :func:`highest_steady_speed`;
@@ -26,12 +26,10 @@ from typing import Any, Callable
 import numpy as np
 
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import ROBOT_NAMES, CompareRanges, get_profile
 from amlip_qp.sim.harness import Push, RunResult, SensorNoise
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, get_scenario
 from amlip_qp.sim.summary import heading_frame_xy, summarize
-
-#: Default nominal scenario per robot.
-NOMINAL_SCENARIOS: dict[str, str] = {"cassie": "cassie-1mps", "rabbit": "rabbit-0.5mps"}
 
 #: Push duration of the bisection, s.
 PUSH_DURATION_S = 0.2
@@ -43,28 +41,25 @@ PUSH_SURVIVE_S = 2.0
 
 @dataclass(frozen=True)
 class CompareSettings:
-    """Durations and search ranges of a comparison (SI units).
+    """Durations of a comparison (SI units); the per-robot search ranges are the
+    robot profiles' (:class:`amlip_qp.profiles.CompareRanges`).
 
     Attributes:
         nominal_duration_s: Cap on the nominal run's simulated time, s (``None``: the scenario's).
-        ramp_end_mps: Per robot, the speed the ramp reaches, m/s.
-        ramp_duration_s: Ramp time from 0 to ``ramp_end_mps`` (starting at 1 s), s.
+        ramp_duration_s: Ramp time from 0 to the profile's ``ramp_end_mps`` (starting at 1 s), s.
         ramp_hold_s: Time the final speed is held, s.
         push_time_s: When the push starts, s.
         push_survive_s: Time after the push's end the robot must stay up, s.
-        push_max_impulse_Ns: Per robot, the upper end of the bisection, N s.
         push_iterations: Bisection iterations per direction.
         window_s: Moving-mean window of the highest-steady-speed test, s.
         tolerance: Relative tolerance of the highest-steady-speed test.
     """
 
     nominal_duration_s: float | None = 10.0
-    ramp_end_mps: tuple[tuple[str, float], ...] = (("cassie", 2.1), ("rabbit", 1.5))
     ramp_duration_s: float = 7.0
     ramp_hold_s: float = 1.5
     push_time_s: float = PUSH_TIME_S
     push_survive_s: float = PUSH_SURVIVE_S
-    push_max_impulse_Ns: tuple[tuple[str, float], ...] = (("cassie", 60.0), ("rabbit", 40.0))
     push_iterations: int = 3
     window_s: float = 2.0
     tolerance: float = 0.10
@@ -133,13 +128,22 @@ def max_survived_impulse(survives: Callable[[float], bool], max_impulse_Ns: floa
 
 
 # ------------------------------------------------------------ scenarios
-def _lookup(pairs: tuple[tuple[str, float], ...], robot: str) -> float:
-    return dict(pairs)[robot]
+def _ranges(robot: str) -> CompareRanges:
+    """The robot profile's comparison ranges.
+
+    Raises:
+        UnknownRobotError: Not a bundled robot.
+        InputError: Its profile has no comparison ranges.
+    """
+    ranges = get_profile(robot).compare
+    if ranges is None:
+        raise InputError(f"robot {robot!r} has no comparison ranges in its profile (amlip_qp.profiles)")
+    return ranges
 
 
 def ramp_scenario(robot: str, settings: CompareSettings) -> Scenario:
     """0 m/s for 1 s, a linear ramp to the robot's ramp speed, then hold."""
-    v_end = _lookup(settings.ramp_end_mps, robot)
+    v_end = _ranges(robot).ramp_end_mps
     t1 = 1.0 + settings.ramp_duration_s
     return Scenario(
         f"{robot}-ramp-{v_end:g}",
@@ -160,12 +164,12 @@ def push_scenario(nominal: Scenario, impulse_Ns: float, axis: int, settings: Com
 
 
 def nominal_scenario(robot: str, names: list[str], settings: CompareSettings) -> Scenario:
-    """The robot's nominal scenario: the one in ``names`` for this robot, else :data:`NOMINAL_SCENARIOS`."""
+    """The robot's nominal scenario: the one in ``names`` for this robot, else its profile's."""
     chosen = [get_scenario(n) for n in names]
     mine = [s for s in chosen if s.robot == robot]
     if len(mine) > 1:
         raise InputError(f"give at most one --scenario per robot; got {', '.join(s.name for s in mine)} for {robot}")
-    sc = mine[0] if mine else get_scenario(NOMINAL_SCENARIOS[robot])
+    sc = mine[0] if mine else get_scenario(_ranges(robot).nominal_scenario)
     if settings.nominal_duration_s is not None:
         sc = sc.with_(duration_s=min(sc.duration_s, settings.nominal_duration_s))
     return sc
@@ -215,7 +219,7 @@ def _execute(task: _Task) -> dict[str, Any]:
             trials.append((impulse, not res.fell))
             return not res.fell
 
-        value, capped = max_survived_impulse(survives, _lookup(s.push_max_impulse_Ns, task.robot), s.push_iterations)
+        value, capped = max_survived_impulse(survives, _ranges(task.robot).push_max_impulse_Ns, s.push_iterations)
         prefix = "sagittal" if axis == 0 else "lateral"
         out = {
             f"max_{prefix}_impulse_Ns": value,
@@ -261,7 +265,7 @@ def build_tasks(
 def _expected_cost(task: _Task) -> float:
     """Rough relative cost (simulated seconds x robot weight) used to start long experiments first."""
     s = task.settings
-    weight = 3.0 if task.robot == "cassie" else 1.0
+    weight = _ranges(task.robot).relative_cost
     if task.kind.startswith("push"):
         return weight * (s.push_iterations + 1) * (s.push_time_s + PUSH_DURATION_S + s.push_survive_s)
     return weight * task.scenario.duration_s
@@ -390,7 +394,7 @@ def settings_from_args(args: argparse.Namespace) -> CompareSettings:
 
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
-    from amlip_qp.cli import check_output_path, writing
+    from amlip_qp.output_paths import check_output_path, writing
     from amlip_qp.sim import summary
 
     settings = settings_from_args(args)
@@ -441,4 +445,9 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d = asdict(settings)
     d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
+    # the per-robot ranges of the profiles, as (robot, value) pairs
+    d.update(
+        ramp_end_mps=tuple((r, _ranges(r).ramp_end_mps) for r in ROBOT_NAMES),
+        push_max_impulse_Ns=tuple((r, _ranges(r).push_max_impulse_Ns) for r in ROBOT_NAMES),
+    )
     return d

@@ -1,8 +1,8 @@
 """Assemble a closed loop (robot, tracker, controller, plant) from names.
 
-The trackers live in their own modules (:mod:`amlip_qp.control.pbc`,
-:mod:`amlip_qp.control.wbc.tracker`) and are imported only when asked for, so
-the CLI and the tests do not pay for (or depend on) a tracker they do not use.
+The trackers live in their own modules (:data:`TRACKER_MODULES`) and are
+imported only when asked for, so the CLI and the tests do not pay for (or
+depend on) a tracker they do not use.
 A tracker class is found in its module as the :class:`~amlip_qp.control.tracker.Tracker`
 subclass whose ``name`` attribute is the requested name.
 """
@@ -12,24 +12,25 @@ from __future__ import annotations
 import functools
 import importlib
 import inspect
+from typing import TYPE_CHECKING
 
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.harness import RunResult, SensorNoise, Simulation, TickCallback
 from amlip_qp.sim.scenarios import Scenario
 
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
+
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
-    "pbc": "amlip_qp.control.pbc",
+    "pbc": "amlip_qp.control.pbc.tracker",
     "qp": "amlip_qp.control.wbc.tracker",
 }
 
-#: Robots the walking commands support.
-ROBOTS: tuple[str, ...] = ("cassie", "rabbit")
-
 
 @functools.lru_cache(maxsize=None)
-def load(robot_name: str):
+def load(robot_name: str) -> Robot:
     """The :class:`~amlip_qp.robots.robot.Robot` named ``robot_name`` (loaded once per process)."""
     from amlip_qp.robots import load_robot
 
@@ -57,7 +58,7 @@ def tracker_class(name: str) -> type[Tracker]:
     raise InputError(f"the {name!r} tracker is not available: {module_name} defines no Tracker named {name!r}")
 
 
-def make_tracker(name: str, robot) -> Tracker:
+def make_tracker(name: str, robot: Robot) -> Tracker:
     """A new tracker ``name`` for ``robot`` (constructed as ``cls(robot)``)."""
     return tracker_class(name)(robot)
 
@@ -79,7 +80,7 @@ def build_simulation(
         noise: Sensor noise, or ``None`` for exact measurements.
         planner_backend: ``"c"`` (generated kernels) or ``"numpy"``.
     """
-    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
 
     robot = load(scenario.robot)

@@ -4,7 +4,7 @@ The harness is the only code that knows the plant. Every control tick it
 reads MuJoCo's state, converts it once to Pinocchio's convention
 (:mod:`amlip_qp.robots.state`), optionally adds sensor noise, reads the foot
 contact switches (normal force above a threshold), hands the
-:class:`~amlip_qp.control.estimator.Measurement` to the controller, turns the
+:class:`~amlip_qp.control.walking.estimator.Measurement` to the controller, turns the
 joint torques into actuator controls (``ctrl = tau / gear``), applies pushes
 on the base body, and steps MuJoCo.
 """
@@ -20,10 +20,11 @@ import mujoco
 import numpy as np
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.control.controller import StepRecord, WalkingController
-from amlip_qp.control.estimator import Measurement
+from amlip_qp.control.walking.controller import StepRecord, WalkingController
+from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import state as S
+from amlip_qp.robots.robot import Robot
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
@@ -178,7 +179,7 @@ class Simulation:
 
     def __init__(
         self,
-        robot,
+        robot: Robot,
         controller: WalkingController,
         command_fn: Callable[[float], Command],
         pushes: tuple[Push, ...] | list[Push] = (),

@@ -15,33 +15,8 @@ import numpy as np
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import RobotProfile, get_profile
+from amlip_qp.profiles import PROFILES, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.harness import Push
-
-
-@dataclass(frozen=True)
-class GaitSettings:
-    """The fixed gait parameters of a robot (SI units).
-
-    Attributes:
-        step_time_s: Step duration ``T``, s.
-        com_height_m: CoM height over the stance contact ``H``, m.
-        clearance_m: Swing clearance ``z_cl``, m.
-        step_width_m: Step width ``W`` for walking in place, m (0 for planar robots).
-    """
-
-    step_time_s: float
-    com_height_m: float
-    clearance_m: float
-    step_width_m: float
-
-
-#: Default gait per robot. Cassie's ``H`` is the CoM height over the foot
-#: ("toe") joint, the paper's contact point.
-DEFAULT_GAITS: dict[str, GaitSettings] = {
-    "cassie": GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
-    "rabbit": GaitSettings(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, step_width_m=0.0),
-}
 
 
 @dataclass(frozen=True)
@@ -98,7 +73,7 @@ class Scenario:
 
     Attributes:
         name: Identifier.
-        robot: ``"cassie"`` or ``"rabbit"``.
+        robot: A bundled robot's name (:data:`amlip_qp.profiles.PROFILES`).
         duration_s: Simulated time, s.
         vx: Forward speed profile (heading frame), m/s.
         vy_mps: Lateral speed (heading frame), m/s.
@@ -106,7 +81,7 @@ class Scenario:
         turn_start_s: Time the turn starts, s.
         turn_angle_rad: Total turn; the rate drops to 0 once reached (``inf`` = keep turning).
         pushes: Forces on the base.
-        gait: Gait parameters (``None``: the robot's default).
+        gait: Gait parameters (``None``: the robot's profile's).
         description: One line for people.
     """
 
@@ -123,8 +98,8 @@ class Scenario:
     description: str = ""
 
     def __post_init__(self):
-        if self.robot not in DEFAULT_GAITS:
-            raise InputError(f"unknown robot {self.robot!r} for a scenario; known: {', '.join(DEFAULT_GAITS)}")
+        if self.robot not in PROFILES:
+            raise InputError(f"unknown robot {self.robot!r} for a scenario; known: {', '.join(PROFILES)}")
         if not (self.duration_s > 0 and math.isfinite(self.duration_s)):
             raise InputError(f"scenario duration must be a positive number of seconds, got {self.duration_s!r}")
         for name in ("vy_mps", "turn_rate_radps", "turn_start_s"):
@@ -133,8 +108,8 @@ class Scenario:
 
     @property
     def gait_settings(self) -> GaitSettings:
-        """The gait used (the scenario's or the robot's default)."""
-        return self.gait or DEFAULT_GAITS[self.robot]
+        """The gait used (the scenario's, or the robot's profile's)."""
+        return self.gait or PROFILES[self.robot].gait
 
     def turn_rate_at(self, t_s: float) -> float:
         """Commanded turn rate at ``t_s``, rad/s."""

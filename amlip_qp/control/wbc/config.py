@@ -194,7 +194,7 @@ def default_config(robot: Robot) -> QPConfig:
     A bundled robot (its name in :data:`amlip_qp.profiles.PROFILES`) gets its
     profile's ``tracker_configs["qp"]``. A robot loaded from another MJCF file
     gets the configuration of the bundled robot whose output layout it shares
-    (:class:`~amlip_qp.robots.outputs.OutputMap`: the Cassie layout, or the
+    (:func:`~amlip_qp.robots.outputs.output_layout`: the Cassie layout, or the
     planar layout of Rabbit): the gains then fit its outputs one for one, but
     they were tuned for the bundled robot; tune a ``QPConfig`` for a new robot.
 
@@ -202,12 +202,12 @@ def default_config(robot: Robot) -> QPConfig:
         MJCFError: The robot has neither output layout.
     """
     from amlip_qp.profiles import PROFILES
-    from amlip_qp.robots.outputs import OutputMap
+    from amlip_qp.robots.outputs import output_layout
 
-    profile = PROFILES.get(robot.name)
+    profile = robot.profile
     if profile is None or "qp" not in profile.tracker_configs:
-        planar = OutputMap(robot).layout == "planar"
-        profile = next(p for p in PROFILES.values() if p.planar == planar and "qp" in p.tracker_configs)
+        layout = output_layout(robot)
+        profile = next(p for p in PROFILES.values() if p.output_layout == layout and "qp" in p.tracker_configs)
     config = profile.tracker_config("qp")
     if not isinstance(config, QPConfig):
         raise InputError(f"profile {profile.name!r}: tracker_configs['qp'] is not a QPConfig: {config!r}")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amlip_qp.control.outputs_compiled import CompiledOutputMap, generate_source
+from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, generate_source
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
@@ -76,12 +76,12 @@ def test_kinematics_takes_a_drop_in_map_and_rejects_a_wrong_one(robot, compiled)
 
 
 def test_source_depends_on_layout_and_size():
-    assert generate_source("cassie", 20) != generate_source("planar", 7)
-    assert generate_source("planar", 7) == generate_source("planar", 7)
+    assert generate_source("cassie", 20) != generate_source("rabbit", 7)
+    assert generate_source("rabbit", 7) == generate_source("rabbit", 7)
 
 
 def test_controller_installs_the_compiled_map_unless_told_otherwise():
-    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
 
     robot = load_robot("rabbit")
@@ -97,7 +97,7 @@ def test_controller_installs_the_compiled_map_unless_told_otherwise():
 
 def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
     from amlip_qp.codegen.runtime import CodegenFallbackWarning
-    from amlip_qp.control.controller import WalkingController
+    from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
 
     robot = load_robot("rabbit")

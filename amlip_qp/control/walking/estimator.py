@@ -13,13 +13,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, MomentumFilter1D
+from amlip_qp.alip import other_side
+from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, AngularMomentumFilter
 from amlip_qp.exceptions import InputError
 
-_SWING_OF = {"left": "right", "right": "left"}
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
 
 
 @dataclass
@@ -65,7 +68,8 @@ class Estimate:
 
 
 class Estimator:
-    """Kinematic state estimate with Kalman filters on ``L``.
+    """Kinematic state estimate with Kalman filters on ``L``
+    (:class:`~amlip_qp.alip.kalman.AngularMomentumFilter`, one scalar filter per plane).
 
     Args:
         kinematics: The controller's :class:`~amlip_qp.robots.kinematics.RobotKinematics`
@@ -78,7 +82,7 @@ class Estimator:
 
     def __init__(
         self,
-        kinematics,
+        kinematics: RobotKinematics,
         dt_s: float,
         kalman: bool = True,
         process_var_rate: float = DEFAULT_PROCESS_VAR_RATE,
@@ -89,9 +93,9 @@ class Estimator:
         self.kin = kinematics
         self.dt_s = float(dt_s)
         self.kalman = bool(kalman)
-        m = kinematics.robot.mass_kg
-        self._fy = MomentumFilter1D(m, +1.0, process_var_rate=process_var_rate, measurement_var=measurement_var)
-        self._fx = MomentumFilter1D(m, -1.0, process_var_rate=process_var_rate, measurement_var=measurement_var)
+        self._filter = AngularMomentumFilter(
+            kinematics.robot.mass_kg, process_var_rate=process_var_rate, measurement_var=measurement_var
+        )
         self._initialised = False
 
     def reset(self) -> None:
@@ -101,11 +105,6 @@ class Estimator:
     def observe(self, measurement: Measurement) -> None:
         """Update the kinematics at this tick's measured ``(q, v)`` (once per tick)."""
         self.kin.update(measurement.q, measurement.v)
-
-    def update(self, measurement: Measurement, stance: str, touchdown: bool = False) -> Estimate:
-        """:meth:`observe` then :meth:`estimate`."""
-        self.observe(measurement)
-        return self.estimate(stance, touchdown)
 
     def estimate(self, stance: str, touchdown: bool = False) -> Estimate:
         """Estimate at the last observed state with ``stance`` as the stance side.
@@ -117,7 +116,7 @@ class Estimator:
         """
         kin = self.kin
         r_st = kin.contact_position(stance)  # raises InputError for a bad side
-        r_sw = kin.contact_position(_SWING_OF[stance])
+        r_sw = kin.contact_position(other_side(stance))
         com = kin.com()
         p_st = com - r_st
         L_meas = kin.angular_momentum_about(r_st)
@@ -125,15 +124,13 @@ class Estimator:
             L = L_meas.copy()
         elif touchdown or not self._initialised:
             Lx, Ly, _ = L_meas.tolist()
-            self._fy.reset(Ly)
-            self._fx.reset(Lx)
+            self._filter.reset(Lx, Ly)
             self._initialised = True
             L = L_meas.copy()
         else:
             Lx, Ly, Lz = L_meas.tolist()
             px, py, _ = p_st.tolist()
-            dt = self.dt_s
-            L = np.array([self._fx.step(py, Lx, dt), self._fy.step(px, Ly, dt), Lz])
+            L = np.array([*self._filter.step(px, py, Lx, Ly, self.dt_s), Lz])
         return Estimate(
             com_m=com,
             com_vel_mps=kin.com_velocity(),

@@ -1,4 +1,4 @@
-"""Tests of the passivity-based tracker (amlip_qp.control.pbc) and the spring model."""
+"""Tests of the passivity-based tracker (amlip_qp.control.pbc.tracker)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.control.pbc import PBCGains, PBCTracker, default_gains
-from amlip_qp.control.springs import spring_deflections_rad, stance_knee_offset_rad
+from amlip_qp.control.pbc.gains import PBCGains, default_gains
+from amlip_qp.control.pbc.springs import spring_deflections_rad
+from amlip_qp.control.pbc.tracker import PBCTracker
 from amlip_qp.control.tracker import TrackingTarget
-from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 
@@ -96,7 +96,6 @@ def test_never_nan_on_degenerate_input(robot, bad):
         tgt.h_d = np.full_like(tgt.h_d, np.nan)
     elif bad == "nan_phase":
         tgt.phase = float("nan")
-        tgt.stance_knee_offset_rad = float("nan")
     else:
         tgt.swing_contact_weight = float("inf")
     res = tracker.compute(kin, tgt)
@@ -118,39 +117,6 @@ def test_singular_dynamics_falls_back(robot, monkeypatch):
     res = tracker.compute(kin, _target_at_estimate(kin, "right"))
     assert not res.ok and res.fallback == "singular_dynamics"
     assert np.all(np.isfinite(res.tau_Nm))
-
-
-def test_gains_validation_and_swing_schedule():
-    with pytest.raises(InputError):
-        PBCGains(kp_stance_ps2=-1.0)
-    with pytest.raises(InputError):
-        PBCGains(swing_start_fraction=2.0)
-    g = PBCGains(swing_start_fraction=0.2, swing_ramp_phase=0.5, touchdown_gain_drop=0.5)
-    assert g.swing_scale(0.0, 0.0) == pytest.approx(0.2)
-    assert g.swing_scale(0.25, 0.0) == pytest.approx(0.6)
-    assert g.swing_scale(1.0, 1.0) == pytest.approx(0.5)
-    assert np.isfinite(g.swing_scale(float("nan"), float("nan")))
-
-
-def test_spring_model_cassie_standing_numbers():
-    """Full weight on one leg stretches the achilles coupling about twice the measured
-    double-support stretch at the stand keyframe (0.031 rad, models/README.md)."""
-    robot = load_robot("cassie")
-    kin = RobotKinematics(robot)
-    kin.update(robot.q_stand, np.zeros(robot.nv))
-    shin, achilles = spring_deflections_rad(kin, "left")
-    assert achilles == pytest.approx(2 * 0.031, rel=0.1)
-    assert abs(shin) < 0.02
-    off = stance_knee_offset_rad(kin, "left")
-    assert np.isfinite(off) and 0.0 < abs(off) < 0.2
-
-
-def test_spring_model_rabbit_has_no_springs():
-    robot = load_robot("rabbit")
-    kin = RobotKinematics(robot)
-    kin.update(robot.q_stand, np.zeros(robot.nv))
-    assert spring_deflections_rad(kin, "left").size == 0
-    assert stance_knee_offset_rad(kin, "left") == 0.0
 
 
 def test_swing_torso_compensation_moves_the_swing_leg_to_the_measured_torso():
@@ -191,20 +157,6 @@ def test_swing_torso_compensation_moves_the_swing_leg_to_the_measured_torso():
     np.testing.assert_allclose(on.ik._prev.q_r[lay.ctrl_q[st]], base[lay.ctrl_q[st]], atol=1e-9)
 
 
-def test_spring_model_half_weight_matches_the_measured_double_support_stretch():
-    """Load share: standing on two feet each leg carries half the weight; the model then gives
-    the measured 0.031 rad achilles stretch of the stand keyframe (models/README.md)."""
-    robot = load_robot("cassie")
-    kin = RobotKinematics(robot)
-    kin.update(robot.q_stand, np.zeros(robot.nv))
-    half = np.array([0.0, 0.0, 0.5 * kin.mass_kg * 9.81])
-    shin, achilles = spring_deflections_rad(kin, "left", half)
-    assert achilles == pytest.approx(0.031, rel=0.1)
-    # linear in the load
-    np.testing.assert_allclose(2 * np.array([shin, achilles]), spring_deflections_rad(kin, "left"), rtol=1e-9)
-    assert stance_knee_offset_rad(kin, "left", half) == pytest.approx(0.5 * stance_knee_offset_rad(kin, "left"))
-
-
 def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
     """With spring_model_offset the IK holds the stance shin/achilles at rest + the model's deflection
     under the last commanded contact force, and the swing leg's springs at rest."""
@@ -224,7 +176,7 @@ def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
     shin, achilles = spring_deflections_rad(kin, "left", f)
     assert q_r[smap.joint_pin_q["left-shin"]] == pytest.approx(shin, abs=1e-9)
     assert q_r[smap.joint_pin_q["right-shin"]] == pytest.approx(0.0, abs=1e-9)
-    rest = tracker.ik.spring_rest_values()[-1]
+    rest = tracker.ik.equations.spring_rest_values()[-1]
     for side, expect in (("left", rest + achilles), ("right", rest)):
         length = q_r[smap.joint_pin_q[f"{side}-knee"]] + q_r[smap.joint_pin_q[f"{side}-tarsus"]]
         assert length == pytest.approx(expect, abs=1e-9)

@@ -1,10 +1,11 @@
-"""The walking controller: estimator, gait logic, ALIP planner, references, tracker, saturation.
+"""The walking controller: estimator, step clock, gait logic, ALIP planner, references, tracker, saturation.
 
 One :meth:`WalkingController.step` per control tick (2 kHz by default):
 
 1. the estimator updates the Pinocchio kinematics once at the measured state;
 2. the gait logic decides whether the swing foot touched down; at touchdown the
-   stance switches and the planner starts a new step from the measured outputs;
+   step clock and the planner start a new step (the planner from the measured
+   outputs) with the other stance leg;
 3. the estimator computes ``p_st``, ``L`` (Kalman-filtered) and ``v_z``;
 4. the planner (the code-generated kernels on the fast path) predicts ``L(T-)``,
    places the foot and evaluates ``h_d(s)`` and its derivatives;
@@ -12,7 +13,7 @@ One :meth:`WalkingController.step` per control tick (2 kHz by default):
 6. the torques are checked (never NaN: a damped fallback replaces them and the
    event is counted) and saturated at the motor limits.
 
-The controller never touches MuJoCo: it sees :class:`~amlip_qp.control.estimator.Measurement` only.
+The controller never touches MuJoCo: it sees :class:`~amlip_qp.control.walking.estimator.Measurement` only.
 """
 
 from __future__ import annotations
@@ -20,102 +21,23 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
-from amlip_qp.control.estimator import Estimate, Estimator, Measurement
-from amlip_qp.control.gait import GaitLogic, GaitParams
 from amlip_qp.control.tracker import Tracker, TrackingTarget
+from amlip_qp.control.walking.clock import StepClock
+from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
+from amlip_qp.control.walking.gait import GaitLogic, GaitParams
+from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
+from amlip_qp.robots.outputs import output_layout
 
-
-@dataclass(frozen=True)
-class SpeedCorrection:
-    """Integral action on the step-to-step velocity error.
-
-    The deadbeat law reaches ``L_des`` exactly only on the LIP. On a real
-    robot the unmodelled dynamics (the CoM bounce after impact, the swing
-    leg's centroidal momentum, foot-placement error) leave a steady bias: a
-    robot commanded at 1 m/s settles a few tenths slower, every step alike.
-    This slow integral removes that bias. After every step the heading-frame
-    mean CoM velocity over the step is compared with the command the planner
-    aimed at for that step (the one in force a step earlier, so a speed ramp
-    does not wind it up), and ``gain_per_step`` times the error is added to
-    the correction given to the planner. Lateral errors use the mean over the
-    last two steps (a stride), because the CoM sways from side to side.
-
-    Attributes:
-        enabled: Apply the correction.
-        gain_per_step: Fraction of the error corrected per step (dimensionless).
-        max_correction_mps: Bound on the correction, m/s.
-        max_error_mps: Larger step errors are disturbances (a push), not bias:
-            they are left to the foot placement and do not enter the integral, m/s.
-        settle_steps: Steps ignored at the start of a run.
-    """
-
-    enabled: bool = True
-    gain_per_step: float = 0.3
-    max_correction_mps: float = 0.3
-    max_error_mps: float = 0.5
-    settle_steps: int = 2
-
-    def __post_init__(self):
-        vals = (self.gain_per_step, self.max_correction_mps, self.max_error_mps)
-        if not all(math.isfinite(v) and v >= 0 for v in vals) or self.gain_per_step > 1 or self.settle_steps < 0:
-            raise InputError(
-                "SpeedCorrection needs 0 <= gain_per_step <= 1, finite non-negative bounds and settle_steps >= 0, "
-                f"got {self!r}"
-            )
-
-
-class SpeedIntegrator:
-    """The integral of :class:`SpeedCorrection`, updated once per completed step.
-
-    Args:
-        params: Gains and bounds.
-        planar: Only the forward axis (planar robots).
-    """
-
-    def __init__(self, params: SpeedCorrection, planar: bool = False):
-        self.params = params
-        self.planar = bool(planar)
-        self._correction = np.zeros(2)
-        self._prev_vy = math.nan
-        self._steps = 0
-
-    @property
-    def correction_mps(self) -> np.ndarray:
-        """``(vx, vy)`` to add to the command, heading frame, m/s (copy)."""
-        return self._correction.copy()
-
-    def reset(self) -> None:
-        """Back to zero correction (a new run)."""
-        self._correction[:] = 0.0
-        self._prev_vy = math.nan
-        self._steps = 0
-
-    def update(self, v_step_mps, v_aimed_mps) -> np.ndarray:
-        """Account for one completed step; returns the new correction (m/s).
-
-        Args:
-            v_step_mps: The step's mean CoM velocity ``(vx, vy)``, heading frame, m/s.
-            v_aimed_mps: The command the foot placement aimed at for that step, m/s.
-        """
-        p = self.params
-        self._steps += 1
-        vy_stride = 0.5 * (v_step_mps[1] + self._prev_vy)
-        self._prev_vy = float(v_step_mps[1])
-        if not p.enabled or self._steps <= p.settle_steps:
-            return self.correction_mps
-        for axis, v in ((0, float(v_step_mps[0])), (1, vy_stride)):
-            if axis == 1 and self.planar or not math.isfinite(v):
-                continue
-            err = float(v_aimed_mps[axis]) - v
-            if abs(err) <= p.max_error_mps:
-                c = self._correction[axis] + p.gain_per_step * err
-                self._correction[axis] = min(max(c, -p.max_correction_mps), p.max_correction_mps)
-        return self.correction_mps
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 
 @dataclass
@@ -185,7 +107,7 @@ class WalkingController:
             (:class:`SpeedCorrection`; ``SpeedCorrection(enabled=False)`` gives
             the paper's controller unchanged).
         output_backend: ``"c"`` installs the generated-C output map
-            (:class:`~amlip_qp.control.outputs_compiled.CompiledOutputMap`, the
+            (:class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`, the
             same outputs to rounding, about half the time) into
             ``kinematics``; without a compiler it keeps the Python map with a
             warning. ``"python"`` keeps :class:`~amlip_qp.robots.outputs.OutputMap`.
@@ -193,9 +115,9 @@ class WalkingController:
 
     def __init__(
         self,
-        robot,
+        robot: Robot,
         tracker: Tracker,
-        kinematics,
+        kinematics: RobotKinematics,
         dt_s: float = 0.0005,
         planner_backend: str = "c",
         kalman: bool = True,
@@ -213,7 +135,7 @@ class WalkingController:
             raise InputError(f"output_backend must be 'c' or 'python', got {output_backend!r}")
         if output_backend == "c":
             from amlip_qp.codegen.runtime import CodegenFallbackWarning
-            from amlip_qp.control.outputs_compiled import CompiledOutputMap
+            from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap
             from amlip_qp.exceptions import CompilerUnavailableError
 
             try:
@@ -236,8 +158,9 @@ class WalkingController:
 
             kernels = load_kernels()
             plan_fn, reference_fn = kernels.alip_plan, kernels.swing_reference
-        planner_robot = "rabbit" if robot.is_planar else "cassie"
-        self.planner = Planner(planner_robot, robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn)
+        self.planner = Planner(output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn)
+        #: Stance side, start and phase of the current step.
+        self.clock = StepClock()
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
         self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
@@ -248,7 +171,6 @@ class WalkingController:
         #: Ticks whose tracker output was replaced by the damped fallback.
         self.fallback_ticks = 0
         self.speed = SpeedIntegrator(speed_correction or SpeedCorrection(), planar=robot.is_planar)
-        self._stance: str | None = None
         self._last_plan: PlannerOutput | None = None
         self._L_target_this_step = np.full(2, np.nan)
         self._correction = np.zeros(2)
@@ -266,7 +188,7 @@ class WalkingController:
     @property
     def stance(self) -> str | None:
         """Current stance side (``None`` before the first step)."""
-        return self._stance
+        return self.clock.stance
 
     def reset(self) -> None:
         """Start over (a new run)."""
@@ -275,7 +197,7 @@ class WalkingController:
         self.planner.reset()
         self.steps.clear()
         self.fallback_ticks = 0
-        self._stance = None
+        self.clock.reset()
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
         self.speed.reset()
@@ -287,21 +209,20 @@ class WalkingController:
         heading = self.planner.heading_next_rad
         h0, _, _ = self.kin.outputs(stance, heading)
         self.planner.start_step(stance, t_s, h0)
-        self._stance = stance
+        self.clock.start(stance, t_s)
         self._com_step_start = self.kin.com()
 
     def _record_step(self, t_s: float, est: Estimate) -> None:
         plan = self._last_plan
-        t0 = self.planner.t_step_start_s
-        c, sn = math.cos(plan.heading_rad), math.sin(plan.heading_rad)
+        t0 = self.clock.t_start_s
         disp = est.com_m - self._com_step_start
         dt = max(t_s - t0, 1e-9)
-        v_mean = np.array([c * disp[0] + sn * disp[1], -sn * disp[0] + c * disp[1]]) / dt
+        v_mean = world_to_heading(disp[:2], plan.heading_rad) / dt
         self.steps.append(
             StepRecord(
                 t_start_s=t0,
                 t_end_s=t_s,
-                stance=self._stance,
+                stance=self.clock.stance,
                 swing_target_m=plan.swing_target_world_m.copy(),
                 swing_actual_m=est.swing_contact_m.copy(),
                 L_end_Nms=est.L_meas_Nms[:2].copy(),
@@ -324,42 +245,42 @@ class WalkingController:
         estimator.observe(measurement)
         kin = self.kin
         touchdown = False
-        if self._stance is None:
+        clock = self.clock
+        if clock.stance is None:
             self._begin_step(self.initial_stance, t)
-            est = estimator.estimate(self._stance)
+            est = estimator.estimate(clock.stance)
         else:
             # The estimate for the current stance serves the touchdown test (the
             # contact heights) and, without a touchdown, the planner; at a
             # touchdown it closes the old step and a new one is made about the
             # new stance contact (the filters restart there).
-            est = estimator.estimate(self._stance)
-            T = command.step_time_s
-            phase_raw = (t - self.planner.t_step_start_s) / T
-            swing = "right" if self._stance == "left" else "left"
+            est = estimator.estimate(clock.stance)
+            phase_raw = clock.phase_unclipped(t, command.step_time_s)
+            swing = clock.swing
             height = float(est.swing_contact_m[2] - est.stance_contact_m[2])
             contact = measurement.foot_contact.get(swing) if measurement.foot_contact else None
             if self._last_plan is not None and self.gait.touchdown(phase_raw, contact, height):
                 self._record_step(t, est)
                 self._begin_step(swing, t)
                 touchdown = True
-                est = estimator.estimate(self._stance, touchdown=True)
+                est = estimator.estimate(clock.stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
         command = self._corrected_command(command)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
             StateEstimate(
-                stance=self._stance,
+                stance=clock.stance,
                 p_st_m=est.p_st_m,
                 L_Nms=est.L_Nms,
                 v_z_mps=v_z,
-                t_in_step_s=max(t - self.planner.t_step_start_s, 0.0),
+                t_in_step_s=clock.time_in_step(t),
                 com_m=est.com_m,
             ),
             command,
         )
         self._last_plan = plan
         target = TrackingTarget(
-            stance=self._stance,
+            stance=clock.stance,
             phase=plan.s,
             heading_rad=plan.heading_rad,
             h_d=plan.h_d,
@@ -384,10 +305,10 @@ class WalkingController:
                 )
         tau = np.maximum(tau, self._tau_lo)
         np.minimum(tau, self._tau_hi, out=tau)
-        h, _, _ = kin.outputs(self._stance, plan.heading_rad)
+        h, _, _ = kin.outputs(clock.stance, plan.heading_rad)
         return TickInfo(
             t_s=t,
-            stance=self._stance,
+            stance=clock.stance,
             phase=plan.s,
             estimate=est,
             plan=plan,

@@ -5,39 +5,12 @@ The paper (section "Inverse Kinematics") converts the reference outputs
 passivity-based controller can track them. This module does that conversion
 by damped Newton iterations on the full Pinocchio configuration.
 
-Formulation (square system, ``nv`` equations in the ``nv`` velocity coordinates)
-------------------------------------------------------------------------------
-Unknown: the full configuration ``q`` (base and all joints). Equations:
-
-1. **Outputs**: ``h_0(q) = h_d`` (the ``n_h`` outputs of
-   :mod:`amlip_qp.robots.outputs`; Cassie 9, Rabbit 4).
-2. **Stance contact pose held at its estimate**: the pose of the stance
-   ``{st}-contact`` frame equals the estimated one: position (m) and
-   orientation (rad, world-axes rotation vector ``log3(R R_est^T)``). For a
-   planar robot only its in-plane rows (x, z, pitch) exist. For Rabbit the
-   contact frame rides on the shin, so this fixes the stance shin's absolute
-   angle (the unactuated coordinate) at its estimate; for Cassie it fixes the
-   foot on the ground, including its roll about the blade.
-3. **Unactuated stance ankle held at its estimate**: if the stance contact
-   frame's parent joint is actuated and the system would otherwise be
-   under-determined (Cassie's stance toe, passive in the paper), its angle
-   equals the estimate.
-4. **Springs held at their estimates**: each passive joint that is not in a
-   coupling (Cassie's shins) equals its estimate, and each coupling length
-   (Cassie's ``q_knee + q_tarsus``) equals its estimated length, so the
-   tarsus moves with the knee as through a rigid achilles rod.
-
-Consequently the free coordinates are: the actuated joints other than the
-stance ankle (Cassie: stance hip roll/yaw/pitch and knee, swing hip
-roll/yaw/pitch, knee and toe: 9 = ``n_h``; Rabbit: both hips and knees, 4 =
-``n_h``) -- the base pose and the tarsi are then dependent (the base follows
-from the stance leg standing on the fixed foot; each tarsus from its knee).
-Fixed (at the estimate): the stance contact pose, the stance ankle (Cassie),
-the shins and the coupling lengths. Cassie: 9 + 6 + 1 + 2 + 2 = 20 = nv;
-Rabbit: 4 + 3 = 7 = nv.
+The equations (a square system of ``nv`` equations in the ``nv`` velocity
+coordinates: the outputs, the held stance contact pose, stance ankle and
+springs) are :mod:`amlip_qp.control.pbc.ik_equations`.
 
 Velocity and acceleration references use the same matrix ``A(q_r)`` (the
-stacked Jacobians of the equations above):
+stacked Jacobians of these equations):
 
 - ``A v_r = [dh_d; b_fix]``, with ``b_fix`` the estimated rates of the held
   contact pose and stance ankle (they are the robot's unactuated motion,
@@ -69,71 +42,27 @@ the next tick for free (``A`` depends on ``q`` only; the residual is rebuilt
 with the new targets and estimates), then one evaluation at the new ``q``
 (more steps only while the residual is above :attr:`IKSettings.tolerance`),
 which also gives the drift: typically one output-map evaluation per tick
-(about 160 us for Cassie, against about 1 ms with the previous duplicate
-output code and four evaluations).
+(measured in ``docs/TUNING.md``, "PBC tracker and walking loop").
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg.lapack import dgetrf as _dgetrf
 from scipy.linalg.lapack import dgetrs as _dgetrs
 
-from amlip_qp.exceptions import InputError, MJCFError
+from amlip_qp.control.pbc.ik_equations import IKEquations, StanceRows
+from amlip_qp.control.pbc.ik_settings import IKSettings
+from amlip_qp.control.pbc.knee_limits import KneeLimits, swap_rows
+from amlip_qp.exceptions import InputError
 
-
-@dataclass(frozen=True)
-class IKSettings:
-    """Settings of :class:`IterativeIK`.
-
-    Attributes:
-        iterations: Most Newton iterations per call when warm-started (the
-            first one reuses the previous tick's final evaluation).
-        cold_iterations: Most Newton iterations when starting from the estimate
-            (first call, after a stance switch or a failure).
-        tolerance: Stop iterating once the max-norm residual is below this
-            (m / rad); only for the default iteration counts, an explicit
-            ``iterations`` argument of :meth:`IterativeIK.solve` runs them all.
-        damping: Levenberg damping ``mu`` of the fallback step
-            ``(A^T A + mu I) dq = -A^T F``, used only when the LU step is not
-            finite (dimensionless; the rows are in m and rad).
-        max_step_rad: Largest joint change per Newton step, rad (m for slide joints).
-        fd_step_s: Time step of the finite difference for ``Adot v``, s.
-        knee_limit_swap: When the iterations end unconverged (max-norm
-            residual above ``swap_threshold``, m / rad) with a knee clamped at
-            its straight-leg range limit: if that knee's output is out of reach
-            (``com_z_over_stance`` for the stance knee, ``com_x_over_swing`` for
-            the swing knee, with ``|y| < |h_d|``) exchange it for "knee = limit"
-            (a square system again) and iterate on -- that output gives way
-            (CoM height; how far the swing foot reaches) and all the others
-            stay exact; otherwise restart the iterations with the knee moved
-            ``knee_back_off_rad`` off the limit (the straight leg is a
-            near-singular iterate). Without this the clamp breaks the rows
-            through the knee (Cassie's coupling), the next step undoes it, and
-            the iterates wander with residuals of order 1 (seen after the long
-            steps of a push recovery).
-        swap_threshold: See ``knee_limit_swap``.
-        knee_back_off_rad: See ``knee_limit_swap``, rad.
-    """
-
-    iterations: int = 2
-    cold_iterations: int = 8
-    tolerance: float = 1e-6
-    damping: float = 1e-10
-    max_step_rad: float = 0.3
-    fd_step_s: float = 1e-6
-    knee_limit_swap: bool = True
-    swap_threshold: float = 1e-3
-    knee_back_off_rad: float = 0.2
-
-    def __post_init__(self):
-        if self.iterations < 1 or self.cold_iterations < 1:
-            raise InputError("IK iteration counts must be >= 1")
-        if not (self.damping >= 0 and self.max_step_rad > 0 and self.fd_step_s > 0 and self.tolerance >= 0):
-            raise InputError("IK damping and tolerance must be >= 0, max_step_rad and fd_step_s > 0")
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 
 @dataclass
@@ -175,20 +104,6 @@ def _lu_solve(lu, b: np.ndarray) -> np.ndarray:
     return x
 
 
-class _StanceRows:
-    """Per-stance constant parts of the system (built once)."""
-
-    def __init__(self, nv: int, n_out: int, n_pose: int, lin_q: np.ndarray, lin_v: np.ndarray, lin_rate: np.ndarray):
-        self.n_var = n_out + n_pose  # rows that change with q
-        self.lin_q = lin_q  # (n_lin, nq): linear residual rows  L_q q - b
-        self.lin_rate = lin_rate  # (n_lin, nv): held rates = lin_rate @ v_est
-        self.A = np.zeros((nv, nv))
-        self.A[self.n_var :] = lin_v
-        self.A_eps = self.A.copy()
-        self.drift = np.zeros(self.n_var)
-        self.F = np.zeros(nv)
-
-
 class IterativeIK:
     """Damped-Newton IK from ``h_d`` to joint references (formulation in the module docstring).
 
@@ -202,11 +117,11 @@ class IterativeIK:
         size: Number of outputs.
 
     Raises:
-        MJCFError: The model does not give a square system (outputs + held
-            coordinates != nv).
+        MJCFError: The model does not give a square system
+            (:class:`~amlip_qp.control.pbc.ik_equations.IKEquations`).
     """
 
-    def __init__(self, robot, settings: IKSettings | None = None):
+    def __init__(self, robot: Robot, settings: IKSettings | None = None):
         import pinocchio as pin
 
         from amlip_qp.robots.kinematics import RobotKinematics
@@ -218,73 +133,14 @@ class IterativeIK:
         self.model = m = robot.pin_model
         self.kin = RobotKinematics(robot)
         self.size = OutputMap(robot).size
-        nv, nq = m.nv, m.nq
-        # in-plane rows of the contact pose (planar robots: x, z, pitch)
-        self._pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
+        nv = m.nv
+        #: The equations of the system (held coordinates and their rows per stance).
+        self.equations = eq = IKEquations(robot, self.size)
+        self._pose_rows = eq.pose_rows
         self._planar = robot.is_planar
-        # Held springs: the passive joints outside couplings, then the coupling lengths.
-        springs = robot.springs
-        #: The springs the IK holds, in the order of ``held_springs`` of :meth:`solve`.
-        self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
-            r for r in springs if r.kind == "coupling"
-        )
-        n_fixed = len(self._pose_rows) + len(self.held_springs)
-        need_ankle = nv - (self.size + n_fixed)
-        if need_ankle not in (0, 1):
-            raise MJCFError(
-                f"{robot.name}: IK needs {nv} equations, has {self.size} outputs + {n_fixed} held coordinates"
-            )
-        # the stance ankle: the contact frame's parent joint, if actuated and needed
-        self._ankle_v: dict[str, int | None] = {}
-        self._ankle_q: dict[str, int | None] = {}
-        act_v = [int(i) for i in robot.actuated.pin_v_idx]
-        for side in robot.foot_sides:
-            jid = m.frames[robot.contact_frame_ids[side]].parentJoint
-            iv, iq = m.joints[jid].idx_v, m.joints[jid].idx_q
-            if need_ankle == 1:
-                if iv not in act_v:
-                    raise MJCFError(f"{robot.name}: the {side} contact's parent joint is not actuated")
-                self._ankle_v[side], self._ankle_q[side] = iv, iq
-            else:
-                self._ankle_v[side] = self._ankle_q[side] = None
-        self._n_fixed = n_fixed + need_ankle
-        # linear rows per stance: ankle (held, with its estimated rate), springs and couplings (rate 0)
-        self._rows: dict[str, _StanceRows] = {}
-        for side in robot.foot_sides:
-            lq, lv, lr = [], [], []
-            if self._ankle_v[side] is not None:
-                r_q, r_v = np.zeros(nq), np.zeros(nv)
-                r_q[self._ankle_q[side]] = 1.0
-                r_v[self._ankle_v[side]] = 1.0
-                lq.append(r_q), lv.append(r_v), lr.append(r_v.copy())
-            for spring in self.held_springs:
-                lq.append(spring.row_q(nq)), lv.append(spring.row_v(nv)), lr.append(np.zeros(nv))
-            self._rows[side] = _StanceRows(
-                nv, self.size, len(self._pose_rows), np.array(lq).reshape(-1, nq),
-                np.array(lv).reshape(-1, nv), np.array(lr).reshape(-1, nv)
-            )
-        # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap):
-        # (output row, knee q index, knee v index, straight-leg limit)
-        names = list(OutputMap(robot).names)
-        smap = robot.state_map
-        self._knee_swap: dict[str, list] = {side: [] for side in robot.foot_sides}
-        if self.settings.knee_limit_swap and all(f"{sd}-knee" in smap.joint_pin_q for sd in robot.foot_sides):
-            from amlip_qp.robots.kinematics import RobotKinematics as _K
-
-            k0 = _K(robot)
-            k0.update_positions(robot.q_stand)
-            for side in robot.foot_sides:
-                other = robot.other_side(side)
-                _, J0, _ = k0.outputs(side, 0.0)
-                for row_name, knee_side in (("com_z_over_stance", side), ("com_x_over_swing", other)):
-                    if row_name not in names:
-                        continue
-                    iq, iv = smap.joint_pin_q[f"{knee_side}-knee"], smap.joint_pin_v[f"{knee_side}-knee"]
-                    # straight leg = the limit towards which the stance CoM height grows
-                    grow = J0[names.index("com_z_over_stance"), smap.joint_pin_v[f"{side}-knee"]]
-                    lo_, hi_ = float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])
-                    limit, other_end = (hi_, lo_) if grow > 0 else (lo_, hi_)
-                    self._knee_swap[side].append((names.index(row_name), iq, iv, limit, other_end))
+        self._rows = eq.rows
+        # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap)
+        self._knees = KneeLimits(robot, self.settings) if self.settings.knee_limit_swap else None
         self._act_q = robot.actuated.pin_q_idx
         self._lo = m.lowerPositionLimit[self._act_q].copy()
         self._hi = m.upperPositionLimit[self._act_q].copy()
@@ -305,11 +161,6 @@ class IterativeIK:
         self.lu = None
 
     # ---------------------------------------------------------------- pieces
-    def controlled_actuated(self, stance: str) -> np.ndarray:
-        """Indices into the actuator list of the joints the IK solves for (all but the stance ankle)."""
-        ankle = self._ankle_v[stance]
-        return np.array([k for k, iv in enumerate(self.robot.actuated.pin_v_idx) if iv != ankle], dtype=int)
-
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
         """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
 
@@ -336,7 +187,7 @@ class IterativeIK:
         out[:n] = kin.outputs(stance, heading)[2]
         out[n : n + len(self._pose_rows)] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose_rows]
 
-    def _residual(self, rows: _StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
+    def _residual(self, rows: StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
         """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
         F, n = rows.F, self.size
         np.subtract(y, h_d, out=F[:n])
@@ -350,7 +201,7 @@ class IterativeIK:
         F[rows.n_var :] = rows.lin_q @ q - fixed["lin"]
         return F
 
-    def _fixed_from(self, kin, stance: str) -> dict:
+    def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:
         """The held quantities and their estimated rates, from the updated kinematics."""
         rows = self._rows[stance]
         q, v = kin.q, kin.v
@@ -366,39 +217,6 @@ class IterativeIK:
             "lin": rows.lin_q @ q,
             "rates": rates,
         }
-
-    def _limit_handling(self, stance: str, q, F, y, h_d) -> tuple[list | None, list]:
-        """For an unconverged solve: the knees clamped at their straight-leg limit, split into
-        ``(swap, back_off)``.
-
-        A clamp breaks the rows through the knee (Cassie's coupling ``q_knee +
-        q_tarsus``), which the next step undoes: the iterates then wander with
-        residuals of order 1. If the knee's output is out of reach
-        (``|y| < |h_d|``: CoM too low over the stance foot, swing foot short
-        of its target) the output is exchanged for "knee = limit" (``swap``);
-        otherwise the straight leg is only a bad (near-singular) iterate and
-        the knee is moved back off the limit (``back_off``).
-        """
-        thr = self.settings.swap_threshold
-        if float(np.max(np.abs(F))) <= thr:
-            return None, []
-        swap, back = [], []
-        for sp in self._knee_swap[stance]:
-            row, iq = sp[0], sp[1]
-            if abs(q[iq] - sp[3]) < 1e-9:
-                (swap if abs(y[row]) < abs(h_d[row]) - thr else back).append(sp)
-        return (swap or None), back
-
-    @staticmethod
-    def _swap_rows(swap, q, A, F) -> None:
-        """Replace each exchanged output row by ``q_knee - limit`` (row of that knee)."""
-        if swap is None:
-            return
-        for row, iq, iv, limit, _ in swap:
-            A[row] = 0.0
-            A[row, iv] = 1.0
-            if F is not None:
-                F[row] = q[iq] - limit
 
     def _newton_step(self, F: np.ndarray, A: np.ndarray, lu) -> np.ndarray:
         dq = -_lu_solve(lu, F) if lu is not None else np.full(F.shape, np.nan)
@@ -435,14 +253,8 @@ class IterativeIK:
         return _lu_solve(self.lu, np.asarray(rhs, dtype=float))
 
     # ------------------------------------------------------------------ solve
-    def spring_rest_values(self) -> np.ndarray:
-        """Rest values (rad) of :attr:`held_springs`, in the order of ``held_springs`` of
-        :meth:`solve`: the passive joints outside couplings (their spring reference),
-        then each coupling's rest length."""
-        return np.array([spring.rest for spring in self.held_springs], dtype=float)
-
     def solve(
-        self, kin, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
+        self, kin: RobotKinematics, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
     ) -> IKResult:
         """Joint references for the outputs ``h_d`` (m, rad) and their rates.
 
@@ -455,7 +267,8 @@ class IterativeIK:
             iterations: Newton iterations, all done (default: settings, cold or
                 warm, stopping early below the tolerance).
             held_springs: Values at which to hold the springs instead of their
-                estimates (order of :meth:`spring_rest_values`; e.g. the rest
+                estimates (order of :meth:`IKEquations.spring_rest_values
+                <amlip_qp.control.pbc.ik_equations.IKEquations.spring_rest_values>`; e.g. the rest
                 values, for the paper's rigid-spring IK plus a knee offset).
 
         Returns:
@@ -480,7 +293,7 @@ class IterativeIK:
         try:
             fixed = self._fixed_from(kin, stance)
             if held_springs is not None:
-                ns = len(self.held_springs)
+                ns = len(self.equations.held_springs)
                 fixed["lin"][len(fixed["lin"]) - ns :] = held_springs
             warm = self._prev is not None and self._prev.ok and self._prev_stance == stance
             # warm start: the previous solution (its held coordinates are pulled to
@@ -496,25 +309,26 @@ class IterativeIK:
             if warm and cache is not None and cache[0] == stance and cache[1] == heading_rad:
                 # first step from the previous tick's final evaluation (same q, A)
                 F = self._residual(rows, q, cache[2], cache[3], cache[4], h_d, fixed)
-                self._swap_rows(cache[6], q, A, F)
+                swap_rows(cache[6], q, A, F)
                 q = self._step(q, self._newton_step(F, A, cache[5]))
                 it = 1
             self._cache = None
             limit_handled = False
+            knees = self._knees
             while True:
                 y, pos, rot = self._evaluate(q, stance, heading_rad, A, v_pred)
                 F = self._residual(rows, q, y, pos, rot, h_d, fixed)
-                self._swap_rows(swap, q, A, F)
+                swap_rows(swap, q, A, F)
                 residual = float(np.max(np.abs(F)))
                 lu = self._lu(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
-                if done and swap is None and self._knee_swap[stance] and not limit_handled:
-                    swap, back = self._limit_handling(stance, q, F, y, h_d)
+                if done and swap is None and knees is not None and knees.entries(stance) and not limit_handled:
+                    swap, back = knees.split(stance, q, F, y, h_d)
                     limit_handled = True
                     if swap is not None:
                         # out of iterations, a knee straight and its output out of reach: trade
                         # that output for the knee held at the limit, and iterate on
-                        self._swap_rows(swap, q, A, F)
+                        swap_rows(swap, q, A, F)
                         residual = float(np.max(np.abs(F)))
                         lu = self._lu(A)
                         n_max = it + s.cold_iterations
@@ -548,7 +362,7 @@ class IterativeIK:
                 eps = s.fd_step_s
                 q_eps = pin.integrate(self.model, q, eps * v_r)
                 self._evaluate(q_eps, stance, heading_rad, rows.A_eps)
-                self._swap_rows(swap, q_eps, rows.A_eps, None)
+                swap_rows(swap, q_eps, rows.A_eps, None)
                 rhs[:n] = ddh_d
                 rhs[:m] -= (rows.A_eps[:m] - A[:m]) @ v_r / eps
             if swap is not None:

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from amlip_qp.control.estimator import Estimator, Measurement
+from amlip_qp.alip.kalman import AngularMomentumFilter
+from amlip_qp.control.walking.estimator import Estimator, Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import RobotKinematics, load_robot
 
@@ -25,7 +26,9 @@ def test_measured_L_is_the_momentum_about_the_stance_contact(cassie):
     rng = np.random.default_rng(0)
     q, v = _state(cassie, rng)
     kin = RobotKinematics(cassie)
-    est = Estimator(kin, 0.0005, kalman=False).update(Measurement(0.0, q, v), "right")
+    estimator = Estimator(kin, 0.0005, kalman=False)
+    estimator.observe(Measurement(0.0, q, v))
+    est = estimator.estimate("right")
     ref = RobotKinematics(cassie)
     ref.update(q, v)
     r = ref.contact_position("right")
@@ -47,7 +50,8 @@ def test_kalman_filter_reduces_measurement_noise(cassie):
     raw, filt = [], []
     for k in range(400):
         vn = v + np.r_[rng.normal(0, 0.02, 6), rng.normal(0, 0.05, cassie.nv - 6)]
-        e = est.update(Measurement(k * 0.0005, q, vn), "left")
+        est.observe(Measurement(k * 0.0005, q, vn))
+        e = est.estimate("left")
         if k > 100:
             raw.append(e.L_meas_Nms[:2] - L_true[:2])
             filt.append(e.L_Nms[:2] - L_true[:2])
@@ -63,11 +67,34 @@ def test_touchdown_restarts_the_filters_from_the_new_contact(cassie):
     kin = RobotKinematics(cassie)
     est = Estimator(kin, 0.0005)
     for k in range(5):
-        est.update(Measurement(k * 0.0005, q, v), "left")
-    e = est.update(Measurement(0.01, q, v), "right", touchdown=True)
+        est.observe(Measurement(k * 0.0005, q, v))
+        est.estimate("left")
+    est.observe(Measurement(0.01, q, v))
+    e = est.estimate("right", touchdown=True)
     np.testing.assert_allclose(e.L_Nms, e.L_meas_Nms, atol=1e-12)
 
 
 def test_bad_control_period_is_a_typed_error(cassie):
     with pytest.raises(InputError, match="dt_s"):
         Estimator(RobotKinematics(cassie), 0.0)
+
+
+def test_the_filters_are_the_librarys_momentum_filter(cassie):
+    """The estimator's L is AngularMomentumFilter's, bit for bit: reset from the first
+    measurement, then one step per tick with p_st and the measured L about the stance contact."""
+    rng = np.random.default_rng(3)
+    q, v = _state(cassie, rng)
+    kin = RobotKinematics(cassie)
+    est = Estimator(kin, 0.0005)
+    ref = AngularMomentumFilter(cassie.mass_kg)
+    for k in range(20):
+        vn = v + rng.normal(0, 0.05, cassie.nv)
+        est.observe(Measurement(k * 0.0005, q, vn))
+        e = est.estimate("left")
+        Lx, Ly, Lz = e.L_meas_Nms.tolist()
+        if k == 0:
+            ref.reset(Lx, Ly)
+            expect = (Lx, Ly)
+        else:
+            expect = ref.step(e.p_st_m[0], e.p_st_m[1], Lx, Ly, 0.0005)
+        assert tuple(e.L_Nms[:2]) == expect and e.L_Nms[2] == Lz

@@ -1,55 +1,14 @@
-"""WalkingController: the speed integral, the never-NaN torque guarantee, saturation."""
+"""WalkingController: the never-NaN torque guarantee, saturation, the step clock, the speed correction."""
 
 import numpy as np
 import pytest
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.control.controller import SpeedCorrection, SpeedIntegrator, WalkingController
-from amlip_qp.control.estimator import Measurement
+from amlip_qp.control.walking.controller import WalkingController
+from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import RobotKinematics, load_robot
-
-
-def test_integral_removes_a_constant_bias_geometrically():
-    integ = SpeedIntegrator(SpeedCorrection(gain_per_step=0.3, settle_steps=0))
-    bias = 0.13  # the robot walks 0.13 m/s slower than what the planner is given
-    aimed = np.array([1.0, 0.0])
-    for k in range(1, 16):
-        v_step = aimed + integ.correction_mps - np.array([bias, 0.0])
-        c = integ.update(v_step, aimed)
-        assert c[0] == pytest.approx(bias * (1 - 0.7**k), rel=1e-12)
-    assert c[1] == 0.0
-
-
-def test_lateral_uses_the_stride_mean_so_sway_does_not_accumulate():
-    integ = SpeedIntegrator(SpeedCorrection(gain_per_step=0.5, settle_steps=0))
-    for k in range(20):
-        sway = 0.2 if k % 2 else -0.2  # alternating per-step lateral means, zero per stride
-        integ.update(np.array([0.0, sway]), np.zeros(2))
-    assert integ.correction_mps[1] == pytest.approx(0.0, abs=1e-12)
-
-
-def test_bounds_disturbances_settling_and_planar():
-    integ = SpeedIntegrator(SpeedCorrection(gain_per_step=1.0, max_correction_mps=0.2, settle_steps=2))
-    integ.update(np.array([0.0, 0.0]), np.array([0.3, 0.0]))
-    integ.update(np.array([0.0, 0.0]), np.array([0.3, 0.0]))
-    assert np.all(integ.correction_mps == 0.0)  # still settling
-    integ.update(np.array([0.0, 0.0]), np.array([0.3, 0.0]))
-    assert integ.correction_mps[0] == pytest.approx(0.2)  # clipped
-    integ.update(np.array([-0.5, 0.0]), np.array([0.3, 0.0]))  # error 0.8 > 0.5: a push, ignored
-    assert integ.correction_mps[0] == pytest.approx(0.2)
-    planar = SpeedIntegrator(SpeedCorrection(settle_steps=0), planar=True)
-    planar.update(np.array([0.0, 0.0]), np.array([0.1, 0.1]))
-    assert planar.correction_mps[1] == 0.0 and planar.correction_mps[0] > 0
-    off = SpeedIntegrator(SpeedCorrection(enabled=False, settle_steps=0))
-    off.update(np.zeros(2), np.array([0.3, 0.0]))
-    assert np.all(off.correction_mps == 0.0)
-
-
-def test_bad_speed_correction_is_a_typed_error():
-    with pytest.raises(InputError, match="gain_per_step"):
-        SpeedCorrection(gain_per_step=1.5)
 
 
 class _NaNTracker(Tracker):
@@ -126,3 +85,24 @@ def test_speed_correction_is_added_to_the_command_and_cached(rabbit):
     assert ctrl._corrected_command(cmd).vx_mps == 0.5 + 0.2
     other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
     assert ctrl._corrected_command(other).vx_mps == 0.7 + 0.2
+
+
+def test_the_clock_starts_the_steps_the_planner_starts(rabbit):
+    """One step clock: its stance and step start are the planner's, and it switches at touchdown."""
+    ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), RobotKinematics(rabbit), planner_backend="numpy")
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06)
+    q, v = rabbit.q_stand.copy(), np.zeros(rabbit.nv)
+    assert ctrl.stance is None
+    first = ctrl.step(Measurement(0.1, q, v, {"left": True, "right": True}), cmd)
+    assert first.stance == ctrl.clock.stance == ctrl.planner.stance == "left"
+    assert ctrl.clock.t_start_s == ctrl.planner.t_step_start_s == 0.1
+    # before the minimum phase a contact does not end the step; after it, it does
+    early = ctrl.step(Measurement(0.1 + 0.3 * 0.35, q, v, {"left": True, "right": True}), cmd)
+    assert not early.touchdown and early.phase == pytest.approx(0.3)
+    t_td = 0.1 + 0.8 * 0.35
+    td = ctrl.step(Measurement(t_td, q, v, {"left": True, "right": True}), cmd)
+    assert td.touchdown and td.stance == ctrl.clock.stance == ctrl.planner.stance == "right"
+    assert ctrl.clock.t_start_s == ctrl.planner.t_step_start_s == t_td
+    assert td.phase == 0.0 and len(ctrl.steps) == 1 and ctrl.steps[0].t_start_s == 0.1
+    ctrl.reset()
+    assert ctrl.stance is None and ctrl.clock.t_start_s == 0.0

@@ -1,7 +1,8 @@
-"""Benchmark of the tracker QP: replay recorded Cassie problems through several solvers.
+"""``amlip-qp bench qp``: replay recorded tracker QPs through several solvers.
 
-:func:`record_walk` runs a Cassie walk with the QP tracker in recording mode
-(every tick's problem is copied) and keeps the whole controller tick times
+:func:`record_walk` runs a scenario with the whole-body QP tracker (the
+tracker named ``"qp"`` in :data:`amlip_qp.sim.factory.TRACKER_MODULES`) and
+copies every tick's problem, keeping the whole controller tick times
 (estimate, plan, build, solve). :func:`bench_solvers` replays the recorded
 sequence through
 
@@ -9,7 +10,8 @@ sequence through
   tracker's path);
 - ``proxsuite-init``: ProxQP re-initialised at every problem (as TSID does);
 - every other installed ``qpsolvers`` backend among daqp, osqp, quadprog
-  (fixed variables substituted first, :meth:`QPProblem.without_fixed_variables`);
+  (fixed variables substituted first,
+  :meth:`~amlip_qp.qp.problem.QPProblem.without_fixed_variables`);
 
 and reports the median and 99th percentile solve time per solver (µs) and
 each one's ratio to the warm ProxSuite path. The solvers take turns in
@@ -17,21 +19,40 @@ blocks of 50 consecutive problems (each keeping its own state), so the
 machine's slow speed drifts, which reached 1.6x between runs on the 2-core
 development machine, affect every solver alike and the ratios stay
 comparable.
+
+Recording needs the controller and the MuJoCo plant, so the benchmark lives
+in ``sim``, the layer that may import both (``docs/ARCHITECTURE.md``).
+
+Arguments :func:`run_bench` reads from the namespace:
+
+- ``json``: ``None``, ``"-"`` (JSON on stdout, table on stderr) or a file path;
+- ``ticks``: number of recorded tracker QPs to replay (>= 1000 for the issue's
+  acceptance; default 1200 when absent);
+- ``scenario``: optional scenario name (default ``"cassie-1mps"``).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
-from amlip_qp.exceptions import InputError
+from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
+from amlip_qp.sim.factory import build_simulation, load, make_tracker
+from amlip_qp.sim.scenarios import get_scenario
 
 #: qpsolvers backends compared when installed.
 QPSOLVERS_BACKENDS: tuple[str, ...] = ("daqp", "osqp", "quadprog")
+
+#: The tracker whose problems are recorded (a name of :data:`amlip_qp.sim.factory.TRACKER_MODULES`).
+QP_TRACKER = "qp"
 
 
 def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: float = 1.0):
@@ -50,21 +71,13 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
         after ``t_skip_s``, the controller tick wall times of those ticks (µs),
         and whether the robot fell.
     """
-    from amlip_qp.control.controller import WalkingController
-    from amlip_qp.control.wbc.tracker import QPTracker
-    from amlip_qp.robots import load_robot
-    from amlip_qp.robots.kinematics import RobotKinematics
-    from amlip_qp.sim.harness import Simulation
-    from amlip_qp.sim.scenarios import get_scenario
-
     if n_ticks < 1:
         raise InputError(f"n_ticks must be >= 1, got {n_ticks}")
     sc = get_scenario(scenario)
-    robot = load_robot(sc.robot)
-    kin = RobotKinematics(robot)
-    tracker = QPTracker(robot)
-    ctrl = WalkingController(robot, tracker, kin)
-    duration = t_skip_s + n_ticks * ctrl.dt_s
+    tracker = make_tracker(QP_TRACKER, load(sc.robot))
+    sim = build_simulation(sc, tracker)
+    dt_s = sim.controller.dt_s
+    duration = t_skip_s + n_ticks * dt_s
     problems: list[QPProblem] = []
     seen = {"x": None}
 
@@ -75,22 +88,19 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
             problems.append(tracker.last_problem.copy())
         seen["x"] = x
 
-    result = Simulation(robot, ctrl, sc.command).run(duration, on_tick=keep)
-    skip = int(round(t_skip_s / ctrl.dt_s))
+    result = sim.run(duration, on_tick=keep)
+    skip = int(round(t_skip_s / dt_s))
     return problems, result.tick_time_us[skip:], result.fell
+
+
+def tracker_solver_options() -> dict:
+    """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
+    return make_tracker(QP_TRACKER, load("rabbit")).solver.options
 
 
 def _stats(times_us: list[float]) -> dict:
     t = np.asarray(times_us, dtype=float)
     return {"median_us": float(np.median(t)), "p99_us": float(np.percentile(t, 99)), "n": int(t.size)}
-
-
-def tracker_solver_options() -> dict:
-    """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
-    from amlip_qp.control.wbc.tracker import QPTracker
-    from amlip_qp.robots import load_robot
-
-    return QPTracker(load_robot("rabbit")).solver.options
 
 
 #: Problems solved untimed before the timed pass (CPU frequency and caches
@@ -107,8 +117,6 @@ class _ProxSuiteRunner:
         self.retries = 0
 
     def __call__(self, problem: QPProblem) -> None:
-        from amlip_qp.exceptions import QPError
-
         try:
             self.solver.solve(problem)
         except QPError:
@@ -127,8 +135,6 @@ class _QPSolversRunner:
         self.failures = 0
 
     def __call__(self, problem: QPProblem) -> None:
-        from amlip_qp.exceptions import QPError
-
         try:
             problem.solve_with(self.backend)
         except QPError:
@@ -164,8 +170,8 @@ def bench_solvers(
 ) -> dict:
     """Solve-time statistics per solver on ``problems`` (see the module docstring).
 
-    ``solver_options`` are the :class:`ProxQPSolver` arguments of both ProxSuite
-    entries (default: the tracker's, :func:`tracker_solver_options`), so the
+    ``solver_options`` are the :class:`~amlip_qp.qp.solver.ProxQPSolver` arguments of both
+    ProxSuite entries (default: the tracker's, :func:`tracker_solver_options`), so the
     bench times the solver exactly as the tracker runs it.
 
     Returns:
@@ -239,3 +245,26 @@ def format_report(report: dict) -> str:
     if missing:
         lines.append(f"not installed, not compared: {', '.join(missing)} (pip install -e '.[bench]')")
     return "\n".join(lines)
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    """Record a walk, replay its QPs through every solver, print the table (and JSON)."""
+    from amlip_qp.output_paths import check_output_path, writing
+
+    n_ticks = int(getattr(args, "ticks", None) or 1200)
+    scenario = getattr(args, "scenario", None) or "cassie-1mps"
+    target = getattr(args, "json", None)
+    check_output_path("--json", target)
+    report = run(n_ticks=n_ticks, scenario=scenario)
+    table = format_report(report)
+    if target == "-":
+        sys.stderr.write(table + "\n")
+        json.dump(report, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+        return 0
+    print(table)
+    if target:
+        with writing("--json", target):
+            Path(target).write_text(json.dumps(report, indent=2) + "\n")
+        print(f"wrote {target}")
+    return 0 if not report["fell"] else 1

@@ -2,7 +2,7 @@
 
 import pytest
 
-from amlip_qp.control.gait import GaitLogic, GaitParams
+from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.exceptions import InputError
 
 

@@ -24,7 +24,7 @@ toe is passive, zero torque, as in the paper) follow
 
     vdot_a = qdd_r + K_d (qd_r - qd) + K_p (q_r - q)                      (3)
 
-with ``(q_r, qd_r, qdd_r)`` from :class:`~amlip_qp.control.ik.IterativeIK`.
+with ``(q_r, qd_r, qdd_r)`` from :class:`~amlip_qp.control.pbc.ik.IterativeIK`.
 (1)-(3) are linear in ``x = (vdot, tau_ctrl, lambda)``; with ``n_c``
 constraint rows and ``n_a`` controlled joints this is a square system of
 ``nv + n_c + n_a`` equations, solved each tick. Written as torques, (3) gives
@@ -36,7 +36,6 @@ so the references already account for the deflection. With
 :attr:`PBCGains.spring_model_offset` (the paper's "Springs") the IK holds them
 at the simplified model's deflections instead (stance leg under the commanded
 contact force, swing leg rigid), which offsets the stance knee reference.
-``target.stance_knee_offset_rad`` is added to the stance knee reference.
 
 Swing torso compensation (:attr:`PBCGains.swing_torso_compensation`, on for
 Cassie): the swing joints' references are moved to the IK solution for the
@@ -53,110 +52,22 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg.lapack import dgesv as _dgesv
 
-from amlip_qp.control.ik import IKSettings, IterativeIK
-from amlip_qp.control.springs import spring_deflections_rad
+from amlip_qp.alip import other_side
+from amlip_qp.control.pbc.gains import PBCGains, default_gains
+from amlip_qp.control.pbc.ik import IterativeIK
+from amlip_qp.control.pbc.ik_settings import IKSettings
+from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
-from amlip_qp.exceptions import InputError
+from amlip_qp.robots.outputs import OutputMap
 
-
-@dataclass(frozen=True)
-class PBCGains:
-    """Gains of the PBC (acceleration level) and of its fallback (torque level).
-
-    Attributes:
-        kp_stance_ps2: ``K_p`` on the stance leg's joints, 1/s^2.
-        kd_stance_ps: ``K_d`` on the stance leg's joints, 1/s.
-        kp_swing_ps2: ``K_p`` on the swing leg's joints, 1/s^2.
-        kd_swing_ps: ``K_d`` on the swing leg's joints, 1/s.
-        swing_start_fraction: Swing gains at the start of a step, as a fraction
-            of the full gains (phase schedule: the swing leg leaves the ground
-            with the old stance leg's velocity, far from the reference's).
-        swing_ramp_phase: Phase over which the swing gains ramp linearly to full.
-        touchdown_gain_drop: Fraction by which the swing gains drop as
-            ``target.swing_contact_weight`` goes from 0 to 1 (softer landing).
-        fallback_kp_Nmprad: Fallback joint stiffness, N m/rad.
-        fallback_kd_Nmsprad: Fallback joint damping, N m s/rad.
-        swing_torso_compensation: Fraction (0..1) of the torso-orientation error
-            the swing leg compensates: its joint references are moved to the IK
-            solution for the *measured* torso pitch/roll (first order, through
-            the IK's ``A^-1``), so the swing foot follows its output reference
-            relative to the CoM even when the torso is off its reference.
-        spring_model_offset: The paper's spring compensation ("Springs"): the IK
-            holds the springs at the deflections of the simplified model
-            (:func:`~amlip_qp.control.springs.spring_deflections_rad` on the
-            stance leg under the previous tick's commanded contact force; the
-            swing leg rigid at rest) instead of at their encoder estimates; the
-            stance knee reference then carries the compensating offset (exact,
-            through the IK, not the first-order
-            :func:`~amlip_qp.control.springs.stance_knee_offset_rad`).
-    """
-
-    kp_stance_ps2: float = 400.0
-    kd_stance_ps: float = 40.0
-    kp_swing_ps2: float = 400.0
-    kd_swing_ps: float = 40.0
-    swing_start_fraction: float = 1.0
-    swing_ramp_phase: float = 0.2
-    touchdown_gain_drop: float = 0.0
-    fallback_kp_Nmprad: float = 100.0
-    fallback_kd_Nmsprad: float = 5.0
-    swing_torso_compensation: float = 0.0
-    spring_model_offset: bool = False
-
-    def __post_init__(self):
-        vals = [getattr(self, f) for f in self.__dataclass_fields__ if f != "spring_model_offset"]
-        if (
-            not all(np.isfinite(v) and v >= 0 for v in vals)
-            or self.touchdown_gain_drop > 1
-            or self.swing_start_fraction > 1
-            or self.swing_ramp_phase <= 0
-            or self.swing_torso_compensation > 1
-        ):
-            raise InputError(
-                "PBC gains must be finite and >= 0 (touchdown_gain_drop, swing_start_fraction <= 1, "
-                f"swing_ramp_phase > 0), got {self!r}"
-            )
-
-    def swing_scale(self, phase: float, contact_weight: float) -> float:
-        """Factor (dimensionless) on the swing leg's gains at this phase and touchdown weight."""
-        s = float(phase) if math.isfinite(phase) else 1.0
-        w = min(1.0, max(0.0, float(contact_weight))) if math.isfinite(contact_weight) else 0.0
-        ramp = min(1.0, max(0.0, s) / self.swing_ramp_phase)
-        start = self.swing_start_fraction + (1.0 - self.swing_start_fraction) * ramp
-        return start * (1.0 - self.touchdown_gain_drop * w)
-
-
-def default_gains(robot) -> PBCGains:
-    """Tuned gains per robot (closed-loop MuJoCo runs, tests/test_walk_pbc.py).
-
-    Cassie's stance leg gets softer gains (``K_p`` 200 1/s^2, ``K_d`` 28 1/s):
-    with stiffer stance gains (900 1/s^2) the joint PD in series with the leg
-    springs made the robot fall within 0.5 s. Cassie's swing leg compensates
-    the torso error (``swing_torso_compensation`` 1): the 100 N x 0.2 s push
-    pitches the pelvis about 0.12 rad forward, which without it left the swing
-    foot about 0.15 m behind and 5 cm below its reference, so it struck the
-    ground early and short (and the robot fell). Cassie uses the paper's spring
-    model (``spring_model_offset``) rather than the spring encoders in the IK:
-    walking is the same (in place 20 s drift 0.097 vs 0.096 m; 1 m/s 1.000 vs
-    1.001 m/s; ramp 2.096 vs 2.095 m/s; push survived, 0.986 vs 0.982 m/s).
-    Rabbit (rigid) uses 400 / 40
-    on both legs and no torso compensation: with it (1.0 or 0.5) Rabbit fell
-    within 6 s at 1 m/s.
-    """
-    if robot.couplings or len(robot.passive_v_idx):
-        return PBCGains(
-            kp_stance_ps2=200.0,
-            kd_stance_ps=28.0,
-            kp_swing_ps2=400.0,
-            kd_swing_ps=40.0,
-            swing_torso_compensation=1.0,
-            spring_model_offset=True,
-        )
-    return PBCGains()
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 
 @dataclass
@@ -169,7 +80,6 @@ class _Layout:
     kp: np.ndarray = field(default_factory=lambda: np.zeros(0))
     kd: np.ndarray = field(default_factory=lambda: np.zeros(0))
     swing_mask: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    knee_k: int | None = None  # position of the stance knee in ctrl
     K: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # KKT matrix, constant entries preset
     rhs: np.ndarray = field(default_factory=lambda: np.zeros(0))
     n_contact: int = 0  # contact rows (the spring rows follow)
@@ -186,7 +96,7 @@ class PBCTracker(Tracker):
 
     name = "pbc"
 
-    def __init__(self, robot, gains: PBCGains | None = None, ik_settings: IKSettings | None = None):
+    def __init__(self, robot: Robot, gains: PBCGains | None = None, ik_settings: IKSettings | None = None):
         self.robot = robot
         self.gains = gains or default_gains(robot)
         self.ik = IterativeIK(robot, ik_settings)
@@ -197,19 +107,13 @@ class PBCTracker(Tracker):
         rows = [spring.row_v(nv) for spring in robot.springs]
         self._J_springs = np.array(rows).reshape(len(rows), nv)
         self._layout: dict[str, _Layout] = {}
-        smap = robot.state_map
         g = self.gains
         for side in robot.foot_sides:
-            ctrl = self.ik.controlled_actuated(side)
-            swing_side = robot.other_side(side)
+            ctrl = self.ik.equations.controlled_actuated(side)
+            swing_side = other_side(side)
             swing_mask = np.array([act.joint_names[k].startswith(swing_side) for k in ctrl], dtype=bool)
             kp = np.where(swing_mask, g.kp_swing_ps2, g.kp_stance_ps2)
             kd = np.where(swing_mask, g.kd_swing_ps, g.kd_stance_ps)
-            knee_k = None
-            knee = f"{side}-knee"
-            if knee in smap.joint_pin_v:
-                hits = [i for i, k in enumerate(ctrl) if act.pin_v_idx[k] == smap.joint_pin_v[knee]]
-                knee_k = hits[0] if hits else None
             self._layout[side] = _Layout(
                 ctrl=ctrl,
                 ctrl_v=act.pin_v_idx[ctrl],
@@ -217,7 +121,6 @@ class PBCTracker(Tracker):
                 kp=kp,
                 kd=kd,
                 swing_mask=swing_mask,
-                knee_k=knee_k,
             )
         self._blade = {s: len(robot.force_frame_ids[s]) == 2 for s in robot.foot_sides}
         self._planar = robot.is_planar
@@ -235,18 +138,16 @@ class PBCTracker(Tracker):
                 K[:nv, nv + na + ncf :] = -self._J_springs.T
             lay.K, lay.rhs, lay.n_contact = K, np.zeros(nv + nc + na), ncf
         self._nv = nv
-        from amlip_qp.robots.outputs import OutputMap
-
         names = OutputMap(robot).names
         self._torso_rows = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
         self._rhs_comp = np.zeros(nv)
         # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
-        self._spring_rest = self.ik.spring_rest_values()
+        self._spring_rest = self.ik.equations.spring_rest_values()
         # Per stance: the held springs whose deflection the model gives, in the order of
         # spring_deflections_rad (that leg's joints, then its couplings with a spring).
         self._spring_idx = {
             side: np.array(
-                [k for k, s in enumerate(self.ik.held_springs)
+                [k for k, s in enumerate(self.ik.equations.held_springs)
                  if s.side == side and (s.kind == "joint" or s.stiffness > 0)],
                 dtype=int,
             )  # fmt: skip
@@ -260,7 +161,7 @@ class PBCTracker(Tracker):
         self._last_force = {side: None for side in self.robot.foot_sides}
 
     # ---------------------------------------------------------------- model
-    def _contact_rows(self, kin, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
+    def _contact_rows(self, kin: RobotKinematics, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
         """Write the stance contact rows ``J`` (ncf x nv) and ``Jdot_v`` (ncf,) into the buffers."""
         robot = self.robot
         cid = robot.contact_frame_ids[stance]
@@ -295,19 +196,19 @@ class PBCTracker(Tracker):
         a_out[3] = ax * w[0] + ay * w[1] + az * w[2]
         a_out[4] = bx * w[0] + by * w[1] + bz * w[2]
 
-    def contact_constraints(self, kin, stance: str) -> tuple[np.ndarray, np.ndarray]:
+    def contact_constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
         ncf = self._layout[stance].n_contact
         J, a = np.empty((ncf, self._nv)), np.empty(ncf)
         self._contact_rows(kin, stance, J, a)
         return J, a
 
-    def constraints(self, kin, stance: str) -> tuple[np.ndarray, np.ndarray]:
+    def constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """All constraint rows ``(J_c, Jdot_c v)``: stance contact, then the rigid springs."""
         Jf, af = self.contact_constraints(kin, stance)
         return np.vstack([Jf, self._J_springs]), np.concatenate([af, np.zeros(len(self._J_springs))])
 
-    def solve_dynamics(self, kin, stance: str, vdot_ctrl) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def solve_dynamics(self, kin: RobotKinematics, stance: str, vdot_ctrl) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Solve (1)-(3) for ``(vdot, tau_ctrl, lambda)`` given the controlled joints' accelerations.
 
         Raises:
@@ -330,7 +231,7 @@ class PBCTracker(Tracker):
         return x[:nv], x[nv : nv + na], x[nv + na :]
 
     # ---------------------------------------------------------------- track
-    def compute(self, kin, target: TrackingTarget) -> TrackerResult:
+    def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:
         """Torques (actuator order, joint side, N m) tracking ``target`` (see the module docstring)."""
         t0 = time.perf_counter()
         stance = target.stance
@@ -347,11 +248,6 @@ class PBCTracker(Tracker):
         q_r = ik.q_r[lay.ctrl_q].copy()
         v_r = ik.v_r[lay.ctrl_v]
         a_r = ik.a_r[lay.ctrl_v]
-        if lay.knee_k is not None:
-            offset = float(target.stance_knee_offset_rad)
-            offset = offset if math.isfinite(offset) else 0.0
-            q_r[lay.knee_k] += offset
-            info["knee_offset_rad"] = offset
         if not ik.ok:
             return self._fallback(kin, lay, q_r, "ik_failed", info, t0, use_ref=False)
         c = self.gains.swing_torso_compensation
@@ -382,7 +278,7 @@ class PBCTracker(Tracker):
         info["solve_time_us"] = (time.perf_counter() - t0) * 1e6
         return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)
 
-    def _compensate_swing(self, kin, target, lay: _Layout, c: float, q_r, v_r) -> None:
+    def _compensate_swing(self, kin: RobotKinematics, target: TrackingTarget, lay: _Layout, c: float, q_r, v_r) -> None:
         """Move the swing joints' references to the IK solution at the measured torso orientation.
 
         ``dq = A^-1 [dh; 0]`` with ``dh`` the torso rows' error (measured minus
@@ -403,7 +299,7 @@ class PBCTracker(Tracker):
         q_r[sw] += dq[lay.ctrl_v[sw]]
         v_r[sw] += dv[lay.ctrl_v[sw]]
 
-    def _fallback(self, kin, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True) -> TrackerResult:
+    def _fallback(self, kin: RobotKinematics, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True) -> TrackerResult:
         """Damped joint PD towards the reference (or damping only), never NaN."""
         g = self.gains
         q = kin.q[lay.ctrl_q]

@@ -17,6 +17,11 @@ The hip-yaw outputs are joint coordinates and stay in Python.
 
 The source depends only on the robot's layout and ``nv``: it is compiled
 once into the codegen cache (see :mod:`amlip_qp.codegen.runtime`).
+
+It lives in the walking loop: it needs CasADi and the codegen runtime, which
+``robots`` may not import, and the walking controller is what installs it
+(``WalkingController(output_backend="c")``); every tracker then reads it
+through ``kin.outputs``.
 """
 
 from __future__ import annotations
@@ -24,13 +29,19 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
+from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.exceptions import CodegenError
 from amlip_qp.robots.outputs import OutputMap
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
+    from amlip_qp.robots.robot import Robot
 
 FUNCTION_NAME = "output_map"
 SOURCE_FILE = "amlip_outputs.c"
@@ -88,6 +99,7 @@ def _function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
     c, r_st, r_sw = X_parts[len(cols)], X_parts[len(cols) + 1], X_parts[len(cols) + 2]
     cD, sD = ca.cos(heading), ca.sin(heading)
     p_sw = c - r_sw
+    p_sw_x, p_sw_y = world_to_heading_xy(p_sw[0], p_sw[1], cD, sD)
     if cassie:
         R0, R1, R2 = X_parts[0], X_parts[1], X_parts[2]  # columns 0, 1, 2
         pitch = ca.atan2(-R0[2], ca.hypot(R0[0], R0[1]))
@@ -96,12 +108,12 @@ def _function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
         d = toe - heel
         toe_pitch = ca.atan2(-d[2], ca.hypot(d[0], d[1]))
         y = ca.vertcat(
-            pitch, roll, 0, 0, c[2] - r_st[2], cD * p_sw[0] + sD * p_sw[1], -sD * p_sw[0] + cD * p_sw[1], p_sw[2], toe_pitch
+            pitch, roll, 0, 0, c[2] - r_st[2], p_sw_x, p_sw_y, p_sw[2], toe_pitch
         )
     else:
         R0, R2 = X_parts[0], X_parts[1]  # columns 0 and 2
         pitch = ca.atan2(R2[0], R2[2])
-        y = ca.vertcat(pitch, c[2] - r_st[2], cD * p_sw[0] + sD * p_sw[1], p_sw[2])
+        y = ca.vertcat(pitch, c[2] - r_st[2], p_sw_x, p_sw[2])
     grad = ca.jacobian(y, X)
     xdot_sym = ca.SX.sym("xdot", X.shape[0])
     curv = ca.vertcat(*[ca.mtimes([xdot_sym.T, ca.hessian(y[i], X)[0], xdot_sym]) for i in range(y.shape[0])])
@@ -121,7 +133,7 @@ def _function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
 
 
 def generate_source(layout: str, nv: int) -> bytes:
-    """The C source of the output map for a layout (``"cassie"`` or ``"planar"``) and ``nv``."""
+    """The C source of the output map for a layout (``"cassie"`` or ``"rabbit"``) and ``nv``."""
     fn, _, _ = _function(layout, nv)
     cg = ca.CodeGenerator(SOURCE_FILE, dict(generate.CODEGEN_OPTIONS, with_header=False))
     cg.add(fn)
@@ -139,13 +151,12 @@ class CompiledOutputMap:
         CodegenError: The compiler rejected the source or the library does not load.
     """
 
-    def __init__(self, robot, cache_dir: str | os.PathLike | None = None):
+    def __init__(self, robot: Robot, cache_dir: str | os.PathLike | None = None):
         ref = OutputMap(robot)
         self.robot = robot
         self.layout, self.names = ref.layout, ref.names
         self._ref = ref
-        self._yaw_q = getattr(ref, "_yaw_q", None)
-        self._yaw_v = getattr(ref, "_yaw_v", None)
+        self._yaw_q, self._yaw_v = ref.yaw_q_idx, ref.yaw_v_idx
         nv = robot.nv
         source = generate_source(self.layout, nv)
         self.library_path, functions = runtime.compile_and_load(
@@ -171,7 +182,7 @@ class CompiledOutputMap:
         """Number of outputs."""
         return len(self.names)
 
-    def evaluate(self, kin, stance: str, heading_rad: float = 0.0):
+    def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
         swing = self._ref.checked_swing(stance, heading_rad)
         robot = self.robot

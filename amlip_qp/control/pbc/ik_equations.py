@@ -1,0 +1,137 @@
+"""The equations of the iterative IK (:class:`~amlip_qp.control.pbc.ik.IterativeIK`).
+
+Formulation (square system, ``nv`` equations in the ``nv`` velocity coordinates)
+------------------------------------------------------------------------------
+Unknown: the full configuration ``q`` (base and all joints). Equations:
+
+1. **Outputs**: ``h_0(q) = h_d`` (the ``n_h`` outputs of
+   :mod:`amlip_qp.robots.outputs`; Cassie 9, Rabbit 4).
+2. **Stance contact pose held at its estimate**: the pose of the stance
+   ``{st}-contact`` frame equals the estimated one: position (m) and
+   orientation (rad, world-axes rotation vector ``log3(R R_est^T)``). For a
+   planar robot only its in-plane rows (x, z, pitch) exist. For Rabbit the
+   contact frame rides on the shin, so this fixes the stance shin's absolute
+   angle (the unactuated coordinate) at its estimate; for Cassie it fixes the
+   foot on the ground, including its roll about the blade.
+3. **Unactuated stance ankle held at its estimate**: if the stance contact
+   frame's parent joint is actuated and the system would otherwise be
+   under-determined (Cassie's stance toe, passive in the paper), its angle
+   equals the estimate.
+4. **Springs held at their estimates**: each passive joint that is not in a
+   coupling (Cassie's shins) equals its estimate, and each coupling length
+   (Cassie's ``q_knee + q_tarsus``) equals its estimated length, so the
+   tarsus moves with the knee as through a rigid achilles rod.
+
+Consequently the free coordinates are: the actuated joints other than the
+stance ankle (Cassie: stance hip roll/yaw/pitch and knee, swing hip
+roll/yaw/pitch, knee and toe: 9 = ``n_h``; Rabbit: both hips and knees, 4 =
+``n_h``) -- the base pose and the tarsi are then dependent (the base follows
+from the stance leg standing on the fixed foot; each tarsus from its knee).
+Fixed (at the estimate): the stance contact pose, the stance ankle (Cassie),
+the shins and the coupling lengths. Cassie: 9 + 6 + 1 + 2 + 2 = 20 = nv;
+Rabbit: 4 + 3 = 7 = nv.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amlip_qp.exceptions import MJCFError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
+
+
+class StanceRows:
+    """Per-stance constant parts of the system (built once) and its per-tick buffers."""
+
+    def __init__(self, nv: int, n_out: int, n_pose: int, lin_q: np.ndarray, lin_v: np.ndarray, lin_rate: np.ndarray):
+        self.n_var = n_out + n_pose  # rows that change with q
+        self.lin_q = lin_q  # (n_lin, nq): linear residual rows  L_q q - b
+        self.lin_rate = lin_rate  # (n_lin, nv): held rates = lin_rate @ v_est
+        self.A = np.zeros((nv, nv))
+        self.A[self.n_var :] = lin_v
+        self.A_eps = self.A.copy()
+        self.drift = np.zeros(self.n_var)
+        self.F = np.zeros(nv)
+
+
+class IKEquations:
+    """Which coordinates the IK holds, and the constant rows of its system per stance (module doc).
+
+    Args:
+        robot: The robot.
+        n_out: Number of outputs ``n_h``.
+
+    Attributes:
+        pose_rows: Rows of the stance contact pose's 6-D twist that are equations
+            (planar robots: x, z, pitch).
+        held_springs: The springs the IK holds: the passive joints outside
+            couplings, then the couplings (the order of ``held_springs`` of
+            :meth:`IterativeIK.solve <amlip_qp.control.pbc.ik.IterativeIK.solve>`).
+        ankle_v, ankle_q: Side -> Pinocchio ``v`` / ``q`` index of the held stance
+            ankle, or ``None`` when no ankle is held.
+        rows: Side -> the :class:`StanceRows` of that stance.
+
+    Raises:
+        MJCFError: The model does not give a square system (outputs + held
+            coordinates != nv), or the stance ankle to hold is not actuated.
+    """
+
+    def __init__(self, robot: Robot, n_out: int):
+        self.robot = robot
+        m = robot.pin_model
+        nv, nq = m.nv, m.nq
+        # in-plane rows of the contact pose (planar robots: x, z, pitch)
+        self.pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
+        # Held springs: the passive joints outside couplings, then the coupling lengths.
+        springs = robot.springs
+        self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
+            r for r in springs if r.kind == "coupling"
+        )
+        n_fixed = len(self.pose_rows) + len(self.held_springs)
+        need_ankle = nv - (n_out + n_fixed)
+        if need_ankle not in (0, 1):
+            raise MJCFError(
+                f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates"
+            )
+        # the stance ankle: the contact frame's parent joint, if actuated and needed
+        self.ankle_v: dict[str, int | None] = {}
+        self.ankle_q: dict[str, int | None] = {}
+        act_v = [int(i) for i in robot.actuated.pin_v_idx]
+        for side in robot.foot_sides:
+            jid = m.frames[robot.contact_frame_ids[side]].parentJoint
+            iv, iq = m.joints[jid].idx_v, m.joints[jid].idx_q
+            if need_ankle == 1:
+                if iv not in act_v:
+                    raise MJCFError(f"{robot.name}: the {side} contact's parent joint is not actuated")
+                self.ankle_v[side], self.ankle_q[side] = iv, iq
+            else:
+                self.ankle_v[side] = self.ankle_q[side] = None
+        # linear rows per stance: ankle (held, with its estimated rate), springs and couplings (rate 0)
+        self.rows: dict[str, StanceRows] = {}
+        for side in robot.foot_sides:
+            lq, lv, lr = [], [], []
+            if self.ankle_v[side] is not None:
+                r_q, r_v = np.zeros(nq), np.zeros(nv)
+                r_q[self.ankle_q[side]] = 1.0
+                r_v[self.ankle_v[side]] = 1.0
+                lq.append(r_q), lv.append(r_v), lr.append(r_v.copy())
+            for spring in self.held_springs:
+                lq.append(spring.row_q(nq)), lv.append(spring.row_v(nv)), lr.append(np.zeros(nv))
+            self.rows[side] = StanceRows(
+                nv, n_out, len(self.pose_rows), np.array(lq).reshape(-1, nq),
+                np.array(lv).reshape(-1, nv), np.array(lr).reshape(-1, nv)
+            )
+
+    def controlled_actuated(self, stance: str) -> np.ndarray:
+        """Indices into the actuator list of the joints the IK solves for (all but the stance ankle)."""
+        ankle = self.ankle_v[stance]
+        return np.array([k for k, iv in enumerate(self.robot.actuated.pin_v_idx) if iv != ankle], dtype=int)
+
+    def spring_rest_values(self) -> np.ndarray:
+        """Rest values (rad) of :attr:`held_springs`, in their order: the passive joints
+        outside couplings (their spring reference), then each coupling's rest length."""
+        return np.array([spring.rest for spring in self.held_springs], dtype=float)

@@ -1,0 +1,104 @@
+"""Straight-knee handling of the iterative IK (:attr:`IKSettings.knee_limit_swap
+<amlip_qp.control.pbc.ik_settings.IKSettings.knee_limit_swap>`).
+
+A Newton iterate that clamps a knee at its straight-leg range limit breaks the
+rows through the knee (Cassie's coupling ``q_knee + q_tarsus``), which the
+next step undoes: the iterates then wander with residuals of order 1. When the
+iterations end unconverged with a knee at that limit, :meth:`KneeLimits.split`
+decides, per clamped knee, between
+
+- **swap**: the knee's output is out of reach (``|y| < |h_d|``: the CoM too
+  low over the stance foot, the swing foot short of its target); the output's
+  row is exchanged for "knee = limit" (:func:`swap_rows`), a square system
+  again, and that output gives way while all the others stay exact;
+- **back off**: the output is reachable and the straight leg is only a bad
+  (near-singular) iterate; the caller restarts from the knee moved off the limit.
+
+A knee entry is the tuple ``(output row, knee q index, knee v index,
+straight-leg limit, other end of the range)``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amlip_qp.alip import other_side
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.outputs import OutputMap
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.control.pbc.ik_settings import IKSettings
+    from amlip_qp.robots.robot import Robot
+
+#: ``(output row, knee q index, knee v index, straight-leg limit, other end)``.
+KneeEntry = tuple[int, int, int, float, float]
+
+
+class KneeLimits:
+    """The knees that may be held at their straight-leg limit, per stance side.
+
+    Per stance: the stance knee against ``com_z_over_stance`` and the swing
+    knee against ``com_x_over_swing`` (whichever outputs the robot has). The
+    straight leg is the limit towards which the stance CoM height grows, read
+    from the output Jacobian at the robot's standing configuration. A robot
+    without ``{side}-knee`` joints has none.
+
+    Args:
+        robot: The robot.
+        settings: The IK settings (``swap_threshold``).
+    """
+
+    def __init__(self, robot: Robot, settings: IKSettings):
+        self.swap_threshold = settings.swap_threshold
+        names = list(OutputMap(robot).names)
+        smap = robot.state_map
+        m = robot.pin_model
+        self._knees: dict[str, list[KneeEntry]] = {side: [] for side in robot.foot_sides}
+        if not all(f"{sd}-knee" in smap.joint_pin_q for sd in robot.foot_sides):
+            return
+        k0 = RobotKinematics(robot)
+        k0.update_positions(robot.q_stand)
+        for side in robot.foot_sides:
+            other = other_side(side)
+            _, J0, _ = k0.outputs(side, 0.0)
+            for row_name, knee_side in (("com_z_over_stance", side), ("com_x_over_swing", other)):
+                if row_name not in names:
+                    continue
+                iq, iv = smap.joint_pin_q[f"{knee_side}-knee"], smap.joint_pin_v[f"{knee_side}-knee"]
+                # straight leg = the limit towards which the stance CoM height grows
+                grow = J0[names.index("com_z_over_stance"), smap.joint_pin_v[f"{side}-knee"]]
+                lo_, hi_ = float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])
+                limit, other_end = (hi_, lo_) if grow > 0 else (lo_, hi_)
+                self._knees[side].append((names.index(row_name), iq, iv, limit, other_end))
+
+    def entries(self, stance: str) -> tuple[KneeEntry, ...]:
+        """The knees that may be held at their limit with this stance (module doc), possibly none."""
+        return tuple(self._knees[stance])
+
+    def split(self, stance: str, q, F, y, h_d) -> tuple[list[KneeEntry] | None, list[KneeEntry]]:
+        """For an unconverged solve (max-norm residual ``F`` above the threshold): the knees
+        clamped at their straight-leg limit, as ``(swap, back_off)`` (module doc); ``swap``
+        is ``None`` when empty."""
+        thr = self.swap_threshold
+        if float(np.max(np.abs(F))) <= thr:
+            return None, []
+        swap, back = [], []
+        for sp in self._knees[stance]:
+            row, iq = sp[0], sp[1]
+            if abs(q[iq] - sp[3]) < 1e-9:
+                (swap if abs(y[row]) < abs(h_d[row]) - thr else back).append(sp)
+        return (swap or None), back
+
+
+def swap_rows(swap: list[KneeEntry] | None, q, A, F) -> None:
+    """Replace each exchanged output row of ``A`` (and of the residual ``F``, if given) by
+    ``q_knee - limit`` (the row of that knee)."""
+    if swap is None:
+        return
+    for row, iq, iv, limit, _ in swap:
+        A[row] = 0.0
+        A[row, iv] = 1.0
+        if F is not None:
+            F[row] = q[iq] - limit

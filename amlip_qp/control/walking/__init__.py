@@ -1,0 +1,13 @@
+"""The walking loop around a tracker (one job per module).
+
+- :mod:`~amlip_qp.control.walking.controller`: :class:`WalkingController`, one call per control tick;
+- :mod:`~amlip_qp.control.walking.estimator`: the state estimate (``p_st``, filtered ``L``, ``v_z``);
+- :mod:`~amlip_qp.control.walking.clock`: :class:`StepClock`, the stance side, step start and phase;
+- :mod:`~amlip_qp.control.walking.gait`: touchdown detection;
+- :mod:`~amlip_qp.control.walking.speed`: the per-step integral on the speed error;
+- :mod:`~amlip_qp.control.walking.outputs_compiled`: the output map ``h_0(q)`` as generated C.
+
+The walking loop runs any :class:`~amlip_qp.control.tracker.Tracker` and
+imports no specific one. This package's ``__init__`` imports nothing, so
+importing one module does not load the others.
+"""

@@ -1,0 +1,64 @@
+"""The step clock: which leg is in stance, when the step started, how far it is.
+
+The walking loop has one :class:`StepClock`. At every touchdown the
+controller starts a new step on it; every tick it reads the time in the step
+(given to the planner) and the unclipped phase (given to the touchdown test)
+from it. The planner keeps its own copy of the step start only to integrate
+the commanded turn rate; both are set from the same touchdown time.
+"""
+
+from __future__ import annotations
+
+from amlip_qp.alip import other_side
+from amlip_qp.exceptions import InputError
+
+
+class StepClock:
+    """Stance side, start time and phase of the current step.
+
+    Before the first :meth:`start` there is no step: :attr:`stance` is
+    ``None`` and the step start is 0 s.
+    """
+
+    def __init__(self) -> None:
+        self._stance: str | None = None
+        self._t_start_s = 0.0
+
+    @property
+    def stance(self) -> str | None:
+        """Stance side of the current step (``None`` before the first step)."""
+        return self._stance
+
+    @property
+    def swing(self) -> str | None:
+        """Swing side of the current step (``None`` before the first step)."""
+        return None if self._stance is None else other_side(self._stance)
+
+    @property
+    def t_start_s(self) -> float:
+        """Time at which the current step started, s."""
+        return self._t_start_s
+
+    def start(self, stance: str, t_s: float) -> None:
+        """Begin a step with ``stance`` in stance at time ``t_s`` (s): a touchdown.
+
+        Raises:
+            InputError: ``stance`` is not ``"left"`` or ``"right"``.
+        """
+        if stance not in ("left", "right"):
+            raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
+        self._stance = stance
+        self._t_start_s = float(t_s)
+
+    def reset(self) -> None:
+        """No step (a new run)."""
+        self._stance = None
+        self._t_start_s = 0.0
+
+    def time_in_step(self, t_s: float) -> float:
+        """Time since the step started, s, never negative."""
+        return max(t_s - self._t_start_s, 0.0)
+
+    def phase_unclipped(self, t_s: float, step_time_s: float) -> float:
+        """``(t_s - t_start) / T`` (dimensionless): 1 at the nominal end of the step, above 1 when it is late."""
+        return (t_s - self._t_start_s) / step_time_s

@@ -1,0 +1,56 @@
+"""amlip_qp.output_paths: unwritable outputs are refused before any work; failed writes become one InputError."""
+
+import pytest
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.output_paths import check_output_path, writing
+
+
+def test_check_output_path_keeps_files_and_creates_folders_only_when_asked(tmp_path):
+    existing = tmp_path / "kept.json"
+    existing.write_text("old\n")
+    check_output_path("--json", str(existing))
+    assert existing.read_text() == "old\n"  # opened for appending, not truncated
+    new = tmp_path / "new.json"
+    check_output_path("--json", str(new))
+    assert not new.exists()  # the probe file is removed again
+    nested = tmp_path / "a" / "b" / "fig.png"
+    with pytest.raises(InputError, match="does not exist"):
+        check_output_path("--plot", str(nested))
+    check_output_path("--plot", str(nested), create_folder=True)
+    assert nested.parent.is_dir() and not nested.exists()
+    check_output_path("--json", None)
+    check_output_path("--json", "-")
+
+
+def _file(path):
+    path.write_text("")
+    return path
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda tmp: tmp, "is a folder"),
+        (lambda tmp: tmp / "missing" / "x.json", "does not exist"),
+        (lambda tmp: _file(tmp / "f") / "x.json", "is a file, not a folder"),
+    ],
+)
+def test_bad_paths_name_the_option_and_the_fix(tmp_path, make, message):
+    path = str(make(tmp_path))
+    with pytest.raises(InputError, match=message) as info:
+        check_output_path("--json", path)
+    assert str(info.value).startswith(f"--json {path}:")
+
+
+def test_a_path_under_proc_is_refused():
+    with pytest.raises(InputError, match="cannot write there"):
+        check_output_path("--video", "/proc/x.mp4")
+
+
+def test_writing_turns_an_oserror_into_an_input_error():
+    with pytest.raises(InputError, match=r"--log /full/x.npz: writing failed \(No space left on device\)"):
+        with writing("--log", "/full/x.npz"):
+            raise OSError(28, "No space left on device")
+    with writing("--log", "/ok.npz"):  # no error, no effect
+        pass
