@@ -8,7 +8,7 @@ numpy entry points with input validation live in :mod:`amlip_qp.alip.lip`,
 generation in :mod:`amlip_qp.codegen.symbolic` calls these same functions
 with symbols, so the generated C and the numpy reference cannot drift apart.
 
-They work on the generic pair ``(p, L)`` of ``../shared/ALIP_NOTES.md``:
+They work on the generic pair ``(p, L)`` of ``docs/ALIP_NOTES.md``:
 the sagittal pair is ``(p_x, L_y)`` and the lateral pair is ``(p_y, Lt)``
 with ``Lt = -L_x``. No validation happens here.
 

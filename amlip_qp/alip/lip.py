@@ -3,7 +3,7 @@ at touchdown and deadbeat foot placement.
 
 The arithmetic lives once in :mod:`amlip_qp.alip.formulas`; this module only
 checks its inputs and calls it. Every function works on the generic pair
-``(p, L)`` of ``../shared/ALIP_NOTES.md``: the sagittal pair is
+``(p, L)`` of ``docs/ALIP_NOTES.md``: the sagittal pair is
 ``(p_x, L_y)`` and the lateral pair is ``(p_y, Lt)`` with ``Lt = -L_x``.
 :func:`transfer_3d` is the one 3-D convenience; it does the pair mapping for
 the caller.
