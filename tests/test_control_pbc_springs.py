@@ -12,7 +12,7 @@ from amlip_qp.robots.kinematics import RobotKinematics
 
 def test_spring_model_cassie_standing_numbers():
     """Full weight on one leg stretches the achilles coupling about twice the measured
-    double-support stretch at the stand keyframe (0.031 rad, models/README.md)."""
+    double-support stretch at the stand keyframe (0.031 rad, amlip_qp/models/README.md)."""
     robot = load_robot("cassie")
     kin = RobotKinematics(robot)
     kin.update(robot.q_stand, np.zeros(robot.nv))
@@ -30,7 +30,7 @@ def test_spring_model_rabbit_has_no_springs():
 
 def test_spring_model_half_weight_matches_the_measured_double_support_stretch():
     """Load share: standing on two feet each leg carries half the weight; the model then gives
-    the measured 0.031 rad achilles stretch of the stand keyframe (models/README.md)."""
+    the measured 0.031 rad achilles stretch of the stand keyframe (amlip_qp/models/README.md)."""
     robot = load_robot("cassie")
     kin = RobotKinematics(robot)
     kin.update(robot.q_stand, np.zeros(robot.nv))

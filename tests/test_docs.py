@@ -34,6 +34,7 @@ GUIDES = (
     "amlip_qp/models/README.md",
     "amlip_qp/codegen/generated/README.md",
     "models/README.md",
+    "README.md",
 )
 #: Top-level folders of the repository whose paths the guides name.
 REPO_FOLDERS = ("amlip_qp", "tests", "docs", "examples", "models", ".ci")

@@ -1,4 +1,4 @@
-"""models/cassie.xml: the 20-DOF Cassie MJCF shared by MuJoCo and Pinocchio.
+"""amlip_qp/models/cassie.xml: the 20-DOF Cassie MJCF shared by MuJoCo and Pinocchio.
 
 Reference numbers (``SHEET_*``) are Agility Robotics' Cassie parameters as given in the
 project's parameter sheet (``cassie_parameters.json``); ``test_constants_match_sheet``

@@ -1,4 +1,4 @@
-"""Tests of models/rabbit.xml: published parameters, conventions, contacts, keyframe, pinned standing."""
+"""Tests of amlip_qp/models/rabbit.xml: published parameters, conventions, contacts, keyframe, pinned standing."""
 
 from __future__ import annotations
 

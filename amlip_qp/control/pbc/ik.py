@@ -23,7 +23,7 @@ stacked Jacobians of these equations):
   replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
   in ``v``, so the error is about ``2 |dAdot/dv| |v_r| |v_r - v_r^-|``, i.e.
   of the order of ``|a_r| dt`` relative to the drift (checked in
-  tests/test_control_ik.py).
+  tests/test_control_pbc_ik.py).
 
 Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
 :class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
