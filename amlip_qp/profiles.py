@@ -71,8 +71,9 @@ class CommandBounds:
 class CommandShaping:
     """Rate limits on the velocity command reaching the planner (as on the robot's radio).
 
-    A step command from rest becomes a ramp at these rates; a command that
-    already changes no faster passes through unchanged, bit for bit.
+    A step of a velocity command becomes a ramp at these rates; a command that
+    already changes no faster passes through unchanged, bit for bit
+    (:mod:`amlip_qp.alip.command_shaping`). ``inf``: no limit on that axis.
 
     Attributes:
         vx_accel_mps2: Largest rate of change of the forward-speed command, m/s².
@@ -87,8 +88,12 @@ class CommandShaping:
     def __post_init__(self) -> None:
         for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2"):
             value = getattr(self, name)
-            if not (value > 0 and (math.isfinite(value) or value == math.inf)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
                 raise InputError(f"CommandShaping.{name} must be a positive rate (inf: no limit), got {value!r}")
+
+
+#: Command shaping that changes nothing (no rate limit on any axis).
+NO_SHAPING = CommandShaping(vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf)
 
 
 @dataclass(frozen=True)
@@ -159,7 +164,12 @@ PROFILES: dict[str, RobotProfile] = {
         # H is the CoM height over the foot ("toe") joint, the paper's contact point.
         gait=GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
         bounds=CommandBounds(vx_mps=(-1.0, 2.5), vy_max_mps=0.5, turn_rate_max_radps=math.radians(60.0)),
-        shaping=CommandShaping(vx_accel_mps2=0.5, vy_accel_mps2=0.5, turn_accel_radps2=math.radians(60.0)),
+        # vx: the steepest ramp of the named scenarios (cassie-1mps, 1 m/s in
+        # 2 s), so they reach the planner unchanged; a step to 2.5 m/s is
+        # reached in 5 s. vy and turn rate: no limit; cassie-diagonal steps vy
+        # to 0.3 m/s at t = 0 and cassie-turn-90 steps the turn rate to
+        # 18 deg/s, and a limit would change those scenarios.
+        shaping=CommandShaping(vx_accel_mps2=0.5, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
         compare=CompareRanges(
             nominal_scenario="cassie-1mps", ramp_end_mps=2.1, push_max_impulse_Ns=60.0, relative_cost=3.0
         ),
@@ -171,7 +181,8 @@ PROFILES: dict[str, RobotProfile] = {
         planar=True,
         gait=GaitSettings(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, step_width_m=0.0),
         bounds=CommandBounds(vx_mps=(-0.5, 1.5), vy_max_mps=0.0, turn_rate_max_radps=0.0),
-        shaping=CommandShaping(vx_accel_mps2=0.33, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
+        # vx: just above the steepest named ramp (rabbit-1mps, 1 m/s in 3 s).
+        shaping=CommandShaping(vx_accel_mps2=0.35, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
         compare=CompareRanges(nominal_scenario="rabbit-0.5mps", ramp_end_mps=1.5, push_max_impulse_Ns=40.0),
     ),
 }

@@ -126,3 +126,30 @@ def test_speed_correction_is_added_to_the_command_and_cached(rabbit):
     assert ctrl._corrected_command(cmd).vx_mps == 0.5 + 0.2
     other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
     assert ctrl._corrected_command(other).vx_mps == 0.7 + 0.2
+
+
+def test_the_planner_sees_the_shaped_command(rabbit):
+    from amlip_qp.profiles import NO_SHAPING, PROFILES
+
+    v = np.zeros(rabbit.nv)
+
+    def cmd(vx):
+        return Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=vx)
+
+    def first_tick(vx, **kwargs):
+        kin = RobotKinematics(rabbit)
+        ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), kin, planner_backend="numpy", **kwargs)
+        return ctrl, ctrl.step(Measurement(0.0, rabbit.q_stand.copy(), v), cmd(vx))
+
+    ctrl, step_cmd = first_tick(1.0)
+    assert ctrl.shaper.shaping is PROFILES["rabbit"].shaping
+    # From rest, a 1 m/s step is shaped to 0 at the first tick: the plan of a 0 m/s command.
+    _, rest = first_tick(0.0)
+    np.testing.assert_array_equal(step_cmd.plan.L_des_Nms, rest.plan.L_des_Nms)
+    _, unshaped = first_tick(1.0, command_shaping=NO_SHAPING)
+    assert unshaped.plan.L_des_Nms[1] > rest.plan.L_des_Nms[1] + 1.0
+    assert ctrl.shaper.value[0] == 0.0
+    ctrl.step(Measurement(0.0005, rabbit.q_stand.copy(), v), cmd(1.0))
+    assert ctrl.shaper.value[0] == pytest.approx(PROFILES["rabbit"].shaping.vx_accel_mps2 * 0.0005)
+    ctrl.reset()
+    assert ctrl.shaper.value == (0.0, 0.0, 0.0)
