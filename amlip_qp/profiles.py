@@ -69,30 +69,38 @@ class CommandBounds:
 
 @dataclass(frozen=True)
 class CommandShaping:
-    """Rate limits on the velocity command reaching the planner (as on the robot's radio).
+    """How the command is shaped before it reaches the planner (as on the robot's radio).
 
-    A step of a velocity command becomes a ramp at these rates; a command that
-    already changes no faster passes through unchanged, bit for bit
-    (:mod:`amlip_qp.alip.command_shaping`). ``inf``: no limit on that axis.
+    Rate limits: a step of a velocity command becomes a ramp at these rates; a
+    command that already changes no faster passes through unchanged, bit for
+    bit (:mod:`amlip_qp.alip.command_shaping`). ``inf``: no limit on that axis.
+
+    Step-length cap: where the command's step time ``T`` would make steps
+    longer than ``max_step_length_m`` at the shaped forward speed ``vx``
+    (mean step length ``|vx| T``), ``T`` is shortened to
+    ``max_step_length_m / |vx|``: fast walking with a higher step frequency,
+    as the paper did at 2.1 m/s. ``inf``: ``T`` is never changed.
 
     Attributes:
         vx_accel_mps2: Largest rate of change of the forward-speed command, m/s².
         vy_accel_mps2: Largest rate of change of the lateral-speed command, m/s².
         turn_accel_radps2: Largest rate of change of the turn-rate command, rad/s².
+        max_step_length_m: Longest mean step length ``|vx| T``, m.
     """
 
     vx_accel_mps2: float
     vy_accel_mps2: float
     turn_accel_radps2: float
+    max_step_length_m: float = math.inf
 
     def __post_init__(self) -> None:
-        for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2"):
+        for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2", "max_step_length_m"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-                raise InputError(f"CommandShaping.{name} must be a positive rate (inf: no limit), got {value!r}")
+                raise InputError(f"CommandShaping.{name} must be a positive number (inf: no limit), got {value!r}")
 
 
-#: Command shaping that changes nothing (no rate limit on any axis).
+#: Command shaping that changes nothing (no rate limit, no step-length cap).
 NO_SHAPING = CommandShaping(vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf)
 
 
@@ -164,12 +172,12 @@ PROFILES: dict[str, RobotProfile] = {
         # H is the CoM height over the foot ("toe") joint, the paper's contact point.
         gait=GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
         bounds=CommandBounds(vx_mps=(-1.0, 2.5), vy_max_mps=0.5, turn_rate_max_radps=math.radians(60.0)),
-        # vx: the steepest ramp of the named scenarios (cassie-1mps, 1 m/s in
-        # 2 s), so they reach the planner unchanged; a step to 2.5 m/s is
-        # reached in 5 s. vy and turn rate: no limit; cassie-diagonal steps vy
-        # to 0.3 m/s at t = 0 and cassie-turn-90 steps the turn rate to
-        # 18 deg/s, and a limit would change those scenarios.
-        shaping=CommandShaping(vx_accel_mps2=0.5, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
+        # vx: the steepest named ramp (cassie-1mps); vy, turn rate: no limit
+        # (cassie-diagonal and cassie-turn-90 step them). Steps at most as long
+        # as cassie-ramp-2.1's (2.1 m/s x 0.3 s): T = 0.252 s at 2.5 m/s.
+        shaping=CommandShaping(
+            vx_accel_mps2=0.5, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf, max_step_length_m=0.63
+        ),
         compare=CompareRanges(
             nominal_scenario="cassie-1mps", ramp_end_mps=2.1, push_max_impulse_Ns=60.0, relative_cost=3.0
         ),

@@ -154,6 +154,8 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
         dict(vx_accel_mps2=-math.inf, vy_accel_mps2=1.0, turn_accel_radps2=1.0),
         dict(vx_accel_mps2="fast", vy_accel_mps2=1.0, turn_accel_radps2=1.0),
         dict(vx_accel_mps2=True, vy_accel_mps2=1.0, turn_accel_radps2=1.0),
+        dict(vx_accel_mps2=1.0, vy_accel_mps2=1.0, turn_accel_radps2=1.0, max_step_length_m=0.0),
+        dict(vx_accel_mps2=1.0, vy_accel_mps2=1.0, turn_accel_radps2=1.0, max_step_length_m=math.nan),
     ],
 )
 def test_bad_rates_are_input_errors(kwargs):
@@ -173,3 +175,36 @@ def test_bad_arguments_are_input_errors():
     shaper.update(_cmd(), 1.0)
     with pytest.raises(InputError, match="call reset"):
         shaper.update(_cmd(), 0.5)
+
+
+def test_step_time_is_shortened_only_where_steps_would_be_too_long():
+    shaping = CommandShaping(
+        vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf, max_step_length_m=0.63
+    )
+    shaper = CommandShaper(shaping)
+    at_cap = _cmd(vx=2.1, T=0.3)  # 0.63 m: kept, the same object
+    assert shaper.update(at_cap, 0.0) is at_cap
+    short_steps = _cmd(vx=2.5, T=0.25)  # 0.625 m
+    assert shaper.update(short_steps, DT) is short_steps
+    for vx in (2.5, -2.5):
+        out = shaper.update(_cmd(vx=vx, vy=0.1, T=0.3), 2 * DT)
+        assert out.step_time_s == pytest.approx(0.252, rel=1e-12)
+        assert (out.vx_mps, out.vy_mps, out.com_height_m, out.clearance_m) == (vx, 0.1, 0.8, 0.1)
+
+
+def test_the_cap_follows_the_shaped_speed():
+    # During the ramp of a step command T stays until |vx| T reaches the cap,
+    # then falls as 1 / |vx|.
+    shaping = CommandShaping(
+        vx_accel_mps2=0.5, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf, max_step_length_m=0.63
+    )
+    shaper = CommandShaper(shaping)
+    raw = _cmd(vx=2.5, T=0.3)
+    times = _ticks(12001)  # 6 s
+    out = [shaper.update(raw, t) for t in times]
+    vx = np.array([c.vx_mps for c in out])
+    T = np.array([c.step_time_s for c in out])
+    assert np.all(T[vx <= 2.1] == 0.3)
+    fast = vx > 2.1 + 1e-9
+    np.testing.assert_allclose(T[fast], 0.63 / vx[fast], rtol=1e-12)
+    assert T[-1] == pytest.approx(0.252) and vx[-1] == 2.5

@@ -1,4 +1,4 @@
-"""Command shaping: a rate limit on the velocity command, as on the robot's radio.
+"""Command shaping: a rate limit on the velocity command, as on the robot's radio, and a step-length cap.
 
 A user's ``--vx 2`` is a step from rest; the ALIP planner turns a step of the
 commanded speed into one large foot placement that the legs cannot follow (the
@@ -7,15 +7,22 @@ through a rate limiter. :class:`CommandShaper` is that limiter: it moves each
 of ``vx_mps``, ``vy_mps`` and ``turn_rate_radps`` towards the raw command by
 at most ``rate * dt`` per call (rates from
 :class:`~amlip_qp.profiles.CommandShaping`, per robot in
-:mod:`amlip_qp.profiles`; ``inf`` = no limit on that axis). The gait fields
-(``step_time_s``, ``com_height_m``, ...) pass through.
+:mod:`amlip_qp.profiles`; ``inf`` = no limit on that axis). The step time
+may be shortened (the step-length cap, below); the other gait fields pass through.
 
 Exact pass-through: whenever every axis of the raw command is within reach
 (it changes no faster than the limit, up to a relative slack
-:data:`RATE_RTOL` for the rounding of a ramp sampled at the tick times), the
-raw :class:`~amlip_qp.alip.planner.Command` object itself is returned, so a
+:data:`RATE_RTOL` for the rounding of a ramp sampled at the tick times) and
+its steps are not longer than the cap, the raw
+:class:`~amlip_qp.alip.planner.Command` object itself is returned, so a
 command that is already a slow enough ramp reaches the planner bit for bit.
 Only an axis that is out of reach is replaced, by ``previous ± rate * dt``.
+
+Step-length cap: where the command's step time ``T`` would make the mean
+step ``|vx| T`` (``vx`` shaped) longer than ``max_step_length_m``, ``T``
+becomes ``max_step_length_m / |vx|`` (faster walking with a higher step
+frequency). A command whose steps are not longer than the cap (up to the same
+relative slack) keeps its ``T``.
 
 The shaped command starts at rest (zero velocities) at the first
 :meth:`CommandShaper.update` after :meth:`CommandShaper.reset`: the robot
@@ -76,8 +83,9 @@ class CommandShaper:
         an axis with a finite rate passes only if its raw value is 0.
 
         Returns:
-            ``command`` itself when every axis is within reach, else a copy with
-            the out-of-reach axes moved by ``rate * dt`` towards the raw values.
+            ``command`` itself when every axis is within reach and the steps
+            are not longer than the cap, else a copy with the out-of-reach
+            axes moved by ``rate * dt`` towards the raw values and ``T`` capped.
 
         Raises:
             InputError: ``command`` is not a :class:`Command`, ``t_s`` is not
@@ -111,6 +119,10 @@ class CommandShaper:
             else:
                 value[i] = value[i] + math.copysign(step, diff)
                 changes[SHAPED_FIELDS[i]] = value[i]
+        L_max = self.shaping.max_step_length_m
+        speed = abs(value[0])
+        if speed * command.step_time_s > L_max * (1.0 + RATE_RTOL):
+            changes["step_time_s"] = L_max / speed
         if not changes:
             return command
         return replace(command, **changes)
