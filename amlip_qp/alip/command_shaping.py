@@ -48,10 +48,10 @@ SHAPED_FIELDS = ("vx_mps", "vy_mps", "turn_rate_radps")
 
 
 class CommandShaper:
-    """Rate limiter of the velocity command (module doc).
+    """Rate limiter of the velocity command and step-length cap of the step time (module doc).
 
     Args:
-        shaping: The rate limits (:class:`~amlip_qp.profiles.CommandShaping`).
+        shaping: The rate limits and the cap (:class:`~amlip_qp.profiles.CommandShaping`).
 
     Raises:
         InputError: ``shaping`` is not a :class:`CommandShaping`.
