@@ -176,26 +176,39 @@ class CommandBounds:
 
 @dataclass(frozen=True)
 class CommandShaping:
-    """Rate limits on the velocity command reaching the planner (as on the robot's radio).
+    """How the command is shaped before it reaches the planner (as on the robot's radio).
 
-    A step command from rest becomes a ramp at these rates; a command that
-    already changes no faster passes through unchanged, bit for bit.
+    Rate limits: a step of a velocity command becomes a ramp at these rates; a
+    command that already changes no faster passes through unchanged, bit for
+    bit (:mod:`amlip_qp.alip.command_shaping`). ``inf``: no limit on that axis.
+
+    Step-length cap: where the command's step time ``T`` would make steps
+    longer than ``max_step_length_m`` at the shaped forward speed ``vx``
+    (mean step length ``|vx| T``), ``T`` is shortened to
+    ``max_step_length_m / |vx|``: fast walking with a higher step frequency,
+    as the paper did at 2.1 m/s. ``inf``: ``T`` is never changed.
 
     Attributes:
         vx_accel_mps2: Largest rate of change of the forward-speed command, m/s².
         vy_accel_mps2: Largest rate of change of the lateral-speed command, m/s².
         turn_accel_radps2: Largest rate of change of the turn-rate command, rad/s².
+        max_step_length_m: Longest mean step length ``|vx| T``, m.
     """
 
     vx_accel_mps2: float
     vy_accel_mps2: float
     turn_accel_radps2: float
+    max_step_length_m: float = math.inf
 
     def __post_init__(self) -> None:
-        for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2"):
+        for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2", "max_step_length_m"):
             value = getattr(self, name)
-            if not (value > 0 and (math.isfinite(value) or value == math.inf)):
-                raise InputError(f"CommandShaping.{name} must be a positive rate (inf: no limit), got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+                raise InputError(f"CommandShaping.{name} must be a positive number (inf: no limit), got {value!r}")
+
+
+#: Command shaping that changes nothing (no rate limit, no step-length cap).
+NO_SHAPING = CommandShaping(vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf)
 
 
 @dataclass(frozen=True)
@@ -266,7 +279,12 @@ PROFILES: dict[str, RobotProfile] = {
         # H is the CoM height over the foot ("toe") joint, the paper's contact point.
         gait=GaitSettings(step_time_s=0.3, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
         bounds=CommandBounds(vx_mps=(-1.0, 2.5), vy_max_mps=0.5, turn_rate_max_radps=math.radians(60.0)),
-        shaping=CommandShaping(vx_accel_mps2=0.5, vy_accel_mps2=0.5, turn_accel_radps2=math.radians(60.0)),
+        # vx: the steepest named ramp (cassie-1mps); vy, turn rate: no limit
+        # (cassie-diagonal and cassie-turn-90 step them). Steps at most as long
+        # as cassie-ramp-2.1's (2.1 m/s x 0.3 s): T = 0.252 s at 2.5 m/s.
+        shaping=CommandShaping(
+            vx_accel_mps2=0.5, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf, max_step_length_m=0.63
+        ),
         tracker_configs={
             "pbc": "amlip_qp.control.pbc.gains:CASSIE_GAINS",
             "qp": "amlip_qp.control.wbc.config:CASSIE_CONFIG",
@@ -282,7 +300,8 @@ PROFILES: dict[str, RobotProfile] = {
         planar=True,
         gait=GaitSettings(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, step_width_m=0.0),
         bounds=CommandBounds(vx_mps=(-0.5, 1.5), vy_max_mps=0.0, turn_rate_max_radps=0.0),
-        shaping=CommandShaping(vx_accel_mps2=0.33, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
+        # vx: just above the steepest named ramp (rabbit-1mps, 1 m/s in 3 s).
+        shaping=CommandShaping(vx_accel_mps2=0.35, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf),
         tracker_configs={
             "pbc": "amlip_qp.control.pbc.gains:RABBIT_GAINS",
             "qp": "amlip_qp.control.wbc.config:RABBIT_CONFIG",

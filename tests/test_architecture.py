@@ -43,7 +43,8 @@ RULES: dict[str, Rule] = {
     # the command line stays light: handlers are imported by name when a subcommand runs
     "amlip_qp.cli": Rule(("amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
     # pure math: numpy (CasADi only when handed CasADi symbols)
-    "amlip_qp.alip": Rule(("amlip_qp.alip", "amlip_qp.exceptions"), ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy")),
+    # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
+    "amlip_qp.alip": Rule(("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.profiles"), ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy")),
     "amlip_qp.codegen": Rule(
         ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.exceptions", "amlip_qp.output_paths", "amlip_qp.paths"),
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers"),

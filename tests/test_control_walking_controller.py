@@ -106,3 +106,30 @@ def test_the_clock_starts_the_steps_the_planner_starts(rabbit):
     assert td.phase == 0.0 and len(ctrl.steps) == 1 and ctrl.steps[0].t_start_s == 0.1
     ctrl.reset()
     assert ctrl.stance is None and ctrl.clock.t_start_s == 0.0
+
+
+def test_the_planner_sees_the_shaped_command(rabbit):
+    from amlip_qp.profiles import NO_SHAPING, PROFILES
+
+    v = np.zeros(rabbit.nv)
+
+    def cmd(vx):
+        return Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=vx)
+
+    def first_tick(vx, **kwargs):
+        kin = RobotKinematics(rabbit)
+        ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), kin, planner_backend="numpy", **kwargs)
+        return ctrl, ctrl.step(Measurement(0.0, rabbit.q_stand.copy(), v), cmd(vx))
+
+    ctrl, step_cmd = first_tick(1.0)
+    assert ctrl.shaper.shaping is PROFILES["rabbit"].shaping
+    # From rest, a 1 m/s step is shaped to 0 at the first tick: the plan of a 0 m/s command.
+    _, rest = first_tick(0.0)
+    np.testing.assert_array_equal(step_cmd.plan.L_des_Nms, rest.plan.L_des_Nms)
+    _, unshaped = first_tick(1.0, command_shaping=NO_SHAPING)
+    assert unshaped.plan.L_des_Nms[1] > rest.plan.L_des_Nms[1] + 1.0
+    assert ctrl.shaper.value[0] == 0.0
+    ctrl.step(Measurement(0.0005, rabbit.q_stand.copy(), v), cmd(1.0))
+    assert ctrl.shaper.value[0] == pytest.approx(PROFILES["rabbit"].shaping.vx_accel_mps2 * 0.0005)
+    ctrl.reset()
+    assert ctrl.shaper.value == (0.0, 0.0, 0.0)

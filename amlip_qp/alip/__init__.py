@@ -11,6 +11,7 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.phase`: the gait phase ``s``;
 - :mod:`~amlip_qp.alip.outputs`: the reference outputs ``h_d(s)`` and their names;
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
+- :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 """
 
 from amlip_qp.alip.desired import (

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
 from amlip_qp.control.tracker import Tracker, TrackingTarget
@@ -33,6 +34,7 @@ from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.outputs import output_layout
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -111,6 +113,10 @@ class WalkingController:
             same outputs to rounding, about half the time) into
             ``kinematics``; without a compiler it keeps the Python map with a
             warning. ``"python"`` keeps :class:`~amlip_qp.robots.outputs.OutputMap`.
+        command_shaping: Rate limits of the velocity command before the planner
+            sees it (:class:`~amlip_qp.alip.command_shaping.CommandShaper`);
+            default: the robot's profile (:mod:`amlip_qp.profiles`), no limit
+            for a robot without one.
     """
 
     def __init__(
@@ -126,6 +132,7 @@ class WalkingController:
         fallback_damping_Nms: float = 5.0,
         speed_correction: SpeedCorrection | None = None,
         output_backend: str = "c",
+        command_shaping: CommandShaping | None = None,
     ):
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
@@ -170,6 +177,8 @@ class WalkingController:
         self.steps: list[StepRecord] = []
         #: Ticks whose tracker output was replaced by the damped fallback.
         self.fallback_ticks = 0
+        #: The rate limiter of the velocity command (the planner sees its output).
+        self.shaper = CommandShaper(command_shaping or (robot.profile.shaping if robot.profile else NO_SHAPING))
         self.speed = SpeedIntegrator(speed_correction or SpeedCorrection(), planar=robot.is_planar)
         self._last_plan: PlannerOutput | None = None
         self._L_target_this_step = np.full(2, np.nan)
@@ -195,6 +204,7 @@ class WalkingController:
         self.tracker.reset()
         self.estimator.reset()
         self.planner.reset()
+        self.shaper.reset()
         self.steps.clear()
         self.fallback_ticks = 0
         self.clock.reset()
@@ -241,6 +251,7 @@ class WalkingController:
     def step(self, measurement: Measurement, command: Command) -> TickInfo:
         """One control tick: joint torques (actuator order, joint side, N m) and signals."""
         t = float(measurement.t_s)
+        command = self.shaper.update(command, t)
         estimator = self.estimator
         estimator.observe(measurement)
         kin = self.kin
