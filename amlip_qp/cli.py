@@ -115,14 +115,23 @@ def _add_walk(sub) -> None:
     )
     p.add_argument("--robot", choices=ROBOT_NAMES, default=None, help="robot (default cassie, or the scenario's)")
     p.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
-    p.add_argument("--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)")
+    p.add_argument(
+        "--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)"
+    )
     speed = p.add_mutually_exclusive_group()
-    speed.add_argument("--vx", type=_finite_float, metavar="M/S", default=None, help="constant forward speed, m/s (default 0)")
     speed.add_argument(
-        "--speed-profile", metavar="T:V,...", default=None, help="piecewise-linear forward speed, e.g. '0:0,5:2.1' (s:m/s)"
+        "--vx", type=_finite_float, metavar="M/S", default=None, help="constant forward speed, m/s (default 0)"
+    )
+    speed.add_argument(
+        "--speed-profile",
+        metavar="T:V,...",
+        default=None,
+        help="piecewise-linear forward speed, e.g. '0:0,5:2.1' (s:m/s)",
     )
     p.add_argument("--vy", type=_finite_float, metavar="M/S", default=None, help="lateral speed, m/s (left positive)")
-    p.add_argument("--turn-rate", type=_finite_float, metavar="DEG/S", default=None, help="turn rate, deg/s (left positive)")
+    p.add_argument(
+        "--turn-rate", type=_finite_float, metavar="DEG/S", default=None, help="turn rate, deg/s (left positive)"
+    )
     p.add_argument("--duration", type=_positive_float, metavar="S", default=None, help="simulated time, s (default 10)")
     p.add_argument(
         "--push",
@@ -137,10 +146,15 @@ def _add_walk(sub) -> None:
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
     p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
     p.add_argument(
-        "--plot", metavar="PATH", default=None, help="write a figure, .png, .pdf or .svg (speed, L, foot placement, tracking)"
+        "--plot",
+        metavar="PATH",
+        default=None,
+        help="write a figure, .png, .pdf or .svg (speed, L, foot placement, tracking)",
     )
     p.add_argument("--video", metavar="PATH", default=None, help="record the 'track' camera to PATH (.mp4 or .gif)")
-    p.add_argument("--video-fps", type=_positive_float, default=30.0, metavar="FPS", help="video frames per second (default 30)")
+    p.add_argument(
+        "--video-fps", type=_positive_float, default=30.0, metavar="FPS", help="video frames per second (default 30)"
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=_handler("amlip_qp.sim.cli:run_walk"))
 
@@ -152,8 +166,20 @@ def _add_compare(sub) -> None:
         description="Run both trackers on the same scenarios with the same seed and print one table row per "
         "robot and tracker (see docs/SUMMARY_SCHEMA.md for the definitions).",
     )
-    p.add_argument("--robots", type=_name_list(ROBOT_NAMES), default=list(ROBOT_NAMES), metavar="R1,R2", help=f"robots (default {','.join(ROBOT_NAMES)})")
-    p.add_argument("--trackers", type=_name_list(_TRACKERS), default=list(_TRACKERS), metavar="T1,T2", help="trackers (default pbc,qp)")
+    p.add_argument(
+        "--robots",
+        type=_name_list(ROBOT_NAMES),
+        default=list(ROBOT_NAMES),
+        metavar="R1,R2",
+        help=f"robots (default {','.join(ROBOT_NAMES)})",
+    )
+    p.add_argument(
+        "--trackers",
+        type=_name_list(_TRACKERS),
+        default=list(_TRACKERS),
+        metavar="T1,T2",
+        help="trackers (default pbc,qp)",
+    )
     p.add_argument(
         "--scenario",
         action="append",
@@ -161,8 +187,18 @@ def _add_compare(sub) -> None:
         metavar="NAME",
         help="nominal scenario of a robot (replaces its default; repeatable, one per robot)",
     )
-    p.add_argument("--quick", action="store_true", help="short runs and 1 bisection iteration (a smoke test, a few minutes at most)")
-    p.add_argument("--push-iterations", type=_non_negative_int, default=None, metavar="N", help="bisection iterations per push direction")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="short runs and 1 bisection iteration (a smoke test, a few minutes at most)",
+    )
+    p.add_argument(
+        "--push-iterations",
+        type=_non_negative_int,
+        default=None,
+        metavar="N",
+        help="bisection iterations per push direction",
+    )
     p.add_argument("--no-ramp", action="store_true", help="skip the speed-ramp test")
     p.add_argument("--no-push", action="store_true", help="skip the push tests")
     p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
@@ -170,7 +206,10 @@ def _add_compare(sub) -> None:
     p.add_argument("--jobs", type=_positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")
     p.add_argument(
-        "--plot", metavar="PATH", default="out/compare.png", help="comparison figure, .png, .pdf or .svg (default out/compare.png; folder created)"
+        "--plot",
+        metavar="PATH",
+        default="out/compare.png",
+        help="comparison figure, .png, .pdf or .svg (default out/compare.png; folder created)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not write the figure")
     p.set_defaults(func=_handler("amlip_qp.sim.cli:run_compare"))
@@ -258,7 +297,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     except OSError as exc:  # an output that failed after the early checks (disk full, folder removed, ...)
         where = f"{exc.filename}: " if exc.filename else ""
-        sys.stderr.write(f"{PROG}: error: {where}{exc.strerror or exc}; check the path, its folder and the free space\n")
+        sys.stderr.write(
+            f"{PROG}: error: {where}{exc.strerror or exc}; check the path, its folder and the free space\n"
+        )
         return 2
     except KeyboardInterrupt:
         sys.stderr.write(f"{PROG}: interrupted\n")

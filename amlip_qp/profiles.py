@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import importlib
 import math
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 from amlip_qp.exceptions import InputError, UnknownRobotError
 
@@ -103,7 +104,9 @@ class CommandBounds:
     def __post_init__(self) -> None:
         lo, hi = self.vx_mps
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi):
-            raise InputError(f"CommandBounds.vx_mps must be finite (min, max) with min <= 0 <= max, got {self.vx_mps!r}")
+            raise InputError(
+                f"CommandBounds.vx_mps must be finite (min, max) with min <= 0 <= max, got {self.vx_mps!r}"
+            )
         for name in ("vy_max_mps", "turn_rate_max_radps", "duration_max_s", "push_impulse_max_Ns", "push_force_max_N"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):

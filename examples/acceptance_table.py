@@ -44,7 +44,9 @@ def main(argv=None) -> int:
     jobs.sort(key=lambda j: -SCENARIOS[j[0]].duration_s)  # longest first
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = dict(zip(jobs, pool.map(_run, jobs)))
-    print("| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg | tick median / p99 µs |")
+    print(
+        "| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg | tick median / p99 µs |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name in SCENARIOS:
         for t in args.trackers.split(","):

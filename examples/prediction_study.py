@@ -163,7 +163,9 @@ def main(argv=None) -> int:
             f"L_y {sL_st:.3f}, v_x {sv_st:.3f}" + (" (fell)" if res.fell else "")
         )
         if len(rL) < args.min_steps:
-            print(f"  note: only {len(rL)} usable steps (< {args.min_steps}); the {res.tracker} tracker did not walk long enough")
+            print(
+                f"  note: only {len(rL)} usable steps (< {args.min_steps}); the {res.tracker} tracker did not walk long enough"
+            )
     out.mkdir(parents=True, exist_ok=True)
     (out / "prediction_study.json").write_text(json.dumps(to_jsonable(report), indent=2) + "\n")
     return 0

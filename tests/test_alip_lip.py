@@ -28,7 +28,11 @@ def test_predictor_matches_3d_point_mass_in_both_planes():
     v0 = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), 0.0])
     tau = 0.27
     sol = solve_ivp(
-        lambda t, x: [x[2], x[3], G / H * x[0], G / H * x[1]], (0, tau), [p0[0], p0[1], v0[0], v0[1]], rtol=1e-12, atol=1e-12
+        lambda t, x: [x[2], x[3], G / H * x[0], G / H * x[1]],
+        (0, tau),
+        [p0[0], p0[1], v0[0], v0[1]],
+        rtol=1e-12,
+        atol=1e-12,
     )
     pT = np.array([sol.y[0, -1], sol.y[1, -1], H])
     vT = np.array([sol.y[2, -1], sol.y[3, -1], 0.0])

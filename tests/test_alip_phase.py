@@ -27,9 +27,7 @@ def test_late_touchdown_is_clipped_only_on_request():
     assert phase.time_remaining(1.1, 1.0, 0.3) == pytest.approx(0.2)
 
 
-@pytest.mark.parametrize(
-    "fn", [phase.step_phase, phase.step_phase_clipped, phase.time_remaining]
-)
+@pytest.mark.parametrize("fn", [phase.step_phase, phase.step_phase_clipped, phase.time_remaining])
 def test_bad_input_raises_input_error(fn):
     with pytest.raises(InputError, match="T_s.*must be > 0"):
         fn(0.1, 0.0, 0.0)

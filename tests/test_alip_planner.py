@@ -49,7 +49,9 @@ def test_update_matches_the_validated_lip_functions():
     p_sw_y = lip.foot_placement_vz(-L_des[0], Lt, py, 0.05, T, M, H, G)
     np.testing.assert_allclose(out.p_sw_des_world_m, [p_sw_x, p_sw_y], rtol=1e-12)
     r_st = np.array([1.0, 0.5, H]) - np.array([0.03, -0.1, H])
-    np.testing.assert_allclose(out.swing_target_world_m, [r_st[0] + px - p_sw_x, r_st[1] + py - p_sw_y, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        out.swing_target_world_m, [r_st[0] + px - p_sw_x, r_st[1] + py - p_sw_y, 0.0], atol=1e-12
+    )
     assert out.s == pytest.approx(0.1 / T) and out.t_remaining_s == pytest.approx(t_rem)
     assert out.h_d.shape == out.dh_d.shape == out.ddh_d.shape == (9,)
     assert p.output_names[5] == "com_x_over_swing" and p.n_outputs == 9
@@ -184,7 +186,9 @@ def test_rabbit_ignores_lateral_terms():
     out = p.update(est(), cmd(turn_rate_radps=2.0, vy_mps=0.4, step_width_m=0.3))
     assert p.output_names == ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
     assert out.h_d.shape == (4,) and out.heading_rad == 0.0 and out.heading_next_rad == 0.0
-    assert out.L_hat_Nms[0] == 0.0 and out.p_hat_m[1] == 0.0 and out.L_des_Nms[0] == 0.0 and out.p_sw_des_world_m[1] == 0.0
+    assert (
+        out.L_hat_Nms[0] == 0.0 and out.p_hat_m[1] == 0.0 and out.L_des_Nms[0] == 0.0 and out.p_sw_des_world_m[1] == 0.0
+    )
     _, Ly = lip.predict_end_of_step(0.03, 12.0, T - 0.1, 32.0, H, G)
     assert out.L_hat_Nms[1] == pytest.approx(Ly, rel=1e-12)
     s = 0.1 / T

@@ -44,7 +44,10 @@ RULES: dict[str, Rule] = {
     "amlip_qp.cli": Rule(("amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
-    "amlip_qp.alip": Rule(("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.profiles"), ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy")),
+    "amlip_qp.alip": Rule(
+        ("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.profiles"),
+        ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy"),
+    ),
     "amlip_qp.codegen": Rule(
         ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.exceptions", "amlip_qp.output_paths", "amlip_qp.paths"),
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers"),
@@ -66,7 +69,9 @@ RULES: dict[str, Rule] = {
         CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pbc"), ("mujoco", "proxsuite", "qpsolvers")
     ),
     # the whole-body QP: may use the QP layer
-    "amlip_qp.control.wbc": Rule(CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.wbc"), ("mujoco",)),
+    "amlip_qp.control.wbc": Rule(
+        CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.wbc"), ("mujoco",)
+    ),
     # the MuJoCo harness sits on top
     "amlip_qp.sim": Rule(("amlip_qp",)),
 }

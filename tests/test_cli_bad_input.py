@@ -122,7 +122,10 @@ def test_bad_input_exits_2_with_one_line_and_simulates_nothing(argv, needle, tmp
 @pytest.mark.parametrize(
     "argv, stderr",
     [
-        (["walk", "--json", "/proc/x"], "amlip-qp: error: --json /proc/x: cannot write there (No such file or directory); give a writable path\n"),
+        (
+            ["walk", "--json", "/proc/x"],
+            "amlip-qp: error: --json /proc/x: cannot write there (No such file or directory); give a writable path\n",
+        ),
         (
             ["walk", "--duration", "1e12"],
             "amlip-qp: error: duration 1e+12 s is above cassie's bound 600 s "
@@ -200,4 +203,7 @@ def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
     monkeypatch.setattr(sim_cli, "run_walk", disk_full)
     code, out, err = _main(["walk"], capsys)
     assert code == 2
-    assert err == "amlip-qp: error: /data/run.npz: No space left on device; check the path, its folder and the free space\n"
+    assert (
+        err
+        == "amlip-qp: error: /data/run.npz: No space left on device; check the path, its folder and the free space\n"
+    )

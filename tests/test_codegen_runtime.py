@@ -116,7 +116,9 @@ def test_accepts_sequences_and_integer_arrays(fast):
 
 
 @needs_cc
-@pytest.mark.parametrize("bad", [np.zeros(14), np.zeros(16), np.zeros((15, 1)), np.zeros((1, 15)), 3.0, "abc", [[1, 2]]])
+@pytest.mark.parametrize(
+    "bad", [np.zeros(14), np.zeros(16), np.zeros((15, 1)), np.zeros((1, 15)), 3.0, "abc", [[1, 2]]]
+)
 def test_wrong_shape_raises_input_error(fast, bad):
     with pytest.raises(InputError, match=r"alip_plan|15"):
         fast.alip_plan(bad)
@@ -208,7 +210,7 @@ def test_parallel_builds_do_not_collide(tmp_path):
     def build():
         try:
             results.append(runtime.build_library(src, compiler, tmp_path))
-        except Exception as exc:  # noqa: BLE001 (collected for the assertion)
+        except Exception as exc:
             errors.append(exc)
 
     threads = [threading.Thread(target=build) for _ in range(3)]
@@ -302,6 +304,8 @@ def test_compile_and_load_without_compiler_is_a_typed_error(tmp_path, monkeypatc
 @needs_cc
 def test_compile_and_load_names_a_missing_function(tmp_path):
     source = generate.generate_files()[generate.SOURCE_FILE]
-    with pytest.raises(CodegenError, match=r"cannot load no_such_kernel from .*no_such_kernel.*delete .* to rebuild") as info:
+    with pytest.raises(
+        CodegenError, match=r"cannot load no_such_kernel from .*no_such_kernel.*delete .* to rebuild"
+    ) as info:
         runtime.compile_and_load(source, ["no_such_kernel"], cache_dir=tmp_path)
     assert "\n" not in str(info.value)

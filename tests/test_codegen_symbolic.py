@@ -10,9 +10,7 @@ from amlip_qp.alip import kernels
 from amlip_qp.codegen import symbolic
 
 
-@pytest.mark.parametrize(
-    "name, n_in, n_out", [("alip_plan", 15, 8), ("swing_reference", 11, 27)]
-)
+@pytest.mark.parametrize("name, n_in, n_out", [("alip_plan", 15, 8), ("swing_reference", 11, 27)])
 def test_function_signature_is_dense(name, n_in, n_out):
     f = symbolic.function(name)
     assert isinstance(f, ca.Function)

@@ -20,7 +20,10 @@ def test_cassie_stance_and_swing_knees_with_their_straight_leg_limits(cassie):
     for stance, swing in (("left", "right"), ("right", "left")):
         entries = {names[row]: (iq, iv, limit, other) for row, iq, iv, limit, other in knees.entries(stance)}
         assert set(entries) == {"com_z_over_stance", "com_x_over_swing"}
-        assert entries["com_z_over_stance"][:2] == (smap.joint_pin_q[f"{stance}-knee"], smap.joint_pin_v[f"{stance}-knee"])
+        assert entries["com_z_over_stance"][:2] == (
+            smap.joint_pin_q[f"{stance}-knee"],
+            smap.joint_pin_v[f"{stance}-knee"],
+        )
         assert entries["com_x_over_swing"][:2] == (smap.joint_pin_q[f"{swing}-knee"], smap.joint_pin_v[f"{swing}-knee"])
         for iq, _, limit, other in entries.values():
             assert {limit, other} == {float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])}

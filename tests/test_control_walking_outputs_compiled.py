@@ -43,7 +43,9 @@ def test_compiled_outputs_equal_the_python_map(robot, compiled, positions_only):
     for i in range(12):
         kin = _kin(robot, rng, positions_only)
         stance, heading = ("left", "right")[i % 2], float(rng.uniform(-3.0, 3.0))
-        for a, b, what in zip(ref.evaluate(kin, stance, heading), compiled.evaluate(kin, stance, heading), ("y", "J", "Jdot_v")):
+        for a, b, what in zip(
+            ref.evaluate(kin, stance, heading), compiled.evaluate(kin, stance, heading), ("y", "J", "Jdot_v")
+        ):
             assert a.shape == b.shape
             assert np.max(np.abs(a - b) / (1.0 + np.abs(a))) < 1e-12, f"{what} differs (state {i}, {stance})"
 

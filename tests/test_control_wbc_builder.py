@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
-from wbc_cases import FIELDS, build_and_solve, kin_at, target_for
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, RABBIT_CONFIG, default_config
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
+from wbc_cases import FIELDS, build_and_solve, kin_at, target_for
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

@@ -4,7 +4,6 @@ import warnings
 
 import numpy as np
 import pytest
-from wbc_cases import FIELDS, random_cases
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.wbc.builder import WholeBodyQP
@@ -13,6 +12,7 @@ from amlip_qp.control.wbc.config import default_config
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
+from wbc_cases import FIELDS, random_cases
 
 
 def _python(builder, kin, target):

@@ -5,12 +5,12 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
-from wbc_cases import FIELDS, build_and_solve, kin_at, solve, target_for
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
 from amlip_qp.control.wbc.inputs import SymbolicInputs, pack_inputs, packed_layout
 from amlip_qp.robots import load_robot
+from wbc_cases import FIELDS, build_and_solve, kin_at, solve, target_for
 
 #: The problem arrays of each kind of block.
 BLOCK_FIELDS = {"eq": ("A", "b"), "in": ("C", "l", "u"), "box": ("lb", "ub")}

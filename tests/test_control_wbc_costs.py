@@ -3,13 +3,13 @@
 import casadi as ca
 import numpy as np
 import pytest
-from wbc_cases import kin_at, target_for
 
 from amlip_qp.control.wbc import costs as W
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
 from amlip_qp.control.wbc.inputs import SymbolicInputs, pack_inputs, packed_layout
 from amlip_qp.robots import load_robot
+from wbc_cases import kin_at, target_for
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

@@ -6,7 +6,6 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 import pytest
-from wbc_cases import kin_at, target_for
 
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.control.wbc.builder import WholeBodyQP
@@ -22,6 +21,7 @@ from amlip_qp.control.wbc.inputs import (
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import CASSIE_OUTPUTS, load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
+from wbc_cases import kin_at, target_for
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

@@ -3,7 +3,6 @@
 import casadi as ca
 import numpy as np
 import pytest
-from wbc_cases import build_and_solve, kin_at, target_for
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG
@@ -12,6 +11,7 @@ from amlip_qp.control.wbc.layout import VariableLayout
 from amlip_qp.control.wbc.spring_elimination import LegSprings, SpringElimination, springs_per_leg
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
+from wbc_cases import build_and_solve, kin_at, target_for
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.wbc.config import CASSIE_CONFIG
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError

@@ -33,38 +33,82 @@ SHEET_TOTAL_MASS = 33.312
 SHEET_PELVIS_MASS = 10.33
 #: Per-leg body masses of the sheet (identical for both legs).
 SHEET_LEG_MASSES = {
-    "hip-roll": 1.82, "hip-yaw": 1.171, "hip-pitch": 5.52, "achilles-rod": 0.1567,
-    "knee": 0.7578, "knee-spring": 0.186, "shin": 0.577, "tarsus": 0.782,
-    "heel-spring": 0.126, "foot-crank": 0.1261, "plantar-rod": 0.1186, "foot": 0.1498,
+    "hip-roll": 1.82,
+    "hip-yaw": 1.171,
+    "hip-pitch": 5.52,
+    "achilles-rod": 0.1567,
+    "knee": 0.7578,
+    "knee-spring": 0.186,
+    "shin": 0.577,
+    "tarsus": 0.782,
+    "heel-spring": 0.126,
+    "foot-crank": 0.1261,
+    "plantar-rod": 0.1186,
+    "foot": 0.1498,
 }
 #: Sheet bodies in the subtree of the knee joint.
-SHEET_BELOW_KNEE = ("knee", "knee-spring", "shin", "tarsus", "heel-spring", "foot-crank",
-                    "plantar-rod", "foot")
+SHEET_BELOW_KNEE = ("knee", "knee-spring", "shin", "tarsus", "heel-spring", "foot-crank", "plantar-rod", "foot")
 SHEET_GEAR = {"hip-roll": 25.0, "hip-yaw": 25.0, "hip-pitch": 16.0, "knee": 16.0, "foot": 50.0}
 SHEET_MOTOR_LIMIT = {"hip-roll": 4.5, "hip-yaw": 4.5, "hip-pitch": 12.2, "knee": 12.2, "foot": 0.9}
 SHEET_RANGE = {
-    "left-hip-roll": (-0.261799, 0.392699), "right-hip-roll": (-0.392699, 0.261799),
-    "hip-yaw": (-0.392699, 0.392699), "hip-pitch": (-0.872665, 1.396263),
-    "knee": (-2.86234, -0.645772), "shin": (-0.349066, 0.349066),
-    "tarsus": (0.872665, 2.96706), "foot": (-2.443461, -0.523599),
+    "left-hip-roll": (-0.261799, 0.392699),
+    "right-hip-roll": (-0.392699, 0.261799),
+    "hip-yaw": (-0.392699, 0.392699),
+    "hip-pitch": (-0.872665, 1.396263),
+    "knee": (-2.86234, -0.645772),
+    "shin": (-0.349066, 0.349066),
+    "tarsus": (0.872665, 2.96706),
+    "foot": (-2.443461, -0.523599),
 }
 #: The sheet's 35-element standing qpos (achilles-rod ball joints, heel spring, foot crank,
 #: plantar rod included).
 SHEET_STANDING_QPOS = [
-    0, 0, 1.0059301, 1, 0, 0, 0,
-    0.00449956, 0, 0.497301, 0.97861, -0.0164104, 0.0177766, -0.204298, -1.1997, 0, 1.42671,
-    -2.25907e-06, -1.52439, 1.50645, -1.59681,
-    -0.00449956, 0, 0.497301, 0.97874, 0.0038687, -0.0151572, -0.204509, -1.1997, 0, 1.42671,
-    0, -1.52439, 1.50645, -1.59681,
+    0,
+    0,
+    1.0059301,
+    1,
+    0,
+    0,
+    0,
+    0.00449956,
+    0,
+    0.497301,
+    0.97861,
+    -0.0164104,
+    0.0177766,
+    -0.204298,
+    -1.1997,
+    0,
+    1.42671,
+    -2.25907e-06,
+    -1.52439,
+    1.50645,
+    -1.59681,
+    -0.00449956,
+    0,
+    0.497301,
+    0.97874,
+    0.0038687,
+    -0.0151572,
+    -0.204509,
+    -1.1997,
+    0,
+    1.42671,
+    0,
+    -1.52439,
+    1.50645,
+    -1.59681,
 ]
 #: Whole-robot CoM (world) and inertia about it (world axes) of the sheet's full 35-qpos tree
 #: (all 31 bodies) at SHEET_STANDING_QPOS, computed by forward kinematics over the sheet.
 SHEET_STANDING_COM = np.array([-1.755477085639e-02, 1.182208353924e-04, 8.773866413215e-01])
-SHEET_STANDING_INERTIA = np.array([
-    [2.233339970233e+00, -2.290130190445e-04, -3.876202677841e-01],
-    [-2.290130190445e-04, 1.875362294852e+00, -1.028483501288e-03],
-    [-3.876202677841e-01, -1.028483501288e-03, 8.641190259791e-01],
-])
+SHEET_STANDING_INERTIA = np.array(
+    [
+        [2.233339970233e00, -2.290130190445e-04, -3.876202677841e-01],
+        [-2.290130190445e-04, 1.875362294852e00, -1.028483501288e-03],
+        [-3.876202677841e-01, -1.028483501288e-03, 8.641190259791e-01],
+    ]
+)
 
 
 def sheet_range(joint):
@@ -218,9 +262,11 @@ def test_leg_mass_distribution(mj):
         # heel spring, foot crank, plantar rod -> tarsus.
         s = SHEET_LEG_MASSES
         expect = {
-            "hip-roll": s["hip-roll"], "hip-yaw": s["hip-yaw"],
+            "hip-roll": s["hip-roll"],
+            "hip-yaw": s["hip-yaw"],
             "hip-pitch": s["hip-pitch"] + s["achilles-rod"],
-            "knee": s["knee"] + s["knee-spring"], "shin": s["shin"],
+            "knee": s["knee"] + s["knee-spring"],
+            "shin": s["shin"],
             "tarsus": s["tarsus"] + s["heel-spring"] + s["foot-crank"] + s["plantar-rod"],
             "foot": s["foot"],
         }
@@ -360,8 +406,7 @@ def test_frames_agree_mujoco_pinocchio(mj, pn):
             np.testing.assert_allclose(data.oMi[jid].act(Y.lever), d.xipos[b], atol=1e-9)
             R = d.ximat[b].reshape(3, 3)
             Rp = data.oMi[jid].rotation
-            np.testing.assert_allclose(Rp @ Y.inertia @ Rp.T, R @ np.diag(m.body_inertia[b]) @ R.T,
-                                       atol=1e-9)
+            np.testing.assert_allclose(Rp @ Y.inertia @ Rp.T, R @ np.diag(m.body_inertia[b]) @ R.T, atol=1e-9)
 
 
 def test_mass_matrix_agrees(mj, pn):

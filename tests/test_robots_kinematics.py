@@ -138,7 +138,9 @@ def test_site_positions_and_jacobians_match_mujoco(robot):
                 mujoco.mj_jacSite(m, d, jacp, None, sid)
                 np.testing.assert_allclose(kin.frame_position(fid), d.site_xpos[sid], atol=TOL_MJ)
                 np.testing.assert_allclose(kin.frame_jacobian(fid), jacp @ T, atol=TOL_MJ)
-            np.testing.assert_allclose(kin.contact_position(side), d.site_xpos[robot.contact_site_ids[side]], atol=TOL_MJ)
+            np.testing.assert_allclose(
+                kin.contact_position(side), d.site_xpos[robot.contact_site_ids[side]], atol=TOL_MJ
+            )
 
 
 def test_centroidal_momentum_matches_mujoco(robot):
@@ -214,14 +216,30 @@ def test_jacobians_and_drifts_by_finite_differences(robot):
         kin.update(q, v)
         checks = [
             (lambda k: k.com(), kin.com_jacobian(), kin.com_jdot_v(), lambda k: k.com_jacobian()),
-            (lambda k: k.coupling_constraints()[0], kin.coupling_constraints()[1], kin.coupling_constraints()[2],
-             lambda k: k.coupling_constraints()[1]),
+            (
+                lambda k: k.coupling_constraints()[0],
+                kin.coupling_constraints()[1],
+                kin.coupling_constraints()[2],
+                lambda k: k.coupling_constraints()[1],
+            ),
         ]
         for side in robot.foot_sides:
-            checks.append((lambda k, s=side: k.contact_position(s), kin.contact_jacobian(side),
-                           kin.contact_jdot_v(side), lambda k, s=side: k.contact_jacobian(s)))
-            checks.append((lambda k, s=side: k.force_point_positions(s).ravel(), kin.force_point_jacobian(side),
-                           kin.force_point_jdot_v(side), lambda k, s=side: k.force_point_jacobian(s)))
+            checks.append(
+                (
+                    lambda k, s=side: k.contact_position(s),
+                    kin.contact_jacobian(side),
+                    kin.contact_jdot_v(side),
+                    lambda k, s=side: k.contact_jacobian(s),
+                )
+            )
+            checks.append(
+                (
+                    lambda k, s=side: k.force_point_positions(s).ravel(),
+                    kin.force_point_jacobian(side),
+                    kin.force_point_jdot_v(side),
+                    lambda k, s=side: k.force_point_jacobian(s),
+                )
+            )
         for pos_fun, J, jdv, jac_fun in checks:
             J_fd = fd_jacobian(robot, lambda qq: at(qq, v, pos_fun), q)
             np.testing.assert_allclose(J, J_fd, atol=TOL_FD)
@@ -303,8 +321,15 @@ def test_touchdown_L_about_new_contact_is_continuous():
         for i in range(d.ncon):
             mujoco.mj_contactForce(m, d, i, force6)
             contacts.append((d.contact[i].pos.copy(), np.linalg.norm(force6[:3])))
-        log.append(dict(c=kin.com(), mom=kin.centroidal_momentum(), foot=kin.contact_position("left"),
-                        foot_vz=(kin.contact_jacobian("left") @ v)[2], contacts=contacts))
+        log.append(
+            dict(
+                c=kin.com(),
+                mom=kin.centroidal_momentum(),
+                foot=kin.contact_position("left"),
+                foot_vz=(kin.contact_jacobian("left") @ v)[2],
+                contacts=contacts,
+            )
+        )
         tau = 300.0 * (q_ref - d.qpos[act.mj_qpos_idx]) - 10.0 * d.qvel[act.mj_dof_idx]  # internal: no effect on L
         d.ctrl[:] = np.clip(tau, act.torque_limit_Nm[:, 0], act.torque_limit_Nm[:, 1]) / act.gear
         mujoco.mj_step(m, d)
@@ -407,8 +432,12 @@ def test_update_positions_matches_full_update_without_velocity_terms(robot):
         np.testing.assert_array_equal(jdv, 0.0)
     np.testing.assert_array_equal(light.com_velocity(), 0.0)
     np.testing.assert_array_equal(light.com_jdot_v(), 0.0)
-    for getter in (light.mass_matrix, light.nonlinear_effects, light.centroidal_momentum_matrix,
-                   light.centroidal_momentum):
+    for getter in (
+        light.mass_matrix,
+        light.nonlinear_effects,
+        light.centroidal_momentum_matrix,
+        light.centroidal_momentum,
+    ):
         with pytest.raises(InputError):
             getter()
     # a full update makes everything valid again

@@ -88,9 +88,7 @@ def test_cassie_description():
     assert cassie.nq == 21 and cassie.nv == 20
     assert cassie.base_body == "cassie-pelvis"
     assert cassie.force_sites["left"] == ("left-toe", "left-heel")
-    assert set(cassie.passive_joint_names) == {
-        f"{s}-{j}" for s in ("left", "right") for j in ("shin", "tarsus")
-    }
+    assert set(cassie.passive_joint_names) == {f"{s}-{j}" for s in ("left", "right") for j in ("shin", "tarsus")}
     assert len(cassie.actuated) == 10
     mj = cassie.mj_model
     # joint-side limits = gear * ctrlrange (and the joints' actuatorfrcrange)

@@ -17,7 +17,6 @@ from amlip_qp.robots.outputs import output_layout
 from robot_states import ROBOTS
 
 
-
 @pytest.fixture(scope="module", params=ROBOTS)
 def robot(request):
     return load_robot(request.param)
@@ -87,7 +86,9 @@ def test_values_follow_the_definitions(robot):
                 assert named["com_y_over_swing"] == pytest.approx((c - r_sw) @ yD, abs=1e-14)
                 toe, heel = kin.force_point_positions(sw)
                 dlt = toe - heel
-                assert named["swing_toe_pitch"] == pytest.approx(np.arctan2(-dlt[2], np.hypot(dlt[0], dlt[1])), abs=1e-14)
+                assert named["swing_toe_pitch"] == pytest.approx(
+                    np.arctan2(-dlt[2], np.hypot(dlt[0], dlt[1])), abs=1e-14
+                )
 
 
 def test_planar_pitch_sign():
@@ -121,7 +122,9 @@ def test_jacobian_and_drift_by_finite_differences(robot):
             for i in range(robot.nv):
                 e = np.zeros(robot.nv)
                 e[i] = h
-                cols.append((out(pin.integrate(robot.pin_model, q, e)) - out(pin.integrate(robot.pin_model, q, -e))) / (2 * h))
+                cols.append(
+                    (out(pin.integrate(robot.pin_model, q, e)) - out(pin.integrate(robot.pin_model, q, -e))) / (2 * h)
+                )
             np.testing.assert_allclose(J, np.column_stack(cols), atol=1e-6)
             jv_p = out(pin.integrate(robot.pin_model, q, v * h), 1) @ v
             jv_m = out(pin.integrate(robot.pin_model, q, -v * h), 1) @ v

@@ -20,7 +20,6 @@ from amlip_qp.robots import (
 from robot_states import ROBOTS, random_mj_state
 
 
-
 @pytest.fixture(scope="module", params=ROBOTS)
 def robot(request):
     return load_robot(request.param)

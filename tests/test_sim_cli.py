@@ -117,7 +117,12 @@ def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
     assert data["robot"] == "rabbit" and data["tracker"] == "zero" and data["fell"] is False
     assert data["duration_s"] == 0.05 and data["sim_time_s"] == pytest.approx(0.05)
     assert data["commanded_velocity"] == [0.3, 0.0]
-    assert set(data["output_tracking_rms"]) == {"torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing"}
+    assert set(data["output_tracking_rms"]) == {
+        "torso_pitch",
+        "com_z_over_stance",
+        "com_x_over_swing",
+        "com_z_over_swing",
+    }
     assert set(data["tick_time_us"]) == {"median", "p99"}
     with np.load(log) as npz:
         assert npz["log_t"].shape == (100,)
@@ -151,7 +156,9 @@ def test_walk_video_gif(tmp_path, capsys, stand_in):
     import imageio.v3 as iio
 
     path = tmp_path / "walk.gif"
-    code, out, err = _run(["walk", "--robot", "cassie", "--duration", "0.2", "--video", str(path), "--video-fps", "20"], capsys)
+    code, out, err = _run(
+        ["walk", "--robot", "cassie", "--duration", "0.2", "--video", str(path), "--video-fps", "20"], capsys
+    )
     assert code == 0, err
     frames = iio.imread(path, index=None)
     assert frames.shape[0] == 5 and frames.shape[-1] in (3, 4)  # t = 0, 0.05, ..., 0.2 s at 20 fps
@@ -162,7 +169,9 @@ def test_scenario_options_override(capsys, stand_in):
     from amlip_qp.sim.cli import scenario_from_args
 
     parser = cli.build_parser()
-    args = parser.parse_args(["walk", "--scenario", "cassie-turn-90", "--turn-rate", "-10", "--duration", "1", "--push", "0.5:0,30,0:0.1"])
+    args = parser.parse_args(
+        ["walk", "--scenario", "cassie-turn-90", "--turn-rate", "-10", "--duration", "1", "--push", "0.5:0,30,0:0.1"]
+    )
     sc = scenario_from_args(args)
     assert sc.robot == "cassie" and sc.duration_s == 1.0
     assert sc.turn_rate_at(0.0) == pytest.approx(np.radians(-10.0))
@@ -182,7 +191,12 @@ def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
     assert lines[0].split()[:3] == ["robot", "tracker", "fell"] and len(lines) == 2 + 4
     data = json.loads(out_json.read_text())
     rows = data["rows"]
-    assert [(r["robot"], r["tracker"]) for r in rows] == [("rabbit", "pbc"), ("rabbit", "qp"), ("cassie", "pbc"), ("cassie", "qp")]
+    assert [(r["robot"], r["tracker"]) for r in rows] == [
+        ("rabbit", "pbc"),
+        ("rabbit", "qp"),
+        ("cassie", "pbc"),
+        ("cassie", "qp"),
+    ]
     for r in rows:
         assert r["fell"] is True  # zero torque
         assert r["max_sagittal_impulse_Ns"] == 0.0 and r["highest_steady_speed_mps"] == 0.0
@@ -202,7 +216,19 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
 
     monkeypatch.setattr(factory, "make_tracker", lambda name, robot: FallbackTracker(robot))
     monkeypatch.setattr(factory, "tracker_class", lambda name: FallbackTracker)
-    argv = ["compare", "--quick", "--robots", "rabbit", "--trackers", "qp", "--no-ramp", "--no-push", "--jobs", "1", "--no-plot"]
+    argv = [
+        "compare",
+        "--quick",
+        "--robots",
+        "rabbit",
+        "--trackers",
+        "qp",
+        "--no-ramp",
+        "--no-push",
+        "--jobs",
+        "1",
+        "--no-plot",
+    ]
     with pytest.warns(CodegenFallbackWarning, match="no C compiler"):
         code, out, err = _run(argv, capsys)
     assert code == 0, err
@@ -211,7 +237,13 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
 def test_compare_table_marks_values_at_the_top_of_the_search():
     from amlip_qp.sim.compare import format_table
 
-    row = {"robot": "cassie", "tracker": "qp", "fell": False, "highest_steady_speed_mps": 2.1, "speed_at_upper_bound": True}
+    row = {
+        "robot": "cassie",
+        "tracker": "qp",
+        "fell": False,
+        "highest_steady_speed_mps": 2.1,
+        "speed_at_upper_bound": True,
+    }
     row.update(max_sagittal_impulse_Ns=60.0, sagittal_impulse_at_upper_bound=True, max_lateral_impulse_Ns=22.5)
     cells = format_table([row]).splitlines()[2].split()
     assert cells[cells.index("no") + 7 :][:3] == [">=2.10", ">=60.0", "22.5"]

@@ -69,7 +69,15 @@ def test_every_named_scenario_is_inside_its_robots_bounds():
 
 @pytest.mark.parametrize(
     "robot, vx",
-    [("cassie", 2.5), ("cassie", -0.5), ("cassie", -1.0), ("cassie", 1.0), ("rabbit", 0.5), ("rabbit", 0.8), ("rabbit", 1.0)],
+    [
+        ("cassie", 2.5),
+        ("cassie", -0.5),
+        ("cassie", -1.0),
+        ("cassie", 1.0),
+        ("rabbit", 0.5),
+        ("rabbit", 0.8),
+        ("rabbit", 1.0),
+    ],
 )
 def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
     from amlip_qp.sim.scenarios import check_scenario
@@ -80,11 +88,19 @@ def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
 @pytest.mark.parametrize(
     "robot, changes, needle",
     [
-        ("cassie", {"vx": SpeedProfile.constant(2.6)}, "forward speed 2.6 m/s is outside cassie's bounds [-1, 2.5] m/s"),
+        (
+            "cassie",
+            {"vx": SpeedProfile.constant(2.6)},
+            "forward speed 2.6 m/s is outside cassie's bounds [-1, 2.5] m/s",
+        ),
         ("cassie", {"vx": SpeedProfile((0.0, 4.0, 8.0), (0.0, -1.5, 0.0))}, "forward speed -1.5 m/s"),
         ("rabbit", {"vx": SpeedProfile.constant(1.6)}, "outside rabbit's bounds [-0.5, 1.5] m/s"),
         ("cassie", {"vy_mps": -0.51}, "lateral speed -0.51 m/s is outside cassie's bound |vy| <= 0.5 m/s"),
-        ("cassie", {"turn_rate_radps": math.radians(61.0)}, "turn rate 61 deg/s is outside cassie's bound |turn rate| <= 60 deg/s"),
+        (
+            "cassie",
+            {"turn_rate_radps": math.radians(61.0)},
+            "turn rate 61 deg/s is outside cassie's bound |turn rate| <= 60 deg/s",
+        ),
         ("cassie", {"duration_s": 601.0}, "duration 601 s is above cassie's bound 600 s"),
         ("rabbit", {"vy_mps": 0.1, "turn_rate_radps": 0.2}, "rabbit is planar: lateral speed (0.1 m/s), turn rate"),
         ("rabbit", {"pushes": [(1.0, (0.0, 10.0, 0.0), 0.1)]}, "rabbit is planar: push FY (10 N at 1 s)"),

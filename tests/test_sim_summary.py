@@ -69,7 +69,13 @@ def _result(fell=False) -> RunResult:
         steps=steps,
         tick_time_us=np.arange(1.0, N + 1.0),
         fallback_ticks=3,
-        info={"output_names": ("a", "b"), "actuator_names": ("m0", "m1"), "scenario": "synthetic", "seed": 4, "noise": False},
+        info={
+            "output_names": ("a", "b"),
+            "actuator_names": ("m0", "m1"),
+            "scenario": "synthetic",
+            "seed": 4,
+            "noise": False,
+        },
     )
 
 
@@ -164,8 +170,15 @@ def test_bisection_finds_the_threshold():
 
 def test_table_formats_rows():
     rows = [
-        {"robot": "cassie", "tracker": "pbc", "fell": False, "velocity_error_rms": 0.1234, "max_sagittal_impulse_Ns": 60.0,
-         "sagittal_impulse_at_upper_bound": True, "max_lateral_impulse_Ns": None},
+        {
+            "robot": "cassie",
+            "tracker": "pbc",
+            "fell": False,
+            "velocity_error_rms": 0.1234,
+            "max_sagittal_impulse_Ns": 60.0,
+            "sagittal_impulse_at_upper_bound": True,
+            "max_lateral_impulse_Ns": None,
+        },
     ]
     table = format_table(rows).splitlines()
     assert len(table) == 3 and "0.123" in table[2] and ">=60.0" in table[2] and table[2].count(" - ") >= 1

@@ -45,6 +45,7 @@ def _finite(x) -> bool:
     except TypeError:
         return False
 
+
 #: Default process-noise intensity q, (kg m^2/s)^2 / s.
 DEFAULT_PROCESS_VAR_RATE = 4.0
 #: Default measurement-noise variance r, (kg m^2/s)^2.

@@ -44,7 +44,7 @@ four outputs are entries ``RABBIT_FROM_CASSIE = (0, 4, 5, 7)`` of that layout.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -67,7 +67,9 @@ def check_clearance(z_cl_m, H_m) -> None:
     C.non_negative("z_cl_m (swing clearance)", z_cl_m, "m")
     C.positive("H_m (CoM height over the contact)", H_m, "m")
     if not z_cl_m < H_m:
-        raise InputError(f"z_cl_m={z_cl_m!r} m must be smaller than H_m={H_m!r} m (the swing foot cannot rise to the CoM)")
+        raise InputError(
+            f"z_cl_m={z_cl_m!r} m must be smaller than H_m={H_m!r} m (the swing foot cannot rise to the CoM)"
+        )
 
 
 def pack_swing_reference_input(

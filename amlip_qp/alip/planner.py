@@ -46,8 +46,8 @@ periodic LIP gait is larger by ``(lT/2)/tanh(lT/2)``; the planner converts
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -95,7 +95,15 @@ class Command:
     step_width_m: float = 0.0
 
     def __post_init__(self):
-        for name in ("step_time_s", "com_height_m", "clearance_m", "vx_mps", "vy_mps", "turn_rate_radps", "step_width_m"):
+        for name in (
+            "step_time_s",
+            "com_height_m",
+            "clearance_m",
+            "vx_mps",
+            "vy_mps",
+            "turn_rate_radps",
+            "step_width_m",
+        ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
                 raise InputError(f"Command.{name} must be a finite number, got {v!r}")
@@ -182,7 +190,9 @@ class StateEstimate:
                 for n in ("p_st_m", "L_Nms", "com_m", "v_z_mps", "t_in_step_s")
                 if not np.all(np.isfinite(np.asarray(getattr(self, n), dtype=float)))
             ]
-            raise InputError(f"StateEstimate has NaN or inf in {bad or 'a value too large to add'}; check the estimator")
+            raise InputError(
+                f"StateEstimate has NaN or inf in {bad or 'a value too large to add'}; check the estimator"
+            )
         if self.t_in_step_s < 0.0:
             raise InputError(f"StateEstimate.t_in_step_s must be >= 0 s, got {self.t_in_step_s!r}")
 
@@ -454,17 +464,23 @@ class Planner:
         # The kernels may return a shared buffer: copy once, hand out views.
         y = np.array(self.plan_fn(u), dtype=float).reshape(-1)
         if y.size != len(kernels.ALIP_PLAN_OUTPUTS):
-            raise InputError(f"plan_fn returned {y.size} values; ALIP_PLAN has {len(kernels.ALIP_PLAN_OUTPUTS)} outputs")
+            raise InputError(
+                f"plan_fn returned {y.size} values; ALIP_PLAN has {len(kernels.ALIP_PLAN_OUTPUTS)} outputs"
+            )
         yl = y.tolist()
         y2, y3, px_w, py_w = yl[2], yl[3], yl[6], yl[7]
 
         # p_sw_des into the current heading frame D_k for the swing-x/y references.
         p_sw_h = np.array(world_to_heading_xy(px_w, py_w, math.cos(self._heading), math.sin(self._heading)))
         turn = heading_next - self._heading
-        ur = O.pack_swing_reference_input(self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref)
+        ur = O.pack_swing_reference_input(
+            self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref
+        )
         yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
         if yr.size != kernels.SWING_REFERENCE_N_OUT:
-            raise InputError(f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}")
+            raise InputError(
+                f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}"
+            )
         h_d, dh_d, ddh_d = O.split_reference(self.robot, yr)
 
         c0, c1, c2 = estimate.com_m.tolist()

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import platform
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import casadi as ca
 import numpy as np
@@ -39,9 +39,7 @@ from amlip_qp.codegen.runtime import Kernels
 PATHS = ("c-fast", "casadi-function", "numpy")
 
 #: Representative Cassie mid-step inputs (layouts in :mod:`amlip_qp.alip.kernels`).
-ALIP_PLAN_INPUT = np.array(
-    [-0.05, 0.08, -3.0, 8.0, 0.2, 0.0, 0.5, 0.0, 0.1, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81]
-)
+ALIP_PLAN_INPUT = np.array([-0.05, 0.08, -3.0, 8.0, 0.2, 0.0, 0.5, 0.0, 0.1, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81])
 SWING_REFERENCE_INPUT = np.array([0.4, 0.35, 0.9, 0.1, 0.02, -0.01, -0.2, 0.25, 0.15, 0.2, 0.05])
 
 

@@ -202,7 +202,9 @@ def build_library(
         fd, tmp = tempfile.mkstemp(prefix=f".{library_file}.", suffix=".tmp", dir=folder)
         os.close(fd)
     except OSError as exc:
-        raise CodegenError(f"cannot write the kernel cache {folder}: {exc}; set ${CACHE_ENV} to a writable folder") from exc
+        raise CodegenError(
+            f"cannot write the kernel cache {folder}: {exc}; set ${CACHE_ENV} to a writable folder"
+        ) from exc
     cmd = [*compiler, *CFLAGS, "-o", tmp, str(src), "-lm"]
     try:
         try:

@@ -23,9 +23,9 @@ once.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
-from typing import Callable, Sequence
+from functools import cache
 
 import casadi as ca
 
@@ -73,7 +73,7 @@ def build_function(kernel: KernelSpec) -> ca.Function:
     return ca.Function(kernel.name, [u], [y], ["u"], ["y"])
 
 
-@lru_cache(maxsize=None)
+@cache
 def function(name: str) -> ca.Function:
     """The (cached) SX Function of the kernel ``name``: ``alip_plan`` or ``swing_reference``."""
     return build_function(spec(name))

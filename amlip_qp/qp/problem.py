@@ -69,7 +69,7 @@ class QPProblem:
         """Number of two-sided inequality rows (box bounds not counted)."""
         return self.C.shape[0]
 
-    def copy(self) -> "QPProblem":
+    def copy(self) -> QPProblem:
         """A deep copy (for recording problems while the builder reuses buffers)."""
         return QPProblem(
             *(np.array(getattr(self, k), copy=True) for k in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")),
@@ -136,7 +136,7 @@ class QPProblem:
             ub=self.ub,
         )
 
-    def without_fixed_variables(self) -> tuple["QPProblem", np.ndarray, np.ndarray]:
+    def without_fixed_variables(self) -> tuple[QPProblem, np.ndarray, np.ndarray]:
         """The equivalent problem over the variables whose box is not a single point.
 
         Variables with ``lb == ub`` (e.g. the swing foot's forces in the air)

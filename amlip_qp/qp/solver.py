@@ -17,12 +17,13 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from amlip_qp.qp._proxsuite import proxqp
 
 from amlip_qp.exceptions import QPError
+from amlip_qp.qp._proxsuite import proxqp
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
+
 
 @dataclass
 class QPSolution:
@@ -147,7 +148,7 @@ class ProxQPSolver:
             name = getattr(status, "name", str(status))
             # Do not warm-start the next tick from a failed iterate.
             self.reset()
-            raise QPError(f"ProxQP failed with status {name} after {info.iter} iterations", problem=problem, status=name)
-        return QPSolution(
-            x=np.array(x), status=status.name, iterations=int(info.iter), solve_time_us=elapsed_us
-        )
+            raise QPError(
+                f"ProxQP failed with status {name} after {info.iter} iterations", problem=problem, status=name
+            )
+        return QPSolution(x=np.array(x), status=status.name, iterations=int(info.iter), solve_time_us=elapsed_us)

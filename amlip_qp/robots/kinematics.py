@@ -86,9 +86,7 @@ class RobotKinematics:
         q = np.array(q, dtype=float)  # own copies: the caller may reuse its arrays
         v = np.array(v, dtype=float)
         if q.shape != self._q_shape or v.shape != self._v_shape:
-            raise InputError(
-                f"q, v must have shapes ({self.model.nq},), ({self.model.nv},); got {q.shape}, {v.shape}"
-            )
+            raise InputError(f"q, v must have shapes ({self.model.nq},), ({self.model.nv},); got {q.shape}, {v.shape}")
         # One cheap test per tick: a finite sum implies finite entries (NaN and
         # inf propagate); only if it fails (NaN, inf or overflow) check exactly.
         if not math.isfinite(sum(q.tolist()) + sum(v.tolist())) and not (np.isfinite(q).all() and np.isfinite(v).all()):
@@ -409,7 +407,9 @@ class RobotKinematics:
             or not callable(getattr(output_map, "evaluate", None))
             or other.nv != self.robot.nv
         ):
-            raise InputError(f"output_map must evaluate the outputs {names} of {self.robot.name} (nv = {self.robot.nv})")
+            raise InputError(
+                f"output_map must evaluate the outputs {names} of {self.robot.name} (nv = {self.robot.nv})"
+            )
         self._output_map = output_map
         self._out_cache = None
 

@@ -59,8 +59,7 @@ def resolve_model_path(name_or_path: str | os.PathLike) -> tuple[str, Path]:
         if not looks_like_path:
             known = ", ".join(repr(k) for k in KNOWN_ROBOTS)
             raise UnknownRobotError(
-                f"unknown robot {text!r}: known robots are {known}; "
-                "a path to an MJCF .xml file also works"
+                f"unknown robot {text!r}: known robots are {known}; a path to an MJCF .xml file also works"
             )
         path = Path(text).expanduser()
         name = path.stem
@@ -120,8 +119,7 @@ def _sites(mj_model, pin_model, path: Path):
         toe, heel = has(f"{s}-toe"), has(f"{s}-heel")
         if toe != heel:
             raise MJCFError(
-                f"{path}: site {s}-{'heel' if toe else 'toe'} is missing: "
-                "a blade foot needs both toe and heel sites"
+                f"{path}: site {s}-{'heel' if toe else 'toe'} is missing: a blade foot needs both toe and heel sites"
             )
         force[s] = (f"{s}-toe", f"{s}-heel") if toe else (f"{s}-contact",)
     contact = {s: f"{s}-contact" for s in FOOT_SIDES}
@@ -148,14 +146,14 @@ def _root(mj_model, path: Path):
     if sorted(types) == [_SLIDE, _SLIDE, _HINGE]:
         data = mujoco.MjData(mj_model)
         mujoco.mj_kinematics(mj_model, data)
-        hinge_axes = [
-            data.xaxis[j] for j in range(mj_model.njnt) if int(mj_model.jnt_type[j]) == _HINGE
-        ]
+        hinge_axes = [data.xaxis[j] for j in range(mj_model.njnt) if int(mj_model.jnt_type[j]) == _HINGE]
         slide_axes = [data.xaxis[j] for j in root_joints if int(mj_model.jnt_type[j]) == _SLIDE]
         normal = hinge_axes[0]
         is_planar = abs(abs(normal[1]) - 1.0) < 1e-9  # motion in the world x-z plane
-        is_planar = is_planar and all(abs(abs(a @ normal) - 1.0) < 1e-9 for a in hinge_axes) and all(
-            abs(a @ normal) < 1e-9 for a in slide_axes
+        is_planar = (
+            is_planar
+            and all(abs(abs(a @ normal) - 1.0) < 1e-9 for a in hinge_axes)
+            and all(abs(a @ normal) < 1e-9 for a in slide_axes)
         )
     if not (is_floating or is_planar):
         raise MJCFError(

@@ -207,8 +207,7 @@ class Robot:
                 from amlip_qp.exceptions import InputError
 
                 raise InputError(
-                    f"{self.name}: no keyframe named {keyframe!r}; "
-                    f"the model has {self.mj_model.nkey} keyframe(s)"
+                    f"{self.name}: no keyframe named {keyframe!r}; the model has {self.mj_model.nkey} keyframe(s)"
                 )
             mujoco.mj_resetDataKeyframe(self.mj_model, data, key_id)
             mujoco.mj_forward(self.mj_model, data)

@@ -188,7 +188,10 @@ def bench_solvers(
     wanted = backends if backends is not None else QPSOLVERS_BACKENDS
 
     def make_runners() -> dict:
-        runners = {"proxsuite-warm": _ProxSuiteRunner(True, options), "proxsuite-init": _ProxSuiteRunner(False, options)}
+        runners = {
+            "proxsuite-warm": _ProxSuiteRunner(True, options),
+            "proxsuite-init": _ProxSuiteRunner(False, options),
+        }
         for backend in wanted:
             if backend in qpsolvers.available_solvers:
                 runners[backend] = _QPSolversRunner(backend)
@@ -238,7 +241,9 @@ def format_report(report: dict) -> str:
         f"{'solver':<16}{'median µs':>12}{'p99 µs':>12}{'x warm':>9}{'fails':>7}",
     ]
     for name, s in report["solvers"].items():
-        lines.append(f"{name:<16}{s['median_us']:>12.1f}{s['p99_us']:>12.1f}{s['ratio_to_warm']:>9.2f}{s['failures']:>7d}")
+        lines.append(
+            f"{name:<16}{s['median_us']:>12.1f}{s['p99_us']:>12.1f}{s['ratio_to_warm']:>9.2f}{s['failures']:>7d}"
+        )
     t = report["tick_us"]
     lines.append(f"controller tick (estimate, plan, build, solve): median {t['median']:.1f} µs, p99 {t['p99']:.1f} µs")
     missing = report.get("missing_backends") or []

@@ -16,8 +16,8 @@ prefer_offscreen_gl()  # before anything imports mujoco
 
 import numpy as np  # noqa: E402
 
-from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
+from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.sim.harness import Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 

@@ -19,9 +19,10 @@ import argparse
 import math
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -105,7 +106,9 @@ def highest_steady_speed(
     return float(np.max(c_mean[ok])) if np.any(ok) else 0.0
 
 
-def max_survived_impulse(survives: Callable[[float], bool], max_impulse_Ns: float, iterations: int) -> tuple[float, bool]:
+def max_survived_impulse(
+    survives: Callable[[float], bool], max_impulse_Ns: float, iterations: int
+) -> tuple[float, bool]:
     """Largest impulse (N s) that ``survives``, by bisection on ``[0, max_impulse_Ns]``.
 
     The upper end is tried first: if it survives the answer is
@@ -307,7 +310,9 @@ def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None]
         for i, task in enumerate(tasks):
             results[i] = _execute(task)
             if log:
-                log(f"  done {task.robot}/{task.tracker} {task.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)")
+                log(
+                    f"  done {task.robot}/{task.tracker} {task.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)"
+                )
     else:
         import multiprocessing as mp
 
@@ -321,7 +326,9 @@ def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None]
                 results[i] = fut.result()
                 if log:
                     t = tasks[i]
-                    log(f"  done {t.robot}/{t.tracker} {t.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)")
+                    log(
+                        f"  done {t.robot}/{t.tracker} {t.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)"
+                    )
     rows = []
     keys = list(dict.fromkeys((t.robot, t.tracker) for t in tasks))
     for robot, trk in keys:
@@ -376,7 +383,10 @@ def format_table(rows: list[dict[str, Any]]) -> str:
     header = [h for _, h, _ in TABLE_COLUMNS]
     body = [[_cell(r, k, f) for k, _, f in TABLE_COLUMNS] for r in rows]
     widths = [max(len(c) for c in col) for col in zip(header, *body)]
-    lines = ["  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(line, widths))) for line in [header, *body]]
+    lines = [
+        "  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(line, widths)))
+        for line in [header, *body]
+    ]
     lines.insert(1, "-" * len(lines[0]))
     return "\n".join(lines)
 
@@ -403,7 +413,14 @@ def main(args: argparse.Namespace) -> int:
 
         tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
     tasks = build_tasks(
-        args.robots, args.trackers, args.scenario, settings, seed=args.seed, noise=args.noise, ramp=not args.no_ramp, push=not args.no_push
+        args.robots,
+        args.trackers,
+        args.scenario,
+        settings,
+        seed=args.seed,
+        noise=args.noise,
+        ramp=not args.no_ramp,
+        push=not args.no_push,
     )
     # Outputs are checked before anything runs; the figure's folder (default out/) is created.
     check_output_path("--json", args.json)

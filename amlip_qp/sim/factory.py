@@ -29,7 +29,7 @@ TRACKER_MODULES: dict[str, str] = {
 }
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def load(robot_name: str) -> Robot:
     """The :class:`~amlip_qp.robots.robot.Robot` named ``robot_name`` (loaded once per process)."""
     from amlip_qp.robots import load_robot

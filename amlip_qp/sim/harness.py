@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import mujoco
 import numpy as np
@@ -222,7 +222,7 @@ class Simulation:
     def foot_contact(self) -> dict[str, bool]:
         """Contact switches: True when the floor pushes on the foot's body harder than the threshold."""
         m, d = self.model, self.data
-        normal = {side: 0.0 for side in self._foot_bodies}
+        normal = dict.fromkeys(self._foot_bodies, 0.0)
         for i in range(d.ncon):
             con = d.contact[i]
             b1, b2 = int(m.geom_bodyid[con.geom1]), int(m.geom_bodyid[con.geom2])
@@ -390,7 +390,11 @@ class Simulation:
                 on_tick(float(d.time), d)
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
-            if z < self.fall.min_height_fraction * z0 or tilt > self.fall.max_tilt_rad or not np.all(np.isfinite(d.qpos)):
+            if (
+                z < self.fall.min_height_fraction * z0
+                or tilt > self.fall.max_tilt_rad
+                or not np.all(np.isfinite(d.qpos))
+            ):
                 fell, fall_time = True, t
                 break
         wall = time.perf_counter() - wall0

@@ -3,20 +3,20 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-from amlip_qp.exceptions import InputError  # noqa: E402
-from amlip_qp.sim.harness import RunResult  # noqa: E402
-from amlip_qp.sim.summary import heading_frame_xy, step_velocities  # noqa: E402
-
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim.harness import RunResult
+from amlip_qp.sim.summary import heading_frame_xy, step_velocities
 
 #: File suffixes the figures are written as (the format follows the suffix).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")

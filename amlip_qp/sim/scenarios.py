@@ -42,7 +42,7 @@ class SpeedProfile:
             raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
 
     @classmethod
-    def parse(cls, text: str) -> "SpeedProfile":
+    def parse(cls, text: str) -> SpeedProfile:
         """Parse ``"t0:v0,t1:v1,..."`` (s:m/s), e.g. ``"0:0,5:2.1"``."""
         try:
             pairs = [item.split(":") for item in text.split(",") if item.strip()]
@@ -53,7 +53,7 @@ class SpeedProfile:
         return cls(times, speeds)
 
     @classmethod
-    def constant(cls, speed_mps: float) -> "SpeedProfile":
+    def constant(cls, speed_mps: float) -> SpeedProfile:
         """A constant speed."""
         return cls((0.0,), (float(speed_mps),))
 
@@ -133,7 +133,7 @@ class Scenario:
             step_width_m=g.step_width_m,
         )
 
-    def with_(self, **changes) -> "Scenario":
+    def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""
         return replace(self, **changes)
 

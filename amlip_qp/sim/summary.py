@@ -96,7 +96,10 @@ def velocity_error_rms(result: RunResult, settle_s: float = DEFAULT_SETTLE_S) ->
 def foot_placement_errors(result: RunResult) -> np.ndarray:
     """Per step, the horizontal distance (m) between the swing contact at touchdown and the planner's target."""
     return np.array(
-        [float(np.linalg.norm(np.asarray(s.swing_actual_m)[:2] - np.asarray(s.swing_target_m)[:2])) for s in result.steps]
+        [
+            float(np.linalg.norm(np.asarray(s.swing_actual_m)[:2] - np.asarray(s.swing_target_m)[:2]))
+            for s in result.steps
+        ]
     )
 
 

@@ -103,7 +103,15 @@ class VideoRecorder:
         camera: Camera name (the robots' models define ``track``).
     """
 
-    def __init__(self, model, path: str | os.PathLike, fps: float = 30.0, width: int = 640, height: int = 480, camera: str = "track"):
+    def __init__(
+        self,
+        model,
+        path: str | os.PathLike,
+        fps: float = 30.0,
+        width: int = 640,
+        height: int = 480,
+        camera: str = "track",
+    ):
         import mujoco
 
         self.path = check_video_path(path)
@@ -125,7 +133,9 @@ class VideoRecorder:
             if self.path.suffix.lower() == ".gif":
                 self._writer = imageio.get_writer(self.path, mode="I", duration=1000.0 / self.fps, loop=0)
             else:
-                self._writer = imageio.get_writer(self.path, fps=self.fps, codec="libx264", macro_block_size=8, quality=7)
+                self._writer = imageio.get_writer(
+                    self.path, fps=self.fps, codec="libx264", macro_block_size=8, quality=7
+                )
         except Exception as exc:
             self._close_renderer()
             raise RenderError(f"cannot open a video writer for {self.path}: {exc}") from exc
@@ -162,7 +172,7 @@ class VideoRecorder:
             self._writer = None
         self._close_renderer()
 
-    def __enter__(self) -> "VideoRecorder":
+    def __enter__(self) -> VideoRecorder:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -254,7 +254,15 @@ class IterativeIK:
 
     # ------------------------------------------------------------------ solve
     def solve(
-        self, kin: RobotKinematics, stance: str, heading_rad: float, h_d, dh_d, ddh_d, iterations: int | None = None, held_springs=None
+        self,
+        kin: RobotKinematics,
+        stance: str,
+        heading_rad: float,
+        h_d,
+        dh_d,
+        ddh_d,
+        iterations: int | None = None,
+        held_springs=None,
     ) -> IKResult:
         """Joint references for the outputs ``h_d`` (m, rad) and their rates.
 
@@ -375,7 +383,9 @@ class IterativeIK:
             if isinstance(exc, InputError):
                 raise
             return self._failed(kin.q)
-        res = IKResult(q_r=q, v_r=v_r, a_r=a_r, iterations=it, residual=residual, ok=True, knee_at_limit=swap is not None)
+        res = IKResult(
+            q_r=q, v_r=v_r, a_r=a_r, iterations=it, residual=residual, ok=True, knee_at_limit=swap is not None
+        )
         self._prev, self._prev_stance = res, stance
         self._cache, self.lu = cache, lu
         return res

@@ -94,9 +94,7 @@ class IKEquations:
         n_fixed = len(self.pose_rows) + len(self.held_springs)
         need_ankle = nv - (n_out + n_fixed)
         if need_ankle not in (0, 1):
-            raise MJCFError(
-                f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates"
-            )
+            raise MJCFError(f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates")
         # the stance ankle: the contact frame's parent joint, if actuated and needed
         self.ankle_v: dict[str, int | None] = {}
         self.ankle_q: dict[str, int | None] = {}
@@ -122,8 +120,12 @@ class IKEquations:
             for spring in self.held_springs:
                 lq.append(spring.row_q(nq)), lv.append(spring.row_v(nv)), lr.append(np.zeros(nv))
             self.rows[side] = StanceRows(
-                nv, n_out, len(self.pose_rows), np.array(lq).reshape(-1, nq),
-                np.array(lv).reshape(-1, nv), np.array(lr).reshape(-1, nv)
+                nv,
+                n_out,
+                len(self.pose_rows),
+                np.array(lq).reshape(-1, nq),
+                np.array(lv).reshape(-1, nv),
+                np.array(lr).reshape(-1, nv),
             )
 
     def controlled_actuated(self, stance: str) -> np.ndarray:

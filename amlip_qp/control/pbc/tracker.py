@@ -147,18 +147,21 @@ class PBCTracker(Tracker):
         # spring_deflections_rad (that leg's joints, then its couplings with a spring).
         self._spring_idx = {
             side: np.array(
-                [k for k, s in enumerate(self.ik.equations.held_springs)
-                 if s.side == side and (s.kind == "joint" or s.stiffness > 0)],
+                [
+                    k
+                    for k, s in enumerate(self.ik.equations.held_springs)
+                    if s.side == side and (s.kind == "joint" or s.stiffness > 0)
+                ],
                 dtype=int,
             )  # fmt: skip
             for side in robot.foot_sides
         }
-        self._last_force: dict[str, np.ndarray | None] = {side: None for side in robot.foot_sides}
+        self._last_force: dict[str, np.ndarray | None] = dict.fromkeys(robot.foot_sides)
 
     def reset(self) -> None:
         """Forget the IK warm start and the last contact forces."""
         self.ik.reset()
-        self._last_force = {side: None for side in self.robot.foot_sides}
+        self._last_force = dict.fromkeys(self.robot.foot_sides)
 
     # ---------------------------------------------------------------- model
     def _contact_rows(self, kin: RobotKinematics, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
@@ -299,7 +302,9 @@ class PBCTracker(Tracker):
         q_r[sw] += dq[lay.ctrl_v[sw]]
         v_r[sw] += dv[lay.ctrl_v[sw]]
 
-    def _fallback(self, kin: RobotKinematics, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True) -> TrackerResult:
+    def _fallback(
+        self, kin: RobotKinematics, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True
+    ) -> TrackerResult:
         """Damped joint PD towards the reference (or damping only), never NaN."""
         g = self.gains
         q = kin.q[lay.ctrl_q]

@@ -107,9 +107,7 @@ def _function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
         toe, heel = X_parts[len(cols) + 3], X_parts[len(cols) + 4]
         d = toe - heel
         toe_pitch = ca.atan2(-d[2], ca.hypot(d[0], d[1]))
-        y = ca.vertcat(
-            pitch, roll, 0, 0, c[2] - r_st[2], p_sw_x, p_sw_y, p_sw[2], toe_pitch
-        )
+        y = ca.vertcat(pitch, roll, 0, 0, c[2] - r_st[2], p_sw_x, p_sw_y, p_sw[2], toe_pitch)
     else:
         R0, R2 = X_parts[0], X_parts[1]  # columns 0 and 2
         pitch = ca.atan2(R2[0], R2[2])
