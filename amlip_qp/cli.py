@@ -16,6 +16,7 @@ import math
 import re
 import sys
 from collections.abc import Callable, Sequence
+from typing import NoReturn
 
 from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
 from amlip_qp.profiles import ROBOT_NAMES
@@ -42,7 +43,7 @@ class _Parser(argparse.ArgumentParser):
         # argparse consults this (private) matcher to tell negative numbers from options.
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
-    def error(self, message: str) -> None:
+    def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
         raise SystemExit(2)
 
@@ -231,7 +232,7 @@ def parse_push_spec(text: str) -> tuple[float, tuple[float, float, float], float
         raise argparse.ArgumentTypeError(usage)
     if t < 0 or dur <= 0:
         raise argparse.ArgumentTypeError(f"a push needs T >= 0 s and DUR > 0 s, got {text!r}")
-    return t, force, dur  # type: ignore[return-value]
+    return t, force, dur
 
 
 def _finite_float(text: str) -> float:

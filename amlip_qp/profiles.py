@@ -140,7 +140,8 @@ class CommandBounds:
         for v in vx_mps:
             if not lo <= v <= hi:
                 raise InputError(
-                    f"forward speed {v:g} m/s is outside {robot}'s bounds [{lo:g}, {hi:g}] m/s (CommandBounds.vx_mps {where})"
+                    f"forward speed {v:g} m/s is outside {robot}'s bounds [{lo:g}, {hi:g}] m/s "
+                    f"(CommandBounds.vx_mps {where})"
                 )
         if not abs(vy_mps) <= self.vy_max_mps:
             raise InputError(
@@ -167,8 +168,9 @@ class CommandBounds:
                 )
             if not magnitude * push_s <= self.push_impulse_max_Ns:
                 raise InputError(
-                    f"push at {t_s:g} s: impulse {magnitude * push_s:g} N s (force x duration) is above {robot}'s bound "
-                    f"{self.push_impulse_max_Ns:g} N s (CommandBounds.push_impulse_max_Ns {where})"
+                    f"push at {t_s:g} s: impulse {magnitude * push_s:g} N s (force x duration) "
+                    f"is above {robot}'s bound {self.push_impulse_max_Ns:g} N s "
+                    f"(CommandBounds.push_impulse_max_Ns {where})"
                 )
             if duration_s is not None and not t_s + push_s <= duration_s + 1e-9:  # 1 ns: rounding of t + dur
                 raise InputError(

@@ -45,7 +45,8 @@ def main(argv=None) -> int:
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = dict(zip(jobs, pool.map(_run, jobs)))
     print(
-        "| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg | tick median / p99 µs |"
+        "| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg "
+        "| tick median / p99 µs |"
     )
     print("|---|---|---|---|---|---|---|---|")
     for name in SCENARIOS:

@@ -158,13 +158,15 @@ def main(argv=None) -> int:
             "v_hat_spread_per_step": rv,
         }
         print(
-            f"{robot}/{res.tracker}: {len(rL)} steps; within-step spread std/|mean| of the predicted end-of-step value: "
+            f"{robot}/{res.tracker}: {len(rL)} steps; "
+            "within-step spread std/|mean| of the predicted end-of-step value: "
             f"all steps L_y {sL:.3f}, v_x {sv:.3f}; {len(rL_st)} steady steps (t >= {t_steady:g} s) "
             f"L_y {sL_st:.3f}, v_x {sv_st:.3f}" + (" (fell)" if res.fell else "")
         )
         if len(rL) < args.min_steps:
             print(
-                f"  note: only {len(rL)} usable steps (< {args.min_steps}); the {res.tracker} tracker did not walk long enough"
+                f"  note: only {len(rL)} usable steps (< {args.min_steps}); "
+                f"the {res.tracker} tracker did not walk long enough"
             )
     out.mkdir(parents=True, exist_ok=True)
     (out / "prediction_study.json").write_text(json.dumps(to_jsonable(report), indent=2) + "\n")

@@ -45,7 +45,8 @@ def main(argv=None) -> int:
     (out / "walk_rabbit.json").write_text(summary.dumps(report))
     walk_figure(result, out / "walk_rabbit.png", title=f"Rabbit speeding up to 0.8 m/s ({args.tracker})")
     print(
-        f"fell: {report['fell']}  steps: {report['steps']}  mean speed (last 3 s): {report['mean_velocity'][0]:.2f} m/s  "
+        f"fell: {report['fell']}  steps: {report['steps']}  "
+        f"mean speed (last 3 s): {report['mean_velocity'][0]:.2f} m/s  "
         f"L end-of-step error: {report['L_end_of_step_error_rms']:.2f} kg m^2/s RMS  ->  {out}/"
     )
     return 1 if result.fell else 0

@@ -98,7 +98,8 @@ def test_converges_to_commanded_forward_speed(seed):
     err_x = np.max(np.abs(v_mean[-4:, 0] - 0.6))
     v_end_expected = desired.end_of_step_velocity(0.6, T, H, G)
     print(
-        f"seed {seed}: first-step mean vx {v_mean[0, 0]:.3f}, final |mean vx - 0.6| = {err_x:.2e}, lateral stride mean {stride_mean_y:.2e}"
+        f"seed {seed}: first-step mean vx {v_mean[0, 0]:.3f}, final |mean vx - 0.6| = {err_x:.2e}, "
+        f"lateral stride mean {stride_mean_y:.2e}"
     )
     assert abs(v_mean[0, 0] - 0.6) > 1e-2  # the initial state is really perturbed
     assert err_x < 1e-3
@@ -154,7 +155,8 @@ def test_turning_90_degrees():
     stride = (rec[-1]["c_end"] - rec[-3]["c_end"])[:2] / (2 * T)
     direction_deg = np.degrees(np.arctan2(stride[1], stride[0]))
     print(
-        f"turn: final heading {np.degrees(headings[-1]):.3f} deg, stride velocity {stride}, direction {direction_deg:.3f} deg"
+        f"turn: final heading {np.degrees(headings[-1]):.3f} deg, stride velocity {stride}, "
+        f"direction {direction_deg:.3f} deg"
     )
     assert np.degrees(headings[-1]) == pytest.approx(90.0, abs=1e-9)
     np.testing.assert_allclose(np.diff(headings[2:13]), rate * T, atol=1e-12)

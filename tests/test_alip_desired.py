@@ -27,8 +27,10 @@ def test_step_width_momentum_is_the_periodic_walking_in_place_orbit():
     """Left stance starting midway between feet (p_y = -W/2) with the orbit's L_x returns to the same state."""
     W = 0.3
     Lx_end_left = desired.Lx_from_step_width(W, T, M, H, "left", G)
-    # Start of a left stance: the orbit is symmetric, so L_x(0+) = -L_x(T-) and p_y(0+) = p_y(T-) = -W/2.
-    p_y, Lt = lip.flow(-W / 2, -(-Lx_end_left), T, M, H, G)
+    # Start of a left stance: the orbit is symmetric, so L_x(0+) = -L_x(T-) and p_y(0+) = p_y(T-) = -W/2,
+    # where L_x(T-) ends the previous (right) stance: the mirror image of the left stance's end.
+    Lx_end_right = -Lx_end_left
+    p_y, Lt = lip.flow(-W / 2, -Lx_end_right, T, M, H, G)
     assert p_y == pytest.approx(-W / 2, abs=1e-12)
     assert -Lt == pytest.approx(Lx_end_left, abs=1e-12)
 

@@ -212,7 +212,7 @@ def test_jacobians_and_drifts_by_finite_differences(robot):
         probe.update(qq, vv)
         return np.asarray(getter(probe), dtype=float).copy()
 
-    for qpos, qvel, q, v in random_states(robot, 2, seed=18):
+    for _qpos, _qvel, q, v in random_states(robot, 2, seed=18):
         kin.update(q, v)
         checks = [
             (lambda k: k.com(), kin.com_jacobian(), kin.com_jdot_v(), lambda k: k.com_jacobian()),

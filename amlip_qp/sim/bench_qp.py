@@ -39,6 +39,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -48,11 +49,24 @@ from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.sim.factory import build_simulation, load, make_tracker
 from amlip_qp.sim.scenarios import get_scenario
 
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.robots.robot import Robot
+
 #: qpsolvers backends compared when installed.
 QPSOLVERS_BACKENDS: tuple[str, ...] = ("daqp", "osqp", "quadprog")
 
 #: The tracker whose problems are recorded (a name of :data:`amlip_qp.sim.factory.TRACKER_MODULES`).
 QP_TRACKER = "qp"
+
+
+def _make_qp_tracker(robot: Robot) -> QPTracker:
+    """A new :data:`QP_TRACKER` for ``robot``, typed as the whole-body QP tracker it is."""
+    from amlip_qp.control.wbc.tracker import QPTracker
+
+    tracker = make_tracker(QP_TRACKER, robot)
+    assert isinstance(tracker, QPTracker), f"tracker {QP_TRACKER!r} is a {type(tracker).__name__}"
+    return tracker
 
 
 def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: float = 1.0):
@@ -74,12 +88,12 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
     if n_ticks < 1:
         raise InputError(f"n_ticks must be >= 1, got {n_ticks}")
     sc = get_scenario(scenario)
-    tracker = make_tracker(QP_TRACKER, load(sc.robot))
+    tracker = _make_qp_tracker(load(sc.robot))
     sim = build_simulation(sc, tracker)
     dt_s = sim.controller.dt_s
     duration = t_skip_s + n_ticks * dt_s
     problems: list[QPProblem] = []
-    seen = {"x": None}
+    seen: dict[str, np.ndarray | None] = {"x": None}
 
     def keep(t_s, data) -> None:
         # After the timed controller tick: copy the problem it solved.
@@ -95,7 +109,7 @@ def record_walk(n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: fl
 
 def tracker_solver_options() -> dict:
     """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
-    return make_tracker(QP_TRACKER, load("rabbit")).solver.options
+    return _make_qp_tracker(load("rabbit")).solver.options
 
 
 def _stats(times_us: list[float]) -> dict:
@@ -187,8 +201,8 @@ def bench_solvers(
     options = solver_options if solver_options is not None else tracker_solver_options()
     wanted = backends if backends is not None else QPSOLVERS_BACKENDS
 
-    def make_runners() -> dict:
-        runners = {
+    def make_runners() -> dict[str, _ProxSuiteRunner | _QPSolversRunner]:
+        runners: dict[str, _ProxSuiteRunner | _QPSolversRunner] = {
             "proxsuite-warm": _ProxSuiteRunner(True, options),
             "proxsuite-init": _ProxSuiteRunner(False, options),
         }

@@ -84,7 +84,9 @@ def save_log(result: RunResult, path: str) -> None:
         actuator_names=np.array(result.info.get("actuator_names", ()), dtype=str),
     )
     with open(path, "wb") as fh:
-        np.savez_compressed(fh, **arrays)
+        # numpy's stub matches ``**arrays`` against the keyword ``allow_pickle: bool`` too;
+        # every value here is an array (no key is called allow_pickle).
+        np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]
 
 
 def _write_text(option: str, path: str, text: str) -> None:
@@ -156,7 +158,8 @@ def _one_line(s: dict) -> str:
     mv = s["mean_velocity"]
     return (
         f"{s['robot']}/{s['tracker']} {state}: {s['sim_time_s']:.2f} s simulated, {s['steps']} steps, "
-        f"mean v = [{f(mv[0], '.3f')}, {f(mv[1], '.3f')}] m/s, velocity error RMS {f(s['velocity_error_rms'], '.3f')} m/s, "
+        f"mean v = [{f(mv[0], '.3f')}, {f(mv[1], '.3f')}] m/s, "
+        f"velocity error RMS {f(s['velocity_error_rms'], '.3f')} m/s, "
         f"foot placement error RMS {f(s['foot_placement_error_rms_m'], '.3f')} m, "
         f"realtime factor {f(s['realtime_factor'], '.2f')}"
     )

@@ -162,7 +162,7 @@ def push_scenario(nominal: Scenario, impulse_Ns: float, axis: int, settings: Com
     force = [0.0, 0.0, 0.0]
     force[axis] = impulse_Ns / PUSH_DURATION_S
     duration = settings.push_time_s + PUSH_DURATION_S + settings.push_survive_s
-    pushes = (Push(settings.push_time_s, tuple(force), PUSH_DURATION_S),) if impulse_Ns > 0 else ()
+    pushes = (Push(settings.push_time_s, (force[0], force[1], force[2]), PUSH_DURATION_S),) if impulse_Ns > 0 else ()
     return nominal.with_(name=f"{nominal.name}-push", duration_s=duration, pushes=pushes)
 
 
@@ -308,10 +308,12 @@ def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None]
     results: list[dict[str, Any] | None] = [None] * len(tasks)
     if jobs <= 1 or len(tasks) <= 1:
         for i, task in enumerate(tasks):
-            results[i] = _execute(task)
+            row = _execute(task)
+            results[i] = row
             if log:
                 log(
-                    f"  done {task.robot}/{task.tracker} {task.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)"
+                    f"  done {task.robot}/{task.tracker} {task.kind} "
+                    f"({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)"
                 )
     else:
         import multiprocessing as mp
@@ -323,12 +325,11 @@ def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None]
 
             for fut in as_completed(futures):
                 i = futures[fut]
-                results[i] = fut.result()
+                row = fut.result()
+                results[i] = row
                 if log:
                     t = tasks[i]
-                    log(
-                        f"  done {t.robot}/{t.tracker} {t.kind} ({results[i]['_wall_s']:.0f} s, CPU {results[i]['_cpu_s']:.0f} s)"
-                    )
+                    log(f"  done {t.robot}/{t.tracker} {t.kind} ({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)")
     rows = []
     keys = list(dict.fromkeys((t.robot, t.tracker) for t in tasks))
     for robot, trk in keys:

@@ -81,9 +81,9 @@ def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = 
     ax.plot(t, log["L"][:, 1], color="C0", lw=0.8, label="$L_y$ (filtered)")
     ax.plot(t, log["L_hat"][:, 1], color="C3", lw=0.8, label=r"$\hat L_y(T^-)$ predicted")
     ax.plot(t, log["L_des"][:, 1], color="C2", ls="--", lw=0.8, label=r"$L_y^{des}$ (next step end)")
-    ends = [s.t_end_s for s in result.steps]
-    if ends:
-        ax.plot(ends, [s.L_end_Nms[1] for s in result.steps], "k.", ms=4, label="$L_y$ at step end")
+    end_times_s = [s.t_end_s for s in result.steps]
+    if end_times_s:
+        ax.plot(end_times_s, [s.L_end_Nms[1] for s in result.steps], "k.", ms=4, label="$L_y$ at step end")
     if not planar:
         ax.plot(t, log["L"][:, 0], color="C1", lw=0.6, alpha=0.7, label="$L_x$ (filtered)")
         ax.plot(t, log["L_hat"][:, 0], color="C4", lw=0.6, alpha=0.7, label=r"$\hat L_x(T^-)$")

@@ -87,7 +87,10 @@ def step_velocities(result: RunResult) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 def velocity_error_rms(result: RunResult, settle_s: float = DEFAULT_SETTLE_S) -> float:
-    """RMS over the steps starting at or after ``settle_s`` of ``|v_meas - v_cmd|`` (m/s), see :func:`step_velocities`."""
+    """RMS over the steps starting at or after ``settle_s`` of ``|v_meas - v_cmd|`` (m/s).
+
+    See :func:`step_velocities`.
+    """
     t0, vm, vc = step_velocities(result)
     keep = t0 >= settle_s
     return _rms(np.linalg.norm(vm[keep] - vc[keep], axis=1))

@@ -169,7 +169,7 @@ class VideoRecorder:
         """Finish the file and release the OpenGL context."""
         if getattr(self, "_writer", None) is not None:
             self._writer.close()
-            self._writer = None
+            del self._writer  # closed: the getattr above sees no writer on a second close
         self._close_renderer()
 
     def __enter__(self) -> VideoRecorder:

@@ -215,7 +215,7 @@ def lumped_bodies(params):
             mi, ci, Ii = body_inertia_tensor(b)
             out[host]["parts"].append((mi, p + R @ ci, R @ Ii @ R.T))
             out[host]["absorbed"].append(name)
-    for name, d in out.items():
+    for d in out.values():
         m, c, I = combine(d.pop("parts"))
         vals, q = principal(I)
         d.update(mass=m, com=c, inertia=I, principal=vals, iquat=q)
@@ -330,10 +330,12 @@ def build_xml(params, keyframe_qpos=None):
     w("  </visual>")
     w("  <asset>")
     w(
-        '    <texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.6 0.8" rgb2="0.05 0.05 0.1" width="512" height="3072"/>'
+        '    <texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.6 0.8" rgb2="0.05 0.05 0.1" '
+        'width="512" height="3072"/>'
     )
     w(
-        '    <texture name="grid" type="2d" builtin="checker" rgb1="0.25 0.3 0.35" rgb2="0.35 0.4 0.45" width="512" height="512"/>'
+        '    <texture name="grid" type="2d" builtin="checker" rgb1="0.25 0.3 0.35" rgb2="0.35 0.4 0.45" '
+        'width="512" height="512"/>'
     )
     w('    <material name="grid" texture="grid" texrepeat="1 1" texuniform="true"/>')
     w("  </asset>")
