@@ -483,8 +483,10 @@ def test_stands_for_one_second_with_pd_hold():
 
 
 # ------------------------------------------------------------------ sheet cross-check
-@pytest.mark.skipif(not SHEET_PATH.exists(), reason="parameter sheet not available")
 def test_constants_match_sheet():
+    assert SHEET_PATH.exists(), (
+        f"the parameter sheet is missing: {SHEET_PATH} (the project's shared/ folder beside the checkout)"
+    )
     sheet = json.loads(SHEET_PATH.read_text())
     bodies = {b["name"]: b for b in sheet["bodies"]}
     assert sheet["total_mass"] == SHEET_TOTAL_MASS

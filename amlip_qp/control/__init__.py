@@ -9,7 +9,8 @@
   output map) around any tracker;
 - :mod:`~amlip_qp.control.pbc`: the paper's tracker, iterative IK plus a
   passivity-based controller, with the spring model;
-- the whole-body QP tracker (tasks, formulation, compiled build, tracker).
+- :mod:`~amlip_qp.control.wbc`: the whole-body QP tracker (tasks,
+  constraints and costs, builder, compiled build, tracker).
 
 Nothing here imports MuJoCo: the controller sees a state estimate only
 (``docs/ARCHITECTURE.md``).

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.harness import RunResult
 
@@ -34,8 +35,7 @@ def heading_frame_xy(vec_world: np.ndarray, heading_rad: np.ndarray | float) -> 
         (..., 2) the components along ``x_D`` and ``y_D``.
     """
     v = np.asarray(vec_world, dtype=float)
-    c, s = np.cos(heading_rad), np.sin(heading_rad)
-    return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1]], axis=-1)
+    return np.stack(world_to_heading_xy(v[..., 0], v[..., 1], np.cos(heading_rad), np.sin(heading_rad)), axis=-1)
 
 
 def _rms(values) -> float:
