@@ -142,6 +142,20 @@ def _add_walk(sub) -> None:
         default=[],
         help="push the base with a world force (N) from T for DUR seconds; repeatable",
     )
+    shaping = p.add_mutually_exclusive_group()
+    shaping.add_argument(
+        "--accel-limit",
+        type=_positive_float,
+        metavar="M/S2",
+        default=None,
+        help="rate limit of the forward and lateral speed commands before the planner, m/s^2 "
+        "(default: the robot's, amlip_qp.profiles.CommandShaping)",
+    )
+    shaping.add_argument(
+        "--no-command-shaping",
+        action="store_true",
+        help="give the planner the raw command (no rate limit, no step-length cap)",
+    )
     p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")

@@ -182,6 +182,30 @@ def test_scenario_options_override(capsys, stand_in):
     assert sc.robot == "cassie" and sc.vx(2.5) == pytest.approx(1.05) and sc.duration_s == 10.0
 
 
+def test_command_shaping_options_reach_the_controller():
+    from amlip_qp.profiles import NO_SHAPING, get_profile
+    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.sim.factory import build_simulation
+
+    parser = cli.build_parser()
+    assert scenario_from_args(parser.parse_args(["walk", "--robot", "rabbit"])).shaping is None  # the profile's
+    sc = scenario_from_args(parser.parse_args(["walk", "--robot", "rabbit", "--accel-limit", "0.25"]))
+    profile = get_profile("rabbit").shaping
+    assert (sc.shaping.vx_accel_mps2, sc.shaping.vy_accel_mps2) == (0.25, 0.25)
+    assert sc.shaping.turn_accel_radps2 == profile.turn_accel_radps2
+    assert sc.shaping.max_step_length_m == profile.max_step_length_m
+    sim = build_simulation(sc.with_(duration_s=0.01), "pbc")
+    assert sim.controller.shaper.shaping is sc.shaping
+    sc = scenario_from_args(parser.parse_args(["walk", "--robot", "rabbit", "--no-command-shaping"]))
+    assert sc.shaping is NO_SHAPING
+    assert build_simulation(sc.with_(duration_s=0.01), "pbc").controller.shaper.shaping is NO_SHAPING
+    with pytest.raises(SystemExit) as info:
+        parser.parse_args(["walk", "--accel-limit", "0.5", "--no-command-shaping"])
+    assert info.value.code == 2
+    with pytest.raises(SystemExit):
+        parser.parse_args(["walk", "--accel-limit", "0"])
+
+
 def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
     out_json, fig = tmp_path / "cmp.json", tmp_path / "figures" / "cmp.png"  # the figure's folder is created
     argv = ["compare", "--quick", "--robots", "rabbit,cassie", "--jobs", "1", "--push-iterations", "2"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import replace
 
 from amlip_qp.sim.video import prefer_offscreen_gl
 
@@ -18,6 +19,7 @@ import numpy as np  # noqa: E402
 
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
+from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
 from amlip_qp.sim.harness import Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 
@@ -59,6 +61,11 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
         changes["duration_s"] = args.duration
     if args.push:
         changes["pushes"] = tuple(base.pushes) + tuple(Push(t, f, d) for t, f, d in args.push)
+    if args.no_command_shaping:
+        changes["shaping"] = NO_SHAPING
+    elif args.accel_limit is not None:
+        shaping = base.shaping or get_profile(base.robot).shaping
+        changes["shaping"] = replace(shaping, vx_accel_mps2=args.accel_limit, vy_accel_mps2=args.accel_limit)
     if changes and base.name != "custom":
         changes["name"] = f"{base.name}+options"
     scenario = base.with_(**changes) if changes else base

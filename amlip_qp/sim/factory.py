@@ -77,7 +77,7 @@ def build_simulation(
     """The :class:`Simulation` of ``scenario`` with ``tracker`` (a name or an instance).
 
     Args:
-        scenario: Robot, commands, pushes and duration.
+        scenario: Robot, commands, pushes, duration and command shaping.
         tracker: ``"pbc"``, ``"qp"``, or a ready :class:`Tracker` instance
             (e.g. a test stand-in; it must be built for the scenario's robot).
         seed: Seed of the sensor-noise generator.
@@ -92,7 +92,7 @@ def build_simulation(
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
     kin = RobotKinematics(robot)
-    controller = WalkingController(robot, trk, kin, planner_backend=planner_backend)
+    controller = WalkingController(robot, trk, kin, planner_backend=planner_backend, command_shaping=scenario.shaping)
     return Simulation(robot, controller, scenario.command, pushes=scenario.pushes, noise=noise, seed=seed)
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import PROFILES, GaitSettings, RobotProfile, get_profile
+from amlip_qp.profiles import PROFILES, CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.harness import Push
 
 
@@ -82,6 +82,8 @@ class Scenario:
         turn_angle_rad: Total turn; the rate drops to 0 once reached (``inf`` = keep turning).
         pushes: Forces on the base.
         gait: Gait parameters (``None``: the robot's profile's).
+        shaping: Rate limits of the velocity command before the planner
+            (``None``: the robot's profile's; :data:`~amlip_qp.profiles.NO_SHAPING`: none).
         description: One line for people.
     """
 
@@ -95,6 +97,7 @@ class Scenario:
     turn_angle_rad: float = math.inf
     pushes: tuple[Push, ...] = ()
     gait: GaitSettings | None = None
+    shaping: CommandShaping | None = None
     description: str = ""
 
     def __post_init__(self):
