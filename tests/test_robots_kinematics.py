@@ -271,15 +271,24 @@ def test_kinematics_input_errors():
     kin = RobotKinematics(robot)
     with pytest.raises(InputError, match="call update"):
         kin.com()
+    with pytest.raises(InputError, match="call update"):
+        kin.state()
     with pytest.raises(InputError, match=r"shapes \(7,\), \(7,\)"):
         kin.update(np.zeros(6), np.zeros(7))
     with pytest.raises(InputError, match="NaN"):
         kin.update(np.full(7, np.nan), np.zeros(7))
-    kin.update(robot.q_stand, np.zeros(7))
+    v = np.arange(7.0)
+    kin.update(robot.q_stand, v)
+    q_now, v_now = kin.state()
+    assert q_now is kin.q and v_now is kin.v  # the attributes themselves, not copies
+    np.testing.assert_array_equal(q_now, robot.q_stand)
+    np.testing.assert_array_equal(v_now, v)
     with pytest.raises(InputError, match="side"):
         kin.contact_position("front")
     with pytest.raises(InputError, match="finite 3-vector"):
         kin.angular_momentum_about([0.0, np.nan, 0.0])
+    kin.update_positions(robot.q_stand)
+    np.testing.assert_array_equal(kin.state()[1], 0.0)  # the light update sets v = 0
 
 
 # ---------------------------------------------------------------- touchdown

@@ -162,10 +162,10 @@ class AngularMomentumFilter:
         var0: float = 1.0,
     ):
         #: Filter on L_x (lateral plane).
-        L0_Nms = C.vector("L0_Nms", L0_Nms, 2)
-        self.x = MomentumFilter1D(mass_kg, -1.0, g_mps2, process_var_rate, measurement_var, L0_Nms[0], var0)
+        L0_vec_Nms = C.vector("L0_Nms", L0_Nms, 2)
+        self.x = MomentumFilter1D(mass_kg, -1.0, g_mps2, process_var_rate, measurement_var, L0_vec_Nms[0], var0)
         #: Filter on L_y (sagittal plane).
-        self.y = MomentumFilter1D(mass_kg, 1.0, g_mps2, process_var_rate, measurement_var, L0_Nms[1], var0)
+        self.y = MomentumFilter1D(mass_kg, 1.0, g_mps2, process_var_rate, measurement_var, L0_vec_Nms[1], var0)
 
     def reset(self, L_x_Nms: float, L_y_Nms: float, var: float | None = None) -> None:
         """Set both estimates (kg m^2/s, world axes), e.g. to the momentum about a new contact."""

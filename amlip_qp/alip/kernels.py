@@ -96,7 +96,7 @@ def swing_reference_terms(u: Sequence) -> list:
         F.clearance_parabola(s, H, z_cl),  # CoM z over swing
         F.constant(s, 0.0),  # swing toe pitch
     ]
-    derivs = [F.to_time_derivatives(*shape, T) for shape in shapes]
+    derivs = [F.to_time_derivatives(y, dy_ds, d2y_ds2, T) for y, dy_ds, d2y_ds2 in shapes]
     return [d[0] for d in derivs] + [d[1] for d in derivs] + [d[2] for d in derivs]
 
 

@@ -115,7 +115,8 @@ class Command:
             raise InputError(f"Command.step_width_m must be >= 0 m, got {self.step_width_m!r}")
         if not 0.0 <= self.clearance_m < self.com_height_m:
             raise InputError(
-                f"Command.clearance_m (z_cl) must satisfy 0 <= z_cl < H = {self.com_height_m!r} m, got {self.clearance_m!r}"
+                f"Command.clearance_m (z_cl) must satisfy 0 <= z_cl < H = {self.com_height_m!r} m, "
+                f"got {self.clearance_m!r}"
             )
 
 
@@ -403,7 +404,8 @@ class Planner:
             raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
         if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):
             raise InputError(
-                f"update needs a StateEstimate and a Command, got {type(estimate).__name__} and {type(command).__name__}"
+                "update needs a StateEstimate and a Command, "
+                f"got {type(estimate).__name__} and {type(command).__name__}"
             )
         if estimate.stance != self._stance:
             raise InputError(

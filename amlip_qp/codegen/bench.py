@@ -29,11 +29,10 @@ import platform
 import time
 from collections.abc import Callable
 
-import casadi as ca
 import numpy as np
 
 from amlip_qp.alip import kernels
-from amlip_qp.codegen import symbolic
+from amlip_qp.codegen import generate, symbolic
 from amlip_qp.codegen.runtime import Kernels
 
 PATHS = ("c-fast", "casadi-function", "numpy")
@@ -107,7 +106,7 @@ def run_benchmark(calls: int = 20000, warmup: int | None = None, fast: Kernels |
         "c_fast_backend": fast.backend,
         "calls": calls,
         "warmup": warmup,
-        "casadi_version": ca.__version__,
+        "casadi_version": generate.CASADI_VERSION,
         "numpy_version": np.__version__,
         "python": platform.python_version(),
         "machine": platform.machine(),

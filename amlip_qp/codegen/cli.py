@@ -31,8 +31,6 @@ def run_codegen(args: argparse.Namespace) -> int:
     1 naming the stale or missing files in one line, 0 when they match; for
     an installed package it says that it checked the installed files.
     """
-    import casadi
-
     from amlip_qp.codegen import generate
 
     checkout = paths.checkout_root()
@@ -46,7 +44,7 @@ def run_codegen(args: argparse.Namespace) -> int:
     shown = _display(folder, checkout)
     files = generate.generate_files()
     if args.check:
-        fresh = f"a fresh generation (CasADi {casadi.__version__})"
+        fresh = f"a fresh generation (CasADi {generate.CASADI_VERSION})"
         stale = generate.stale_files(folder, files)
         if stale:
             names = ", ".join(f"{shown}{name} {state}" for name, state in stale)

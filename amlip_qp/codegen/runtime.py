@@ -325,8 +325,10 @@ class FastFunction:
         self._u = np.zeros(kernel.n_in)
         self._y = np.zeros(kernel.n_out)
         self._buffer, self._eval = function.buffer()
-        self._buffer.set_arg(0, memoryview(self._u))
-        self._buffer.set_res(0, memoryview(self._y))
+        # Stub limits: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes
+        # it from the buffer); numpy's stubs declare ndarray a Buffer only for Python >= 3.12.
+        self._buffer.set_arg(0, memoryview(self._u))  # type: ignore[call-arg, arg-type]
+        self._buffer.set_res(0, memoryview(self._y))  # type: ignore[call-arg, arg-type]
         self._y.flags.writeable = False
 
     def __call__(self, u: np.ndarray) -> np.ndarray:

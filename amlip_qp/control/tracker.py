@@ -80,9 +80,12 @@ class Tracker(abc.ABC):
         Args:
             kin: The controller's :class:`~amlip_qp.robots.kinematics.RobotKinematics`,
                 already updated at this tick's estimated ``(q, v)`` (read
-                ``kin.q``, ``kin.v``); trackers must not update it again.
+                ``kin.state()``); trackers must not update it again.
             target: This tick's references.
         """
 
-    def reset(self) -> None:
-        """Forget internal state (warm starts, filters) before a new run."""
+    def reset(self) -> None:  # noqa: B027 (optional hook: a no-op by design)
+        """Forget internal state (warm starts, filters) before a new run.
+
+        The default does nothing: a tracker without such state need not override it.
+        """

@@ -35,14 +35,23 @@ def _wants_simd() -> bool:
     return os.environ.get(SIMD_ENV, "").strip().lower() in ("1", "true", "yes", "on")
 
 
+class _NoVectorBuilds(types.ModuleType):
+    """Stand-in for ``proxsuite.instructionset`` that reports no AVX-512 or AVX2 support."""
+
+    @staticmethod
+    def has_AVX512F() -> bool:
+        return False
+
+    @staticmethod
+    def has_AVX2() -> bool:
+        return False
+
+
 def _import_proxsuite():
     if "proxsuite" not in sys.modules and not _wants_simd():
         # proxsuite/__init__.py asks proxsuite.instructionset which builds the
         # CPU supports; answer "none" for the duration of the import.
-        fake = types.ModuleType("proxsuite.instructionset")
-        fake.has_AVX512F = lambda: False
-        fake.has_AVX2 = lambda: False
-        sys.modules["proxsuite.instructionset"] = fake
+        sys.modules["proxsuite.instructionset"] = _NoVectorBuilds("proxsuite.instructionset")
         try:
             return importlib.import_module("proxsuite")
         finally:

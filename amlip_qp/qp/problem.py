@@ -71,8 +71,19 @@ class QPProblem:
 
     def copy(self) -> QPProblem:
         """A deep copy (for recording problems while the builder reuses buffers)."""
+        H, g, A, b, C, l, u, lb, ub = (
+            np.array(getattr(self, k), copy=True) for k in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")
+        )
         return QPProblem(
-            *(np.array(getattr(self, k), copy=True) for k in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")),
+            H,
+            g,
+            A,
+            b,
+            C,
+            l,
+            u,
+            lb,
+            ub,
             variables=dict(self.variables),
             eq_rows=list(self.eq_rows),
             in_rows=list(self.in_rows),
@@ -154,7 +165,7 @@ class QPProblem:
         if not np.any(fixed):
             return self, free, x_fixed
         off_c = self.C[:, fixed] @ x_fixed
-        names = {}
+        names: dict[str, slice] = {}
         reduced = QPProblem(
             H=self.H[np.ix_(free, free)],
             g=self.g[free] + self.H[np.ix_(free, fixed)] @ x_fixed,

@@ -163,8 +163,14 @@ class RobotKinematics:
         self.positions_only = positions_only
 
     def _ready(self) -> None:
-        if self.q is None:
+        self.state()
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` of the last update: :attr:`q`, :attr:`v` themselves (read-only); InputError before any."""
+        q, v = self.q, self.v
+        if q is None or v is None:
             raise InputError("RobotKinematics: call update(q, v) first")
+        return q, v
 
     def require_dynamics(self) -> None:
         """Raise :class:`InputError` unless the last update was a full ``update(q, v)``."""
@@ -373,15 +379,15 @@ class RobotKinematics:
 
         Cached until the next :meth:`update` (treat as read-only).
         """
-        self._ready()
+        q, v = self.state()
         if self._taup is None:
-            self._taup = self._passive_forces(self.q, self.v)
+            self._taup = self._passive_forces(q, v)
         return self._taup
 
     def coupling_constraints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(g, G, Gdot_v)`` of the rigid joint couplings (see :mod:`amlip_qp.robots.passive`)."""
-        self._ready()
-        return _passive.coupling_constraints(self.robot, self.q, self.v)
+        q, v = self.state()
+        return _passive.coupling_constraints(self.robot, q, v)
 
     # ------------------------------------------------------------- outputs
     @property
@@ -429,5 +435,5 @@ class RobotKinematics:
 
     def joint_position(self, name: str) -> float:
         """Position (rad or m) of a hinge/slide joint, by MuJoCo name."""
-        self._ready()
-        return float(self.q[self.robot.state_map.joint_pin_q[name]])
+        q, _ = self.state()
+        return float(q[self.robot.state_map.joint_pin_q[name]])

@@ -226,7 +226,7 @@ class OutputMap:
         """
         swing = self.checked_swing(stance, heading_rad)
         robot = self.robot
-        v = kin.v
+        q, v = kin.state()
         jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
         J = np.zeros((len(self.names), v.shape[0]))
 
@@ -304,7 +304,6 @@ class OutputMap:
         dz = (d[2], rd[2], 0.0, 0.0, 1.0, dd[2])
         toe = _atan2(_neg(dz), _hypot(dx, dy))
         np.dot(toe[2:5], Jd, out=J[8])
-        q = kin.q
         y = np.array([pitch[0], roll[0], q[yaw_q[stance]], q[yaw_q[swing]], *ys, toe[0]])
         jdv = np.array([pitch[5], roll[5], 0.0, 0.0, *ds, toe[5]])
         return y, J, jdv

@@ -294,7 +294,7 @@ class IterativeIK:
         if stance not in self._rows:
             raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
         if not _finite(h_d, dh_d, ddh_d) or not math.isfinite(heading_rad):
-            return self._failed(kin.q)
+            return self._failed(kin)
         rows = self._rows[stance]
         A = rows.A
         s = self.settings
@@ -303,16 +303,18 @@ class IterativeIK:
             if held_springs is not None:
                 ns = len(self.equations.held_springs)
                 fixed["lin"][len(fixed["lin"]) - ns :] = held_springs
-            warm = self._prev is not None and self._prev.ok and self._prev_stance == stance
+            prev = self._prev
+            warm_start = prev if prev is not None and prev.ok and self._prev_stance == stance else None
+            warm = warm_start is not None
             # warm start: the previous solution (its held coordinates are pulled to
             # this tick's estimates by the linear rows in one step); cold: the estimate
-            q = self._prev.q_r.copy() if warm else kin.q.copy()
+            q = warm_start.q_r.copy() if warm_start is not None else kin.state()[0].copy()
             exact = iterations is not None
-            n_max = iterations if exact else (s.iterations if warm else s.cold_iterations)
+            n_max = iterations if iterations is not None else (s.iterations if warm else s.cold_iterations)
             it = 0
             cache = self._cache
             # warm default solves take the drift Adot v at the previous v_r (see the module docstring)
-            v_pred = self._prev.v_r if (warm and not exact) else None
+            v_pred = warm_start.v_r if (warm_start is not None and not exact) else None
             swap = None
             if warm and cache is not None and cache[0] == stance and cache[1] == heading_rad:
                 # first step from the previous tick's final evaluation (same q, A)
@@ -382,7 +384,7 @@ class IterativeIK:
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             if isinstance(exc, InputError):
                 raise
-            return self._failed(kin.q)
+            return self._failed(kin)
         res = IKResult(
             q_r=q, v_r=v_r, a_r=a_r, iterations=it, residual=residual, ok=True, knee_at_limit=swap is not None
         )
@@ -390,10 +392,10 @@ class IterativeIK:
         self._cache, self.lu = cache, lu
         return res
 
-    def _failed(self, q_est: np.ndarray) -> IKResult:
-        """The previous reference (or the estimate) with zero rates, flagged ``ok=False``."""
+    def _failed(self, kin: RobotKinematics) -> IKResult:
+        """The previous reference (or the estimate of ``kin``) with zero rates, flagged ``ok=False``."""
         prev = self._prev
-        q_r = prev.q_r.copy() if prev is not None else q_est.copy()
+        q_r = prev.q_r.copy() if prev is not None else kin.state()[0].copy()
         nv = self.model.nv
         self._prev = None
         self._cache = None

@@ -111,14 +111,20 @@ class IKEquations:
         # linear rows per stance: ankle (held, with its estimated rate), springs and couplings (rate 0)
         self.rows: dict[str, StanceRows] = {}
         for side in robot.foot_sides:
-            lq, lv, lr = [], [], []
+            lq: list[np.ndarray] = []
+            lv: list[np.ndarray] = []
+            lr: list[np.ndarray] = []
             if self.ankle_v[side] is not None:
                 r_q, r_v = np.zeros(nq), np.zeros(nv)
                 r_q[self.ankle_q[side]] = 1.0
                 r_v[self.ankle_v[side]] = 1.0
-                lq.append(r_q), lv.append(r_v), lr.append(r_v.copy())
+                lq.append(r_q)
+                lv.append(r_v)
+                lr.append(r_v.copy())
             for spring in self.held_springs:
-                lq.append(spring.row_q(nq)), lv.append(spring.row_v(nv)), lr.append(np.zeros(nv))
+                lq.append(spring.row_q(nq))
+                lv.append(spring.row_v(nv))
+                lr.append(np.zeros(nv))
             self.rows[side] = StanceRows(
                 nv,
                 n_out,

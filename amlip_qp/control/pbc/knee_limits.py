@@ -84,7 +84,8 @@ class KneeLimits:
         thr = self.swap_threshold
         if float(np.max(np.abs(F))) <= thr:
             return None, []
-        swap, back = [], []
+        swap: list[KneeEntry] = []
+        back: list[KneeEntry] = []
         for sp in self._knees[stance]:
             row, iq = sp[0], sp[1]
             if abs(q[iq] - sp[3]) < 1e-9:

@@ -239,7 +239,7 @@ class PBCTracker(Tracker):
         t0 = time.perf_counter()
         stance = target.stance
         lay = self._layout[stance]
-        q, v = kin.q, kin.v
+        q, v = kin.state()
         held = None
         if self.gains.spring_model_offset and len(self._spring_rest):
             held = self._spring_rest.copy()
@@ -307,8 +307,9 @@ class PBCTracker(Tracker):
     ) -> TrackerResult:
         """Damped joint PD towards the reference (or damping only), never NaN."""
         g = self.gains
-        q = kin.q[lay.ctrl_q]
-        qd = kin.v[lay.ctrl_v]
+        q_est, v_est = kin.state()
+        q = q_est[lay.ctrl_q]
+        qd = v_est[lay.ctrl_v]
         err = (q_r - q) if use_ref else np.zeros_like(q)
         err = np.where(np.isfinite(err), err, 0.0)
         tau = np.zeros(self._nu)

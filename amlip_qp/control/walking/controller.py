@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.alip import other_side
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
@@ -222,8 +223,8 @@ class WalkingController:
         self.clock.start(stance, t_s)
         self._com_step_start = self.kin.com()
 
-    def _record_step(self, t_s: float, est: Estimate) -> None:
-        plan = self._last_plan
+    def _record_step(self, t_s: float, est: Estimate, stance: str, plan: PlannerOutput) -> None:
+        """Close the step of ``stance`` that ends at ``t_s`` (s), planned last by ``plan``."""
         t0 = self.clock.t_start_s
         disp = est.com_m - self._com_step_start
         dt = max(t_s - t0, 1e-9)
@@ -232,7 +233,7 @@ class WalkingController:
             StepRecord(
                 t_start_s=t0,
                 t_end_s=t_s,
-                stance=self.clock.stance,
+                stance=stance,
                 swing_target_m=plan.swing_target_world_m.copy(),
                 swing_actual_m=est.swing_contact_m.copy(),
                 L_end_Nms=est.L_meas_Nms[:2].copy(),
@@ -257,30 +258,34 @@ class WalkingController:
         kin = self.kin
         touchdown = False
         clock = self.clock
-        if clock.stance is None:
-            self._begin_step(self.initial_stance, t)
-            est = estimator.estimate(clock.stance)
+        stance = clock.stance
+        if stance is None:
+            stance = self.initial_stance
+            self._begin_step(stance, t)
+            est = estimator.estimate(stance)
         else:
             # The estimate for the current stance serves the touchdown test (the
             # contact heights) and, without a touchdown, the planner; at a
             # touchdown it closes the old step and a new one is made about the
             # new stance contact (the filters restart there).
-            est = estimator.estimate(clock.stance)
+            est = estimator.estimate(stance)
             phase_raw = clock.phase_unclipped(t, command.step_time_s)
-            swing = clock.swing
+            swing = other_side(stance)
             height = float(est.swing_contact_m[2] - est.stance_contact_m[2])
             contact = measurement.foot_contact.get(swing) if measurement.foot_contact else None
-            if self._last_plan is not None and self.gait.touchdown(phase_raw, contact, height):
-                self._record_step(t, est)
-                self._begin_step(swing, t)
+            last_plan = self._last_plan
+            if last_plan is not None and self.gait.touchdown(phase_raw, contact, height):
+                self._record_step(t, est, stance, last_plan)
+                stance = swing
+                self._begin_step(stance, t)
                 touchdown = True
-                est = estimator.estimate(clock.stance, touchdown=True)
+                est = estimator.estimate(stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
         command = self._corrected_command(command)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
             StateEstimate(
-                stance=clock.stance,
+                stance=stance,
                 p_st_m=est.p_st_m,
                 L_Nms=est.L_Nms,
                 v_z_mps=v_z,
@@ -291,7 +296,7 @@ class WalkingController:
         )
         self._last_plan = plan
         target = TrackingTarget(
-            stance=clock.stance,
+            stance=stance,
             phase=plan.s,
             heading_rad=plan.heading_rad,
             h_d=plan.h_d,
@@ -304,7 +309,7 @@ class WalkingController:
         ok = result.ok
         # A finite sum implies finite entries; only if it is not (or overflows), look closer.
         if tau.shape != self._tau_shape or (not math.isfinite(sum(tau.tolist())) and not np.isfinite(tau).all()):
-            tau = -self._fallback_kd * kin.v[self._act_v]
+            tau = -self._fallback_kd * kin.state()[1][self._act_v]
             ok = False
             self.fallback_ticks += 1
             if self.fallback_ticks == 1:
@@ -316,10 +321,10 @@ class WalkingController:
                 )
         tau = np.maximum(tau, self._tau_lo)
         np.minimum(tau, self._tau_hi, out=tau)
-        h, _, _ = kin.outputs(clock.stance, plan.heading_rad)
+        h, _, _ = kin.outputs(stance, plan.heading_rad)
         return TickInfo(
             t_s=t,
-            stance=clock.stance,
+            stance=stance,
             phase=plan.s,
             estimate=est,
             plan=plan,
@@ -340,10 +345,11 @@ class WalkingController:
         if cx == 0.0 and cy == 0.0:
             return command
         key = (command, cx, cy)
-        if key != self._corrected_key:
-            self._corrected_key = key
-            self._corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
-        return self._corrected
+        corrected = self._corrected
+        if key != self._corrected_key or corrected is None:
+            corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
+            self._corrected_key, self._corrected = key, corrected
+        return corrected
 
     @staticmethod
     def _swing_contact_weight(phase: float) -> float:

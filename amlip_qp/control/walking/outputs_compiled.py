@@ -166,12 +166,14 @@ class CompiledOutputMap:
         self._p = np.zeros(fn.nnz_in(1))
         self._y, self._J, self._jdv = np.zeros(n), np.zeros((n, nv)), np.zeros(n)
         self._buffer, self._eval = fn.buffer()
+        # Stub limits: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes
+        # it from the buffer); numpy's stubs declare ndarray a Buffer only for Python >= 3.12.
         for i, arr in enumerate((self._JT, self._p)):
-            self._buffer.set_arg(i, memoryview(arr.reshape(-1)))
+            self._buffer.set_arg(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
         for i, arr in enumerate((self._y, self._J, self._jdv)):
             if fn.nnz_out(i) != arr.size:
                 raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} output {i} has the wrong size")
-            self._buffer.set_res(i, memoryview(arr.reshape(-1)))
+            self._buffer.set_res(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
         self._cassie = self.layout == "cassie"
         self._v = slice(self._p.size - nv, self._p.size)
 
@@ -202,12 +204,12 @@ class CompiledOutputMap:
             p[at : at + 3] = kin.frame_translation_view(fid)
             p[at + 3 : at + 6] = acc(fid)[:3]
             at += 6
-        q = kin.q
+        q, v = kin.state()
         if self._cassie:
             p[at] = q[self._yaw_q[stance]]
             p[at + 1] = q[self._yaw_q[swing]]
         p[at + 2] = heading_rad
-        p[self._v] = kin.v
+        p[self._v] = v
         self._eval()
         J = self._J.copy()
         if self._cassie:

@@ -133,16 +133,17 @@ def _bind(functions: dict[str, ca.Function], inputs: list, outputs: list) -> dic
         CodegenError: A size differs.
     """
     bound = {}
+    # Stub limit: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes it from the buffer).
     for name, fn in functions.items():
         buf, ev = fn.buffer()
         for i, arr in enumerate(inputs):
             if fn.nnz_in(i) != arr.size:
                 raise CodegenError(f"{name} input {i} has the wrong size")
-            buf.set_arg(i, memoryview(arr.reshape(-1, order="A")))
+            buf.set_arg(i, memoryview(arr.reshape(-1, order="A")))  # type: ignore[call-arg]
         for i, arr in enumerate(outputs):
             if fn.nnz_out(i) != arr.size:
                 raise CodegenError(f"{name} output {i} has the wrong size")
-            buf.set_res(i, memoryview(arr.reshape(-1, order="A")))
+            buf.set_res(i, memoryview(arr.reshape(-1, order="A")))  # type: ignore[call-arg]
         bound[name] = (buf, ev)
     return bound
 

@@ -68,8 +68,11 @@ class Constraint(abc.ABC):
         """The named row blocks for ``QPProblem.eq_rows`` / ``in_rows``."""
         return [(self.name, self.rows)]
 
-    def initialize(self, problem: QPProblem) -> None:
-        """Write the entries that never change (once, on the fresh problem)."""
+    def initialize(self, problem: QPProblem) -> None:  # noqa: B027 (optional hook: a no-op by design)
+        """Write the entries that never change (once, on the fresh problem).
+
+        The default writes nothing: a constraint whose entries all vary per tick need not override it.
+        """
 
     @abc.abstractmethod
     def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:

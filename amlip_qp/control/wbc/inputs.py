@@ -171,7 +171,7 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
     stance = target.stance
     swing = other_side(stance)
     inputs.stance, inputs.swing = stance, swing
-    inputs.q, inputs.v = kin.q, kin.v
+    inputs.q, inputs.v = kin.state()
     np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=inputs.hp)
     inputs.mass_upper = kin.data.M
     # Force-point Jacobians on the layout's axes: the stance foot's rows, then the swing foot's.
