@@ -20,8 +20,8 @@ prefer_offscreen_gl()  # headless rendering, before mujoco is imported
 
 from amlip_qp.sim import summary  # noqa: E402
 from amlip_qp.sim.factory import build_simulation  # noqa: E402
-from amlip_qp.sim.harness import Push  # noqa: E402
 from amlip_qp.sim.plots import walk_figure  # noqa: E402
+from amlip_qp.sim.run_types import Push  # noqa: E402
 from amlip_qp.sim.scenarios import get_scenario  # noqa: E402
 from amlip_qp.sim.video import VideoRecorder  # noqa: E402
 

@@ -258,21 +258,6 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
     assert code == 0, err
 
 
-def test_compare_table_marks_values_at_the_top_of_the_search():
-    from amlip_qp.sim.compare import format_table
-
-    row = {
-        "robot": "cassie",
-        "tracker": "qp",
-        "fell": False,
-        "highest_steady_speed_mps": 2.1,
-        "speed_at_upper_bound": True,
-    }
-    row.update(max_sagittal_impulse_Ns=60.0, sagittal_impulse_at_upper_bound=True, max_lateral_impulse_Ns=22.5)
-    cells = format_table([row]).splitlines()[2].split()
-    assert cells[cells.index("no") + 7 :][:3] == [">=2.10", ">=60.0", "22.5"]
-
-
 def test_factory_names_a_missing_tracker(monkeypatch):
     monkeypatch.setitem(factory.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
     with pytest.raises(InputError, match="'pbc' tracker is not available"):

@@ -111,7 +111,7 @@ def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
 )
 def test_check_scenario_names_the_bound(robot, changes, needle):
     from amlip_qp.profiles import get_profile
-    from amlip_qp.sim.harness import Push
+    from amlip_qp.sim.run_types import Push
     from amlip_qp.sim.scenarios import check_scenario
 
     if "pushes" in changes:

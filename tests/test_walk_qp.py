@@ -39,7 +39,7 @@ def _run(key: str) -> dict:
     """Run one entry of RUNS with the QP tracker; summary numbers only (picklable)."""
     from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.sim.factory import build_simulation, load
-    from amlip_qp.sim.harness import SensorNoise
+    from amlip_qp.sim.run_types import SensorNoise
     from amlip_qp.sim.scenarios import SCENARIOS
 
     name, duration, seed, noise = RUNS[key]

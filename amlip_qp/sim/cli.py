@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
-from amlip_qp.sim.harness import Push, RunResult, SensorNoise  # noqa: E402
+from amlip_qp.sim.run_types import Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.

@@ -17,7 +17,8 @@ from typing import TYPE_CHECKING, cast
 
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.harness import RunResult, SensorNoise, Simulation, TickCallback
+from amlip_qp.sim.harness import Simulation
+from amlip_qp.sim.run_types import RunResult, SensorNoise, TickCallback
 from amlip_qp.sim.scenarios import Scenario
 
 if TYPE_CHECKING:  # pragma: no cover - typing only

@@ -6,7 +6,8 @@ reads MuJoCo's state, converts it once to Pinocchio's convention
 contact switches (normal force above a threshold), hands the
 :class:`~amlip_qp.control.walking.estimator.Measurement` to the controller, turns the
 joint torques into actuator controls (``ctrl = tau / gear``), applies pushes
-on the base body, and steps MuJoCo.
+on the base body, and steps MuJoCo. Its inputs and result are the plain
+types of :mod:`~amlip_qp.sim.run_types`.
 """
 
 from __future__ import annotations
@@ -14,25 +15,20 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.control.walking.controller import StepRecord, WalkingController
+from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import state as S
 from amlip_qp.robots.robot import Robot
+from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
-
-#: Signature of the optional per-tick callback of :meth:`Simulation.run`:
-#: ``on_tick(t_s, data)`` with the simulated time after the tick's plant steps
-#: (s) and MuJoCo's ``MjData`` (read only: do not modify it).
-TickCallback = Callable[[float, "mujoco.MjData"], None]
 
 #: MuJoCo warnings that mean the simulation diverged (it then resets the state).
 _DIVERGENCE_WARNINGS = (
@@ -40,126 +36,6 @@ _DIVERGENCE_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
     mujoco.mjtWarning.mjWARN_BADQVEL,
 )
-
-
-@dataclass(frozen=True)
-class Push:
-    """A force on the base body.
-
-    Attributes:
-        t_s: Start time, s.
-        force_N: World-frame force (fx, fy, fz), N.
-        duration_s: How long it lasts, s.
-    """
-
-    t_s: float
-    force_N: tuple[float, float, float]
-    duration_s: float
-
-    def __post_init__(self):
-        vals = (self.t_s, *self.force_N, self.duration_s)
-        if len(self.force_N) != 3 or not all(math.isfinite(float(x)) for x in vals):
-            raise InputError(f"a push needs finite t, (fx, fy, fz) and duration, got {self!r}")
-        if self.t_s < 0 or self.duration_s <= 0:
-            raise InputError(f"a push needs t >= 0 s and duration > 0 s, got t={self.t_s}, duration={self.duration_s}")
-
-    @property
-    def impulse_Ns(self) -> float:
-        """Magnitude of the impulse, N s."""
-        return float(np.linalg.norm(self.force_N) * self.duration_s)
-
-
-@dataclass(frozen=True)
-class SensorNoise:
-    """Gaussian sensor noise (standard deviations), added to the measurement.
-
-    Attributes:
-        joint_pos_rad: Joint encoders, rad.
-        joint_vel_radps: Joint velocities, rad/s.
-        base_pos_m: Base position, m.
-        base_rot_rad: Base orientation (small rotation vector), rad.
-        base_lin_vel_mps: Base linear velocity, m/s.
-        base_ang_vel_radps: Base angular velocity (IMU gyro), rad/s.
-    """
-
-    joint_pos_rad: float = 5e-4
-    joint_vel_radps: float = 0.05
-    base_pos_m: float = 1e-3
-    base_rot_rad: float = 2e-3
-    base_lin_vel_mps: float = 0.02
-    base_ang_vel_radps: float = 0.02
-
-
-@dataclass(frozen=True)
-class FallCriteria:
-    """When a run counts as a fall.
-
-    Attributes:
-        min_height_fraction: Base height below this fraction of its initial value.
-        max_tilt_rad: Base tilt (angle between its z axis and the world's) above this.
-    """
-
-    min_height_fraction: float = 0.6
-    max_tilt_rad: float = math.radians(50.0)
-
-
-@dataclass
-class RunResult:
-    """A finished simulation.
-
-    Attributes:
-        robot: Robot name.
-        tracker: Tracker name.
-        duration_s: Requested simulated time, s.
-        sim_time_s: Simulated time reached (< duration after a fall), s.
-        wall_time_s: Wall-clock time of the loop, s.
-        fell: True if the fall criteria triggered.
-        fall_time_s: When, or NaN.
-        log: Name -> array with one row per control tick (see :meth:`Simulation.run`).
-        steps: The completed steps.
-        tick_time_us: Controller wall time per tick, µs.
-        fallback_ticks: Ticks that used the damped fallback torque.
-        pushes: The pushes applied.
-        info: Run metadata: ``output_names`` (the order of ``log["h"]``),
-            ``actuator_names`` (the order of ``log["tau"]``), ``control_dt_s``,
-            ``planar`` (True for a planar robot),
-            ``seed`` and ``noise`` (True if sensor noise was on).
-    """
-
-    robot: str
-    tracker: str
-    duration_s: float
-    sim_time_s: float
-    wall_time_s: float
-    fell: bool
-    fall_time_s: float
-    log: dict[str, np.ndarray]
-    steps: list[StepRecord]
-    tick_time_us: np.ndarray
-    fallback_ticks: int
-    pushes: tuple[Push, ...] = ()
-    info: dict = field(default_factory=dict)
-
-
-def _quat_mul_small_rotation(quat_xyzw: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
-    """Quaternion (xyzw) times the small rotation ``rotvec`` (body frame), normalised."""
-    angle = float(np.linalg.norm(rotvec))
-    if angle < 1e-15:
-        return quat_xyzw
-    axis = rotvec / angle
-    s = math.sin(0.5 * angle)
-    dq = np.array([axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * angle)])
-    x1, y1, z1, w1 = quat_xyzw
-    x2, y2, z2, w2 = dq
-    out = np.array(
-        [
-            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        ]
-    )
-    return out / np.linalg.norm(out)
 
 
 class Simulation:
@@ -241,7 +117,7 @@ class Simulation:
             v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
             if self.robot.is_floating:
                 q[:3] += rng.normal(0.0, n.base_pos_m, 3)
-                q[3:7] = _quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
+                q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
                 v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
                 v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
         return Measurement(t_s=float(self.data.time), q=q, v=v, foot_contact=self.foot_contact())

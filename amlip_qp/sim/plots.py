@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.harness import RunResult
+from amlip_qp.sim.run_types import RunResult
 from amlip_qp.sim.summary import heading_frame_xy, step_velocities
 
 #: File suffixes the figures are written as (the format follows the suffix).

@@ -16,7 +16,7 @@ import numpy as np
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES, CommandShaping, GaitSettings, RobotProfile, get_profile
-from amlip_qp.sim.harness import Push
+from amlip_qp.sim.run_types import Push
 
 
 @dataclass(frozen=True)

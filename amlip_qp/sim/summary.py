@@ -16,7 +16,7 @@ import numpy as np
 
 from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.harness import RunResult
+from amlip_qp.sim.run_types import RunResult
 
 #: Steps that start before this time (s) are excluded from ``velocity_error_rms``.
 DEFAULT_SETTLE_S = 2.0
