@@ -32,3 +32,15 @@ def test_compare_table_marks_values_at_the_top_of_the_search():
     row.update(max_sagittal_impulse_Ns=60.0, sagittal_impulse_at_upper_bound=True, max_lateral_impulse_Ns=22.5)
     cells = format_table([row]).splitlines()[2].split()
     assert cells[cells.index("no") + 7 :][:3] == [">=2.10", ">=60.0", "22.5"]
+
+
+def test_generated_code_is_prepared_once_per_robot_and_tracker(monkeypatch):
+    from amlip_qp.sim import compare, factory
+    from amlip_qp.sim.robustness import CompareSettings
+
+    built = []
+    monkeypatch.setattr(factory, "build_simulation", lambda scenario, tracker: built.append((scenario.robot, tracker)))
+    tasks = compare.build_tasks(["rabbit", "cassie"], ["pbc", "qp"], [], CompareSettings(), seed=0, noise=False)
+    assert len(tasks) > 4  # nominal, ramp and push runs per pair
+    compare.prepare_generated_code(tasks)
+    assert sorted(built) == [("cassie", "pbc"), ("cassie", "qp"), ("rabbit", "pbc"), ("rabbit", "qp")]

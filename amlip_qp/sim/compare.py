@@ -274,6 +274,23 @@ def settings_from_args(args: argparse.Namespace) -> CompareSettings:
     return s
 
 
+def prepare_generated_code(tasks: list[_Task]) -> None:
+    """Build one closed loop per (robot, tracker) of ``tasks`` here, before any worker starts.
+
+    Building compiles the generated C (planner kernels, output map, QP
+    assembly) into the cache once, in this process: the workers then load it,
+    so a cold cache prints one first-run line rather than one per worker, and
+    no two workers compile the same library at once.
+    """
+    from amlip_qp.sim.factory import build_simulation
+
+    done: set[tuple[str, str]] = set()
+    for task in tasks:
+        if (task.robot, task.tracker) not in done:
+            done.add((task.robot, task.tracker))
+            build_simulation(task.scenario, task.tracker)
+
+
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
     from amlip_qp.output_paths import check_output_path, writing
@@ -310,6 +327,8 @@ def main(args: argparse.Namespace) -> int:
 
     log(f"compare: {len(tasks)} experiments on {args.jobs} process(es)...")
     t0 = time.perf_counter()
+    if args.jobs > 1:
+        prepare_generated_code(tasks)
     rows = run_comparison(tasks, jobs=args.jobs, log=log)
     log(f"compare: finished in {time.perf_counter() - t0:.0f} s")
     table = format_table(rows)
