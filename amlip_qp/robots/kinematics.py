@@ -284,10 +284,6 @@ class RobotKinematics:
         """World angular-velocity Jacobian (3 x nv) of the root body."""
         return self.frame_jacobian6(self.robot.base_frame_id)[3:]
 
-    def base_angular_jdot_v(self) -> np.ndarray:
-        """World angular-acceleration drift (rad/s^2) of the root body, shape (3,)."""
-        return self.frame_jdot_v6(self.robot.base_frame_id)[3:]
-
     # ------------------------------------------------------- centre of mass
     @property
     def mass_kg(self) -> float:
@@ -432,8 +428,3 @@ class RobotKinematics:
         result = self.output_map.evaluate(self, stance, heading_rad)
         self._out_cache = (stance, heading_rad, result)
         return result
-
-    def joint_position(self, name: str) -> float:
-        """Position (rad or m) of a hinge/slide joint, by MuJoCo name."""
-        q, _ = self.state()
-        return float(q[self.robot.state_map.joint_pin_q[name]])
