@@ -25,11 +25,15 @@ with ``vdot = 0``), so ``xddot = J vdot + jdot_v``.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import passive as _passive
+
+if TYPE_CHECKING:
+    from amlip_qp.robots.robot import Robot
 
 
 class RobotKinematics:
@@ -43,7 +47,7 @@ class RobotKinematics:
         v: The velocity of the last update (copy), shape (nv,).
     """
 
-    def __init__(self, robot):
+    def __init__(self, robot: Robot):
         """Create the Pinocchio data; call :meth:`update` before any getter."""
         import pinocchio as pin
 
@@ -61,7 +65,7 @@ class RobotKinematics:
         self._jac: dict[int, np.ndarray] = {}
         self._acc: dict[int, np.ndarray] = {}
         self._bind_views()
-        self._output_map = None
+        self._output_map: Any = None  # an OutputMap or a drop-in (see output_map)
         self._out_cache: tuple | None = None
         self._M: np.ndarray | None = None
         self._taup: np.ndarray | None = None
