@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amlip_qp.alip.planner import Command
+from amlip_qp.alip.messages import Command
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.estimator import Measurement

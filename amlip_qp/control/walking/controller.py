@@ -28,7 +28,8 @@ import numpy as np
 from amlip_qp.alip import other_side
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
-from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
+from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.clock import StepClock
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
