@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.alip import Command, Planner, PlannerOutput, StateEstimate, desired, kernels, lip
+from amlip_qp.alip import Command, Planner, PlannerOutput, StateEstimate, StepClock, desired, kernels, lip
 from amlip_qp.exceptions import InputError
 
 M, H, G, T = 31.0, 0.9, 9.81, 0.3
@@ -111,7 +111,22 @@ def test_heading_advances_at_start_step_and_targets_are_in_the_step_frame():
     assert p.heading_rad == pytest.approx(0.4 + T) and p.step_count == 2 and p.stance == "right"
     p.start_step("left", 2 * T, H0, heading_rad=-1.0)
     assert p.heading_rad == -1.0
-    assert p.t_step_start_s == pytest.approx(2 * T) and p.time_in_step(2 * T + 0.05) == pytest.approx(0.05)
+    assert p.clock.t_start_s == pytest.approx(2 * T) and p.clock.time_in_step(2 * T + 0.05) == pytest.approx(0.05)
+
+
+def test_the_planner_starts_its_steps_on_the_clock_it_is_given():
+    """One step clock: the planner keeps no stance or step start of its own."""
+    clock = StepClock()
+    p = Planner("cassie", M, G, clock=clock)
+    assert p.clock is clock and p.stance is None
+    p.start_step("right", 1.5, H0)
+    assert (clock.stance, clock.t_start_s) == ("right", 1.5) and p.stance == "right"
+    # The turn-rate integral runs on the clock's step start: 0.1 s into the step at 1 rad/s.
+    out = p.update(est(stance="right", t_in_step_s=0.1), cmd(turn_rate_radps=1.0))
+    assert out.heading_next_rad == pytest.approx(0.1 + (T - 0.1))
+    p.reset()
+    assert clock.stance is None and clock.t_start_s == 0.0
+    assert Planner("cassie", M).clock is not Planner("cassie", M).clock
 
 
 @pytest.mark.parametrize("early", [0.9, 1.0, 1.07])
@@ -210,6 +225,8 @@ def test_bad_planner_use_raises_input_error():
         Planner("cassie", M, speed_reference="avg")
     with pytest.raises(InputError, match="plan_fn must be callable"):
         Planner("cassie", M, plan_fn=3)
+    with pytest.raises(InputError, match="clock must be a StepClock, got str"):
+        Planner("cassie", M, clock="left")
     p = Planner("cassie", M)
     with pytest.raises(InputError, match="before start_step"):
         p.update(est(), cmd())

@@ -53,6 +53,7 @@ import numpy as np
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
 from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
 from amlip_qp.exceptions import InputError
@@ -85,6 +86,10 @@ class Planner:
             mean velocities over a step, ``"end_of_step"`` for the paper's meaning.
         vz_correction: use ``StateEstimate.v_z_mps`` in the momentum transfer
             (True, default) or the basic law with ``v_z = 0`` (False).
+        clock: the :class:`~amlip_qp.alip.clock.StepClock` of the walk (a
+            walking controller passes its own, which reads the phase from it);
+            a new one by default. The planner starts its steps
+            (:meth:`start_step`) and resets it (:meth:`reset`).
     """
 
     def __init__(
@@ -98,6 +103,7 @@ class Planner:
         heading_rad: float = 0.0,
         speed_reference: str = "mean",
         vz_correction: bool = True,
+        clock: StepClock | None = None,
     ):
         self.robot = O.check_robot(robot)
         C.positive("mass_kg", mass_kg, "kg")
@@ -106,6 +112,8 @@ class Planner:
             raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
         if plan_fn is not None and not callable(plan_fn):
             raise InputError(f"plan_fn must be callable (15 floats -> 8 floats), got {plan_fn!r}")
+        if clock is not None and not isinstance(clock, StepClock):
+            raise InputError(f"clock must be a StepClock, got {type(clock).__name__}")
         if reference_fn is not None and not callable(reference_fn):
             raise InputError(f"reference_fn must be callable (11 floats -> 27 floats), got {reference_fn!r}")
         self.mass_kg = float(mass_kg)
@@ -114,6 +122,8 @@ class Planner:
         self.reference_fn = reference_fn or kernels.swing_reference
         self.speed_reference = speed_reference
         self.vz_correction = bool(vz_correction)
+        #: Stance side and start of the current step (the walk's one step clock).
+        self.clock = StepClock() if clock is None else clock
         #: Output names in order (Cassie's nine or Rabbit's four).
         self.output_names = O.output_names(robot)
         self._planar = robot == "rabbit"
@@ -124,7 +134,7 @@ class Planner:
 
     def reset(self, heading_rad: float = 0.0) -> None:
         """Forget the walk (a new run): no step yet, first heading ``heading_rad``
-        (rad; Rabbit: 0) and the commanded-heading integral restarted."""
+        (rad; Rabbit: 0), the step clock reset and the commanded-heading integral restarted."""
         C.finite("heading_rad", heading_rad)
         self._heading = 0.0 if self._planar else float(heading_rad)
         self._heading_next = self._heading
@@ -133,8 +143,7 @@ class Planner:
         self._heading_cmd = self._heading
         self._t_heading_cmd: float | None = None
         self._rate_cmd: float | None = None  # the turn rate of the last update, rad/s
-        self._stance: str | None = None
-        self._t_start = 0.0
+        self.clock.reset()
         self._h0[:] = 0.0
         self._steps = 0
 
@@ -148,12 +157,7 @@ class Planner:
     @property
     def stance(self) -> str | None:
         """Stance side of the current step (``None`` before the first :meth:`start_step`)."""
-        return self._stance
-
-    @property
-    def t_step_start_s(self) -> float:
-        """Time at which the current step started, s."""
-        return self._t_start
+        return self.clock.stance
 
     @property
     def heading_rad(self) -> float:
@@ -177,14 +181,10 @@ class Planner:
         """Copy of the outputs measured at the start of the current step (robot order)."""
         return self._h0.copy()
 
-    def time_in_step(self, t_s: float) -> float:
-        """Time since the current step started, ``t_s - t_step_start_s``, in s."""
-        return float(t_s) - self._t_start
-
     # --- per step ------------------------------------------------------------
 
     def start_step(self, stance: str, t_start_s: float, h0_start, heading_rad: float | None = None) -> None:
-        """Begin a step at touchdown.
+        """Begin a step at touchdown (on :attr:`clock`).
 
         Args:
             stance: the new stance leg, ``"left"`` or ``"right"``.
@@ -208,11 +208,11 @@ class Planner:
         else:
             self._heading = self._heading_next
         self._heading_next = self._heading
-        self._stance = stance
-        self._t_start = float(t_start_s)
+        clock = self.clock
+        clock.start(stance, t_start_s)
         if self._t_heading_cmd is None:
             # The turn-rate integral starts with the first step.
-            self._t_heading_cmd = self._t_start
+            self._t_heading_cmd = clock.t_start_s
         self._h0[:] = h0
         self._steps += 1
 
@@ -229,16 +229,18 @@ class Planner:
         Returns:
             A :class:`PlannerOutput`.
         """
-        if self._stance is None:
+        clock = self.clock
+        stance = clock.stance
+        if stance is None:
             raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
         if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):
             raise InputError(
                 "update needs a StateEstimate and a Command, "
                 f"got {type(estimate).__name__} and {type(command).__name__}"
             )
-        if estimate.stance != self._stance:
+        if estimate.stance != stance:
             raise InputError(
-                f"estimate.stance={estimate.stance!r} but the current step has stance {self._stance!r}; "
+                f"estimate.stance={estimate.stance!r} but the current step has stance {stance!r}; "
                 "call start_step at touchdown before updating with the new stance"
             )
         T = command.step_time_s
@@ -279,7 +281,7 @@ class Planner:
             # last update applies to the time since (the first update of a run:
             # its own rate, since the step start).
             rate = command.turn_rate_radps
-            t_abs = self._t_start + t_in
+            t_abs = clock.t_start_s + t_in
             if self._t_heading_cmd is not None and t_abs > self._t_heading_cmd:
                 held = rate if self._rate_cmd is None else self._rate_cmd
                 self._heading_cmd += held * (t_abs - self._t_heading_cmd)
@@ -289,7 +291,7 @@ class Planner:
             u_p1, u_L0, vy, width = p1, L0, command.vy_mps * factor, command.step_width_m
         self._heading_next = heading_next
         # The dense ALIP_PLAN layout (kernels module doc); the next stance leg is the other one.
-        sign = 1.0 if self._stance == "right" else -1.0
+        sign = 1.0 if stance == "right" else -1.0
         u = self._u_plan
         u[:] = (p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g)
         # The kernels may return a shared buffer: copy once, hand out views.

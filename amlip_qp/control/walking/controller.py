@@ -3,9 +3,10 @@
 One :meth:`WalkingController.step` per control tick (2 kHz by default):
 
 1. the estimator updates the Pinocchio kinematics once at the measured state;
-2. the gait logic decides whether the swing foot touched down; at touchdown the
-   step clock and the planner start a new step (the planner from the measured
-   outputs) with the other stance leg;
+2. the gait logic decides whether the swing foot touched down (from the step
+   clock's phase); at touchdown the planner starts a new step, from the
+   measured outputs, with the other stance leg on the step clock it shares
+   with the controller;
 3. the estimator computes ``p_st``, ``L`` (Kalman-filtered) and ``v_z``;
 4. the planner (the code-generated kernels on the fast path) predicts ``L(T-)``,
    places the foot and evaluates ``h_d(s)`` and its derivatives;
@@ -26,12 +27,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amlip_qp.alip import other_side
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
-from amlip_qp.control.walking.clock import StepClock
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
@@ -167,9 +168,12 @@ class WalkingController:
 
             kernels = load_kernels()
             plan_fn, reference_fn = kernels.alip_plan, kernels.swing_reference
-        self.planner = Planner(output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn)
-        #: Stance side, start and phase of the current step.
+        #: Stance side, start and phase of the current step: the one step clock,
+        #: held by the planner, which starts its steps.
         self.clock = StepClock()
+        self.planner = Planner(
+            output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn, clock=self.clock
+        )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
         self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
@@ -209,7 +213,6 @@ class WalkingController:
         self.shaper.reset()
         self.steps.clear()
         self.fallback_ticks = 0
-        self.clock.reset()
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
         self.speed.reset()
@@ -220,8 +223,7 @@ class WalkingController:
     def _begin_step(self, stance: str, t_s: float) -> None:
         heading = self.planner.heading_next_rad
         h0, _, _ = self.kin.outputs(stance, heading)
-        self.planner.start_step(stance, t_s, h0)
-        self.clock.start(stance, t_s)
+        self.planner.start_step(stance, t_s, h0)  # starts the step on self.clock
         self._com_step_start = self.kin.com()
 
     def _record_step(self, t_s: float, est: Estimate, stance: str, plan: PlannerOutput) -> None:
