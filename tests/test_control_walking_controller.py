@@ -73,18 +73,19 @@ def test_finite_but_huge_torques_are_saturated_not_replaced(rabbit):
     np.testing.assert_allclose(tick.tau_Nm, rabbit.actuated.torque_limit_Nm[:, 1])
 
 
-def test_speed_correction_is_added_to_the_command_and_cached(rabbit):
+def test_the_planner_sees_the_command_plus_the_speed_correction(rabbit):
     ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), RobotKinematics(rabbit), planner_backend="numpy")
-    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5)
-    assert ctrl._corrected_command(cmd) is cmd  # no correction: the command itself
-    ctrl._correction[:] = (0.1, -0.05)
-    c1 = ctrl._corrected_command(cmd)
-    assert (c1.vx_mps, c1.vy_mps) == (0.5 + 0.1, 0.0 - 0.05) and c1.step_time_s == cmd.step_time_s
-    assert ctrl._corrected_command(cmd) is c1  # same command and correction: reused
-    ctrl._correction[0] = 0.2
-    assert ctrl._corrected_command(cmd).vx_mps == 0.5 + 0.2
-    other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
-    assert ctrl._corrected_command(other).vx_mps == 0.7 + 0.2
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5, vy_mps=0.0)
+    q, v = rabbit.q_stand.copy(), np.zeros(rabbit.nv)
+    first = ctrl.step(Measurement(0.0, q, v, {"left": True, "right": True}), cmd)
+    ctrl.reset()
+    ctrl.corrector.correction_mps[:] = (0.25, 0.0)
+    np.testing.assert_array_equal(ctrl.speed_correction_mps, [0.25, 0.0])
+    faster = ctrl.step(Measurement(0.0, q, v, {"left": True, "right": True}), cmd)
+    # The forward speed enters the desired momentum and thus the foot placement.
+    assert faster.plan.L_des_Nms[1] > first.plan.L_des_Nms[1]
+    ctrl.reset()
+    assert not ctrl.speed_correction_mps.any()
 
 
 def test_the_clock_starts_the_steps_the_planner_starts(rabbit):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -35,7 +35,7 @@ from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
-from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
+from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.outputs import output_layout
@@ -188,17 +188,16 @@ class WalkingController:
         self.speed = SpeedIntegrator(speed_correction or SpeedCorrection(), planar=robot.is_planar)
         self._last_plan: PlannerOutput | None = None
         self._L_target_this_step = np.full(2, np.nan)
-        self._correction = np.zeros(2)
+        #: The command the planner sees: the shaped command plus the integral speed correction.
+        self.corrector = CorrectedCommand()
         self._com_step_start = np.zeros(3)
         self._cmd_aimed = np.zeros(2)
         self._cmd_now = np.zeros(2)
-        self._corrected_key: tuple | None = None
-        self._corrected: Command | None = None
 
     @property
     def speed_correction_mps(self) -> np.ndarray:
         """The integral speed correction now given to the planner, heading frame, m/s (copy)."""
-        return self._correction.copy()
+        return self.corrector.correction_mps.copy()
 
     @property
     def stance(self) -> str | None:
@@ -216,7 +215,7 @@ class WalkingController:
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
         self.speed.reset()
-        self._correction[:] = 0.0
+        self.corrector.correction_mps[:] = 0.0
         self._cmd_aimed[:] = 0.0
         self._cmd_now[:] = 0.0
 
@@ -244,11 +243,11 @@ class WalkingController:
                 com_vel_end_mps=est.com_vel_mps.copy(),
                 heading_rad=plan.heading_rad,
                 mean_velocity_heading_mps=v_mean,
-                speed_correction_mps=self._correction.copy(),
+                speed_correction_mps=self.corrector.correction_mps.copy(),
             )
         )
         self._L_target_this_step = plan.L_des_Nms.copy()
-        self._correction[:] = self.speed.update(v_mean, self._cmd_aimed)
+        self.corrector.correction_mps[:] = self.speed.update(v_mean, self._cmd_aimed)
         # The command in force now is what the next step's foot placement aims at.
         self._cmd_aimed[:] = self._cmd_now
 
@@ -284,7 +283,7 @@ class WalkingController:
                 touchdown = True
                 est = estimator.estimate(stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
-        command = self._corrected_command(command)
+        command = self.corrector.apply(command)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
             StateEstimate(
@@ -337,22 +336,6 @@ class WalkingController:
             touchdown=touchdown,
             info=result.info,
         )
-
-    def _corrected_command(self, command: Command) -> Command:
-        """``command`` plus the integral speed correction (the same object if the correction is zero).
-
-        The corrected :class:`Command` is cached: it changes only when the
-        command or the correction (updated once per step) does.
-        """
-        cx, cy = self._correction.tolist()
-        if cx == 0.0 and cy == 0.0:
-            return command
-        key = (command, cx, cy)
-        corrected = self._corrected
-        if key != self._corrected_key or corrected is None:
-            corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
-            self._corrected_key, self._corrected = key, corrected
-        return corrected
 
     @staticmethod
     def _swing_contact_weight(phase: float) -> float:
