@@ -606,9 +606,6 @@ def test_precomputed_passive_forces_equal_the_plain_formula():
                 expected = _passive_reference(r, q, v)
                 np.testing.assert_array_equal(forces(q, v), expected)
                 np.testing.assert_array_equal(passive.passive_forces(r, q, v), expected)
-    assert passive._index(np.arange(3, 7)) == slice(3, 7)
-    idx = np.array([1, 3])
-    assert passive._index(idx) is idx
 
 
 def test_position_only_drifts_are_read_only_shared_zeros(robot):

@@ -69,7 +69,7 @@ def passive_forces_unchecked(robot: Robot, q: np.ndarray, v: np.ndarray) -> np.n
     return PassiveForces(robot)(q, v)
 
 
-def _index(idx: np.ndarray) -> slice | np.ndarray:
+def contiguous_index(idx: np.ndarray) -> slice | np.ndarray:
     """``idx`` as a slice when it is a contiguous increasing range (cheaper to index with), else unchanged."""
     if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         return slice(int(idx[0]), int(idx[0]) + idx.size)
@@ -89,7 +89,7 @@ class PassiveForces:
         smap = robot.state_map
         pv = smap.scalar_pin_v
         self._neg_damping = -robot.dof_damping
-        self._pq, self._pv = _index(smap.scalar_pin_q), _index(pv)
+        self._pq, self._pv = contiguous_index(smap.scalar_pin_q), contiguous_index(pv)
         self._stiffness = robot.dof_stiffness[pv]
         self._springref = robot.dof_springref[pv]
         # Per tendon: the coupling, its coefficients, q and v indices, and (index, coefficient) pairs.

@@ -127,6 +127,12 @@ class IterativeIK:
         #: LU factors of ``A(q_r)`` of the last successful solve (see :meth:`solve_linear`).
         self.lu = None
 
+    @property
+    def last_result(self) -> IKResult | None:
+        """The last successful solve's result (the next solve's warm start); ``None``
+        before any, after :meth:`reset` or after a failed solve. Read-only."""
+        return self._prev
+
     def reset(self) -> None:
         """Forget the warm start."""
         self._prev = None
