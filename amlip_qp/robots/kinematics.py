@@ -261,19 +261,6 @@ class RobotKinematics:
         """``Jdot v`` (m/s^2) of the ALIP contact point, shape (3,)."""
         return self.frame_jdot_v(self.robot.contact_frame_ids[self._side(side)])
 
-    def force_point_positions(self, side: str) -> np.ndarray:
-        """World positions (m) of the foot's force points (toe, heel or the contact), shape (k, 3)."""
-        self._ready()
-        return np.array([self.frame_translation_view(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
-    def force_point_jacobian(self, side: str) -> np.ndarray:
-        """Stacked translational Jacobians (3k x nv) of the foot's force points."""
-        return np.vstack([self.frame_jacobian(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
-    def force_point_jdot_v(self, side: str) -> np.ndarray:
-        """Stacked ``Jdot v`` (3k,) of the foot's force points."""
-        return np.concatenate([self.frame_jdot_v(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
     def _side(self, side: str) -> str:
         if side not in self.robot.foot_sides:
             raise InputError(f"side must be 'left' or 'right', got {side!r}")
@@ -404,18 +391,9 @@ class RobotKinematics:
 
     @output_map.setter
     def output_map(self, output_map) -> None:
-        from amlip_qp.robots.outputs import OutputMap
+        from amlip_qp.robots.outputs import check_output_map
 
-        names = OutputMap(self.robot).names
-        other = getattr(output_map, "robot", self.robot)
-        if (
-            tuple(getattr(output_map, "names", ())) != tuple(names)
-            or not callable(getattr(output_map, "evaluate", None))
-            or other.nv != self.robot.nv
-        ):
-            raise InputError(
-                f"output_map must evaluate the outputs {names} of {self.robot.name} (nv = {self.robot.nv})"
-            )
+        check_output_map(self.robot, output_map)
         self._output_map = output_map
         self._out_cache = None
 
