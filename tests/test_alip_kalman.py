@@ -80,7 +80,7 @@ def test_two_plane_filter_tracks_a_3d_lip_in_both_planes():
 def test_defaults_are_documented_values():
     assert kalman.DEFAULT_PROCESS_VAR_RATE == 4.0 and kalman.DEFAULT_MEASUREMENT_VAR == 0.25
     f = kalman.MomentumFilter1D(M)
-    assert f._q == 4.0 and f._r == 0.25
+    assert f.process_var_rate == 4.0 and f.measurement_var == 0.25
 
 
 @pytest.mark.parametrize(

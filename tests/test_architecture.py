@@ -145,14 +145,14 @@ def test_the_check_catches_violations(tmp_path, monkeypatch):
     bad = pkg / "control" / "walking" / "m.py"
     bad.write_text(
         "from amlip_qp.control.pbc.tracker import PBCTracker\n"
-        "from . import clock\n"
+        "from . import gait\n"
         "def f():\n    import mujoco\n    from amlip_qp.sim.harness import Simulation\n"
     )
     monkeypatch.setattr(sys.modules[__name__], "PKG", pkg)
     found = _imports(bad)
-    assert {"mujoco", "amlip_qp.sim.harness", "amlip_qp.control.pbc.tracker", "amlip_qp.control.walking.clock"} <= found
+    assert {"mujoco", "amlip_qp.sim.harness", "amlip_qp.control.pbc.tracker", "amlip_qp.control.walking.gait"} <= found
     offenders = _offenders("amlip_qp.control.walking", [bad])
-    assert len(offenders) == 3 and not any("clock" in o for o in offenders)
+    assert len(offenders) == 3 and not any("gait" in o for o in offenders)
 
 
 def test_the_command_line_imports_nothing_heavy():

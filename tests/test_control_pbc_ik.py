@@ -47,12 +47,20 @@ def test_ik_evaluates_the_output_map_on_its_own_kinematics(robot):
     for stance in ("left", "right"):
         h, J, _ = kin.outputs(stance, heading)
         h, J = h.copy(), J.copy()
-        A = np.zeros((robot.nv, robot.nv))
-        y, _, _ = ik._evaluate(q, stance, heading, A)
+        ik.kin.update_positions(q)
+        y, J_ik, _ = ik.kin.outputs(stance, heading)
         np.testing.assert_allclose(y, h, atol=1e-12)
-        np.testing.assert_allclose(A[: ik.size], J, atol=1e-12)
+        np.testing.assert_allclose(J_ik, J, atol=1e-12)
         n = h.size
-        ik.solve(kin, stance, heading, h + 0.01, np.zeros(n), np.zeros(n))
+        res = ik.solve(kin, stance, heading, h + 0.01, np.zeros(n), np.zeros(n))
+        assert res.ok and ik.last_result is res
+        # The output rows of the IK's matrix A(q_r) are the output map's Jacobian at q_r:
+        # A dq = [dh; 0] moves the outputs by J(q_r) dq = dh.
+        ik.kin.update_positions(res.q_r)
+        J_r = ik.kin.outputs(stance, heading)[1]
+        rhs = np.zeros(robot.nv)
+        rhs[:n] = np.linspace(-0.01, 0.01, n)
+        np.testing.assert_allclose(J_r @ ik.solve_linear(rhs), rhs[:n], atol=1e-9)
         np.testing.assert_array_equal(kin.q, q)
         np.testing.assert_array_equal(kin.v, v)
         np.testing.assert_array_equal(kin.outputs(stance, heading)[0], h)

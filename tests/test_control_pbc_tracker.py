@@ -52,9 +52,9 @@ def test_torques_reproduce_the_constrained_inverse_dynamics(robot, stance):
     res = tracker.compute(kin, _target_at_estimate(kin, stance))
     assert res.ok and np.all(np.isfinite(res.tau_Nm))
     # the IK reproduces the estimate: zero position errors
-    lay = tracker._layout[stance]
+    lay = tracker.layout(stance)
     assert res.info["tracking_error_rad"] < 1e-8
-    ik = tracker.ik._prev
+    ik = tracker.ik.last_result
     vdot_cmd = ik.a_r[lay.ctrl_v] + lay.kd * (ik.v_r[lay.ctrl_v] - v[lay.ctrl_v])
     vdot, tau_c, lam = tracker.solve_dynamics(kin, stance, vdot_cmd)
     np.testing.assert_allclose(tau_c, res.tau_Nm[lay.ctrl], atol=1e-8)
@@ -135,26 +135,26 @@ def test_swing_torso_compensation_moves_the_swing_leg_to_the_measured_torso():
     tgt = TrackingTarget(stance=stance, phase=0.5, heading_rad=0.0, h_d=h_d, dh_d=dh, ddh_d=dh)
     on = PBCTracker(robot, gains=PBCGains(swing_torso_compensation=1.0))
     off = PBCTracker(robot, gains=PBCGains(swing_torso_compensation=0.0))
-    lay = on._layout[stance]
+    lay = on.layout(stance)
     r_on, r_off = on.compute(kin, tgt), off.compute(kin, tgt)
     assert r_on.ok and r_off.ok
     # the IK at the measured torso
     h_meas = h_d.copy()
     h_meas[:2] = h[:2]
     ref = PBCTracker(robot).ik.solve(kin, stance, 0.0, h_meas, dh, dh, iterations=12).q_r
-    base = off.ik._prev.q_r
+    base = off.ik.last_result.q_r
     sw, st = lay.swing_mask, ~lay.swing_mask
-    np.testing.assert_allclose(on.ik._prev.q_r, base, atol=1e-12)  # same IK solution in both
+    np.testing.assert_allclose(on.ik.last_result.q_r, base, atol=1e-12)  # same IK solution in both
     q_r = base[lay.ctrl_q].copy()
-    v_r = on.ik._prev.v_r[lay.ctrl_v].copy()
-    on._compensate_swing(kin, tgt, lay, 1.0, q_r, v_r)
+    v_r = on.ik.last_result.v_r[lay.ctrl_v].copy()
+    on.compensate_swing(kin, tgt, lay, 1.0, q_r, v_r)
     change = np.abs(ref[lay.ctrl_q[sw]] - base[lay.ctrl_q[sw]])
     assert np.max(change) > 0.01  # the torso error matters for the swing leg
     np.testing.assert_allclose(q_r[sw], ref[lay.ctrl_q[sw]], atol=0.1 * np.max(change))
     np.testing.assert_array_equal(q_r[st], base[lay.ctrl_q[st]])
     # the torques differ only through the swing joints' references
     assert not np.allclose(r_on.tau_Nm, r_off.tau_Nm)
-    np.testing.assert_allclose(on.ik._prev.q_r[lay.ctrl_q[st]], base[lay.ctrl_q[st]], atol=1e-9)
+    np.testing.assert_allclose(on.ik.last_result.q_r[lay.ctrl_q[st]], base[lay.ctrl_q[st]], atol=1e-9)
 
 
 def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
@@ -167,11 +167,11 @@ def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
     tracker = PBCTracker(robot, gains=PBCGains(spring_model_offset=True))
     tgt = _target_at_estimate(kin, "left")
     assert tracker.compute(kin, tgt).ok
-    f = tracker._last_force["left"]
+    f = tracker.last_contact_force_N("left")
     assert f is not None and f[2] > 0
     res = tracker.compute(kin, tgt)
     assert res.ok
-    q_r = tracker.ik._prev.q_r
+    q_r = tracker.ik.last_result.q_r
     smap = robot.state_map
     shin, achilles = spring_deflections_rad(kin, "left", f)
     assert q_r[smap.joint_pin_q["left-shin"]] == pytest.approx(shin, abs=1e-9)

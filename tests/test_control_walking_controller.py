@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amlip_qp.alip.planner import Command
+from amlip_qp.alip.messages import Command
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.estimator import Measurement
@@ -73,36 +73,37 @@ def test_finite_but_huge_torques_are_saturated_not_replaced(rabbit):
     np.testing.assert_allclose(tick.tau_Nm, rabbit.actuated.torque_limit_Nm[:, 1])
 
 
-def test_speed_correction_is_added_to_the_command_and_cached(rabbit):
+def test_the_planner_sees_the_command_plus_the_speed_correction(rabbit):
     ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), RobotKinematics(rabbit), planner_backend="numpy")
-    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5)
-    assert ctrl._corrected_command(cmd) is cmd  # no correction: the command itself
-    ctrl._correction[:] = (0.1, -0.05)
-    c1 = ctrl._corrected_command(cmd)
-    assert (c1.vx_mps, c1.vy_mps) == (0.5 + 0.1, 0.0 - 0.05) and c1.step_time_s == cmd.step_time_s
-    assert ctrl._corrected_command(cmd) is c1  # same command and correction: reused
-    ctrl._correction[0] = 0.2
-    assert ctrl._corrected_command(cmd).vx_mps == 0.5 + 0.2
-    other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
-    assert ctrl._corrected_command(other).vx_mps == 0.7 + 0.2
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5, vy_mps=0.0)
+    q, v = rabbit.q_stand.copy(), np.zeros(rabbit.nv)
+    first = ctrl.step(Measurement(0.0, q, v, {"left": True, "right": True}), cmd)
+    ctrl.reset()
+    ctrl.corrector.correction_mps[:] = (0.25, 0.0)
+    np.testing.assert_array_equal(ctrl.speed_correction_mps, [0.25, 0.0])
+    faster = ctrl.step(Measurement(0.0, q, v, {"left": True, "right": True}), cmd)
+    # The forward speed enters the desired momentum and thus the foot placement.
+    assert faster.plan.L_des_Nms[1] > first.plan.L_des_Nms[1]
+    ctrl.reset()
+    assert not ctrl.speed_correction_mps.any()
 
 
 def test_the_clock_starts_the_steps_the_planner_starts(rabbit):
-    """One step clock: its stance and step start are the planner's, and it switches at touchdown."""
+    """One step clock: the planner holds the controller's clock and starts its steps; it switches at touchdown."""
     ctrl = WalkingController(rabbit, _HugeTracker(rabbit.nu), RobotKinematics(rabbit), planner_backend="numpy")
     cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06)
     q, v = rabbit.q_stand.copy(), np.zeros(rabbit.nv)
     assert ctrl.stance is None
     first = ctrl.step(Measurement(0.1, q, v, {"left": True, "right": True}), cmd)
     assert first.stance == ctrl.clock.stance == ctrl.planner.stance == "left"
-    assert ctrl.clock.t_start_s == ctrl.planner.t_step_start_s == 0.1
+    assert ctrl.planner.clock is ctrl.clock and ctrl.clock.t_start_s == 0.1
     # before the minimum phase a contact does not end the step; after it, it does
     early = ctrl.step(Measurement(0.1 + 0.3 * 0.35, q, v, {"left": True, "right": True}), cmd)
     assert not early.touchdown and early.phase == pytest.approx(0.3)
     t_td = 0.1 + 0.8 * 0.35
     td = ctrl.step(Measurement(t_td, q, v, {"left": True, "right": True}), cmd)
     assert td.touchdown and td.stance == ctrl.clock.stance == ctrl.planner.stance == "right"
-    assert ctrl.clock.t_start_s == ctrl.planner.t_step_start_s == t_td
+    assert ctrl.clock.t_start_s == t_td
     assert td.phase == 0.0 and len(ctrl.steps) == 1 and ctrl.steps[0].t_start_s == 0.1
     ctrl.reset()
     assert ctrl.stance is None and ctrl.clock.t_start_s == 0.0

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
+from amlip_qp.alip.messages import Command
+from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
 
 
@@ -46,3 +47,17 @@ def test_bounds_disturbances_settling_and_planar():
 def test_bad_speed_correction_is_a_typed_error():
     with pytest.raises(InputError, match="gain_per_step"):
         SpeedCorrection(gain_per_step=1.5)
+
+
+def test_the_corrected_command_adds_the_correction_and_is_made_once_per_pair():
+    corrector = CorrectedCommand()
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.5)
+    assert corrector.apply(cmd) is cmd  # no correction: the command itself
+    corrector.correction_mps[:] = (0.1, -0.05)
+    c1 = corrector.apply(cmd)
+    assert (c1.vx_mps, c1.vy_mps) == (0.5 + 0.1, 0.0 - 0.05) and c1.step_time_s == cmd.step_time_s
+    assert corrector.apply(cmd) is c1  # same command and correction: reused
+    corrector.correction_mps[0] = 0.2
+    assert corrector.apply(cmd).vx_mps == 0.5 + 0.2
+    other = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06, vx_mps=0.7)
+    assert corrector.apply(other).vx_mps == 0.7 + 0.2

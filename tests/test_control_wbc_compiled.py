@@ -9,6 +9,7 @@ from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import FUNCTION_STEM, CompiledBuild, assembly_function, generate_source
 from amlip_qp.control.wbc.config import default_config
+from amlip_qp.control.wbc.inputs import swing_force_weight
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
@@ -60,7 +61,7 @@ def test_compiled_build_equals_the_python_build(name, changes):
         x = np.random.default_rng(i).normal(0.0, 10.0, builder.n_variables)
         rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
         assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
-        assert builder.inputs.swing_force_weight == builder.swing_force_weight(target)
+        assert builder.inputs.swing_force_weight == swing_force_weight(builder.config, target)
 
 
 def test_the_functions_follow_the_constraint_and_cost_lists():

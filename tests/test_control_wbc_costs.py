@@ -9,7 +9,7 @@ from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
 from amlip_qp.control.wbc.inputs import SymbolicInputs, pack_inputs, packed_layout
 from amlip_qp.robots import load_robot
-from wbc_cases import kin_at, target_for
+from wbc_cases import corrected_target, kin_at, target_for
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])
@@ -207,7 +207,8 @@ def test_pelvis_yaw_feedback_enters_the_output_cost_as_the_corrected_reference()
     target = target_for(kin, "left", heading=0.3)
     with_fb = WholeBodyQP(cassie, CASSIE_CONFIG.with_(hip_yaw_feedback=0.8))
     plain = WholeBodyQP(cassie, CASSIE_CONFIG.with_(hip_yaw_feedback=0.0))
-    corrected = with_fb.hip_yaw_feedback_target(kin, target)
+    assert with_fb.feedback is not None
+    corrected = corrected_target(with_fb.feedback, kin, target)
     a = with_fb.build(kin, target).copy()
     b = plain.build(kin, corrected)
     assert np.allclose(a.g, b.g, rtol=1e-12, atol=1e-9)

@@ -232,14 +232,15 @@ def test_jacobians_and_drifts_by_finite_differences(robot):
                     lambda k, s=side: k.contact_jacobian(s),
                 )
             )
-            checks.append(
-                (
-                    lambda k, s=side: k.force_point_positions(s).ravel(),
-                    kin.force_point_jacobian(side),
-                    kin.force_point_jdot_v(side),
-                    lambda k, s=side: k.force_point_jacobian(s),
+            for f in robot.force_frame_ids[side]:
+                checks.append(
+                    (
+                        lambda k, f=f: k.frame_position(f),
+                        kin.frame_jacobian(f),
+                        kin.frame_jdot_v(f),
+                        lambda k, f=f: k.frame_jacobian(f),
+                    )
                 )
-            )
         for pos_fun, J, jdv, jac_fun in checks:
             J_fd = fd_jacobian(robot, lambda qq: at(qq, v, pos_fun), q)
             np.testing.assert_allclose(J, J_fd, atol=TOL_FD)
@@ -373,7 +374,7 @@ def quasi_static_torques(robot, kin, q):
     """
     kin.update(q, np.zeros(robot.nv))
     rhs = kin.nonlinear_effects() - kin.passive_forces()
-    Jc = np.vstack([kin.force_point_jacobian(s) for s in robot.foot_sides])
+    Jc = np.vstack([kin.frame_jacobian(f) for s in robot.foot_sides for f in robot.force_frame_ids[s]])
     G = kin.coupling_constraints()[1]
     Jall = np.vstack([Jc, G])
     coupled = sorted({int(i) for c in robot.couplings for i in c.pin_v_idx} - set(robot.actuated.pin_v_idx.tolist()))
@@ -606,9 +607,6 @@ def test_precomputed_passive_forces_equal_the_plain_formula():
                 expected = _passive_reference(r, q, v)
                 np.testing.assert_array_equal(forces(q, v), expected)
                 np.testing.assert_array_equal(passive.passive_forces(r, q, v), expected)
-    assert passive._index(np.arange(3, 7)) == slice(3, 7)
-    idx = np.array([1, 3])
-    assert passive._index(idx) is idx
 
 
 def test_position_only_drifts_are_read_only_shared_zeros(robot):

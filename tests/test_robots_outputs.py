@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from amlip_qp.alip import other_side
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.robots import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap, RobotKinematics, load_robot
-from amlip_qp.robots.outputs import output_layout
+from amlip_qp.robots.outputs import check_output_map, output_layout
 from robot_states import ROBOTS
 
 
@@ -84,7 +84,7 @@ def test_values_follow_the_definitions(robot):
                 assert named["stance_hip_yaw"] == q[sm.joint_pin_q[f"{st}-hip-yaw"]]
                 assert named["swing_hip_yaw"] == q[sm.joint_pin_q[f"{sw}-hip-yaw"]]
                 assert named["com_y_over_swing"] == pytest.approx((c - r_sw) @ yD, abs=1e-14)
-                toe, heel = kin.force_point_positions(sw)
+                toe, heel = (kin.frame_position(f) for f in robot.force_frame_ids[sw])
                 dlt = toe - heel
                 assert named["swing_toe_pitch"] == pytest.approx(
                     np.arctan2(-dlt[2], np.hypot(dlt[0], dlt[1])), abs=1e-14
@@ -191,3 +191,19 @@ def test_position_rows_are_the_plain_formulas_bit_for_bit(robot):
                 k = row[name]
                 assert y[k] == value and jdv[k] == drift
                 np.testing.assert_array_equal(J[k], jac_row)
+
+
+def test_an_output_map_stand_in_must_evaluate_the_same_outputs_of_the_same_model():
+    cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
+    check_output_map(cassie, OutputMap(cassie))  # the default passes
+    with pytest.raises(InputError, match=r"output_map must evaluate the outputs \('torso_pitch', .*of cassie \(nv = "):
+        check_output_map(cassie, OutputMap(rabbit))
+
+    class NoEvaluate:
+        names = OutputMap(cassie).names
+
+    with pytest.raises(InputError, match="output_map must evaluate"):
+        check_output_map(cassie, NoEvaluate())
+    kin = RobotKinematics(cassie)
+    with pytest.raises(InputError, match="output_map must evaluate"):
+        kin.output_map = NoEvaluate()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.robots import load_robot
-from amlip_qp.robots.passive import coupling_constraints, passive_forces, spring_rows
+from amlip_qp.robots.passive import contiguous_index, coupling_constraints, passive_forces, spring_rows
 
 
 def test_cassie_has_an_achilles_rod_and_a_shin_spring_per_leg():
@@ -50,3 +50,11 @@ def test_rows_give_the_model_spring_forces_and_coupling_residuals():
             deflection = r.row_q(cassie.nq) @ q - r.rest
             assert abs(deflection) > 1e-3
             assert f[iv] == pytest.approx(-r.stiffness * deflection, rel=1e-12)
+
+
+def test_a_contiguous_increasing_index_becomes_a_slice():
+    assert contiguous_index(np.arange(3, 7)) == slice(3, 7)
+    idx = np.array([1, 3])
+    assert contiguous_index(idx) is idx
+    descending = np.array([4, 3])
+    assert contiguous_index(descending) is descending

@@ -1,5 +1,7 @@
 """Shared helpers of the whole-body QP tests: states, targets, solves (not a test module)."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from amlip_qp.control.tracker import TrackingTarget
@@ -26,6 +28,16 @@ def target_for(kin, stance="left", phase=0.5, weight=0.0, offset=0.0, heading=0.
     y, _, _ = kin.outputs(stance, heading)
     n = y.size
     return TrackingTarget(stance, phase, heading, y + offset, np.zeros(n), np.zeros(n), swing_contact_weight=weight)
+
+
+def corrected_target(feedback, kin, target):
+    """A copy of ``target`` with the swing hip-yaw reference and rate moved by the
+    pelvis-yaw ``feedback``'s correction (the reference the feedback stands for)."""
+    dh, ddh = feedback.correction(kin, target)
+    out = replace(target, h_d=target.h_d.copy(), dh_d=target.dh_d.copy())
+    out.h_d[feedback.swing_index] += dh
+    out.dh_d[feedback.swing_index] += ddh
+    return out
 
 
 def random_cases(robot, n, seed=0):

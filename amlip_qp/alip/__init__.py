@@ -9,11 +9,14 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.heading`: heading frames and the hip-yaw split of a turn;
 - :mod:`~amlip_qp.alip.kalman`: scalar Kalman filters on ``L``;
 - :mod:`~amlip_qp.alip.phase`: the gait phase ``s``;
+- :mod:`~amlip_qp.alip.clock`: :class:`StepClock`, the stance side, step start and phase of the current step;
 - :mod:`~amlip_qp.alip.outputs`: the reference outputs ``h_d(s)`` and their names;
+- :mod:`~amlip_qp.alip.messages`: :class:`Command`, :class:`StateEstimate`, :class:`PlannerOutput` (planner I/O);
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 """
 
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.desired import (
     Lx_from_lateral_speed,
     Lx_from_step_width,
@@ -40,9 +43,10 @@ from amlip_qp.alip.lip import (
     transfer_3d,
     vz_limit,
 )
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
 from amlip_qp.alip.outputs import CASSIE_OUTPUTS, RABBIT_OUTPUTS, output_names, reference_outputs
 from amlip_qp.alip.phase import step_phase, step_phase_clipped, time_remaining
-from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
+from amlip_qp.alip.planner import Planner
 
 __all__ = [
     "CASSIE_OUTPUTS",
@@ -58,6 +62,7 @@ __all__ = [
     "Planner",
     "PlannerOutput",
     "StateEstimate",
+    "StepClock",
     "alip_plan",
     "desired_L_heading",
     "desired_L_world",

@@ -14,7 +14,7 @@ Exact pass-through: whenever every axis of the raw command is within reach
 (it changes no faster than the limit, up to a relative slack
 :data:`RATE_RTOL` for the rounding of a ramp sampled at the tick times) and
 its steps are not longer than the cap, the raw
-:class:`~amlip_qp.alip.planner.Command` object itself is returned, so a
+:class:`~amlip_qp.alip.messages.Command` object itself is returned, so a
 command that is already a slow enough ramp reaches the planner bit for bit.
 Only an axis that is out of reach is replaced, by ``previous ± rate * dt``.
 
@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from amlip_qp.alip.planner import Command
+from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import CommandShaping
 

@@ -95,6 +95,16 @@ class MomentumFilter1D:
         #: Current estimate variance, (kg m^2/s)^2.
         self.P = float(var0)
 
+    @property
+    def process_var_rate(self) -> float:
+        """Process noise rate ``q`` of ``L``, (kg m^2/s)^2 per s."""
+        return self._q
+
+    @property
+    def measurement_var(self) -> float:
+        """Measurement noise variance ``r`` of ``L``, (kg m^2/s)^2."""
+        return self._r
+
     def reset(self, L_Nms: float, var: float | None = None) -> None:
         """Set the estimate to ``L_Nms`` (kg m^2/s), and its variance to ``var`` if given.
 

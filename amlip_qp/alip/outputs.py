@@ -41,9 +41,6 @@ RABBIT_OUTPUTS = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z
 #: Output names of each supported robot.
 ROBOT_OUTPUTS = {"cassie": CASSIE_OUTPUTS, "rabbit": RABBIT_OUTPUTS}
 
-#: Indices of each robot's outputs in the SWING_REFERENCE (Cassie) layout.
-ROBOT_INDICES = {"cassie": tuple(range(kernels.N_CASSIE_OUTPUTS)), "rabbit": tuple(kernels.RABBIT_FROM_CASSIE)}
-
 _RABBIT_IDX = np.asarray(kernels.RABBIT_FROM_CASSIE)
 
 assert len(CASSIE_OUTPUTS) == kernels.N_CASSIE_OUTPUTS

@@ -47,15 +47,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
 from amlip_qp.exceptions import InputError
+
+__all__ = ["VZ_CLAMP_FRACTION", "Command", "Planner", "PlannerOutput", "StateEstimate"]
 
 #: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
 #: of ``H l tanh(lT)``, where the law's denominator vanishes (see
@@ -65,179 +68,6 @@ from amlip_qp.exceptions import InputError
 VZ_CLAMP_FRACTION = 0.5
 
 _SPEED_REFERENCES = ("mean", "end_of_step")
-
-_F64 = np.dtype(np.float64)
-_VECTOR3 = (3,)
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
-class Command:
-    """What the walking controller asks for. All fields keyword-only, SI units.
-
-    Attributes:
-        step_time_s: step duration ``T``, s (> 0).
-        com_height_m: desired CoM height over the stance contact ``H``, m (> 0).
-        clearance_m: swing-foot clearance ``z_cl`` at mid-step, m (0 <= z_cl < H).
-        vx_mps: forward CoM velocity in the heading frame, m/s (mean over a
-            step unless the planner uses ``speed_reference="end_of_step"``).
-        vy_mps: lateral (left positive) CoM velocity in the heading frame, m/s.
-        turn_rate_radps: heading rate, rad/s (positive turns left); the
-            planner integrates it over time (module doc, step 2).
-        step_width_m: lateral distance between the feet when walking in place, m (>= 0).
-    """
-
-    step_time_s: float
-    com_height_m: float
-    clearance_m: float
-    vx_mps: float = 0.0
-    vy_mps: float = 0.0
-    turn_rate_radps: float = 0.0
-    step_width_m: float = 0.0
-
-    def __post_init__(self):
-        for name in (
-            "step_time_s",
-            "com_height_m",
-            "clearance_m",
-            "vx_mps",
-            "vy_mps",
-            "turn_rate_radps",
-            "step_width_m",
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
-                raise InputError(f"Command.{name} must be a finite number, got {v!r}")
-        if not self.step_time_s > 0.0:
-            raise InputError(f"Command.step_time_s (T) must be > 0 s, got {self.step_time_s!r}")
-        if not self.com_height_m > 0.0:
-            raise InputError(f"Command.com_height_m (H) must be > 0 m, got {self.com_height_m!r}")
-        if not self.step_width_m >= 0.0:
-            raise InputError(f"Command.step_width_m must be >= 0 m, got {self.step_width_m!r}")
-        if not 0.0 <= self.clearance_m < self.com_height_m:
-            raise InputError(
-                f"Command.clearance_m (z_cl) must satisfy 0 <= z_cl < H = {self.com_height_m!r} m, "
-                f"got {self.clearance_m!r}"
-            )
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
-class StateEstimate:
-    """The controller's estimate at one tick. All fields keyword-only, SI units, world axes.
-
-    Attributes:
-        stance: ``"left"`` or ``"right"``, the leg in stance.
-        p_st_m: (3,) CoM minus stance contact, m.
-        L_Nms: (3,) angular momentum about the stance contact, kg m^2/s.
-        v_z_mps: CoM vertical velocity, m/s; used as the prediction of ``v_z`` at
-            touchdown in the momentum-transfer correction.
-        t_in_step_s: time since the current step started, s (>= 0; may exceed ``T``
-            after a late touchdown, then the phase is held at 1).
-        com_m: (3,) CoM position, m.
-
-    Arrays are converted to float ``numpy`` arrays; NaN/inf, wrong shapes,
-    unknown stance sides and negative times raise InputError.
-    """
-
-    stance: str
-    p_st_m: np.ndarray
-    L_Nms: np.ndarray
-    v_z_mps: float
-    t_in_step_s: float
-    com_m: np.ndarray
-
-    def __post_init__(self):
-        if self.stance not in ("left", "right"):
-            raise InputError(f"StateEstimate.stance must be 'left' or 'right', got {self.stance!r}")
-        # Built every control tick: a fast path for three float64 3-vectors,
-        # plain-float arithmetic, no numpy reductions.
-        p, L, c = self.p_st_m, self.L_Nms, self.com_m
-        if (
-            type(p) is np.ndarray
-            and type(L) is np.ndarray
-            and type(c) is np.ndarray
-            and p.dtype is _F64
-            and L.dtype is _F64
-            and c.dtype is _F64
-            and p.shape == L.shape == c.shape == _VECTOR3
-        ):
-            p0, p1, p2 = p.tolist()
-            L0, L1, L2 = L.tolist()
-            c0, c1, c2 = c.tolist()
-            total = p0 + p1 + p2 + (L0 + L1 + L2) + (c0 + c1 + c2)
-        else:
-            total = 0.0
-            for name in ("p_st_m", "L_Nms", "com_m"):
-                a = getattr(self, name)
-                if not (isinstance(a, np.ndarray) and a.dtype is _F64):
-                    try:
-                        a = np.asarray(a, dtype=float)
-                    except (TypeError, ValueError) as exc:
-                        raise InputError(f"StateEstimate.{name} must be 3 numbers, got {a!r}") from exc
-                    object.__setattr__(self, name, a)
-                if a.shape != _VECTOR3:
-                    raise InputError(f"StateEstimate.{name} must have shape (3,), got {a.shape}")
-                x0, x1, x2 = a.tolist()
-                total += x0 + x1 + x2
-        # One cheap finiteness test: NaN and inf propagate through a sum.
-        try:
-            total = float(np.float64(total) + self.v_z_mps + self.t_in_step_s)
-        except (TypeError, ValueError) as exc:
-            raise InputError(
-                f"StateEstimate.v_z_mps and t_in_step_s must be numbers, got {self.v_z_mps!r} and {self.t_in_step_s!r}"
-            ) from exc
-        if not math.isfinite(total):
-            bad = [
-                n
-                for n in ("p_st_m", "L_Nms", "com_m", "v_z_mps", "t_in_step_s")
-                if not np.all(np.isfinite(np.asarray(getattr(self, n), dtype=float)))
-            ]
-            raise InputError(
-                f"StateEstimate has NaN or inf in {bad or 'a value too large to add'}; check the estimator"
-            )
-        if self.t_in_step_s < 0.0:
-            raise InputError(f"StateEstimate.t_in_step_s must be >= 0 s, got {self.t_in_step_s!r}")
-
-
-@dataclass(frozen=True, kw_only=True, slots=True)
-class PlannerOutput:
-    """The planner's answer at one tick (SI units).
-
-    Attributes:
-        s: phase in [0, 1] (clipped: held at 1 after a late touchdown).
-        t_remaining_s: predictor horizon ``max(T - t_in_step, 0)``, s.
-        L_hat_Nms: (2,) predicted ``(L_x, L_y)`` at the end of the step, world axes, kg m^2/s.
-        p_hat_m: (2,) predicted ``p_st(T-)`` (x, y), world axes, m.
-        L_des_Nms: (2,) desired ``(L_x, L_y)`` at the end of the next step, world axes, kg m^2/s.
-        p_sw_des_world_m: (2,) desired CoM minus swing contact at touchdown, world axes, m.
-        p_sw_des_heading_m: (2,) the same in the current heading frame ``D_k``, m
-            (the end targets of ``com_x_over_swing`` / ``com_y_over_swing``).
-        swing_target_world_m: (3,) where the swing contact should land, world, m:
-            ``x, y = r_st + p_hat - p_sw_des`` (= predicted CoM at ``T-`` minus
-            ``p_sw_des``, with ``r_st = com - p_st`` the stance contact), ``z`` = the
-            stance contact's height (flat ground).
-        h_d, dh_d, ddh_d: reference outputs and their first and second time
-            derivatives, in the robot's output order (:attr:`Planner.output_names`).
-        heading_rad: heading ``D_k`` of the current step, rad.
-        heading_next_rad: heading ``D_{k+1}`` of the next step, rad.
-        turn_rad: ``D_{k+1} - D_k``, rad (split between the hip yaws).
-        v_z_used_mps: the ``v_z`` given to the foot-placement law after clamping, m/s.
-    """
-
-    s: float
-    t_remaining_s: float
-    L_hat_Nms: np.ndarray
-    p_hat_m: np.ndarray
-    L_des_Nms: np.ndarray
-    p_sw_des_world_m: np.ndarray
-    p_sw_des_heading_m: np.ndarray
-    swing_target_world_m: np.ndarray
-    h_d: np.ndarray
-    dh_d: np.ndarray
-    ddh_d: np.ndarray
-    heading_rad: float
-    heading_next_rad: float
-    turn_rad: float
-    v_z_used_mps: float
 
 
 class Planner:
@@ -256,6 +86,10 @@ class Planner:
             mean velocities over a step, ``"end_of_step"`` for the paper's meaning.
         vz_correction: use ``StateEstimate.v_z_mps`` in the momentum transfer
             (True, default) or the basic law with ``v_z = 0`` (False).
+        clock: the :class:`~amlip_qp.alip.clock.StepClock` of the walk (a
+            walking controller passes its own, which reads the phase from it);
+            a new one by default. The planner starts its steps
+            (:meth:`start_step`) and resets it (:meth:`reset`).
     """
 
     def __init__(
@@ -269,6 +103,7 @@ class Planner:
         heading_rad: float = 0.0,
         speed_reference: str = "mean",
         vz_correction: bool = True,
+        clock: StepClock | None = None,
     ):
         self.robot = O.check_robot(robot)
         C.positive("mass_kg", mass_kg, "kg")
@@ -277,6 +112,8 @@ class Planner:
             raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
         if plan_fn is not None and not callable(plan_fn):
             raise InputError(f"plan_fn must be callable (15 floats -> 8 floats), got {plan_fn!r}")
+        if clock is not None and not isinstance(clock, StepClock):
+            raise InputError(f"clock must be a StepClock, got {type(clock).__name__}")
         if reference_fn is not None and not callable(reference_fn):
             raise InputError(f"reference_fn must be callable (11 floats -> 27 floats), got {reference_fn!r}")
         self.mass_kg = float(mass_kg)
@@ -285,6 +122,8 @@ class Planner:
         self.reference_fn = reference_fn or kernels.swing_reference
         self.speed_reference = speed_reference
         self.vz_correction = bool(vz_correction)
+        #: Stance side and start of the current step (the walk's one step clock).
+        self.clock = StepClock() if clock is None else clock
         #: Output names in order (Cassie's nine or Rabbit's four).
         self.output_names = O.output_names(robot)
         self._planar = robot == "rabbit"
@@ -295,7 +134,7 @@ class Planner:
 
     def reset(self, heading_rad: float = 0.0) -> None:
         """Forget the walk (a new run): no step yet, first heading ``heading_rad``
-        (rad; Rabbit: 0) and the commanded-heading integral restarted."""
+        (rad; Rabbit: 0), the step clock reset and the commanded-heading integral restarted."""
         C.finite("heading_rad", heading_rad)
         self._heading = 0.0 if self._planar else float(heading_rad)
         self._heading_next = self._heading
@@ -304,8 +143,7 @@ class Planner:
         self._heading_cmd = self._heading
         self._t_heading_cmd: float | None = None
         self._rate_cmd: float | None = None  # the turn rate of the last update, rad/s
-        self._stance: str | None = None
-        self._t_start = 0.0
+        self.clock.reset()
         self._h0[:] = 0.0
         self._steps = 0
 
@@ -319,12 +157,7 @@ class Planner:
     @property
     def stance(self) -> str | None:
         """Stance side of the current step (``None`` before the first :meth:`start_step`)."""
-        return self._stance
-
-    @property
-    def t_step_start_s(self) -> float:
-        """Time at which the current step started, s."""
-        return self._t_start
+        return self.clock.stance
 
     @property
     def heading_rad(self) -> float:
@@ -348,14 +181,10 @@ class Planner:
         """Copy of the outputs measured at the start of the current step (robot order)."""
         return self._h0.copy()
 
-    def time_in_step(self, t_s: float) -> float:
-        """Time since the current step started, ``t_s - t_step_start_s``, in s."""
-        return float(t_s) - self._t_start
-
     # --- per step ------------------------------------------------------------
 
     def start_step(self, stance: str, t_start_s: float, h0_start, heading_rad: float | None = None) -> None:
-        """Begin a step at touchdown.
+        """Begin a step at touchdown (on :attr:`clock`).
 
         Args:
             stance: the new stance leg, ``"left"`` or ``"right"``.
@@ -379,11 +208,11 @@ class Planner:
         else:
             self._heading = self._heading_next
         self._heading_next = self._heading
-        self._stance = stance
-        self._t_start = float(t_start_s)
+        clock = self.clock
+        clock.start(stance, t_start_s)
         if self._t_heading_cmd is None:
             # The turn-rate integral starts with the first step.
-            self._t_heading_cmd = self._t_start
+            self._t_heading_cmd = clock.t_start_s
         self._h0[:] = h0
         self._steps += 1
 
@@ -400,16 +229,18 @@ class Planner:
         Returns:
             A :class:`PlannerOutput`.
         """
-        if self._stance is None:
+        clock = self.clock
+        stance = clock.stance
+        if stance is None:
             raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
         if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):
             raise InputError(
                 "update needs a StateEstimate and a Command, "
                 f"got {type(estimate).__name__} and {type(command).__name__}"
             )
-        if estimate.stance != self._stance:
+        if estimate.stance != stance:
             raise InputError(
-                f"estimate.stance={estimate.stance!r} but the current step has stance {self._stance!r}; "
+                f"estimate.stance={estimate.stance!r} but the current step has stance {stance!r}; "
                 "call start_step at touchdown before updating with the new stance"
             )
         T = command.step_time_s
@@ -450,7 +281,7 @@ class Planner:
             # last update applies to the time since (the first update of a run:
             # its own rate, since the step start).
             rate = command.turn_rate_radps
-            t_abs = self._t_start + t_in
+            t_abs = clock.t_start_s + t_in
             if self._t_heading_cmd is not None and t_abs > self._t_heading_cmd:
                 held = rate if self._rate_cmd is None else self._rate_cmd
                 self._heading_cmd += held * (t_abs - self._t_heading_cmd)
@@ -460,7 +291,7 @@ class Planner:
             u_p1, u_L0, vy, width = p1, L0, command.vy_mps * factor, command.step_width_m
         self._heading_next = heading_next
         # The dense ALIP_PLAN layout (kernels module doc); the next stance leg is the other one.
-        sign = 1.0 if self._stance == "right" else -1.0
+        sign = 1.0 if stance == "right" else -1.0
         u = self._u_plan
         u[:] = (p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g)
         # The kernels may return a shared buffer: copy once, hand out views.

@@ -2,7 +2,7 @@
 
 Paths:
 
-- ``c-fast``: the generated C through :class:`amlip_qp.codegen.runtime.Kernels`
+- ``c-fast``: the generated C through :class:`amlip_qp.codegen.kernels.Kernels`
   (``casadi.external`` + ``Function.buffer()`` on preallocated arrays).
 - ``casadi-function``: the SX ``casadi.Function`` called from Python on a
   numpy array, result converted back with ``.full()`` (what a controller
@@ -33,7 +33,7 @@ import numpy as np
 
 from amlip_qp.alip import kernels
 from amlip_qp.codegen import generate, symbolic
-from amlip_qp.codegen.runtime import Kernels
+from amlip_qp.codegen.kernels import Kernels
 
 PATHS = ("c-fast", "casadi-function", "numpy")
 

@@ -25,11 +25,15 @@ with ``vdot = 0``), so ``xddot = J vdot + jdot_v``.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import passive as _passive
+
+if TYPE_CHECKING:
+    from amlip_qp.robots.robot import Robot
 
 
 class RobotKinematics:
@@ -43,7 +47,7 @@ class RobotKinematics:
         v: The velocity of the last update (copy), shape (nv,).
     """
 
-    def __init__(self, robot):
+    def __init__(self, robot: Robot):
         """Create the Pinocchio data; call :meth:`update` before any getter."""
         import pinocchio as pin
 
@@ -61,7 +65,7 @@ class RobotKinematics:
         self._jac: dict[int, np.ndarray] = {}
         self._acc: dict[int, np.ndarray] = {}
         self._bind_views()
-        self._output_map = None
+        self._output_map: Any = None  # an OutputMap or a drop-in (see output_map)
         self._out_cache: tuple | None = None
         self._M: np.ndarray | None = None
         self._taup: np.ndarray | None = None
@@ -257,19 +261,6 @@ class RobotKinematics:
         """``Jdot v`` (m/s^2) of the ALIP contact point, shape (3,)."""
         return self.frame_jdot_v(self.robot.contact_frame_ids[self._side(side)])
 
-    def force_point_positions(self, side: str) -> np.ndarray:
-        """World positions (m) of the foot's force points (toe, heel or the contact), shape (k, 3)."""
-        self._ready()
-        return np.array([self.frame_translation_view(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
-    def force_point_jacobian(self, side: str) -> np.ndarray:
-        """Stacked translational Jacobians (3k x nv) of the foot's force points."""
-        return np.vstack([self.frame_jacobian(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
-    def force_point_jdot_v(self, side: str) -> np.ndarray:
-        """Stacked ``Jdot v`` (3k,) of the foot's force points."""
-        return np.concatenate([self.frame_jdot_v(f) for f in self.robot.force_frame_ids[self._side(side)]])
-
     def _side(self, side: str) -> str:
         if side not in self.robot.foot_sides:
             raise InputError(f"side must be 'left' or 'right', got {side!r}")
@@ -283,10 +274,6 @@ class RobotKinematics:
     def base_angular_jacobian(self) -> np.ndarray:
         """World angular-velocity Jacobian (3 x nv) of the root body."""
         return self.frame_jacobian6(self.robot.base_frame_id)[3:]
-
-    def base_angular_jdot_v(self) -> np.ndarray:
-        """World angular-acceleration drift (rad/s^2) of the root body, shape (3,)."""
-        return self.frame_jdot_v6(self.robot.base_frame_id)[3:]
 
     # ------------------------------------------------------- centre of mass
     @property
@@ -404,18 +391,9 @@ class RobotKinematics:
 
     @output_map.setter
     def output_map(self, output_map) -> None:
-        from amlip_qp.robots.outputs import OutputMap
+        from amlip_qp.robots.outputs import check_output_map
 
-        names = OutputMap(self.robot).names
-        other = getattr(output_map, "robot", self.robot)
-        if (
-            tuple(getattr(output_map, "names", ())) != tuple(names)
-            or not callable(getattr(output_map, "evaluate", None))
-            or other.nv != self.robot.nv
-        ):
-            raise InputError(
-                f"output_map must evaluate the outputs {names} of {self.robot.name} (nv = {self.robot.nv})"
-            )
+        check_output_map(self.robot, output_map)
         self._output_map = output_map
         self._out_cache = None
 
@@ -432,8 +410,3 @@ class RobotKinematics:
         result = self.output_map.evaluate(self, stance, heading_rad)
         self._out_cache = (stance, heading_rad, result)
         return result
-
-    def joint_position(self, name: str) -> float:
-        """Position (rad or m) of a hinge/slide joint, by MuJoCo name."""
-        q, _ = self.state()
-        return float(q[self.robot.state_map.joint_pin_q[name]])

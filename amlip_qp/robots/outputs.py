@@ -307,3 +307,22 @@ class OutputMap:
         y = np.array([pitch[0], roll[0], q[yaw_q[stance]], q[yaw_q[swing]], *ys, toe[0]])
         jdv = np.array([pitch[5], roll[5], 0.0, 0.0, *ds, toe[5]])
         return y, J, jdv
+
+
+def check_output_map(robot: Robot, output_map) -> None:
+    """Check that ``output_map`` can stand in for ``OutputMap(robot)`` (as
+    :attr:`RobotKinematics.output_map <amlip_qp.robots.kinematics.RobotKinematics.output_map>`):
+    the same ``names``, a callable ``evaluate(kin, stance, heading_rad)`` and,
+    if it has a ``robot``, the same ``nv``.
+
+    Raises:
+        InputError: It does not, naming the outputs it must evaluate.
+    """
+    names = OutputMap(robot).names
+    other = getattr(output_map, "robot", robot)
+    if (
+        tuple(getattr(output_map, "names", ())) != tuple(names)
+        or not callable(getattr(output_map, "evaluate", None))
+        or other.nv != robot.nv
+    ):
+        raise InputError(f"output_map must evaluate the outputs {names} of {robot.name} (nv = {robot.nv})")

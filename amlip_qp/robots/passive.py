@@ -8,13 +8,17 @@ MuJoCo's ``qfrc_passive`` (converted to Pinocchio coordinates) for any model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
 
+if TYPE_CHECKING:
+    from amlip_qp.robots.robot import Robot
 
-def _checked(robot, q, v) -> tuple[np.ndarray, np.ndarray]:
+
+def _checked(robot: Robot, q, v) -> tuple[np.ndarray, np.ndarray]:
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     if q.shape != (robot.nq,) or v.shape != (robot.nv,):
@@ -39,7 +43,7 @@ def tendon_force(coupling, length: float, rate: float) -> float:
     return -coupling.stiffness * stretch - coupling.damping * rate
 
 
-def passive_forces(robot, q, v) -> np.ndarray:
+def passive_forces(robot: Robot, q, v) -> np.ndarray:
     """Passive generalized forces in Pinocchio coordinates, shape (nv,).
 
     Joint springs ``-k (q - springref)`` (hinge/slide joints), joint damping
@@ -56,7 +60,7 @@ def passive_forces(robot, q, v) -> np.ndarray:
     return passive_forces_unchecked(robot, q, v)
 
 
-def passive_forces_unchecked(robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+def passive_forces_unchecked(robot: Robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """:func:`passive_forces` without input validation, for callers that already checked ``(q, v)``.
 
     A caller that evaluates the forces every tick should keep a
@@ -65,7 +69,7 @@ def passive_forces_unchecked(robot, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     return PassiveForces(robot)(q, v)
 
 
-def _index(idx: np.ndarray) -> slice | np.ndarray:
+def contiguous_index(idx: np.ndarray) -> slice | np.ndarray:
     """``idx`` as a slice when it is a contiguous increasing range (cheaper to index with), else unchanged."""
     if idx.size and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         return slice(int(idx[0]), int(idx[0]) + idx.size)
@@ -81,11 +85,11 @@ class PassiveForces:
     done once here.
     """
 
-    def __init__(self, robot):
+    def __init__(self, robot: Robot):
         smap = robot.state_map
         pv = smap.scalar_pin_v
         self._neg_damping = -robot.dof_damping
-        self._pq, self._pv = _index(smap.scalar_pin_q), _index(pv)
+        self._pq, self._pv = contiguous_index(smap.scalar_pin_q), contiguous_index(pv)
         self._stiffness = robot.dof_stiffness[pv]
         self._springref = robot.dof_springref[pv]
         # Per tendon: the coupling, its coefficients, q and v indices, and (index, coefficient) pairs.
@@ -151,13 +155,13 @@ class SpringRow:
         return row
 
 
-def _side_of(robot, joint_names) -> str | None:
+def _side_of(robot: Robot, joint_names) -> str | None:
     sides = {s for s in robot.foot_sides for name in joint_names if name.startswith(s)}
     counted = all(any(name.startswith(s) for s in robot.foot_sides) for name in joint_names)
     return sides.pop() if len(sides) == 1 and counted else None
 
 
-def spring_rows(robot) -> tuple[SpringRow, ...]:
+def spring_rows(robot: Robot) -> tuple[SpringRow, ...]:
     """The robot's springs, the one enumeration every tracker uses (read
     them from :attr:`Robot.springs <amlip_qp.robots.robot.Robot.springs>`,
     which builds them once).
@@ -195,7 +199,7 @@ def coupling_target(coupling) -> float:
     return 0.5 * (low + high)
 
 
-def coupling_constraints(robot, q, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def coupling_constraints(robot: Robot, q, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rigid versions of the fixed tendons: ``g(q) = sum_i c_i q_i - L0 = 0``.
 
     For Cassie this is ``q_tarsus + q_knee - 0.2269`` per side (the model's

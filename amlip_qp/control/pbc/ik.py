@@ -48,7 +48,6 @@ which also gives the drift: typically one output-map evaluation per tick
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,38 +55,13 @@ from scipy.linalg.lapack import dgetrf as _dgetrf
 from scipy.linalg.lapack import dgetrs as _dgetrs
 
 from amlip_qp.control.pbc.ik_equations import IKEquations, StanceRows
-from amlip_qp.control.pbc.ik_settings import IKSettings
+from amlip_qp.control.pbc.ik_settings import IKResult, IKSettings
 from amlip_qp.control.pbc.knee_limits import KneeLimits, swap_rows
 from amlip_qp.exceptions import InputError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
-
-
-@dataclass
-class IKResult:
-    """References for all coordinates (Pinocchio convention) from one IK call.
-
-    Attributes:
-        q_r: Reference configuration, shape (nq,).
-        v_r: Reference velocity, shape (nv,).
-        a_r: Reference acceleration, shape (nv,).
-        iterations: Newton iterations done.
-        residual: Max-norm of the equation residual at ``q_r`` (m / rad).
-        ok: False when the solve failed and the previous reference was kept.
-        knee_at_limit: A knee was held at its straight-leg limit in place of an
-            unreachable output (``com_z_over_stance`` for the stance knee,
-            ``com_x_over_swing`` for the swing knee).
-    """
-
-    q_r: np.ndarray
-    v_r: np.ndarray
-    a_r: np.ndarray
-    iterations: int
-    residual: float
-    ok: bool = True
-    knee_at_limit: bool = False
 
 
 def _finite(*arrays) -> bool:
@@ -152,6 +126,12 @@ class IterativeIK:
         self._cache: tuple | None = None
         #: LU factors of ``A(q_r)`` of the last successful solve (see :meth:`solve_linear`).
         self.lu = None
+
+    @property
+    def last_result(self) -> IKResult | None:
+        """The last successful solve's result (the next solve's warm start); ``None``
+        before any, after :meth:`reset` or after a failed solve. Read-only."""
+        return self._prev
 
     def reset(self) -> None:
         """Forget the warm start."""

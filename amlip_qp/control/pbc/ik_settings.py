@@ -1,8 +1,11 @@
-"""Settings of the iterative IK (:class:`~amlip_qp.control.pbc.ik.IterativeIK`)."""
+"""What goes into and comes out of the iterative IK (:class:`~amlip_qp.control.pbc.ik.IterativeIK`):
+its :class:`IKSettings` and one call's :class:`IKResult`."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 from amlip_qp.exceptions import InputError
 
@@ -55,3 +58,28 @@ class IKSettings:
             raise InputError("IK iteration counts must be >= 1")
         if not (self.damping >= 0 and self.max_step_rad > 0 and self.fd_step_s > 0 and self.tolerance >= 0):
             raise InputError("IK damping and tolerance must be >= 0, max_step_rad and fd_step_s > 0")
+
+
+@dataclass
+class IKResult:
+    """References for all coordinates (Pinocchio convention) from one IK call.
+
+    Attributes:
+        q_r: Reference configuration, shape (nq,).
+        v_r: Reference velocity, shape (nv,).
+        a_r: Reference acceleration, shape (nv,).
+        iterations: Newton iterations done.
+        residual: Max-norm of the equation residual at ``q_r`` (m / rad).
+        ok: False when the solve failed and the previous reference was kept.
+        knee_at_limit: A knee was held at its straight-leg limit in place of an
+            unreachable output (``com_z_over_stance`` for the stance knee,
+            ``com_x_over_swing`` for the swing knee).
+    """
+
+    q_r: np.ndarray
+    v_r: np.ndarray
+    a_r: np.ndarray
+    iterations: int
+    residual: float
+    ok: bool = True
+    knee_at_limit: bool = False

@@ -71,8 +71,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 
 @dataclass
-class _Layout:
-    """Index bookkeeping for one stance side."""
+class StanceLayout:
+    """Index bookkeeping and gains for one stance side (read-only; see :meth:`PBCTracker.layout`)."""
 
     ctrl: np.ndarray  # indices into the actuator list of the controlled joints
     ctrl_v: np.ndarray  # their Pinocchio v indices
@@ -106,7 +106,7 @@ class PBCTracker(Tracker):
         # Rigid springs (couplings, then the passive joints outside them).
         rows = [spring.row_v(nv) for spring in robot.springs]
         self._J_springs = np.array(rows).reshape(len(rows), nv)
-        self._layout: dict[str, _Layout] = {}
+        self._layout: dict[str, StanceLayout] = {}
         g = self.gains
         for side in robot.foot_sides:
             ctrl = self.ik.equations.controlled_actuated(side)
@@ -114,7 +114,7 @@ class PBCTracker(Tracker):
             swing_mask = np.array([act.joint_names[k].startswith(swing_side) for k in ctrl], dtype=bool)
             kp = np.where(swing_mask, g.kp_swing_ps2, g.kp_stance_ps2)
             kd = np.where(swing_mask, g.kd_swing_ps, g.kd_stance_ps)
-            self._layout[side] = _Layout(
+            self._layout[side] = StanceLayout(
                 ctrl=ctrl,
                 ctrl_v=act.pin_v_idx[ctrl],
                 ctrl_q=act.pin_q_idx[ctrl],
@@ -157,6 +157,17 @@ class PBCTracker(Tracker):
             for side in robot.foot_sides
         }
         self._last_force: dict[str, np.ndarray | None] = dict.fromkeys(robot.foot_sides)
+
+    def layout(self, stance: str) -> StanceLayout:
+        """The controlled joints, gains and KKT buffers for ``stance`` (read-only)."""
+        return self._layout[stance]
+
+    def last_contact_force_N(self, side: str) -> np.ndarray | None:
+        """The last commanded stance contact force of ``side`` (world, N; zero when it
+        pulled; ``None`` before any or on Rabbit): copy. The spring model
+        (``PBCGains.spring_model_offset``) deflects the springs by it."""
+        f = self._last_force[side]
+        return None if f is None else f.copy()
 
     def reset(self) -> None:
         """Forget the IK warm start and the last contact forces."""
@@ -256,7 +267,7 @@ class PBCTracker(Tracker):
         c = self.gains.swing_torso_compensation
         if c > 0.0 and len(self._torso_rows):
             v_r = v_r.copy()
-            self._compensate_swing(kin, target, lay, c, q_r, v_r)
+            self.compensate_swing(kin, target, lay, c, q_r, v_r)
         e = q_r - q[lay.ctrl_q]
         ed = v_r - v[lay.ctrl_v]
         sw = self.gains.swing_scale(target.phase, target.swing_contact_weight)
@@ -281,7 +292,9 @@ class PBCTracker(Tracker):
         info["solve_time_us"] = (time.perf_counter() - t0) * 1e6
         return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)
 
-    def _compensate_swing(self, kin: RobotKinematics, target: TrackingTarget, lay: _Layout, c: float, q_r, v_r) -> None:
+    def compensate_swing(
+        self, kin: RobotKinematics, target: TrackingTarget, lay: StanceLayout, c: float, q_r, v_r
+    ) -> None:
         """Move the swing joints' references to the IK solution at the measured torso orientation.
 
         ``dq = A^-1 [dh; 0]`` with ``dh`` the torso rows' error (measured minus
@@ -289,6 +302,19 @@ class PBCTracker(Tracker):
         solution whose torso is where the robot's is, with the same CoM-relative
         swing foot, held stance foot and springs. Only its swing-leg part is
         used (the stance leg keeps steering the torso to its reference).
+        :meth:`compute` applies it when ``gains.swing_torso_compensation > 0``.
+
+        Args:
+            kin: The kinematics, updated this tick.
+            target: The tick's references (stance, heading, ``h_d``, ``dh_d``).
+            lay: :meth:`layout` of the stance side.
+            c: The compensation fraction (``gains.swing_torso_compensation``).
+            q_r, v_r: The controlled joints' position (rad) and velocity (rad/s)
+                references, in ``lay``'s order; the swing entries are moved in place.
+
+        Raises:
+            InputError: The IK has no successful solve yet (:meth:`IterativeIK.solve_linear
+                <amlip_qp.control.pbc.ik.IterativeIK.solve_linear>`).
         """
         y, J, _ = kin.outputs(target.stance, target.heading_rad)  # cached; the controller reuses it
         rows = self._torso_rows
@@ -303,7 +329,7 @@ class PBCTracker(Tracker):
         v_r[sw] += dv[lay.ctrl_v[sw]]
 
     def _fallback(
-        self, kin: RobotKinematics, lay: _Layout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True
+        self, kin: RobotKinematics, lay: StanceLayout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True
     ) -> TrackerResult:
         """Damped joint PD towards the reference (or damping only), never NaN."""
         g = self.gains

@@ -1,8 +1,8 @@
 """The walking loop around a tracker (one job per module).
 
-- :mod:`~amlip_qp.control.walking.controller`: :class:`WalkingController`, one call per control tick;
+- :mod:`~amlip_qp.control.walking.controller`: :class:`WalkingController`, one call per control tick
+  (its step clock is :class:`amlip_qp.alip.clock.StepClock`, shared with the planner);
 - :mod:`~amlip_qp.control.walking.estimator`: the state estimate (``p_st``, filtered ``L``, ``v_z``);
-- :mod:`~amlip_qp.control.walking.clock`: :class:`StepClock`, the stance side, step start and phase;
 - :mod:`~amlip_qp.control.walking.gait`: touchdown detection;
 - :mod:`~amlip_qp.control.walking.speed`: the per-step integral on the speed error;
 - :mod:`~amlip_qp.control.walking.outputs_compiled`: the output map ``h_0(q)`` as generated C.

@@ -3,9 +3,10 @@
 One :meth:`WalkingController.step` per control tick (2 kHz by default):
 
 1. the estimator updates the Pinocchio kinematics once at the measured state;
-2. the gait logic decides whether the swing foot touched down; at touchdown the
-   step clock and the planner start a new step (the planner from the measured
-   outputs) with the other stance leg;
+2. the gait logic decides whether the swing foot touched down (from the step
+   clock's phase); at touchdown the planner starts a new step, from the
+   measured outputs, with the other stance leg on the step clock it shares
+   with the controller;
 3. the estimator computes ``p_st``, ``L`` (Kalman-filtered) and ``v_z``;
 4. the planner (the code-generated kernels on the fast path) predicts ``L(T-)``,
    places the foot and evaluates ``h_d(s)`` and its derivatives;
@@ -20,20 +21,21 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.alip import other_side
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
-from amlip_qp.alip.planner import Command, Planner, PlannerOutput, StateEstimate
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
+from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
-from amlip_qp.control.walking.clock import StepClock
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
-from amlip_qp.control.walking.speed import SpeedCorrection, SpeedIntegrator
+from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.outputs import output_layout
@@ -166,9 +168,12 @@ class WalkingController:
 
             kernels = load_kernels()
             plan_fn, reference_fn = kernels.alip_plan, kernels.swing_reference
-        self.planner = Planner(output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn)
-        #: Stance side, start and phase of the current step.
+        #: Stance side, start and phase of the current step: the one step clock,
+        #: held by the planner, which starts its steps.
         self.clock = StepClock()
+        self.planner = Planner(
+            output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn, clock=self.clock
+        )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
         self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
@@ -183,17 +188,16 @@ class WalkingController:
         self.speed = SpeedIntegrator(speed_correction or SpeedCorrection(), planar=robot.is_planar)
         self._last_plan: PlannerOutput | None = None
         self._L_target_this_step = np.full(2, np.nan)
-        self._correction = np.zeros(2)
+        #: The command the planner sees: the shaped command plus the integral speed correction.
+        self.corrector = CorrectedCommand()
         self._com_step_start = np.zeros(3)
         self._cmd_aimed = np.zeros(2)
         self._cmd_now = np.zeros(2)
-        self._corrected_key: tuple | None = None
-        self._corrected: Command | None = None
 
     @property
     def speed_correction_mps(self) -> np.ndarray:
         """The integral speed correction now given to the planner, heading frame, m/s (copy)."""
-        return self._correction.copy()
+        return self.corrector.correction_mps.copy()
 
     @property
     def stance(self) -> str | None:
@@ -208,19 +212,17 @@ class WalkingController:
         self.shaper.reset()
         self.steps.clear()
         self.fallback_ticks = 0
-        self.clock.reset()
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
         self.speed.reset()
-        self._correction[:] = 0.0
+        self.corrector.correction_mps[:] = 0.0
         self._cmd_aimed[:] = 0.0
         self._cmd_now[:] = 0.0
 
     def _begin_step(self, stance: str, t_s: float) -> None:
         heading = self.planner.heading_next_rad
         h0, _, _ = self.kin.outputs(stance, heading)
-        self.planner.start_step(stance, t_s, h0)
-        self.clock.start(stance, t_s)
+        self.planner.start_step(stance, t_s, h0)  # starts the step on self.clock
         self._com_step_start = self.kin.com()
 
     def _record_step(self, t_s: float, est: Estimate, stance: str, plan: PlannerOutput) -> None:
@@ -241,11 +243,11 @@ class WalkingController:
                 com_vel_end_mps=est.com_vel_mps.copy(),
                 heading_rad=plan.heading_rad,
                 mean_velocity_heading_mps=v_mean,
-                speed_correction_mps=self._correction.copy(),
+                speed_correction_mps=self.corrector.correction_mps.copy(),
             )
         )
         self._L_target_this_step = plan.L_des_Nms.copy()
-        self._correction[:] = self.speed.update(v_mean, self._cmd_aimed)
+        self.corrector.correction_mps[:] = self.speed.update(v_mean, self._cmd_aimed)
         # The command in force now is what the next step's foot placement aims at.
         self._cmd_aimed[:] = self._cmd_now
 
@@ -281,7 +283,7 @@ class WalkingController:
                 touchdown = True
                 est = estimator.estimate(stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
-        command = self._corrected_command(command)
+        command = self.corrector.apply(command)
         v_z = float(est.com_vel_mps[2])
         plan = self.planner.update(
             StateEstimate(
@@ -334,22 +336,6 @@ class WalkingController:
             touchdown=touchdown,
             info=result.info,
         )
-
-    def _corrected_command(self, command: Command) -> Command:
-        """``command`` plus the integral speed correction (the same object if the correction is zero).
-
-        The corrected :class:`Command` is cached: it changes only when the
-        command or the correction (updated once per step) does.
-        """
-        cx, cy = self._correction.tolist()
-        if cx == 0.0 and cy == 0.0:
-            return command
-        key = (command, cx, cy)
-        corrected = self._corrected
-        if key != self._corrected_key or corrected is None:
-            corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
-            self._corrected_key, self._corrected = key, corrected
-        return corrected
 
     @staticmethod
     def _swing_contact_weight(phase: float) -> float:

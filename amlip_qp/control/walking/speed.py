@@ -4,18 +4,23 @@ The deadbeat foot placement reaches ``L_des`` exactly only on the LIP; the
 unmodelled dynamics leave a steady speed bias, which
 :class:`SpeedIntegrator` removes once per completed step (its effect is
 measured in ``docs/TUNING.md``, "PBC tracker and walking loop").
-:class:`SpeedCorrection` holds its gains and bounds;
+:class:`SpeedCorrection` holds its gains and bounds; :class:`CorrectedCommand`
+adds the correction to the command the planner sees;
 ``SpeedCorrection(enabled=False)`` gives the paper's controller unchanged.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
+
+if TYPE_CHECKING:
+    from amlip_qp.alip.messages import Command
 
 
 @dataclass(frozen=True)
@@ -104,3 +109,33 @@ class SpeedIntegrator:
                 c = self._correction[axis] + p.gain_per_step * err
                 self._correction[axis] = min(max(c, -p.max_correction_mps), p.max_correction_mps)
         return self.correction_mps
+
+
+class CorrectedCommand:
+    """The command the planner sees: the given one plus the integral speed correction.
+
+    The corrected :class:`~amlip_qp.alip.messages.Command` is made once per
+    (command, correction) pair and reused while neither changes (the
+    correction changes once per step).
+
+    Attributes:
+        correction_mps: The correction ``(v_x, v_y)`` added, heading frame, m/s;
+            the walking controller sets it after every step.
+    """
+
+    def __init__(self) -> None:
+        self.correction_mps = np.zeros(2)
+        self._key: tuple | None = None
+        self._corrected: Command | None = None
+
+    def apply(self, command: Command) -> Command:
+        """``command`` plus the correction (the same object if the correction is zero)."""
+        cx, cy = self.correction_mps.tolist()
+        if cx == 0.0 and cy == 0.0:
+            return command
+        key = (command, cx, cy)
+        corrected = self._corrected
+        if key != self._key or corrected is None:
+            corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
+            self._key, self._corrected = key, corrected
+        return corrected

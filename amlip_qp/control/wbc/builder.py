@@ -36,7 +36,7 @@ import numpy as np
 from amlip_qp.control.wbc import constraints as K
 from amlip_qp.control.wbc import costs as W
 from amlip_qp.control.wbc.config import QPConfig, default_config
-from amlip_qp.control.wbc.inputs import PelvisYawFeedback, TickInputs, gather_inputs, swing_force_weight
+from amlip_qp.control.wbc.inputs import PelvisYawFeedback, TickInputs, gather_inputs
 from amlip_qp.control.wbc.layout import VariableLayout
 from amlip_qp.control.wbc.spring_elimination import LegSprings, ReducedDynamics, SpringElimination, springs_per_leg
 from amlip_qp.control.wbc.tasks import Gains, JointTask, OutputTask
@@ -159,17 +159,6 @@ class WholeBodyQP:
             if c.name == name:
                 return c
         raise InputError(f"no constraint {name!r}; known: {', '.join(c.name for c in self.constraints)}")
-
-    def swing_force_weight(self, target: TrackingTarget) -> float:
-        """The force ramp ``w`` of the swing foot (0 in the air, 1 fully loaded)."""
-        return swing_force_weight(self.config, target)
-
-    def hip_yaw_feedback_target(self, kin: RobotKinematics, target: TrackingTarget) -> TrackingTarget:
-        """``target`` with the pelvis-yaw feedback on the swing hip-yaw
-        reference (``config.hip_yaw_feedback``); the same object when the
-        feedback is off or the robot has no hip-yaw outputs."""
-        fb = self.inputs.feedback
-        return target if fb is None else fb.apply(kin, target)
 
     # ------------------------------------------------------------------ build
     def build(self, kin: RobotKinematics, target: TrackingTarget) -> QPProblem:

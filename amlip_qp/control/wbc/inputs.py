@@ -18,7 +18,7 @@ shift of ``r``; the swing foot's force ramp ``w``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import casadi as ca
@@ -92,15 +92,6 @@ class PelvisYawFeedback:
         dh, ddh = self.correction(kin, target)
         i = self.swing_index
         return task.gains.kd[i] * ddh + task.gains.kp[i] * dh
-
-    def apply(self, kin: RobotKinematics, target: TrackingTarget) -> TrackingTarget:
-        """A copy of ``target`` with the corrected swing hip-yaw reference and rate."""
-        dh, ddh = self.correction(kin, target)
-        i_sw = self.swing_index
-        out = replace(target, h_d=target.h_d.copy(), dh_d=target.dh_d.copy())
-        out.h_d[i_sw] += dh
-        out.dh_d[i_sw] += ddh
-        return out
 
 
 class TickInputs:

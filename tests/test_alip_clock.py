@@ -1,8 +1,8 @@
-"""StepClock: stance side, step start and phase of the current step."""
+"""Tests of amlip_qp.alip.clock: StepClock, the stance side, step start and phase of the current step."""
 
 import pytest
 
-from amlip_qp.control.walking.clock import StepClock
+from amlip_qp.alip.clock import StepClock
 from amlip_qp.exceptions import InputError
 
 

@@ -1,15 +1,18 @@
 """The step clock: which leg is in stance, when the step started, how far it is.
 
-The walking loop has one :class:`StepClock`. At every touchdown the
-controller starts a new step on it; every tick it reads the time in the step
-(given to the planner) and the unclipped phase (given to the touchdown test)
-from it. The planner keeps its own copy of the step start only to integrate
-the commanded turn rate; both are set from the same touchdown time.
+The walking loop has one :class:`StepClock`, and it is the only record of the
+stance side and the step start. The :class:`~amlip_qp.alip.planner.Planner`
+holds it (the controller hands its clock to the planner) and starts a step on
+it at every touchdown (:meth:`Planner.start_step
+<amlip_qp.alip.planner.Planner.start_step>`); the planner reads the step start
+from it to integrate the commanded turn rate. Every tick the controller reads
+the time in the step (given to the planner) and the unclipped phase (given to
+the touchdown test) from it.
 """
 
 from __future__ import annotations
 
-from amlip_qp.alip import other_side
+from amlip_qp.alip.desired import other_side
 from amlip_qp.exceptions import InputError
 
 

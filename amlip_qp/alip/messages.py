@@ -1,0 +1,191 @@
+"""What a walking controller and the ALIP planner exchange every control tick.
+
+:class:`Command` (what the controller asks for) and :class:`StateEstimate`
+(the controller's estimate) go into :meth:`Planner.update
+<amlip_qp.alip.planner.Planner.update>`; :class:`PlannerOutput` comes out.
+All are frozen, keyword-only dataclasses in SI units, validated on creation
+(bad values raise :class:`~amlip_qp.exceptions.InputError`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+
+_F64 = np.dtype(np.float64)
+_VECTOR3 = (3,)
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class Command:
+    """What the walking controller asks for. All fields keyword-only, SI units.
+
+    Attributes:
+        step_time_s: step duration ``T``, s (> 0).
+        com_height_m: desired CoM height over the stance contact ``H``, m (> 0).
+        clearance_m: swing-foot clearance ``z_cl`` at mid-step, m (0 <= z_cl < H).
+        vx_mps: forward CoM velocity in the heading frame, m/s (mean over a
+            step unless the planner uses ``speed_reference="end_of_step"``).
+        vy_mps: lateral (left positive) CoM velocity in the heading frame, m/s.
+        turn_rate_radps: heading rate, rad/s (positive turns left); the
+            planner integrates it over time (module doc, step 2).
+        step_width_m: lateral distance between the feet when walking in place, m (>= 0).
+    """
+
+    step_time_s: float
+    com_height_m: float
+    clearance_m: float
+    vx_mps: float = 0.0
+    vy_mps: float = 0.0
+    turn_rate_radps: float = 0.0
+    step_width_m: float = 0.0
+
+    def __post_init__(self):
+        for name in (
+            "step_time_s",
+            "com_height_m",
+            "clearance_m",
+            "vx_mps",
+            "vy_mps",
+            "turn_rate_radps",
+            "step_width_m",
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+                raise InputError(f"Command.{name} must be a finite number, got {v!r}")
+        if not self.step_time_s > 0.0:
+            raise InputError(f"Command.step_time_s (T) must be > 0 s, got {self.step_time_s!r}")
+        if not self.com_height_m > 0.0:
+            raise InputError(f"Command.com_height_m (H) must be > 0 m, got {self.com_height_m!r}")
+        if not self.step_width_m >= 0.0:
+            raise InputError(f"Command.step_width_m must be >= 0 m, got {self.step_width_m!r}")
+        if not 0.0 <= self.clearance_m < self.com_height_m:
+            raise InputError(
+                f"Command.clearance_m (z_cl) must satisfy 0 <= z_cl < H = {self.com_height_m!r} m, "
+                f"got {self.clearance_m!r}"
+            )
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class StateEstimate:
+    """The controller's estimate at one tick. All fields keyword-only, SI units, world axes.
+
+    Attributes:
+        stance: ``"left"`` or ``"right"``, the leg in stance.
+        p_st_m: (3,) CoM minus stance contact, m.
+        L_Nms: (3,) angular momentum about the stance contact, kg m^2/s.
+        v_z_mps: CoM vertical velocity, m/s; used as the prediction of ``v_z`` at
+            touchdown in the momentum-transfer correction.
+        t_in_step_s: time since the current step started, s (>= 0; may exceed ``T``
+            after a late touchdown, then the phase is held at 1).
+        com_m: (3,) CoM position, m.
+
+    Arrays are converted to float ``numpy`` arrays; NaN/inf, wrong shapes,
+    unknown stance sides and negative times raise InputError.
+    """
+
+    stance: str
+    p_st_m: np.ndarray
+    L_Nms: np.ndarray
+    v_z_mps: float
+    t_in_step_s: float
+    com_m: np.ndarray
+
+    def __post_init__(self):
+        if self.stance not in ("left", "right"):
+            raise InputError(f"StateEstimate.stance must be 'left' or 'right', got {self.stance!r}")
+        # Built every control tick: a fast path for three float64 3-vectors,
+        # plain-float arithmetic, no numpy reductions.
+        p, L, c = self.p_st_m, self.L_Nms, self.com_m
+        if (
+            type(p) is np.ndarray
+            and type(L) is np.ndarray
+            and type(c) is np.ndarray
+            and p.dtype is _F64
+            and L.dtype is _F64
+            and c.dtype is _F64
+            and p.shape == L.shape == c.shape == _VECTOR3
+        ):
+            p0, p1, p2 = p.tolist()
+            L0, L1, L2 = L.tolist()
+            c0, c1, c2 = c.tolist()
+            total = p0 + p1 + p2 + (L0 + L1 + L2) + (c0 + c1 + c2)
+        else:
+            total = 0.0
+            for name in ("p_st_m", "L_Nms", "com_m"):
+                a = getattr(self, name)
+                if not (isinstance(a, np.ndarray) and a.dtype is _F64):
+                    try:
+                        a = np.asarray(a, dtype=float)
+                    except (TypeError, ValueError) as exc:
+                        raise InputError(f"StateEstimate.{name} must be 3 numbers, got {a!r}") from exc
+                    object.__setattr__(self, name, a)
+                if a.shape != _VECTOR3:
+                    raise InputError(f"StateEstimate.{name} must have shape (3,), got {a.shape}")
+                x0, x1, x2 = a.tolist()
+                total += x0 + x1 + x2
+        # One cheap finiteness test: NaN and inf propagate through a sum.
+        try:
+            total = float(np.float64(total) + self.v_z_mps + self.t_in_step_s)
+        except (TypeError, ValueError) as exc:
+            raise InputError(
+                f"StateEstimate.v_z_mps and t_in_step_s must be numbers, got {self.v_z_mps!r} and {self.t_in_step_s!r}"
+            ) from exc
+        if not math.isfinite(total):
+            bad = [
+                n
+                for n in ("p_st_m", "L_Nms", "com_m", "v_z_mps", "t_in_step_s")
+                if not np.all(np.isfinite(np.asarray(getattr(self, n), dtype=float)))
+            ]
+            raise InputError(
+                f"StateEstimate has NaN or inf in {bad or 'a value too large to add'}; check the estimator"
+            )
+        if self.t_in_step_s < 0.0:
+            raise InputError(f"StateEstimate.t_in_step_s must be >= 0 s, got {self.t_in_step_s!r}")
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
+class PlannerOutput:
+    """The planner's answer at one tick (SI units).
+
+    Attributes:
+        s: phase in [0, 1] (clipped: held at 1 after a late touchdown).
+        t_remaining_s: predictor horizon ``max(T - t_in_step, 0)``, s.
+        L_hat_Nms: (2,) predicted ``(L_x, L_y)`` at the end of the step, world axes, kg m^2/s.
+        p_hat_m: (2,) predicted ``p_st(T-)`` (x, y), world axes, m.
+        L_des_Nms: (2,) desired ``(L_x, L_y)`` at the end of the next step, world axes, kg m^2/s.
+        p_sw_des_world_m: (2,) desired CoM minus swing contact at touchdown, world axes, m.
+        p_sw_des_heading_m: (2,) the same in the current heading frame ``D_k``, m
+            (the end targets of ``com_x_over_swing`` / ``com_y_over_swing``).
+        swing_target_world_m: (3,) where the swing contact should land, world, m:
+            ``x, y = r_st + p_hat - p_sw_des`` (= predicted CoM at ``T-`` minus
+            ``p_sw_des``, with ``r_st = com - p_st`` the stance contact), ``z`` = the
+            stance contact's height (flat ground).
+        h_d, dh_d, ddh_d: reference outputs and their first and second time
+            derivatives, in the robot's output order
+            (:attr:`Planner.output_names <amlip_qp.alip.planner.Planner.output_names>`).
+        heading_rad: heading ``D_k`` of the current step, rad.
+        heading_next_rad: heading ``D_{k+1}`` of the next step, rad.
+        turn_rad: ``D_{k+1} - D_k``, rad (split between the hip yaws).
+        v_z_used_mps: the ``v_z`` given to the foot-placement law after clamping, m/s.
+    """
+
+    s: float
+    t_remaining_s: float
+    L_hat_Nms: np.ndarray
+    p_hat_m: np.ndarray
+    L_des_Nms: np.ndarray
+    p_sw_des_world_m: np.ndarray
+    p_sw_des_heading_m: np.ndarray
+    swing_target_world_m: np.ndarray
+    h_d: np.ndarray
+    dh_d: np.ndarray
+    ddh_d: np.ndarray
+    heading_rad: float
+    heading_next_rad: float
+    turn_rad: float
+    v_z_used_mps: float

@@ -1,0 +1,82 @@
+"""Shared helpers of the codegen tests: the compiler requirement and random kernel inputs (not a test module)."""
+
+from __future__ import annotations
+
+import functools
+import shutil
+
+import numpy as np
+import pytest
+
+from amlip_qp.alip import kernels
+from amlip_qp.codegen.kernels import FastFunction
+
+
+def needs_cc(test):
+    """The test compiles generated C. The README requires a C compiler, so
+    without one the test fails, naming the fix (it is never skipped)."""
+
+    @functools.wraps(test)
+    def run(*args, **kwargs):
+        if shutil.which("cc") is None and shutil.which("gcc") is None:
+            pytest.fail("no C compiler on the PATH: install one (e.g. apt-get install gcc), as the README requires")
+        return test(*args, **kwargs)
+
+    return run
+
+
+N = 1500  # random samples per robot and kernel
+
+# Physical ranges: (m kg, H m, T s, W m, z_cl m, lateral motion?)
+ROBOTS = {
+    "cassie": dict(m=(31.0, 35.0), H=(0.6, 1.0), T=(0.25, 0.45), W=(0.0, 0.35), z_cl=(0.05, 0.2), lateral=True),
+    "rabbit": dict(m=(32.0, 32.0), H=(0.6, 0.8), T=(0.3, 0.5), W=(0.0, 0.0), z_cl=(0.05, 0.2), lateral=False),
+}
+
+
+def sample_alip_plan(rng, robot, n):
+    r = ROBOTS[robot]
+    lat = 1.0 if r["lateral"] else 0.0
+    m, H, T = rng.uniform(*r["m"], n), rng.uniform(*r["H"], n), rng.uniform(*r["T"], n)
+    vx, vy = rng.uniform(-1, 3, n), lat * rng.uniform(-1, 1, n)
+    t_rem = rng.uniform(0, 1, n) * T
+    t_rem[:20], t_rem[20:40] = 0.0, T[20:40]  # both ends of the step
+    u = np.column_stack([
+        rng.uniform(-0.3, 0.3, n), lat * rng.uniform(-0.2, 0.2, n),  # p_st
+        -m * H * lat * rng.uniform(-1, 1, n), m * H * rng.uniform(-1, 3, n),  # L_x, L_y
+        t_rem, rng.uniform(-0.3, 0.3, n), vx, vy,
+        rng.uniform(-np.pi, np.pi, n), rng.choice([-1.0, 1.0], n),
+        m, H, T, rng.uniform(*r["W"], n), np.full(n, 9.81),
+    ])  # fmt: skip
+    return u
+
+
+def sample_swing_reference(rng, robot, n):
+    r = ROBOTS[robot]
+    lat = 1.0 if r["lateral"] else 0.0
+    s = rng.uniform(0, 1, n)
+    s[:20], s[20:40] = 0.0, 1.0
+    return np.column_stack([
+        s, rng.uniform(*r["T"], n), rng.uniform(*r["H"], n), rng.uniform(*r["z_cl"], n),
+        lat * rng.uniform(-0.5, 0.5, n), lat * rng.uniform(-0.5, 0.5, n),
+        rng.uniform(-0.4, 0.4, n), lat * rng.uniform(-0.3, 0.3, n),
+        rng.uniform(-0.4, 0.4, n), lat * rng.uniform(-0.3, 0.3, n), lat * rng.uniform(-0.6, 0.6, n),
+    ])  # fmt: skip
+
+
+SAMPLERS = {
+    "alip_plan": (sample_alip_plan, kernels.alip_plan),
+    "swing_reference": (sample_swing_reference, kernels.swing_reference),
+}
+SEEDS = {("cassie", "alip_plan"): 11, ("cassie", "swing_reference"): 12,
+         ("rabbit", "alip_plan"): 21, ("rabbit", "swing_reference"): 22}  # fmt: skip
+
+
+def assert_matches_reference(fn: FastFunction, robot: str, seed: int):
+    sample, reference = SAMPLERS[fn.name]
+    rng = np.random.default_rng(seed)
+    for u in sample(rng, robot, N):
+        y = fn(u).copy()
+        ref = reference(u)
+        err = np.abs(y - ref) / np.maximum(1.0, np.abs(ref))
+        assert err.max() <= 1e-12, (fn.name, robot, u, y, ref)

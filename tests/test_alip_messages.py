@@ -1,0 +1,85 @@
+"""Tests of amlip_qp.alip.messages: Command, StateEstimate and PlannerOutput, their conversion and validation."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.alip import Command, StateEstimate
+from amlip_qp.exceptions import InputError
+
+H, T = 0.9, 0.3
+
+
+def cmd(**kw):
+    base = dict(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, vy_mps=0.1, step_width_m=0.2)
+    base.update(kw)
+    return Command(**base)
+
+
+def est(**kw):
+    base = dict(stance="left", p_st_m=[0.03, -0.1, H], L_Nms=[1.5, 12.0, 0.2], v_z_mps=0.05, t_in_step_s=0.1,
+                com_m=[1.0, 0.5, H])  # fmt: skip
+    base.update(kw)
+    return StateEstimate(**base)
+
+
+def test_dataclasses_are_frozen():
+    c = cmd()
+    with pytest.raises(AttributeError):
+        c.vx_mps = 2.0  # type: ignore[misc]
+    e = est()
+    assert isinstance(e.p_st_m, np.ndarray) and e.p_st_m.dtype == np.float64
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(step_time_s=0.0), r"step_time_s \(T\) must be > 0"),
+        (dict(step_time_s=-0.3), r"step_time_s \(T\) must be > 0"),
+        (dict(com_height_m=0.0), r"com_height_m \(H\) must be > 0"),
+        (dict(com_height_m=-1.0, clearance_m=0.0), r"com_height_m \(H\) must be > 0"),
+        (dict(clearance_m=0.95), r"clearance_m \(z_cl\) must satisfy"),
+        (dict(clearance_m=-0.01), r"clearance_m \(z_cl\) must satisfy"),
+        (dict(step_width_m=-0.1), "step_width_m must be >= 0"),
+        (dict(vx_mps=float("nan")), "vx_mps must be a finite number"),
+        (dict(turn_rate_radps=float("inf")), "turn_rate_radps must be a finite number"),
+        (dict(vy_mps="fast"), "vy_mps must be a finite number"),
+        (dict(step_time_s=True), "step_time_s must be a finite number"),
+    ],
+)
+def test_bad_command_raises_input_error(kw, match):
+    with pytest.raises(InputError, match=match):
+        cmd(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(stance="middle"), "stance must be 'left' or 'right'"),
+        (dict(p_st_m=[0.0, np.nan, H]), r"NaN or inf in \['p_st_m'\]"),
+        (dict(L_Nms=[np.inf, 0.0, 0.0]), r"NaN or inf in \['L_Nms'\]"),
+        (dict(com_m=[0.0, 0.0, -np.inf]), r"NaN or inf in \['com_m'\]"),
+        (dict(v_z_mps=np.nan), r"NaN or inf in \['v_z_mps'\]"),
+        (dict(t_in_step_s=np.inf), r"NaN or inf in \['t_in_step_s'\]"),
+        (dict(t_in_step_s=-0.01), "t_in_step_s must be >= 0"),
+        (dict(p_st_m=[0.0, 0.1]), r"p_st_m must have shape \(3,\)"),
+        (dict(L_Nms="abc"), "L_Nms must be 3 numbers"),
+        (dict(v_z_mps="fast"), "v_z_mps and t_in_step_s must be numbers"),
+    ],
+)
+def test_bad_estimate_raises_input_error(kw, match):
+    with pytest.raises(InputError, match=match):
+        est(**kw)
+
+
+def test_state_estimate_converts_other_inputs_to_float64():
+    """Lists, integer and float32 arrays take the checked conversion path; float64 arrays are kept."""
+    p = np.array([0.03, -0.1, H])
+    e = est(p_st_m=p, L_Nms=np.array([1, 12, 0]), com_m=np.array([1.0, 0.5, H], dtype=np.float32))
+    assert e.p_st_m is p
+    for a in (e.L_Nms, e.com_m):
+        assert isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (3,)
+    np.testing.assert_array_equal(e.L_Nms, [1.0, 12.0, 0.0])
+    with pytest.raises(InputError, match=r"com_m must have shape \(3,\)"):
+        est(com_m=np.zeros(4))
+    with pytest.raises(InputError, match=r"NaN or inf in \['L_Nms'\]"):
+        est(L_Nms=np.array([0.0, np.nan, 0.0]))
