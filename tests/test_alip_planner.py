@@ -5,24 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.alip import Command, Planner, PlannerOutput, StateEstimate, StepClock, desired, kernels, lip
+from alip_cases import H, T, cmd, est
+from amlip_qp.alip import Planner, PlannerOutput, StepClock, desired, kernels, lip
 from amlip_qp.exceptions import InputError
 
-M, H, G, T = 31.0, 0.9, 9.81, 0.3
+M, G = 31.0, 9.81
 H0 = np.array([0.01, -0.02, 0.03, -0.04, 0.9, -0.15, 0.12, 0.88, 0.0])
-
-
-def cmd(**kw):
-    base = dict(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, vy_mps=0.1, step_width_m=0.2)
-    base.update(kw)
-    return Command(**base)
-
-
-def est(**kw):
-    base = dict(stance="left", p_st_m=[0.03, -0.1, H], L_Nms=[1.5, 12.0, 0.2], v_z_mps=0.05, t_in_step_s=0.1,
-                com_m=[1.0, 0.5, H])  # fmt: skip
-    base.update(kw)
-    return StateEstimate(**base)
 
 
 def started(robot="cassie", h0=H0, **kw):

@@ -64,6 +64,9 @@ BAD_INPUTS = [
     (["walk", "--plot", "{tmp}/fig.xyz"], "figure file must end in .png, .pdf, .svg"),
     # physical bounds (amlip_qp.profiles)
     (["walk", "--duration", "1e12"], "CommandBounds.duration_max_s"),
+    (["walk", "--accel-limit", "0"], "--accel-limit: expected a positive number"),
+    (["walk", "--accel-limit", "nan"], "--accel-limit: expected a finite number"),
+    (["walk", "--accel-limit", "1", "--no-command-shaping"], "not allowed with argument --accel-limit"),
     (["walk", "--vx", "1e9"], "forward speed 1e+09 m/s is outside cassie's bounds [-1, 2.5] m/s"),
     (["walk", "--vx", "-1e9"], "CommandBounds.vx_mps"),
     (["walk", "--robot", "rabbit", "--vx", "2"], "outside rabbit's bounds"),
