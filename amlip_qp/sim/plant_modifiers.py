@@ -81,10 +81,16 @@ class PlantModifiers:
     def __post_init__(self):
         s = self.mass_scale
         if not _finite(s) or not 0.0 < s <= MAX_MASS_SCALE:
-            raise InputError(f"plant mass scale (--plant-mass-scale) must be a number in (0, {MAX_MASS_SCALE:g}], got {s!r}; e.g. 0.8 or 1.2")
+            raise InputError(
+                f"plant mass scale (--plant-mass-scale) must be a number in (0, {MAX_MASS_SCALE:g}], got {s!r}; "
+                "e.g. 0.8 or 1.2"
+            )
         kg = self.payload_kg
         if not _finite(kg) or not 0.0 <= kg <= MAX_PAYLOAD_KG:
-            raise InputError(f"payload (--payload) must be a mass in [0, {MAX_PAYLOAD_KG:g}] kg, got {kg!r}; e.g. --payload 5@-0.1,0,0")
+            raise InputError(
+                f"payload (--payload) must be a mass in [0, {MAX_PAYLOAD_KG:g}] kg, got {kg!r}; "
+                "e.g. --payload 5@-0.1,0,0"
+            )
         pos = self.payload_pos_m
         if (
             isinstance(pos, str)
@@ -93,21 +99,30 @@ class PlantModifiers:
             or not all(_finite(x) and abs(x) <= MAX_PAYLOAD_OFFSET_M for x in pos)
         ):
             raise InputError(
-                f"payload position (--payload KG@X,Y,Z) must be 3 numbers within {MAX_PAYLOAD_OFFSET_M:g} m of the base body, "
-                f"got {pos!r}; e.g. --payload 5@-0.1,0,0"
+                "payload position (--payload KG@X,Y,Z) must be 3 numbers within "
+                f"{MAX_PAYLOAD_OFFSET_M:g} m of the base body, got {pos!r}; e.g. --payload 5@-0.1,0,0"
             )
         object.__setattr__(self, "payload_pos_m", tuple(float(x) for x in pos))
         if kg == 0.0 and any(self.payload_pos_m):
-            raise InputError(f"payload position {self.payload_pos_m} given with a 0 kg payload; give a mass > 0 kg or no position")
+            raise InputError(
+                f"payload position {self.payload_pos_m} given with a 0 kg payload; give a mass > 0 kg or no position"
+            )
         k = self.spring_scale
         if not _finite(k) or k < 0.0:
-            raise InputError(f"plant spring scale (--plant-spring-scale) must be a finite number >= 0, got {k!r}; e.g. 0.8")
+            raise InputError(
+                f"plant spring scale (--plant-spring-scale) must be a finite number >= 0, got {k!r}; e.g. 0.8"
+            )
         mu = self.friction
         if mu is not None and (not _finite(mu) or not 0.0 < mu <= MAX_FRICTION):
-            raise InputError(f"friction (--friction) must be a coefficient in (0, {MAX_FRICTION:g}], got {mu!r}; e.g. 0.5")
+            raise InputError(
+                f"friction (--friction) must be a coefficient in (0, {MAX_FRICTION:g}], got {mu!r}; e.g. 0.5"
+            )
         n = self.actuator_delay_ticks
         if not isinstance(n, numbers.Integral) or isinstance(n, bool) or not 0 <= n <= MAX_DELAY_TICKS:
-            raise InputError(f"actuator delay (--actuator-delay) must be a whole number of ticks in [0, {MAX_DELAY_TICKS}], got {n!r}; e.g. 1")
+            raise InputError(
+                f"actuator delay (--actuator-delay) must be a whole number of ticks in [0, {MAX_DELAY_TICKS}], "
+                f"got {n!r}; e.g. 1"
+            )
         object.__setattr__(self, "actuator_delay_ticks", int(n))
 
     def spec_edits(self, base_body: str) -> list[SpecEdit]:
@@ -161,7 +176,9 @@ def parse_payload(text: str) -> tuple[float, tuple[float, float, float]]:
         kg = float(kg_text)
         pos = tuple(float(x) for x in pos_text.split(",")) if sep else (0.0, 0.0, 0.0)
     except ValueError:
-        raise InputError(f"--payload takes KG or KG@X,Y,Z (kg, m in the base frame), got {text!r}; e.g. 5@-0.1,0,0") from None
+        raise InputError(
+            f"--payload takes KG or KG@X,Y,Z (kg, m in the base frame), got {text!r}; e.g. 5@-0.1,0,0"
+        ) from None
     if len(pos) != 3:
         raise InputError(f"--payload position needs 3 coordinates X,Y,Z (m), got {pos_text!r}; e.g. 5@-0.1,0,0")
     mods = PlantModifiers(payload_kg=kg, payload_pos_m=pos)
@@ -233,9 +250,13 @@ class PayloadEdit:
     def __call__(self, spec: mujoco.MjSpec) -> None:
         base = spec.body(self.base_body)
         if base is None:
-            raise MJCFError(f"the plant has no body {self.base_body!r} to carry the payload; give the plant's base body name")
+            raise MJCFError(
+                f"the plant has no body {self.base_body!r} to carry the payload; give the plant's base body name"
+            )
         if spec.compiler.settotalmass > 0:
-            raise MJCFError("the plant's compiler sets settotalmass, which would rescale the payload; remove it to use --payload")
+            raise MJCFError(
+                "the plant's compiler sets settotalmass, which would rescale the payload; remove it to use --payload"
+            )
         lx, ly, lz = PAYLOAD_BOX_M
         m = self.mass_kg
         body = base.add_body(
@@ -272,8 +293,8 @@ class SpringScaleEdit:
         for joint in spec.joints:
             if all(x > 0 for x in joint.springdamper):
                 raise MJCFError(
-                    f"plant joint {joint.name!r} sets its spring by springdamper, which --plant-spring-scale cannot scale; "
-                    "give it a stiffness instead"
+                    f"plant joint {joint.name!r} sets its spring by springdamper, which --plant-spring-scale "
+                    "cannot scale; give it a stiffness instead"
                 )
             joint.stiffness = s * np.asarray(joint.stiffness)
         for tendon in spec.tendons:
@@ -301,9 +322,7 @@ class FrictionEdit:
         if not ground:
             raise MJCFError("the plant has no geom on the world body (a floor) to set --friction on; add a floor")
         for geom in spec.geoms:
-            if geom in ground or any(
-                (geom.contype & f.conaffinity) or (f.contype & geom.conaffinity) for f in ground
-            ):
+            if geom in ground or any((geom.contype & f.conaffinity) or (f.contype & geom.conaffinity) for f in ground):
                 geom.friction = [self.mu, geom.friction[1], geom.friction[2]]
         ground_names = {g.name for g in ground if g.name}
         for pair in spec.pairs:
@@ -326,6 +345,12 @@ class ActuatorDelay:
         n_ticks: Delay, whole ticks, in [0, 100].
         nu: Length of the control vector.
     """
+
+    n_ticks: int
+    nu: int
+    _buffer: np.ndarray
+    _next: int
+    _started: bool
 
     def __init__(self, n_ticks: int, nu: int):
         PlantModifiers(actuator_delay_ticks=n_ticks)
