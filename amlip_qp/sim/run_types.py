@@ -104,11 +104,14 @@ class RunResult:
         steps: The completed steps.
         tick_time_us: Controller wall time per tick, µs.
         fallback_ticks: Ticks that used the damped fallback torque.
+        safe_mode_ticks: Ticks the controller spent in its safe mode after a diverged base estimate.
+        estimator_divergences: How often the base estimate diverged.
         pushes: The pushes applied.
         info: Run metadata: ``output_names`` (the order of ``log["h"]``),
             ``actuator_names`` (the order of ``log["tau"]``), ``control_dt_s``,
             ``planar`` (True for a planar robot),
-            ``seed`` and ``noise`` (True if sensor noise was on).
+            ``seed``, ``noise`` (True if Gaussian noise was on), ``plant`` (its name or path),
+            ``sensors`` (``"ideal"`` or ``"robot"``) and ``estimator`` (the base estimator's name).
     """
 
     robot: str
@@ -122,6 +125,8 @@ class RunResult:
     steps: list[StepRecord]
     tick_time_us: np.ndarray
     fallback_ticks: int
+    safe_mode_ticks: int = 0
+    estimator_divergences: int = 0
     pushes: tuple[Push, ...] = ()
     info: dict = field(default_factory=dict)
 
