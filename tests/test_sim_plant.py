@@ -16,54 +16,12 @@ from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim import factory
 from amlip_qp.sim.plant import load_plant, plant_files
 from amlip_qp.sim.sensors import IMU_SITE
-
-CASSIE_XML = MODELS_DIR / "cassie.xml"
+from plant_cases import CASSIE_XML, extra_joint_spec, slide_ball_spec, write_plant
 
 
 @pytest.fixture(scope="module")
 def cassie():
     return factory.load("cassie")
-
-
-def _write(spec: mujoco.MjSpec, path, insert: tuple[str, str] = ("", "")) -> str:
-    """Compile ``spec`` and write its MJCF to ``path``, with ``insert[1]`` put before ``insert[0]``."""
-    spec.compile()
-    text = spec.to_xml()
-    if insert[0]:
-        text = text.replace(insert[0], insert[1] + insert[0])
-    path.write_text(text)
-    return str(path)
-
-
-def _slide_ball_spec() -> mujoco.MjSpec:
-    """cassie.xml with the pelvis floated by slide x, y, z and a ball joint (as Agility's own model)."""
-    spec = mujoco.MjSpec.from_file(str(CASSIE_XML))
-    pelvis = spec.body("cassie-pelvis")
-    spec.delete(spec.joint("floating-base"))
-    # joints of one body are added in order; MuJoCo wants them before the child bodies' (any order works)
-    for name, axis in (("base-x", [1, 0, 0]), ("base-y", [0, 1, 0]), ("base-z", [0, 0, 1])):
-        pelvis.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis)
-    pelvis.add_joint(name="base-rot", type=mujoco.mjtJoint.mjJNT_BALL)
-    key = spec.key("stand")
-    qpos = np.asarray(key.qpos)
-    # free joint (x, y, z, quat) -> slides relative to the body's position, then the ball's quaternion
-    pos0 = np.asarray(pelvis.pos)
-    key.qpos = np.concatenate([qpos[:3] - pos0, qpos[3:7], qpos[7:]]).tolist()
-    return spec
-
-
-def _extra_joint_spec() -> mujoco.MjSpec:
-    """cassie.xml with a passive hinge between the left foot and a new toe-tip body."""
-    spec = mujoco.MjSpec.from_file(str(CASSIE_XML))
-    foot = spec.body("left-foot")
-    tip = foot.add_body(name="left-toe-tip", pos=[0.05, 0.0, 0.0], mass=0.01, inertia=[1e-6, 1e-6, 1e-6])
-    tip.add_joint(name="left-toe-flex", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], stiffness=10.0)
-    key = spec.key("stand")
-    qpos = list(key.qpos)
-    m0 = mujoco.MjModel.from_xml_path(str(CASSIE_XML))
-    foot_end = int(m0.jnt_qposadr[mujoco.mj_name2id(m0, mujoco.mjtObj.mjOBJ_JOINT, "left-foot")]) + 1
-    key.qpos = qpos[:foot_end] + [0.0] + qpos[foot_end:]
-    return spec
 
 
 def test_the_default_plant_is_the_robots_own_model_with_an_imu(cassie):
@@ -107,7 +65,7 @@ def test_read_state_of_the_default_plant_is_the_state_conversion(cassie):
 def test_a_slide_and_ball_base_gives_the_same_state_as_the_free_joint(cassie, tmp_path):
     """The same motion on both plants (same controls): the same (q, v), to integration rounding."""
     free = load_plant("cassie", cassie)
-    slide = load_plant(_write(_slide_ball_spec(), tmp_path / "slide_ball.xml"), cassie)
+    slide = load_plant(write_plant(slide_ball_spec(), tmp_path / "slide_ball.xml"), cassie)
     assert not slide.free_base and slide.model.nv == free.model.nv
     df, ds = free.new_data("stand"), slide.new_data("stand")
     qf, vf = free.read_state(df)
@@ -133,7 +91,7 @@ def test_a_slide_and_ball_base_gives_the_same_state_as_the_free_joint(cassie, tm
 def test_an_extra_passive_joint_is_mapped_by_name(cassie, tmp_path):
     # (MjSpec.to_xml leaves out the new body's inertial: put it back in the file)
     inertial = ('<joint name="left-toe-flex"', '<inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>')
-    plant = load_plant(_write(_extra_joint_spec(), tmp_path / "extra.xml", inertial), cassie)
+    plant = load_plant(write_plant(extra_joint_spec(), tmp_path / "extra.xml", inertial), cassie)
     assert plant.model.nq == cassie.mj_model.nq + 1 and plant.free_base
     d = plant.new_data("stand")
     extra = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_JOINT, "left-toe-flex")
@@ -157,7 +115,7 @@ def test_actuators_are_written_by_name_in_any_plant_order(cassie, tmp_path):
         spec.delete(a)
     for n in reversed(names):  # the plant lists them backwards
         spec.add_actuator(name=n, target=n, trntype=mujoco.mjtTrn.mjTRN_JOINT, gear=[10, 0, 0, 0, 0, 0])
-    plant = load_plant(_write(spec, tmp_path / "reversed.xml"), cassie)
+    plant = load_plant(write_plant(spec, tmp_path / "reversed.xml"), cassie)
     assert list(plant.actuator_ids) == list(range(cassie.nu - 1, -1, -1))
     d = plant.new_data("stand")
     plant.write_ctrl(d, np.arange(cassie.nu, dtype=float))
@@ -169,7 +127,7 @@ def test_a_missing_actuator_and_a_renamed_joint_are_named_in_one_line(cassie, tm
     spec.delete(spec.actuator("left-knee"))
     spec.joint("right-shin").name = "right-knee-spring"
     with pytest.raises(PlantMismatchError) as err:
-        load_plant(_write(spec, tmp_path / "broken.xml"), cassie)
+        load_plant(write_plant(spec, tmp_path / "broken.xml"), cassie)
     msg = str(err.value)
     assert "\n" not in msg and "actuator 'left-knee'" in msg and "joint 'right-shin'" in msg
     assert isinstance(err.value, InputError)
@@ -185,7 +143,7 @@ def test_a_welded_base_is_a_mismatch(cassie, tmp_path):
     spec.delete(spec.joint("floating-base"))
     spec.delete(spec.key("stand"))
     with pytest.raises(PlantMismatchError, match="joints floating body 'cassie-pelvis'"):
-        load_plant(_write(spec, tmp_path / "welded.xml"), cassie)
+        load_plant(write_plant(spec, tmp_path / "welded.xml"), cassie)
 
 
 def test_names_paths_and_edits(cassie, tmp_path):

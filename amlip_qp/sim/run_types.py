@@ -76,6 +76,21 @@ class SensorNoise:
 
 
 @dataclass(frozen=True)
+class PlantSetting:
+    """The plant, sensors and base estimator of every run (``--plant``, ``--sensors``, ``--estimator``).
+
+    Attributes:
+        plant: A plant name or MJCF path, or ``None``: each robot's own model.
+        sensors: ``"ideal"`` or ``"robot"``.
+        estimator: ``"truth"`` or ``"ekf"``.
+    """
+
+    plant: str | None = None
+    sensors: str = "ideal"
+    estimator: str = "truth"
+
+
+@dataclass(frozen=True)
 class FallCriteria:
     """When a run counts as a fall.
 
