@@ -119,6 +119,7 @@ class Simulation:
         self.true_base = self.estimator == "truth"
         self.ctrl_filter = ctrl_filter
         self._base_q, self._base_v = base_indices(robot)
+        self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
         self._scalar_pin_v = robot.state_map.scalar_pin_v
 
@@ -232,9 +233,9 @@ class Simulation:
             "cmd_turn_rate": np.zeros(n_ticks),
         }
         bq, bv = self._base_q, self._base_v
-        base_true = np.zeros((n_ticks, bq.size + bv.size))
-        base_est = np.zeros((n_ticks, bq.size + bv.size))
-        nbq = bq.size
+        nbq, nbv = self._base_size
+        base_true = np.zeros((n_ticks, nbq + nbv))
+        base_est = np.zeros((n_ticks, nbq + nbv))
         plant, ctrl_filter = self.plant, self.ctrl_filter
         tick_us = np.zeros(n_ticks)
         z0, _ = self._base_height_and_tilt()

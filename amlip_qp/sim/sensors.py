@@ -156,11 +156,9 @@ class PlantSensors:
             if sid < 0:
                 raise InputError(f"plant {plant.name} has no sensor {name!r}; load it with sim.plant.load_plant")
             adr[name] = int(m.sensor_adr[sid])
-        self._quat_adr, self._gyro_adr, self._accel_adr = (
-            adr[IMU_QUAT_SENSOR],
-            adr[IMU_GYRO_SENSOR],
-            adr[IMU_ACCEL_SENSOR],
-        )
+        q, g, c = adr[IMU_QUAT_SENSOR], adr[IMU_GYRO_SENSOR], adr[IMU_ACCEL_SENSOR]
+        # sensordata indices of (quat xyzw, gyro, accel): one gather per sample
+        self._imu_idx = np.array([q + 1, q + 2, q + 3, q, g, g + 1, g + 2, c, c + 1, c + 2], dtype=np.intp)
         robot = plant.robot
         smap = robot.state_map
         self._enc_q = np.array([smap.joint_pin_q[n] for n in robot.joint_names], dtype=np.intp)
@@ -184,11 +182,8 @@ class PlantSensors:
     # ------------------------------------------------------------------ IMU
     def exact_imu(self, data: mujoco.MjData) -> ImuReading:
         """The IMU sample without noise (MuJoCo's sensors)."""
-        sd = data.sensordata
-        a = self._quat_adr
-        quat = np.array([sd[a + 1], sd[a + 2], sd[a + 3], sd[a]])  # wxyz -> xyzw
-        g, c = self._gyro_adr, self._accel_adr
-        return ImuReading(quat_xyzw=quat, gyro_radps=sd[g : g + 3].copy(), accel_mps2=sd[c : c + 3].copy())
+        x = data.sensordata[self._imu_idx]
+        return ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:])
 
     def robot_imu(self, data: mujoco.MjData) -> ImuReading:
         """The IMU sample with white noise and the random-walk biases (advanced by one sample)."""
@@ -245,12 +240,12 @@ class PlantSensors:
         return Measurement(t_s=t, q=q, v=v, foot_contact=contact, imu=imu, base_known=bool(base_known))
 
 
-def base_indices(robot) -> tuple[np.ndarray, np.ndarray]:
-    """Pinocchio ``q`` and ``v`` indices of the base (the root joints' coordinates)."""
+def base_indices(robot) -> tuple[slice | np.ndarray, slice | np.ndarray]:
+    """Pinocchio ``q`` and ``v`` indices of the base (the root joints' coordinates; slices for a free flyer)."""
     smap = robot.state_map
     if robot.is_floating:
         pq, pv = smap.joint_pin_q[robot.root_joint_names[0]], smap.joint_pin_v[robot.root_joint_names[0]]
-        return np.arange(pq, pq + 7), np.arange(pv, pv + 6)
+        return slice(pq, pq + 7), slice(pv, pv + 6)
     return (
         np.array([smap.joint_pin_q[n] for n in robot.root_joint_names], dtype=np.intp),
         np.array([smap.joint_pin_v[n] for n in robot.root_joint_names], dtype=np.intp),
