@@ -103,6 +103,34 @@ def build_parser() -> argparse.ArgumentParser:
 #: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
 #: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
 _TRACKERS = ("pbc", "qp")
+#: Sensor models and base estimators (the same as ``amlip_qp.sim.sensors.SENSOR_MODELS`` and
+#: ``amlip_qp.sim.factory.ESTIMATORS``, checked by the tests).
+_SENSORS = ("ideal", "robot")
+_ESTIMATORS = ("truth", "ekf")
+
+
+def _add_plant_options(p: argparse.ArgumentParser) -> None:
+    """``--plant``, ``--sensors`` and ``--estimator`` of ``walk`` and ``compare``."""
+    p.add_argument(
+        "--plant",
+        metavar="NAME|PATH",
+        default=None,
+        help="the MuJoCo plant: a plant name of the robot (e.g. cassie-closed-chain) or an MJCF file with the "
+        "robot's actuators, measured joints and base body (default: the robot's own model)",
+    )
+    p.add_argument(
+        "--sensors",
+        choices=_SENSORS,
+        default="ideal",
+        help="ideal: the exact state; robot: IMU, encoders and contact switches with noise, no base state "
+        "(default ideal)",
+    )
+    p.add_argument(
+        "--estimator",
+        choices=_ESTIMATORS,
+        default="truth",
+        help="base state: truth (the simulator's) or ekf (contact-aided invariant EKF) (default truth)",
+    )
 
 
 def _add_walk(sub) -> None:
@@ -158,6 +186,7 @@ def _add_walk(sub) -> None:
     )
     p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
+    _add_plant_options(p)
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
     p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
     p.add_argument(
@@ -218,6 +247,7 @@ def _add_compare(sub) -> None:
     p.add_argument("--no-push", action="store_true", help="skip the push tests")
     p.add_argument("--seed", type=_non_negative_int, default=0, help="seed of the sensor noise (default 0)")
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise")
+    _add_plant_options(p)
     p.add_argument("--jobs", type=_positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
     p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")
     p.add_argument(

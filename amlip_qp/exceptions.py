@@ -33,6 +33,10 @@ class MJCFError(AmlipError, ValueError):
     """A model file exists but cannot be parsed, or lacks what amlip_qp needs."""
 
 
+class PlantMismatchError(InputError):
+    """A plant model lacks joints, actuators or bodies the controller needs (the message names them)."""
+
+
 class CodegenError(AmlipError):
     """Generating, compiling or loading the CasADi-generated C code failed."""
 

@@ -247,6 +247,11 @@ class RobotProfile:
         shaping: Command shaping (rate limits).
         tracker_configs: Tracker name -> ``"module:ATTRIBUTE"`` of its tuned configuration.
         compare: ``amlip-qp compare`` ranges.
+        plants: Plant name -> MJCF file name among the package's models: the
+            plants ``--plant`` may name (:func:`amlip_qp.sim.plant.load_plant`);
+            the robot's own model is one of them, under the robot's name.
+        imu_pos_in_base_m: Where the IMU sits in the base body's frame, m (its
+            axes are the base body's).
     """
 
     name: str
@@ -258,6 +263,8 @@ class RobotProfile:
     shaping: CommandShaping
     tracker_configs: Mapping[str, str] = field(default_factory=dict)
     compare: CompareRanges | None = None
+    plants: Mapping[str, str] = field(default_factory=dict)
+    imu_pos_in_base_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def tracker_config(self, tracker: str) -> Any:
         """The tuned configuration of ``tracker`` for this robot (imported on demand).
@@ -297,6 +304,11 @@ PROFILES: dict[str, RobotProfile] = {
         compare=CompareRanges(
             nominal_scenario="cassie-1mps", ramp_end_mps=2.1, push_max_impulse_Ns=60.0, relative_cost=3.0
         ),
+        plants={"cassie": "cassie.xml", "cassie-closed-chain": "cassie-closed-chain.xml"},
+        # The VectorNav VN-100's site in the pelvis of Agility Robotics' Cassie MuJoCo model
+        # (cassie-mujoco-sim, model/cassie.xml: <site name='imu' pos='0.03155 0 -0.07996'/>, axes
+        # those of the pelvis); cassie.xml's pelvis frame is the same.
+        imu_pos_in_base_m=(0.03155, 0.0, -0.07996),
     ),
     "rabbit": RobotProfile(
         name="rabbit",
@@ -312,6 +324,9 @@ PROFILES: dict[str, RobotProfile] = {
             "qp": "amlip_qp.control.wbc.config:RABBIT_CONFIG",
         },
         compare=CompareRanges(nominal_scenario="rabbit-0.5mps", ramp_end_mps=1.5, push_max_impulse_Ns=40.0),
+        plants={"rabbit": "rabbit.xml"},
+        # Rabbit has no documented IMU: one at the torso body's origin, torso axes.
+        imu_pos_in_base_m=(0.0, 0.0, 0.0),
     ),
 }
 

@@ -62,8 +62,11 @@ RULES: dict[str, Rule] = {
     "amlip_qp.control": Rule(CONTROL_BASE + ("amlip_qp.control",), ("mujoco", "amlip_qp.qp") + CONTROL_JOBS),
     # the walking loop runs any tracker: it imports none, nor the QP layer
     "amlip_qp.control.walking": Rule(
-        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking"), ("mujoco", "proxsuite", "qpsolvers")
+        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation"),
+        ("mujoco", "proxsuite", "qpsolvers"),
     ),
+    # base-state estimation from the robot's sensors: never the plant
+    "amlip_qp.estimation": Rule(CONTROL_BASE + ("amlip_qp.estimation",), ("mujoco", "proxsuite", "qpsolvers")),
     # the paper's tracker: no QP
     "amlip_qp.control.pbc": Rule(
         CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pbc"), ("mujoco", "proxsuite", "qpsolvers")

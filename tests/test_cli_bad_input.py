@@ -16,7 +16,11 @@ import pytest
 
 from amlip_qp import cli
 from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim import factory
+
+#: A plant that lacks everything Cassie's controller needs.
+RABBIT_XML = str(MODELS_DIR / "rabbit.xml")
 
 
 def _simulated(*args, **kwargs):
@@ -96,6 +100,20 @@ BAD_INPUTS = [
     (["walk", "--tracker", "lqr"], "invalid choice"),
     (["walk", "--scenario", "moonwalk"], "unknown scenario 'moonwalk'"),
     (["walk", "--scenario", "rabbit-1mps", "--robot", "cassie"], "is for rabbit"),
+    # the plant, the sensors and the estimator
+    (["walk", "--plant", "moon"], "unknown plant 'moon' for cassie: known plants are cassie, cassie-closed-chain"),
+    (["walk", "--robot", "rabbit", "--plant", "cassie-closed-chain"], "unknown plant 'cassie-closed-chain' for rabbit"),
+    (["walk", "--plant", "{tmp}/none.xml"], "plant model file not found"),
+    (["walk", "--plant", "{file}"], "MuJoCo cannot load the plant"),
+    (["walk", "--plant", RABBIT_XML], "does not fit the cassie controller: it lacks body 'cassie-pelvis'"),
+    (["walk", "--sensors", "perfect"], "argument --sensors: invalid choice"),
+    (["walk", "--estimator", "kalman"], "argument --estimator: invalid choice"),
+    (["walk", "--noise", "--sensors", "robot"], "--sensors robot has its own"),
+    (["compare", "--jobs", "1", "--plant", "moon"], "unknown plant 'moon' for cassie"),
+    (["compare", "--robots", "cassie", "--jobs", "1", "--plant", RABBIT_XML], "it lacks body 'cassie-pelvis'"),
+    (["compare", "--sensors", "perfect"], "argument --sensors: invalid choice"),
+    (["compare", "--estimator", "kalman"], "argument --estimator: invalid choice"),
+    (["compare", "--jobs", "1", "--noise", "--sensors", "robot"], "--sensors robot has its own"),
     # compare and the benchmarks
     (["compare", "--jobs", "1", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
     (["compare", "--jobs", "1", "--plot", "/proc/x.png"], "--plot /proc/x.png: cannot write"),

@@ -25,6 +25,8 @@ SUMMARY_KEYS = {
     "commanded_velocity", "mean_velocity", "velocity_error_rms", "heading_change_deg", "foot_placement_error_rms_m",
     "L_end_of_step_error_rms", "L_end_of_step_error_rms_xy", "output_tracking_rms", "torque_peak_Nm", "torque_rms_Nm",
     "tick_time_us", "realtime_factor", "fallback_ticks", "tracker_failed_ticks", "settle_s",
+    "plant", "sensors", "estimator", "safe_mode_ticks", "estimator_divergences", "base_velocity_error_rms_mps",
+    "yaw_estimate_error_deg",
 }  # fmt: skip
 
 
@@ -142,6 +144,19 @@ def test_walk_is_deterministic_with_noise(capsys, stand_in):
     timing = {"tick_time_us", "realtime_factor"}
     assert {k: v for k, v in a.items() if k not in timing} == {k: v for k, v in b.items() if k not in timing}
     assert a["output_tracking_rms"] != c["output_tracking_rms"]
+
+
+def test_walk_with_the_robot_sensors_records_the_setting(capsys, stand_in):
+    argv = ["walk", "--duration", "0.05", "--plant", "cassie", "--sensors", "robot", "--seed", "3"]
+    code, out, err = _run(argv, capsys)
+    assert code == 0 and "cassie/zero (plant cassie, robot sensors, truth estimator) walked" in out, err
+    a = json.loads(_run(argv + ["--json", "-"], capsys)[1])
+    b = json.loads(_run(argv + ["--json", "-"], capsys)[1])
+    assert (a["plant"], a["sensors"], a["estimator"]) == ("cassie", "robot", "truth")
+    assert a["base_velocity_error_rms_mps"] == 0.0 and a["yaw_estimate_error_deg"] == 0.0
+    assert a["output_tracking_rms"] == b["output_tracking_rms"]  # deterministic for a seed
+    assert cli._SENSORS == __import__("amlip_qp.sim.sensors", fromlist=["x"]).SENSOR_MODELS
+    assert cli._ESTIMATORS == factory.ESTIMATORS
 
 
 def test_walk_reports_a_fall_with_exit_1(capsys, stand_in):

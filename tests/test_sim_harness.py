@@ -134,3 +134,67 @@ def test_a_diverging_simulation_is_a_fall_not_a_restart():
     assert res.fall_time_s == pytest.approx(0.004, abs=1e-3)
     assert res.sim_time_s <= 0.006
     assert np.all(np.diff(res.log["t"]) > 0)
+
+
+def test_the_true_and_estimated_base_are_logged_and_equal_with_the_truth():
+    sim = _sim("cassie", tracker_cls=HoldTracker, duration=0.2)
+    res = sim.run(0.2)
+    log = res.log
+    for key in ("base_pos", "base_vel", "base_yaw"):
+        assert np.array_equal(log[f"{key}_true"], log[f"{key}_est"])
+    # the world velocity is the derivative of the position (MuJoCo's semi-implicit Euler: p' = p + dt v')
+    dp = np.diff(log["base_pos_true"], axis=0) / 0.0005
+    assert np.allclose(dp, log["base_vel_true"][1:], atol=1e-9)
+    assert np.max(np.abs(log["base_vel_true"])) > 0.01  # it settles: not a trivial zero
+    assert np.allclose(log["base_yaw_true"], log["base_yaw"], atol=1e-3)
+    summ_info = (res.info["plant"], res.info["sensors"], res.info["estimator"])
+    assert summ_info == ("cassie", "ideal", "truth") and res.safe_mode_ticks == 0
+    rabbit = _sim("rabbit", duration=0.01).run(0.01)
+    assert "base_vel_true" not in rabbit.log  # planar: no free-flyer base to log
+
+
+def test_the_control_filter_sees_every_tick_s_controls_before_the_plant():
+    seen = []
+
+    def zero(ctrl):
+        seen.append(ctrl.copy())
+        return np.zeros_like(ctrl)
+
+    robot = factory.load("cassie")
+    sim = factory.build_simulation(Scenario("test", "cassie", 0.01), HoldTracker(robot))
+    sim.ctrl_filter = zero
+    res = sim.run(0.01)
+    assert len(seen) == 20 and np.all(sim.data.ctrl == 0.0)
+    assert np.allclose(seen[-1] * sim.plant.gear, np.clip(res.log["tau"][-1], *robot.actuated.torque_limit_Nm.T))
+
+
+def test_robot_sensors_and_a_plant_of_another_layout(tmp_path):
+    """A slide+ball-floated plant with the robot sensors: the robot stands, the truth reaches the controller."""
+    from amlip_qp.sim.plant import load_plant
+    from plant_cases import slide_ball_spec, write_plant
+
+    robot = factory.load("cassie")
+    plant = load_plant(write_plant(slide_ball_spec(), tmp_path / "slide_ball.xml"), robot)
+    sc = Scenario("test", "cassie", 0.2)
+    sim = factory.build_simulation(sc, HoldTracker(robot), seed=2, plant=plant, sensors="robot")
+    res = sim.run(0.2)
+    assert not res.fell and sim.foot_contact() == {"left": True, "right": True}
+    assert res.info["sensors"] == "robot" and res.info["plant"].endswith("slide_ball.xml")
+    assert np.array_equal(res.log["base_vel_true"], res.log["base_vel_est"])  # truth: the true base
+    meas = sim.measure()
+    assert meas.base_known and meas.imu is not None and np.all(np.isfinite(meas.q))
+
+
+def test_without_the_truth_the_measurement_has_no_base():
+    from amlip_qp.sim.harness import Simulation
+
+    sim = _sim("cassie")
+    blind = Simulation(sim.robot, sim.controller, sim.command_fn, plant=sim.plant, sensors="robot", estimator="ekf")
+    meas = blind.measure()
+    assert not meas.base_known and np.all(np.isnan(meas.q[:7])) and np.all(np.isnan(meas.v[:6]))
+    assert np.all(np.isfinite(meas.q[7:])) and np.all(np.isfinite(meas.imu.accel_mps2))
+
+
+def test_gaussian_noise_is_for_the_ideal_sensors_only():
+    with pytest.raises(InputError, match="robot sensors have their own"):
+        factory.build_simulation(Scenario("test", "cassie", 0.01), "qp", noise=SensorNoise(), sensors="robot")

@@ -121,14 +121,45 @@ def _check_output_paths(args: argparse.Namespace) -> None:
         check_output_path(f"--{opt}", value)
 
 
+def check_sensor_options(args: argparse.Namespace) -> None:
+    """Refuse ``--noise`` with ``--sensors robot`` (the robot sensors have their own noise)."""
+    if args.noise and args.sensors != "ideal":
+        raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")
+
+
+def plant_from_args(args: argparse.Namespace, robot_name: str):
+    """The :class:`~amlip_qp.sim.plant.Plant` of ``--plant`` for ``robot_name`` (default: its own model).
+
+    Raises:
+        InputError: An unknown plant name, or a plant that lacks what the controller needs.
+        ModelFileError: The plant file does not exist.
+        MJCFError: MuJoCo cannot load it.
+    """
+    from amlip_qp.sim import factory
+    from amlip_qp.sim.plant import load_plant
+
+    robot = factory.load(robot_name)
+    return load_plant(args.plant if args.plant is not None else robot.name, robot)
+
+
 def run_walk(args: argparse.Namespace) -> int:
     """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
     from amlip_qp.sim import factory, summary
 
     scenario = scenario_from_args(args)
     _check_output_paths(args)
+    check_sensor_options(args)
+    plant = plant_from_args(args, scenario.robot)
     noise = SensorNoise() if args.noise else None
-    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
+    sim = factory.build_simulation(
+        scenario,
+        args.tracker,
+        seed=args.seed,
+        noise=noise,
+        plant=plant,
+        sensors=args.sensors,
+        estimator=args.estimator,
+    )
     recorder = None
     if args.video is not None:
         from amlip_qp.sim.video import VideoRecorder
@@ -163,8 +194,11 @@ def _one_line(s: dict) -> str:
 
     state = f"FELL at {s['fall_time_s']:.2f} s" if s["fell"] else "walked"
     mv = s["mean_velocity"]
+    setting = ""
+    if (s.get("plant"), s.get("sensors"), s.get("estimator")) != (s["robot"], "ideal", "truth"):
+        setting = f" (plant {s.get('plant')}, {s.get('sensors')} sensors, {s.get('estimator')} estimator)"
     return (
-        f"{s['robot']}/{s['tracker']} {state}: {s['sim_time_s']:.2f} s simulated, {s['steps']} steps, "
+        f"{s['robot']}/{s['tracker']}{setting} {state}: {s['sim_time_s']:.2f} s simulated, {s['steps']} steps, "
         f"mean v = [{f(mv[0], '.3f')}, {f(mv[1], '.3f')}] m/s, "
         f"velocity error RMS {f(s['velocity_error_rms'], '.3f')} m/s, "
         f"foot placement error RMS {f(s['foot_placement_error_rms_m'], '.3f')} m, "

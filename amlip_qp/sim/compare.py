@@ -42,7 +42,7 @@ from amlip_qp.sim.robustness import (
     push_scenario,
     ramp_scenario,
 )
-from amlip_qp.sim.run_types import RunResult, SensorNoise
+from amlip_qp.sim.run_types import PlantSetting, RunResult, SensorNoise
 from amlip_qp.sim.scenarios import Scenario, get_scenario
 from amlip_qp.sim.summary import summarize
 
@@ -57,12 +57,21 @@ class _Task:
     settings: CompareSettings
     seed: int
     noise: bool
+    setting: PlantSetting
 
 
-def _run(scenario: Scenario, tracker: str, seed: int, noise: bool) -> RunResult:
+def _run(scenario: Scenario, tracker: str, seed: int, noise: bool, setting: PlantSetting) -> RunResult:
     from amlip_qp.sim.factory import run_scenario
 
-    return run_scenario(scenario, tracker, seed=seed, noise=SensorNoise() if noise else None)
+    return run_scenario(
+        scenario,
+        tracker,
+        seed=seed,
+        noise=SensorNoise() if noise else None,
+        plant=setting.plant,
+        sensors=setting.sensors,
+        estimator=setting.estimator,
+    )
 
 
 def _execute(task: _Task) -> dict[str, Any]:
@@ -70,11 +79,11 @@ def _execute(task: _Task) -> dict[str, Any]:
     t0, c0 = time.perf_counter(), time.process_time()
     s = task.settings
     if task.kind == "nominal":
-        res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        res = _run(task.scenario, task.tracker, task.seed, task.noise, task.setting)
         summ = summarize(res)
         out: dict[str, Any] = {"nominal": summ}
     elif task.kind == "ramp":
-        res = _run(task.scenario, task.tracker, task.seed, task.noise)
+        res = _run(task.scenario, task.tracker, task.seed, task.noise, task.setting)
         speed = highest_steady_speed(res, s.window_s, s.tolerance)
         out = {
             "highest_steady_speed_mps": speed,
@@ -87,7 +96,8 @@ def _execute(task: _Task) -> dict[str, Any]:
         trials: list[tuple[float, bool]] = []
 
         def survives(impulse: float) -> bool:
-            res = _run(push_scenario(task.scenario, impulse, axis, s), task.tracker, task.seed, task.noise)
+            pushed = push_scenario(task.scenario, impulse, axis, s)
+            res = _run(pushed, task.tracker, task.seed, task.noise, task.setting)
             trials.append((impulse, not res.fell))
             return not res.fell
 
@@ -114,22 +124,32 @@ def build_tasks(
     noise: bool = False,
     ramp: bool = True,
     push: bool = True,
+    setting: PlantSetting | None = None,
 ) -> list[_Task]:
-    """Every experiment of a comparison, longest first (better packing on the workers)."""
-    from amlip_qp.sim.factory import load
+    """Every experiment of a comparison, longest first (better packing on the workers).
 
+    Raises:
+        InputError: A plant that does not fit one of the robots (loaded here, once per robot).
+    """
+    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.plant import load_plant
+
+    setting = setting or PlantSetting()
     tasks = []
     for robot in robots:
         nominal = nominal_scenario(robot, scenario_names, settings)
-        planar = load(robot).is_planar
+        loaded = load(robot)
+        planar = loaded.is_planar
+        if setting.plant is not None:
+            load_plant(setting.plant, loaded)  # fail fast (exit 2) on a plant that does not fit
         for trk in trackers:
-            tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise))
+            tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise, setting))
             if ramp:
-                tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), settings, seed, noise))
+                tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), settings, seed, noise, setting))
             if push:
-                tasks.append(_Task("push-x", robot, trk, nominal, settings, seed, noise))
+                tasks.append(_Task("push-x", robot, trk, nominal, settings, seed, noise, setting))
                 if not planar:
-                    tasks.append(_Task("push-y", robot, trk, nominal, settings, seed, noise))
+                    tasks.append(_Task("push-y", robot, trk, nominal, settings, seed, noise, setting))
     unknown = [n for n in scenario_names if get_scenario(n).robot not in robots]
     if unknown:
         raise InputError(f"--scenario {', '.join(unknown)} is for a robot not in --robots {','.join(robots)}")
@@ -288,15 +308,17 @@ def prepare_generated_code(tasks: list[_Task]) -> None:
     for task in tasks:
         if (task.robot, task.tracker) not in done:
             done.add((task.robot, task.tracker))
-            build_simulation(task.scenario, task.tracker)
+            build_simulation(task.scenario, task.tracker)  # the generated C does not depend on the plant
 
 
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
     from amlip_qp.output_paths import check_output_path, writing
     from amlip_qp.sim import summary
+    from amlip_qp.sim.cli import check_sensor_options
 
     settings = settings_from_args(args)
+    check_sensor_options(args)
     for trk in args.trackers:
         from amlip_qp.sim.factory import tracker_class
 
@@ -310,6 +332,7 @@ def main(args: argparse.Namespace) -> int:
         noise=args.noise,
         ramp=not args.no_ramp,
         push=not args.no_push,
+        setting=PlantSetting(args.plant, args.sensors, args.estimator),
     )
     # Outputs are checked before anything runs; the figure's folder (default out/) is created.
     check_output_path("--json", args.json)
@@ -353,6 +376,7 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d = asdict(settings)
     d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
+    d.update(plant=args.plant, sensors=args.sensors, estimator=args.estimator)
     # the per-robot ranges of the profiles, as (robot, value) pairs
     d.update(
         ramp_end_mps=tuple((r, compare_ranges(r).ramp_end_mps) for r in ROBOT_NAMES),

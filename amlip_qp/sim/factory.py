@@ -23,6 +23,13 @@ from amlip_qp.sim.scenarios import Scenario
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot
+    from amlip_qp.sim.plant import Plant
+
+#: The control period of the closed loops built here, s (2 kHz, as on Cassie).
+CONTROL_DT_S = 0.0005
+
+#: The base estimators of ``--estimator``: the simulator's truth, or the contact-aided invariant EKF.
+ESTIMATORS: tuple[str, ...] = ("truth", "ekf")
 
 #: Tracker name -> module that defines it.
 TRACKER_MODULES: dict[str, str] = {
@@ -68,12 +75,22 @@ def make_tracker(name: str, robot: Robot) -> Tracker:
     return cls(robot)
 
 
+def check_estimator(name: str) -> str:
+    """``name`` if it is a base estimator of :data:`ESTIMATORS`; InputError naming them otherwise."""
+    if name not in ESTIMATORS:
+        raise InputError(f"unknown estimator {name!r}; known: {', '.join(ESTIMATORS)}")
+    return name
+
+
 def build_simulation(
     scenario: Scenario,
     tracker: str | Tracker,
     seed: int = 0,
     noise: SensorNoise | None = None,
     planner_backend: str = "c",
+    plant: str | Plant | None = None,
+    sensors: str = "ideal",
+    estimator: str = "truth",
 ) -> Simulation:
     """The :class:`Simulation` of ``scenario`` with ``tracker`` (a name or an instance).
 
@@ -81,20 +98,53 @@ def build_simulation(
         scenario: Robot, commands, pushes, duration and command shaping.
         tracker: ``"pbc"``, ``"qp"``, or a ready :class:`Tracker` instance
             (e.g. a test stand-in; it must be built for the scenario's robot).
-        seed: Seed of the sensor-noise generator.
-        noise: Sensor noise, or ``None`` for exact measurements.
+        seed: Seed of the sensor-noise generators.
+        noise: Gaussian noise on the ideal sensors, or ``None`` for exact measurements.
         planner_backend: ``"c"`` (generated kernels) or ``"numpy"``.
+        plant: A plant name of the robot or an MJCF path (loaded with
+            :func:`~amlip_qp.sim.plant.load_plant`), a loaded
+            :class:`~amlip_qp.sim.plant.Plant`, or ``None``: the robot's own model.
+        sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`).
+        estimator: The controller's base estimator, ``"truth"`` or ``"ekf"``
+            (:func:`amlip_qp.estimation.make_base_estimator`).
     """
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
+    from amlip_qp.sim.plant import Plant, load_plant
 
+    check_estimator(estimator)
     robot = load(scenario.robot)
+    the_plant = plant if isinstance(plant, Plant) else load_plant(robot.name if plant is None else plant, robot)
     trk = make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
     kin = RobotKinematics(robot)
-    controller = WalkingController(robot, trk, kin, planner_backend=planner_backend, command_shaping=scenario.shaping)
-    return Simulation(robot, controller, scenario.command, pushes=scenario.pushes, noise=noise, seed=seed)
+    options: dict = {}
+    if estimator != "truth":  # the truth needs no estimator object: the harness gives the true base
+        from amlip_qp.estimation import make_base_estimator
+
+        imu_pos = robot.profile.imu_pos_in_base_m if robot.profile else (0.0, 0.0, 0.0)
+        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu_pos)
+    controller = WalkingController(
+        robot,
+        trk,
+        kin,
+        dt_s=CONTROL_DT_S,
+        planner_backend=planner_backend,
+        command_shaping=scenario.shaping,
+        **options,
+    )
+    return Simulation(
+        robot,
+        controller,
+        scenario.command,
+        pushes=scenario.pushes,
+        noise=noise,
+        seed=seed,
+        plant=the_plant,
+        sensors=sensors,
+        estimator=estimator,
+    )
 
 
 def run_scenario(
@@ -104,9 +154,12 @@ def run_scenario(
     noise: SensorNoise | None = None,
     progress: bool = False,
     on_tick: TickCallback | None = None,
+    plant: str | Plant | None = None,
+    sensors: str = "ideal",
+    estimator: str = "truth",
 ) -> RunResult:
     """Build and run ``scenario`` for its full duration (see :func:`build_simulation`)."""
-    sim = build_simulation(scenario, tracker, seed=seed, noise=noise)
+    sim = build_simulation(scenario, tracker, seed=seed, noise=noise, plant=plant, sensors=sensors, estimator=estimator)
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick)
     result.info["scenario"] = scenario.name
     return result

@@ -1,13 +1,14 @@
 """The MuJoCo harness: the plant, its sensors, pushes, and the closed loop.
 
 The harness is the only code that knows the plant. Every control tick it
-reads MuJoCo's state, converts it once to Pinocchio's convention
-(:mod:`amlip_qp.robots.state`), optionally adds sensor noise, reads the foot
-contact switches (normal force above a threshold), hands the
-:class:`~amlip_qp.control.walking.estimator.Measurement` to the controller, turns the
-joint torques into actuator controls (``ctrl = tau / gear``), applies pushes
-on the base body, and steps MuJoCo. Its inputs and result are the plain
-types of :mod:`~amlip_qp.sim.run_types`.
+reads the plant's state in the controller's Pinocchio convention through the
+:class:`~amlip_qp.sim.plant.Plant` (which maps any plant model to the
+controller's by name), optionally adds Gaussian noise (``--noise``), hands the
+sensors' :class:`~amlip_qp.control.walking.estimator.Measurement`
+(:mod:`~amlip_qp.sim.sensors`: ``ideal`` or ``robot``) to the controller,
+turns the joint torques into the plant's actuator controls
+(``ctrl = tau / gear``), applies pushes on the base body, and steps MuJoCo.
+Its inputs and result are the plain types of :mod:`~amlip_qp.sim.run_types`.
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ from amlip_qp.alip.planner import Command
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
-from amlip_qp.robots import state as S
 from amlip_qp.robots.robot import Robot
+from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
+from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
@@ -42,15 +44,24 @@ class Simulation:
     """A MuJoCo plant closed around a :class:`WalkingController`.
 
     Args:
-        robot: The :class:`~amlip_qp.robots.robot.Robot` (its ``mj_model`` is the plant).
+        robot: The controller's :class:`~amlip_qp.robots.robot.Robot`.
         controller: The controller.
         command_fn: Time (s) -> :class:`~amlip_qp.alip.planner.Command`.
         pushes: Forces on the base body.
-        noise: Sensor noise, or ``None`` for exact measurements.
-        seed: Seed of the noise generator.
+        noise: Gaussian noise on the ``ideal`` measurement (``--noise``), or ``None``.
+        seed: Seed of the noise generators (``noise`` and the ``robot`` sensors).
         contact_threshold_N: Normal force above which a foot's contact switch is on, N.
         fall: Fall criteria.
-        keyframe: Initial keyframe name.
+        keyframe: Initial keyframe name (of the plant).
+        plant: The plant (default: the robot's own model, :func:`~amlip_qp.sim.plant.load_plant`).
+        sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`).
+        estimator: The controller's base estimator (its name, ``--estimator``): with
+            ``"truth"`` the measurement carries the simulator's true base state; with any
+            other, none (``base_known=False``): the controller's estimator fills it.
+        sensor_settings: Noise of the ``robot`` sensors.
+        ctrl_filter: Applied to the actuator controls (controller order, after
+            ``tau / gear`` and clipping) before they are written to the plant, e.g.
+            an actuator delay's ``push``; ``None``: written as they are.
     """
 
     def __init__(
@@ -64,6 +75,11 @@ class Simulation:
         contact_threshold_N: float = 20.0,
         fall: FallCriteria | None = None,
         keyframe: str = "stand",
+        plant: Plant | None = None,
+        sensors: str = "ideal",
+        estimator: str = "truth",
+        sensor_settings: SensorSettings | None = None,
+        ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
     ):
         self.robot = robot
         self.controller = controller
@@ -76,8 +92,13 @@ class Simulation:
         self.rng = np.random.default_rng(seed)
         self.contact_threshold_N = float(contact_threshold_N)
         self.fall = fall or FallCriteria()
-        self.model = robot.mj_model
-        self.data = robot.new_mj_data(keyframe)
+        self.plant = plant if plant is not None else load_plant(robot.name, robot)
+        if self.plant.robot is not robot:
+            raise InputError(f"the plant {self.plant.name} was loaded for another robot object than the controller's")
+        if noise is not None and sensors != "ideal":
+            raise InputError("--noise adds Gaussian noise to the ideal sensors; the robot sensors have their own")
+        self.model = self.plant.model
+        self.data = self.plant.new_data(keyframe)
         self.dt_s = float(self.model.opt.timestep)
         ratio = controller.dt_s / self.dt_s
         self.substeps = int(round(ratio))
@@ -85,32 +106,35 @@ class Simulation:
             raise InputError(
                 f"the control period ({controller.dt_s} s) must be a whole multiple of the plant step ({self.dt_s} s)"
             )
-        m = self.model
-        self._base_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, robot.base_body)
-        self._foot_bodies = {side: int(m.site_bodyid[robot.contact_site_ids[side]]) for side in robot.foot_sides}
-        self._gear = robot.actuated.gear
-        self._ctrl_range = robot.actuated.ctrl_range
-        self._force6 = np.zeros(6)
+        self._base_body = self.plant.base_body_id
+        self.sensors = PlantSensors(
+            self.plant,
+            sensors,
+            dt_s=controller.dt_s,
+            seed=self.seed,
+            settings=sensor_settings,
+            contact_threshold_N=self.contact_threshold_N,
+        )
+        self.estimator = str(estimator)
+        self.true_base = self.estimator == "truth"
+        self.ctrl_filter = ctrl_filter
+        self._base_q, self._base_v = base_indices(robot)
+        self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
         self._scalar_pin_v = robot.state_map.scalar_pin_v
 
     # ----------------------------------------------------------- sensors
     def foot_contact(self) -> dict[str, bool]:
-        """Contact switches: True when the floor pushes on the foot's body harder than the threshold."""
-        m, d = self.model, self.data
-        normal = dict.fromkeys(self._foot_bodies, 0.0)
-        for i in range(d.ncon):
-            con = d.contact[i]
-            b1, b2 = int(m.geom_bodyid[con.geom1]), int(m.geom_bodyid[con.geom2])
-            for side, body in self._foot_bodies.items():
-                if (b1 == body and b2 == 0) or (b2 == body and b1 == 0):
-                    mujoco.mj_contactForce(m, d, i, self._force6)
-                    normal[side] += abs(self._force6[0])
-        return {side: f > self.contact_threshold_N for side, f in normal.items()}
+        """Exact contact switches: True when the floor pushes on the foot's body harder than the threshold."""
+        return self.sensors.exact_contact(self.data)
 
     def measure(self) -> Measurement:
-        """This tick's sensor data (exact or noisy)."""
-        q, v = S.mj_to_pin(self.robot.state_map, self.data.qpos, self.data.qvel)
+        """This tick's sensor data (see :meth:`measure_state`)."""
+        q, v = self.plant.read_state(self.data)
+        return self.measure_state(q, v)
+
+    def measure_state(self, q: np.ndarray, v: np.ndarray) -> Measurement:
+        """The measurement of the true state ``(q, v)`` (modified in place): ``--noise``, then the sensors."""
         if self.noise is not None:
             n, rng = self.noise, self.rng
             q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
@@ -120,7 +144,7 @@ class Simulation:
                 q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
                 v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
                 v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
-        return Measurement(t_s=float(self.data.time), q=q, v=v, foot_contact=self.foot_contact())
+        return self.sensors.measure(self.data, q, v, base_known=self.true_base)
 
     # ------------------------------------------------------------ checks
     def _base_height_and_tilt(self) -> tuple[float, float]:
@@ -165,7 +189,12 @@ class Simulation:
         ``L_hat`` (2), ``L_des`` (2), ``p_sw_des`` (2), ``swing_target`` (3),
         ``h`` and ``h_d`` (outputs), ``tau`` (joint side, N m),
         ``tracker_ok``, ``push`` (3, N) and the command ``cmd_vx``, ``cmd_vy``,
-        ``cmd_turn_rate``.
+        ``cmd_turn_rate``. ``base_pos`` and ``base_yaw`` are MuJoCo's body pose of
+        the last plant step's start. For a floating-base robot, the base state
+        the controller used against the truth at the measurement:
+        ``base_pos_true``, ``base_vel_true`` (3, world, m/s), ``base_yaw_true``,
+        and ``base_pos_est``, ``base_vel_est``, ``base_yaw_est`` (equal to the
+        truth with ``--estimator truth`` and exact sensors).
         """
         if not (duration_s > 0 and math.isfinite(duration_s)):
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
@@ -174,7 +203,7 @@ class Simulation:
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
-        nu = len(self._gear)
+        nu = self.robot.nu
         n_out = ctrl.planner.n_outputs
         log = {
             "t": np.zeros(n_ticks),
@@ -203,6 +232,11 @@ class Simulation:
             "cmd_vy": np.zeros(n_ticks),
             "cmd_turn_rate": np.zeros(n_ticks),
         }
+        bq, bv = self._base_q, self._base_v
+        nbq, nbv = self._base_size
+        base_true = np.zeros((n_ticks, nbq + nbv))
+        base_est = np.zeros((n_ticks, nbq + nbv))
+        plant, ctrl_filter = self.plant, self.ctrl_filter
         tick_us = np.zeros(n_ticks)
         z0, _ = self._base_height_and_tilt()
         fell, fall_time = False, float("nan")
@@ -218,11 +252,20 @@ class Simulation:
         for k in range(n_ticks):
             t = float(d.time)
             cmd = self.command_fn(t)
-            meas = self.measure()
+            q, v = plant.read_state(d)
+            row = base_true[k]
+            row[:nbq], row[nbq:] = q[bq], v[bv]
+            meas = self.measure_state(q, v)
             t0 = time.perf_counter_ns()
             tick = ctrl.step(meas, cmd)
             tick_us[k] = (time.perf_counter_ns() - t0) * 1e-3
-            d.ctrl[:nu] = np.clip(tick.tau_Nm / self._gear, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
+            q_est, v_est = ctrl.kin.state()
+            row = base_est[k]
+            row[:nbq], row[nbq:] = q_est[bq], v_est[bv]
+            ctrl_now = plant.ctrl_from_tau(tick.tau_Nm)
+            if ctrl_filter is not None:  # e.g. an actuator delay
+                ctrl_now = ctrl_filter(ctrl_now)
+            plant.apply_ctrl(d, ctrl_now)
             push = self.push_force(t)
             d.xfrc_applied[self._base_body, :3] = push
             # log
@@ -279,6 +322,9 @@ class Simulation:
             bar.update(n - bar.n)
             bar.close()
         log = {key: value[:n] for key, value in log.items()}
+        if self.robot.is_floating:
+            log.update(_world_base(base_true[:n], "true"))
+            log.update(_world_base(base_est[:n], "est"))
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -291,6 +337,8 @@ class Simulation:
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
             fallback_ticks=ctrl.fallback_ticks,
+            safe_mode_ticks=int(getattr(ctrl, "safe_mode_ticks", 0)),
+            estimator_divergences=int(getattr(ctrl, "estimator_divergences", 0)),
             pushes=self.pushes,
             info={
                 "output_names": tuple(ctrl.planner.output_names),
@@ -299,5 +347,19 @@ class Simulation:
                 "planar": bool(self.robot.is_planar),
                 "seed": self.seed,
                 "noise": self.noise is not None,
+                "plant": self.plant.name,
+                "sensors": self.sensors.model,
+                "estimator": self.estimator,
             },
         )
+
+
+def _world_base(rows: np.ndarray, suffix: str) -> dict[str, np.ndarray]:
+    """``base_pos_*``, ``base_vel_*`` (world) and ``base_yaw_*`` from free-flyer rows ``(q[:7], v[:6])``."""
+    pos, quat, vel_body = rows[:, :3], rows[:, 3:7], rows[:, 7:10]
+    u, w = quat[:, :3], quat[:, 3:4]
+    uv = np.cross(u, vel_body)
+    vel_world = vel_body + 2.0 * w * uv + 2.0 * np.cross(u, uv)  # R(quat) @ v for unit quaternions
+    x, y, z, qw = quat.T
+    yaw = np.arctan2(2.0 * (qw * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return {f"base_pos_{suffix}": pos.copy(), f"base_vel_{suffix}": vel_world, f"base_yaw_{suffix}": yaw}

@@ -76,6 +76,21 @@ class SensorNoise:
 
 
 @dataclass(frozen=True)
+class PlantSetting:
+    """The plant, sensors and base estimator of every run (``--plant``, ``--sensors``, ``--estimator``).
+
+    Attributes:
+        plant: A plant name or MJCF path, or ``None``: each robot's own model.
+        sensors: ``"ideal"`` or ``"robot"``.
+        estimator: ``"truth"`` or ``"ekf"``.
+    """
+
+    plant: str | None = None
+    sensors: str = "ideal"
+    estimator: str = "truth"
+
+
+@dataclass(frozen=True)
 class FallCriteria:
     """When a run counts as a fall.
 
@@ -104,11 +119,14 @@ class RunResult:
         steps: The completed steps.
         tick_time_us: Controller wall time per tick, µs.
         fallback_ticks: Ticks that used the damped fallback torque.
+        safe_mode_ticks: Ticks the controller spent in its safe mode after a diverged base estimate.
+        estimator_divergences: How often the base estimate diverged.
         pushes: The pushes applied.
         info: Run metadata: ``output_names`` (the order of ``log["h"]``),
             ``actuator_names`` (the order of ``log["tau"]``), ``control_dt_s``,
             ``planar`` (True for a planar robot),
-            ``seed`` and ``noise`` (True if sensor noise was on).
+            ``seed``, ``noise`` (True if Gaussian noise was on), ``plant`` (its name or path),
+            ``sensors`` (``"ideal"`` or ``"robot"``) and ``estimator`` (the base estimator's name).
     """
 
     robot: str
@@ -122,6 +140,8 @@ class RunResult:
     steps: list[StepRecord]
     tick_time_us: np.ndarray
     fallback_ticks: int
+    safe_mode_ticks: int = 0
+    estimator_divergences: int = 0
     pushes: tuple[Push, ...] = ()
     info: dict = field(default_factory=dict)
 

@@ -116,6 +116,22 @@ def L_end_errors(result: RunResult) -> np.ndarray:
     return np.asarray(rows, dtype=float).reshape(-1, 2)
 
 
+def base_estimate_errors(result: RunResult) -> tuple[float, float]:
+    """``(base velocity error RMS m/s, final yaw error deg)`` of the controller's base state against the truth.
+
+    The velocity error is ``|base_vel_est - base_vel_true|`` (world, m/s) over
+    every tick; the yaw error is ``|yaw_est - yaw_true|`` (unwrapped) at the
+    last tick, the drift of an estimator that cannot observe yaw. NaN without
+    the logs (a planar robot) or with a non-finite estimate at the end.
+    """
+    log = result.log
+    if "base_vel_est" not in log or log["t"].size == 0:
+        return float("nan"), float("nan")
+    dv = log["base_vel_est"] - log["base_vel_true"]
+    yaw = np.unwrap(log["base_yaw_est"]) - np.unwrap(log["base_yaw_true"])
+    return _rms(np.linalg.norm(dv, axis=1)), abs(math.degrees(float(yaw[-1])))
+
+
 def summarize(
     result: RunResult,
     settle_s: float = DEFAULT_SETTLE_S,
@@ -139,6 +155,7 @@ def summarize(
     L_err = L_end_errors(result)
     yaw = np.unwrap(log["base_yaw"]) if n else np.zeros(1)
     tick = np.asarray(result.tick_time_us, dtype=float)
+    base_vel_err, yaw_err = base_estimate_errors(result)
     return {
         "robot": result.robot,
         "tracker": result.tracker,
@@ -168,6 +185,13 @@ def summarize(
         "fallback_ticks": int(result.fallback_ticks),
         "tracker_failed_ticks": int(np.sum(log["tracker_ok"] == 0.0)),
         "settle_s": float(settle_s),
+        "plant": result.info.get("plant"),
+        "sensors": result.info.get("sensors"),
+        "estimator": result.info.get("estimator"),
+        "safe_mode_ticks": int(result.safe_mode_ticks),
+        "estimator_divergences": int(result.estimator_divergences),
+        "base_velocity_error_rms_mps": base_vel_err,
+        "yaw_estimate_error_deg": yaw_err,
     }
 
 

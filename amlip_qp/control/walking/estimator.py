@@ -19,6 +19,7 @@ import numpy as np
 
 from amlip_qp.alip import other_side
 from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, AngularMomentumFilter
+from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -31,17 +32,24 @@ class Measurement:
 
     Attributes:
         t_s: Time, s.
-        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw).
-        v: Velocity, Pinocchio convention (free-flyer twist in the base frame).
+        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw);
+            with ``base_known`` False the base part ``q[:7]`` is NOT valid.
+        v: Velocity, Pinocchio convention (free-flyer twist in the base frame);
+            with ``base_known`` False the base part ``v[:6]`` is NOT valid.
         foot_contact: Side -> contact switch (True when the foot carries load);
             an empty dict means "no contact sensing": touchdown is then
             detected from the swing foot's height.
+        imu: The IMU sample, or ``None`` without an IMU.
+        base_known: False when the sensors give no base state (``--sensors robot``
+            without ``--estimator truth``): the base state must come from the estimator.
     """
 
     t_s: float
     q: np.ndarray
     v: np.ndarray
     foot_contact: dict[str, bool] = field(default_factory=dict)
+    imu: ImuReading | None = None
+    base_known: bool = True
 
 
 @dataclass

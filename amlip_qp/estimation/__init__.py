@@ -1,0 +1,1 @@
+"""Base-state estimation from the robot's own sensors (IMU, encoders, foot contact)."""

@@ -1,0 +1,296 @@
+"""The plant: any MJCF model the controller walks on, mapped to the controller's model by name.
+
+The controller keeps its own Pinocchio model (``--robot``); the plant is
+MuJoCo running a model that may differ from it (``--plant``): extra passive
+joints, loop closures, its own solver options, contact parameters and meshes.
+:func:`load_plant` checks that the plant has what the controller needs and
+:class:`Plant` is the one place that maps the two by name:
+
+- every joint of the controller's model (the root joints of a planar robot
+  included) -> its ``qpos``/``qvel`` addresses in the plant;
+- the controller's actuators, in the controller's order -> the plant's
+  actuators of the same names (``ctrl = tau / gear`` with the plant's gears,
+  clipped to the plant's control ranges);
+- the base body, and the foot bodies (the bodies carrying the controller's
+  ``{side}-contact`` sites), by name.
+
+The base pose and velocity come from the base body whatever joints float it.
+A free joint on the base body goes through :mod:`amlip_qp.robots.state`
+exactly as the controller's own model does (its own model as the plant is
+bit-identical to what the harness did before plants existed); otherwise
+(slide and ball joints, or any chain of joints above the base) the pose is
+the base body's and the twist is MuJoCo's ``mj_objectVelocity`` in the body's
+own frame, which is Pinocchio's free-flyer convention.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
+from amlip_qp.paths import MODELS_DIR
+from amlip_qp.robots import state as S
+from amlip_qp.sim.sensors import imu_spec_edit
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
+
+#: A change of the plant's model before it is compiled (e.g. a plant modifier).
+SpecEdit = Callable[[mujoco.MjSpec], None]
+
+_FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3  # mujoco.mjtJoint values
+_QPOS_SIZE = {_FREE: 7, _BALL: 4, _SLIDE: 1, _HINGE: 1}
+_DOF_SIZE = {_FREE: 6, _BALL: 3, _SLIDE: 1, _HINGE: 1}
+
+
+def plant_files(robot: Robot) -> dict[str, Path]:
+    """The named plants of ``robot``: its profile's ``plants``, or its own file for a robot without a profile."""
+    if robot.profile is None:
+        return {robot.name: Path(robot.path)}
+    return {name: MODELS_DIR / file for name, file in robot.profile.plants.items()}
+
+
+def default_plant_name(robot: Robot) -> str:
+    """The plant of ``robot`` when none is asked for: its own model (named like the robot)."""
+    return robot.name
+
+
+def resolve_plant_source(source: str | os.PathLike, robot: Robot) -> tuple[str, Path]:
+    """``(name, path)`` of a plant name of ``robot`` or an MJCF path.
+
+    Raises:
+        InputError: Neither a plant name of the robot nor something that looks like a path.
+        ModelFileError: The file does not exist.
+    """
+    named = plant_files(robot)
+    text = os.fspath(source)
+    if isinstance(source, str) and text in named:
+        name, path = text, named[text]
+    else:
+        looks_like_path = not isinstance(source, str) or text.lower().endswith(".xml") or os.sep in text
+        if not looks_like_path:
+            raise InputError(
+                f"unknown plant {text!r} for {robot.name}: known plants are {', '.join(named)}; "
+                "a path to an MJCF .xml file also works"
+            )
+        path = Path(text).expanduser()
+        name = str(path)
+    if not path.is_file():
+        raise ModelFileError(f"plant model file not found: {path}")
+    return name, path.resolve()
+
+
+def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit] = ()) -> Plant:
+    """Load the plant ``source`` (a plant name of ``robot`` or an MJCF path) for ``robot``'s controller.
+
+    The model is read with ``mujoco.MjSpec.from_file``; every edit of ``edits``
+    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`),
+    then it is compiled.
+
+    Raises:
+        InputError: An unknown plant name.
+        ModelFileError: The file does not exist.
+        MJCFError: MuJoCo cannot load or compile it.
+        PlantMismatchError: It lacks joints, actuators or bodies of the controller's model.
+    """
+    name, path = resolve_plant_source(source, robot)
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception as exc:  # MuJoCo raises ValueError for XML errors
+        raise MJCFError(f"{path}: MuJoCo cannot load the plant: {_one_line(exc)}") from exc
+    for edit in edits:
+        edit(spec)
+    has_base = spec.body(robot.base_body) is not None
+    if has_base:
+        pos = robot.profile.imu_pos_in_base_m if robot.profile is not None else (0.0, 0.0, 0.0)
+        imu_spec_edit(spec, robot.base_body, pos)
+    try:
+        model = spec.compile()
+    except Exception as exc:
+        raise MJCFError(f"{path}: MuJoCo cannot compile the plant: {_one_line(exc)}") from exc
+    return Plant(model, robot, name)
+
+
+def _one_line(exc: BaseException) -> str:
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    return "; ".join(lines) if lines else type(exc).__name__
+
+
+def _id(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
+    return int(mujoco.mj_name2id(model, objtype, name))
+
+
+class Plant:
+    """A compiled MuJoCo plant mapped by name to a controller's :class:`~amlip_qp.robots.robot.Robot`.
+
+    Attributes:
+        model: The compiled ``mujoco.MjModel``.
+        robot: The controller's robot.
+        name: The plant's name (a plant name of the robot, or the file's path).
+        base_body_id: Plant body id of the robot's base body.
+        foot_body_ids: Side -> plant body id of the body carrying that side's contact site.
+        actuator_ids: Plant actuator id of each controller actuator (controller order).
+        gear: Plant gear of each controller actuator, shape (nu,).
+        ctrl_range: Plant control range of each controller actuator, shape (nu, 2) (+-inf: unlimited).
+        free_base: True when a free joint on the base body floats it.
+
+    Raises:
+        PlantMismatchError: The plant lacks joints, actuators or bodies (all named in one line).
+    """
+
+    def __init__(self, model: mujoco.MjModel, robot: Robot, name: str):
+        self.model = model
+        self.robot = robot
+        self.name = name
+        ctrl_model = robot.mj_model
+        missing: list[str] = []
+        body_names = [robot.base_body] + [self._body_name_of_site(robot, side) for side in robot.foot_sides]
+        body_ids = [_id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in body_names]
+        missing += [f"body {n!r}" for n, b in zip(body_names, body_ids) if b < 0]
+        self.base_body_id = body_ids[0]
+        self.foot_body_ids = dict(zip(robot.foot_sides, body_ids[1:]))
+        # joints: the controller's, by name and type (the free root joint: the base body's free joint)
+        qsrc = np.empty(int(ctrl_model.nq), dtype=np.intp)
+        vsrc = np.empty(int(ctrl_model.nv), dtype=np.intp)
+        self.free_base = False
+        free_on_base = [
+            j for j in range(model.njnt) if model.jnt_bodyid[j] == self.base_body_id and model.jnt_type[j] == _FREE
+        ]
+        for j in range(ctrl_model.njnt):
+            jname = mujoco.mj_id2name(ctrl_model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+            jtype = int(ctrl_model.jnt_type[j])
+            if jtype == _FREE:
+                pj = free_on_base[0] if free_on_base else -1
+                self.free_base = pj >= 0
+                if pj < 0:
+                    continue  # floated otherwise: the base body's pose
+            else:
+                pj = _id(model, mujoco.mjtObj.mjOBJ_JOINT, jname)
+                if pj < 0 or int(model.jnt_type[pj]) != jtype:
+                    missing.append(f"joint {jname!r}" + ("" if pj < 0 else " (of another type)"))
+                    continue
+            qa, pqa = int(ctrl_model.jnt_qposadr[j]), int(model.jnt_qposadr[pj])
+            da, pda = int(ctrl_model.jnt_dofadr[j]), int(model.jnt_dofadr[pj])
+            qsrc[qa : qa + _QPOS_SIZE[jtype]] = np.arange(pqa, pqa + _QPOS_SIZE[jtype])
+            vsrc[da : da + _DOF_SIZE[jtype]] = np.arange(pda, pda + _DOF_SIZE[jtype])
+        # actuators, in the controller's order
+        act = robot.actuated
+        self.actuator_ids = np.array([_id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in act.names], dtype=np.intp)
+        missing += [f"actuator {n!r}" for n, a in zip(act.names, self.actuator_ids) if a < 0]
+        if self.base_body_id >= 0 and robot.is_floating and not self.free_base and not self._base_moves():
+            missing.append(f"joints floating body {robot.base_body!r}")
+        if missing:
+            raise PlantMismatchError(
+                f"plant {name} does not fit the {robot.name} controller: it lacks {', '.join(missing)} "
+                "(a plant needs the controller's actuators, measured joints and base body, by name)"
+            )
+        ids = self.actuator_ids
+        self.gear = model.actuator_gear[ids, 0].astype(float)
+        limited = model.actuator_ctrllimited[ids].astype(bool)
+        self.ctrl_range = np.where(limited[:, None], model.actuator_ctrlrange[ids], [-np.inf, np.inf])
+        self._ctrl_lo, self._ctrl_hi = self.ctrl_range[:, 0].copy(), self.ctrl_range[:, 1].copy()
+        nu = len(ids)
+        self._ctrl_prefix = bool(np.array_equal(ids, np.arange(nu)))
+        self._nu = nu
+        self._qsrc, self._vsrc = qsrc, vsrc
+        # The controller's own joint layout: qpos and qvel are read as they are.
+        self._same_layout = (self.free_base or not robot.is_floating) and (
+            model.nq == ctrl_model.nq
+            and model.nv == ctrl_model.nv
+            and np.array_equal(qsrc, np.arange(model.nq))
+            and np.array_equal(vsrc, np.arange(model.nv))
+        )
+        if not self.free_base and robot.is_floating:
+            smap = robot.state_map  # every hinge and slide joint of the controller's model
+            self._pin_q, self._pin_v = smap.scalar_pin_q, smap.scalar_pin_v
+            self._src_q, self._src_v = qsrc[smap.scalar_mj_q], vsrc[smap.scalar_mj_v]
+            self._scratch = mujoco.MjData(model)
+            self._twist = np.zeros(6)
+
+    @staticmethod
+    def _body_name_of_site(robot: Robot, side: str) -> str:
+        body = int(robot.mj_model.site_bodyid[robot.contact_site_ids[side]])
+        return mujoco.mj_id2name(robot.mj_model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
+
+    def _base_moves(self) -> bool:
+        """True when joints between the world and the base body give it 6 degrees of freedom."""
+        m, b, ndof = self.model, self.base_body_id, 0
+        while b > 0:
+            ndof += int(m.body_dofnum[b])
+            b = int(m.body_parentid[b])
+        return ndof >= 6
+
+    # ----------------------------------------------------------------- data
+    def new_data(self, keyframe: str | None = "stand") -> mujoco.MjData:
+        """A fresh ``MjData``, set to the plant's keyframe ``keyframe`` if given (then forwarded)."""
+        data = mujoco.MjData(self.model)
+        if keyframe is not None:
+            key_id = _id(self.model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
+            if key_id < 0:
+                raise InputError(f"plant {self.name} has no keyframe named {keyframe!r}; add one to its MJCF")
+            mujoco.mj_resetDataKeyframe(self.model, data, key_id)
+            mujoco.mj_forward(self.model, data)
+        return data
+
+    def read_state(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """The plant's state as the controller's Pinocchio ``(q, v)`` (new arrays; ``data`` is only read)."""
+        if self._same_layout:
+            return S.mj_to_pin(self.robot.state_map, data.qpos, data.qvel)
+        if self.free_base or not self.robot.is_floating:
+            return S.mj_to_pin(self.robot.state_map, data.qpos[self._qsrc], data.qvel[self._vsrc])
+        return self._read_body_base(data)
+
+    def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
+        m, s, b = self.model, self._scratch, self.base_body_id
+        s.qpos[:] = data.qpos
+        s.qvel[:] = data.qvel
+        mujoco.mj_kinematics(m, s)  # the base body's pose at this qpos (data's may be a step old)
+        mujoco.mj_comPos(m, s)
+        mujoco.mj_comVel(m, s)
+        mujoco.mj_objectVelocity(m, s, mujoco.mjtObj.mjOBJ_XBODY, b, self._twist, 1)  # (w, v), body frame
+        robot = self.robot
+        q = np.zeros(robot.nq)
+        v = np.zeros(robot.nv)
+        q[self._pin_q] = data.qpos[self._src_q]
+        v[self._pin_v] = data.qvel[self._src_v]
+        quat = s.xquat[b] / np.linalg.norm(s.xquat[b])
+        q[:3] = s.xpos[b]
+        q[3:6], q[6] = quat[1:], quat[0]  # xyzw
+        v[:3], v[3:6] = self._twist[3:], self._twist[:3]
+        return q, v
+
+    def ctrl_from_tau(self, tau_Nm: np.ndarray) -> np.ndarray:
+        """Actuator controls (controller order) for joint torques ``tau_Nm``: ``tau / gear``, clipped."""
+        return np.clip(tau_Nm / self.gear, self._ctrl_lo, self._ctrl_hi)
+
+    def apply_ctrl(self, data: mujoco.MjData, ctrl: np.ndarray) -> None:
+        """Write controls in the controller's actuator order to the plant's actuators."""
+        if self._ctrl_prefix:
+            data.ctrl[: self._nu] = ctrl
+        else:
+            data.ctrl[self.actuator_ids] = ctrl
+
+    def write_ctrl(self, data: mujoco.MjData, tau_Nm: np.ndarray) -> None:
+        """``apply_ctrl(data, ctrl_from_tau(tau_Nm))``."""
+        self.apply_ctrl(data, self.ctrl_from_tau(tau_Nm))
+
+    def foot_normal_forces_N(self, data: mujoco.MjData, out: dict[str, float] | None = None) -> dict[str, float]:
+        """Side -> normal force of the floor (world body) on that foot's body, N (summed over contacts)."""
+        m = self.model
+        normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
+        force6 = np.zeros(6)
+        for i in range(data.ncon):
+            con = data.contact[i]
+            b1, b2 = int(m.geom_bodyid[con.geom1]), int(m.geom_bodyid[con.geom2])
+            for side, body in self.foot_body_ids.items():
+                if (b1 == body and b2 == 0) or (b2 == body and b1 == 0):
+                    mujoco.mj_contactForce(m, data, i, force6)
+                    normal[side] += abs(force6[0])
+        return normal
