@@ -62,7 +62,13 @@ RULES: dict[str, Rule] = {
     "amlip_qp.control": Rule(CONTROL_BASE + ("amlip_qp.control",), ("mujoco", "amlip_qp.qp") + CONTROL_JOBS),
     # the walking loop runs any tracker: it imports none, nor the QP layer
     "amlip_qp.control.walking": Rule(
-        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking"), ("mujoco", "proxsuite", "qpsolvers")
+        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation"),
+        ("mujoco", "proxsuite", "qpsolvers"),
+    ),
+    # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
+    "amlip_qp.estimation": Rule(
+        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen"),
+        ("mujoco", "proxsuite", "qpsolvers", "scipy", "amlip_qp.control", "amlip_qp.sim"),
     ),
     # the paper's tracker: no QP
     "amlip_qp.control.pbc": Rule(

@@ -1,0 +1,243 @@
+"""The controller's base-state estimators: the simulator's truth, or the contact-aided invariant EKF.
+
+:func:`make_base_estimator` makes one by name. :meth:`BaseStateEstimator.fill`
+takes this tick's measurement and returns one whose base part (``q[:7]``:
+position and ``x y z w`` quaternion; ``v[:6]``: the Pinocchio free-flyer
+twist, i.e. the linear velocity of the base origin and the angular velocity,
+both in base axes) is the estimate.
+
+- ``truth`` returns the measurement object itself, untouched (the harness put
+  the simulator's base state in it).
+- ``ekf`` (:class:`EkfBaseEstimator`) runs
+  :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` on the IMU reading
+  and the leg kinematics of the encoder angles
+  (:class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`), with the
+  foot-contact switches of the measurement.
+
+**Initialisation of the EKF** (first measurement, and after :meth:`reset`):
+the robot is assumed at rest with both feet on the ground. The orientation is
+the IMU's own quaternion; the velocity and biases are zero; the contact
+points are placed through the leg kinematics. The world origin: the base's
+``x, y`` are the first measurement's ``q[0:2]`` when finite (else the robot's
+``stand`` keyframe's), and the height puts the two contact sites, on average,
+at their height in the ``stand`` keyframe (the plant starts on flat ground at
+``z = 0``). Yaw and the horizontal position are unobservable to the filter:
+they drift from there.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from amlip_qp.estimation.invariant_ekf import EkfNoise, InvariantEKF
+from amlip_qp.estimation.leg_kinematics import LegKinematics
+from amlip_qp.exceptions import InputError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
+
+#: The estimator names :func:`make_base_estimator` knows.
+ESTIMATORS = ("truth", "ekf")
+
+
+class BaseStateEstimator(Protocol):
+    """What the walking controller needs of a base-state estimator."""
+
+    #: True once the estimate is unusable (the controller then goes to its safe mode).
+    diverged: bool
+
+    def fill(self, measurement):
+        """This tick's measurement with the estimated base part (``q[:7]``, ``v[:6]``)."""
+
+    def reset(self) -> None:
+        """Start over (a new run)."""
+
+
+class TruthBaseEstimator:
+    """The simulator's base state, as the harness put it in the measurement."""
+
+    diverged = False
+
+    def fill(self, measurement):
+        """Return ``measurement`` itself (its base part is the truth).
+
+        Raises:
+            InputError: The measurement has no base state (``base_known`` False).
+        """
+        if not measurement.base_known:
+            raise InputError(
+                "--estimator truth needs the true base state in the measurement (base_known=True); "
+                "use --estimator ekf with sensors that give no base state"
+            )
+        return measurement
+
+    def reset(self) -> None:
+        """Nothing to forget."""
+
+
+def quat_xyzw_to_rot(quat) -> np.ndarray:
+    """Rotation matrix of a quaternion ``x y z w`` (normalised here)."""
+    x, y, z, w = (float(c) for c in quat)
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    if not (n > 0 and math.isfinite(n)):
+        raise InputError(f"the IMU quaternion must be finite and non-zero, got {list(quat)!r}")
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def rot_to_quat_xyzw(R) -> np.ndarray:
+    """Unit quaternion ``x y z w`` (``w >= 0``) of a rotation matrix (Shepperd's method)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    tr = r00 + r11 + r22
+    if tr > 0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        q = (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s
+    elif r00 > r11 and r00 > r22:
+        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
+        q = 0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s
+    elif r11 > r22:
+        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
+        q = (r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s
+    else:
+        s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
+        q = (r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s
+    out = np.array(q)
+    return -out if out[3] < 0 else out
+
+
+class EkfBaseEstimator:
+    """The base state from the contact-aided invariant EKF (see the module doc).
+
+    Args:
+        robot: A floating-base robot (the controller's model).
+        dt_s: Control period, s (used when the measurement times do not advance).
+        imu_pos_in_base_m: IMU position in the base frame, m (identity orientation).
+        noise: Filter settings (:class:`~amlip_qp.estimation.invariant_ekf.EkfNoise`).
+
+    Attributes:
+        ekf: The :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF`.
+        legs: The :class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`.
+        diverged: True once the filter diverged (kept until :meth:`reset`).
+    """
+
+    def __init__(self, robot: Robot, dt_s: float, imu_pos_in_base_m, noise: EkfNoise | None = None):
+        if not (dt_s > 0 and math.isfinite(dt_s)):
+            raise InputError(f"dt_s must be a positive control period in s, got {dt_s!r}")
+        self.legs = LegKinematics(robot, imu_pos_in_base_m)
+        self.ekf = InvariantEKF(noise)
+        self.dt_s = float(dt_s)
+        self.sides = self.legs.sides
+        self._imu = self.legs.imu_pos_in_base_m
+        self._q_stand = robot.q_stand.copy()
+        stand = self.legs.contacts_in_imu(robot.q_stand) + self._imu  # base frame
+        R_stand = quat_xyzw_to_rot(robot.q_stand[3:7])
+        #: Mean height of the contact sites in the stand keyframe (world), m.
+        self.stand_contact_height_m = float(robot.q_stand[2] + (stand @ R_stand.T)[:, 2].mean())
+        self.diverged = False
+        self._t_prev: float | None = None
+        self._imu_prev: tuple[np.ndarray, np.ndarray] | None = None
+
+    def reset(self) -> None:
+        """Forget the filter; the next :meth:`fill` re-initialises it."""
+        self.diverged = False
+        self._t_prev = None
+        self._imu_prev = None
+
+    def _contacts(self, measurement) -> tuple[bool, bool]:
+        fc = measurement.foot_contact
+        if not fc:
+            raise InputError("--estimator ekf needs the foot-contact switches in the measurement (foot_contact)")
+        return bool(fc.get(self.sides[0], False)), bool(fc.get(self.sides[1], False))
+
+    def _initialise(self, measurement, y: np.ndarray) -> None:
+        R = quat_xyzw_to_rot(measurement.imu.quat_xyzw)
+        xy = np.asarray(measurement.q[0:2], dtype=float)
+        if not np.isfinite(xy).all():
+            xy = self._q_stand[0:2]
+        p = np.empty(3)
+        p[0:2] = xy + (R @ self._imu)[0:2]
+        p[2] = self.stand_contact_height_m - float((y @ R.T)[:, 2].mean())
+        self.ekf.initialise(R, p, y)
+
+    def fill(self, measurement):
+        """This tick's measurement with the EKF's base estimate (a new object; the input is not modified).
+
+        Raises:
+            InputError: No IMU reading or no foot-contact switches in the measurement.
+        """
+        imu = measurement.imu
+        if imu is None:
+            raise InputError("--estimator ekf needs an IMU reading in the measurement (imu)")
+        contacts = self._contacts(measurement)
+        ekf = self.ekf
+        y = self.legs.contacts_in_imu(measurement.q)
+        gyro = np.asarray(imu.gyro_radps, dtype=float)
+        t = float(measurement.t_s)
+        if self._t_prev is None:
+            self._initialise(measurement, y)
+        else:
+            dt = t - self._t_prev
+            if not dt > 0:
+                dt = self.dt_s
+            ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
+        ekf.set_contacts(contacts, y)
+        ekf.correct(y)
+        self._t_prev = t
+        self._imu_prev = (gyro, np.asarray(imu.accel_mps2, dtype=float))
+        if not self.diverged and ekf.diverged():
+            self.diverged = True
+        return self._measurement(measurement, gyro)
+
+    def _measurement(self, measurement, gyro: np.ndarray):
+        ekf, r = self.ekf, self._imu
+        R = ekf.R
+        w = gyro - ekf.bg  # base axes = IMU axes
+        q = np.array(measurement.q, dtype=float)
+        v = np.array(measurement.v, dtype=float)
+        q[0:3] = ekf.p - R @ r
+        q[3:7] = rot_to_quat_xyzw(R) if np.isfinite(R).all() else np.nan
+        v[0:3] = R.T @ ekf.v - np.cross(w, r)
+        v[3:6] = w
+        return type(measurement)(
+            t_s=measurement.t_s,
+            q=q,
+            v=v,
+            foot_contact=measurement.foot_contact,
+            imu=measurement.imu,
+            base_known=True,
+        )
+
+
+def make_base_estimator(
+    name: str, robot: Robot, dt_s: float, imu_pos_in_base_m=None, noise: EkfNoise | None = None
+) -> BaseStateEstimator:
+    """The base-state estimator ``name`` (``"truth"`` or ``"ekf"``).
+
+    Args:
+        name: One of :data:`ESTIMATORS`.
+        robot: The controller's robot.
+        dt_s: Control period, s.
+        imu_pos_in_base_m: IMU position in the base frame, m (required for ``"ekf"``).
+        noise: EKF settings (``"ekf"`` only; default :class:`EkfNoise`).
+
+    Raises:
+        InputError: Unknown name, or ``"ekf"`` without an IMU position or for a robot without a floating base.
+    """
+    if name == "truth":
+        return TruthBaseEstimator()
+    if name == "ekf":
+        if imu_pos_in_base_m is None:
+            raise InputError(
+                f"{robot.name}: --estimator ekf needs the IMU position in the base frame (imu_pos_in_base_m)"
+            )
+        return EkfBaseEstimator(robot, dt_s, imu_pos_in_base_m, noise)
+    raise InputError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}")
