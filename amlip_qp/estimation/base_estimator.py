@@ -28,6 +28,7 @@ they drift from there.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
@@ -122,18 +123,41 @@ class EkfBaseEstimator:
         dt_s: Control period, s (used when the measurement times do not advance).
         imu_pos_in_base_m: IMU position in the base frame, m (identity orientation).
         noise: Filter settings (:class:`~amlip_qp.estimation.invariant_ekf.EkfNoise`).
+        backend: ``"c"``: the tick as generated C
+            (:class:`~amlip_qp.estimation.ekf_compiled.CompiledEkf`; without a
+            compiler, numpy with one ``CodegenFallbackWarning``); ``"numpy"``:
+            :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` (the reference).
+        cache_dir: Codegen cache folder (default: the codegen runtime's).
 
     Attributes:
-        ekf: The :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF`.
+        ekf: The numpy filter (the initialisation, and the filter itself with ``backend="numpy"``).
+        compiled: The generated-C filter, or ``None``.
         legs: The :class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`.
         diverged: True once the filter diverged (kept until :meth:`reset`).
     """
 
-    def __init__(self, robot: Robot, dt_s: float, imu_pos_in_base_m, noise: EkfNoise | None = None):
+    def __init__(
+        self, robot: Robot, dt_s: float, imu_pos_in_base_m, noise: EkfNoise | None = None, backend: str = "c",
+        cache_dir=None,
+    ):  # fmt: skip
         if not (dt_s > 0 and math.isfinite(dt_s)):
             raise InputError(f"dt_s must be a positive control period in s, got {dt_s!r}")
+        if backend not in ("c", "numpy"):
+            raise InputError(f"the EKF backend must be 'c' or 'numpy', got {backend!r}")
         self.legs = LegKinematics(robot, imu_pos_in_base_m)
         self.ekf = InvariantEKF(noise)
+        self.compiled = None
+        if backend == "c":
+            from amlip_qp.codegen.runtime import CodegenFallbackWarning
+            from amlip_qp.estimation.ekf_compiled import CompiledEkf
+            from amlip_qp.exceptions import CompilerUnavailableError
+
+            try:
+                self.compiled = CompiledEkf(self.ekf.noise, self.legs, cache_dir)
+            except CompilerUnavailableError as exc:
+                warnings.warn(
+                    f"no compiled EKF ({exc}); using numpy (same estimate, slower)", CodegenFallbackWarning, 2
+                )
         self.dt_s = float(dt_s)
         self.sides = self.legs.sides
         self._imu = self.legs.imu_pos_in_base_m
@@ -142,6 +166,8 @@ class EkfBaseEstimator:
         R_stand = quat_xyzw_to_rot(robot.q_stand[3:7])
         #: Mean height of the contact sites in the stand keyframe (world), m.
         self.stand_contact_height_m = float(robot.q_stand[2] + (stand @ R_stand.T)[:, 2].mean())
+        n = self.ekf.noise
+        self._max_trace, self._max_speed2 = n.max_covariance_trace, n.max_speed_mps**2
         self.diverged = False
         self._t_prev: float | None = None
         self._imu_prev: tuple[np.ndarray, np.ndarray] | None = None
@@ -151,6 +177,10 @@ class EkfBaseEstimator:
         self.diverged = False
         self._t_prev = None
         self._imu_prev = None
+
+    def state(self):
+        """A copy of the filter state (:class:`~amlip_qp.estimation.invariant_ekf.EkfState`)."""
+        return self.compiled.unpack() if self.compiled is not None else self.ekf.state()
 
     def _contacts(self, measurement) -> tuple[bool, bool]:
         fc = measurement.foot_contact
@@ -167,6 +197,11 @@ class EkfBaseEstimator:
         p[0:2] = xy + (R @ self._imu)[0:2]
         p[2] = self.stand_contact_height_m - float((y @ R.T)[:, 2].mean())
         self.ekf.initialise(R, p, y)
+        if self.compiled is not None:
+            self.compiled.load(self.ekf.state())
+            inp = self.compiled.input
+            inp[0:7] = 0.0  # no propagation on the first tick
+            inp[9:11] = 1.0  # both feet were in contact
 
     def fill(self, measurement):
         """This tick's measurement with the EKF's base estimate (a new object; the input is not modified).
@@ -178,24 +213,53 @@ class EkfBaseEstimator:
         if imu is None:
             raise InputError("--estimator ekf needs an IMU reading in the measurement (imu)")
         contacts = self._contacts(measurement)
-        ekf = self.ekf
-        y = self.legs.contacts_in_imu(measurement.q)
-        gyro = np.asarray(imu.gyro_radps, dtype=float)
         t = float(measurement.t_s)
-        if self._t_prev is None:
+        first = self._t_prev is None
+        compiled = self.compiled
+        if first or compiled is None:
+            y = self.legs.contacts_in_imu(measurement.q)
+        if first:
             self._initialise(measurement, y)
-        else:
-            dt = t - self._t_prev
-            if not dt > 0:
-                dt = self.dt_s
+        dt = t - self._t_prev if not first else 0.0
+        if not first and not dt > 0:
+            dt = self.dt_s
+        self._t_prev = t
+        if compiled is not None:
+            return self._fill_compiled(measurement, imu, contacts, dt)
+        ekf = self.ekf
+        gyro = np.asarray(imu.gyro_radps, dtype=float)
+        if not first:
             ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
         ekf.set_contacts(contacts, y)
         ekf.correct(y)
-        self._t_prev = t
         self._imu_prev = (gyro, np.asarray(imu.accel_mps2, dtype=float))
         if not self.diverged and ekf.diverged():
             self.diverged = True
         return self._measurement(measurement, gyro)
+
+    def _fill_compiled(self, measurement, imu, contacts: tuple[bool, bool], dt: float):
+        c = self.compiled
+        inp = c.input
+        inp[6] = dt
+        inp[7], inp[8] = contacts
+        inp[11:14] = imu.gyro_radps
+        q = measurement.q
+        c.q_joints[:] = q[7:]
+        c.tick()
+        # The next tick propagates with this tick's IMU, from these contacts.
+        inp[0:3] = imu.gyro_radps
+        inp[3:6] = imu.accel_mps2
+        inp[9], inp[10] = contacts
+        base, (tr, speed2) = c.base, c.checks.tolist()
+        if not math.isfinite(sum(base.tolist()) + tr + speed2) or tr > self._max_trace or speed2 > self._max_speed2:
+            self.diverged = True
+        q = q.copy()
+        v = measurement.v.copy()
+        q[0:7] = base[0:7]
+        v[0:6] = base[7:13]
+        return type(measurement)(
+            t_s=measurement.t_s, q=q, v=v, foot_contact=measurement.foot_contact, imu=imu, base_known=True
+        )
 
     def _measurement(self, measurement, gyro: np.ndarray):
         ekf, r = self.ekf, self._imu
@@ -208,17 +272,12 @@ class EkfBaseEstimator:
         v[0:3] = R.T @ ekf.v - np.cross(w, r)
         v[3:6] = w
         return type(measurement)(
-            t_s=measurement.t_s,
-            q=q,
-            v=v,
-            foot_contact=measurement.foot_contact,
-            imu=measurement.imu,
-            base_known=True,
+            t_s=measurement.t_s, q=q, v=v, foot_contact=measurement.foot_contact, imu=measurement.imu, base_known=True
         )
 
 
 def make_base_estimator(
-    name: str, robot: Robot, dt_s: float, imu_pos_in_base_m=None, noise: EkfNoise | None = None
+    name: str, robot: Robot, dt_s: float, imu_pos_in_base_m=None, noise: EkfNoise | None = None, backend: str = "c"
 ) -> BaseStateEstimator:
     """The base-state estimator ``name`` (``"truth"`` or ``"ekf"``).
 
@@ -228,6 +287,7 @@ def make_base_estimator(
         dt_s: Control period, s.
         imu_pos_in_base_m: IMU position in the base frame, m (required for ``"ekf"``).
         noise: EKF settings (``"ekf"`` only; default :class:`EkfNoise`).
+        backend: The EKF's ``"c"`` (generated C, default) or ``"numpy"`` (:class:`EkfBaseEstimator`).
 
     Raises:
         InputError: Unknown name, or ``"ekf"`` without an IMU position or for a robot without a floating base.
@@ -239,5 +299,5 @@ def make_base_estimator(
             raise InputError(
                 f"{robot.name}: --estimator ekf needs the IMU position in the base frame (imu_pos_in_base_m)"
             )
-        return EkfBaseEstimator(robot, dt_s, imu_pos_in_base_m, noise)
+        return EkfBaseEstimator(robot, dt_s, imu_pos_in_base_m, noise, backend)
     raise InputError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}")

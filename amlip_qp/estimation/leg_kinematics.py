@@ -47,7 +47,8 @@ class LegKinematics:
         self.model = robot.pin_model
         self.data = self.model.createData()
         self.sides = tuple(robot.foot_sides)
-        self._frames = tuple(robot.contact_frame_ids[s] for s in self.sides)
+        #: Pinocchio frame ids of the contact sites (``sides`` order).
+        self.frame_ids = tuple(robot.contact_frame_ids[s] for s in self.sides)
         self.imu_pos_in_base_m = imu
         self._q = np.zeros(self.model.nq)
         self._q[6] = 1.0  # identity base quaternion (x y z w)
@@ -66,7 +67,7 @@ class LegKinematics:
         m, d = self.model, self.data
         pin.forwardKinematics(m, d, qq)
         out = np.empty((2, 3))
-        for i, fid in enumerate(self._frames):
+        for i, fid in enumerate(self.frame_ids):
             out[i] = pin.updateFramePlacement(m, d, fid).translation
         out -= self.imu_pos_in_base_m
         return out
