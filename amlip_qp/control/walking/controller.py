@@ -177,6 +177,8 @@ class WalkingController:
         #: Times the controller entered the safe mode.
         self.estimator_divergences = 0
         self._in_safe_mode = False
+        n_joints = len(robot.joint_names)
+        self._n_base_q, self._n_base_v = robot.nq - n_joints, robot.nv - n_joints
         self._nan_tick_parts: tuple[Estimate, PlannerOutput, np.ndarray] | None = None
         self.gait = GaitLogic(gait)
         plan_fn = reference_fn = None
@@ -278,7 +280,8 @@ class WalkingController:
         measurement = self.base_estimator.fill(measurement)
         q, v = measurement.q, measurement.v
         # A finite sum implies finite entries (NaN and inf propagate).
-        if self.base_estimator.diverged or not math.isfinite(sum(q[:7].tolist()) + sum(v[:6].tolist())):
+        nq, nv = self._n_base_q, self._n_base_v
+        if self.base_estimator.diverged or not math.isfinite(sum(q[:nq].tolist()) + sum(v[:nv].tolist())):
             return self._safe_mode(t, v)
         self._in_safe_mode = False
         command = self.shaper.update(command, t)
