@@ -7,7 +7,7 @@ invariant extended Kalman filtering for robot state estimation", IJRR 39(4), 202
 orientation ``R`` (IMU to world), velocity ``v`` and position ``p`` of the IMU
 (world axes), the contact points ``d_left``, ``d_right`` (world), plus the
 gyro and accelerometer biases ``b_g``, ``b_a`` (IMU axes) beside the group
-("imperfect" IEKF, paper section 5). The error is right-invariant,
+(the paper's "imperfect" IEKF with IMU biases). The error is right-invariant,
 ``eta = X_hat X^-1 ~ exp(xi)``, ordered
 ``xi = [xi_R, xi_v, xi_p, xi_dl, xi_dr, d b_g, d b_a]`` (21; ``d b = b_hat - b``).
 
@@ -23,8 +23,10 @@ white slip velocity (``contact_std``).
 ``p <- p + v dt + (R a + g) dt^2/2``, ``v <- v + (R a + g) dt`` with the
 bias-corrected gyro ``w`` and specific force ``a``; the covariance with the
 error's state transition ``Phi = exp(A dt)`` to first order, ``I + A dt``
-(at 2 kHz the second-order term is below 1e-6 of the first), and
-``Q_d = G Q G^T dt``.
+(the neglected ``(A dt)^2 / 2`` is ``|A| dt / 2``, about 3e-3, of the kept
+term at 2 kHz; the tests check ``Phi`` against finite differences of the
+propagation), and ``Q_d = G Q G^T dt`` with isotropic densities (so
+``R Sigma R^T = Sigma``).
 
 **Correction** (each foot in contact): ``y = R^T (d - p)`` measured by the leg
 kinematics; innovation ``z = R_hat y - (d_hat - p_hat) = H xi`` with the
