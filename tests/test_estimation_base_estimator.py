@@ -124,3 +124,14 @@ def test_quaternion_conversions_round_trip():
         np.testing.assert_allclose(quat_xyzw_to_rot(q), R, atol=1e-12)
     with pytest.raises(InputError, match="quaternion"):
         quat_xyzw_to_rot([0.0, 0.0, 0.0, 0.0])
+
+
+def test_without_a_compiler_the_ekf_runs_on_numpy_with_one_warning(cassie, monkeypatch):
+    from amlip_qp.codegen.runtime import CodegenFallbackWarning
+
+    monkeypatch.setenv("AMLIP_QP_CC", "none")
+    with pytest.warns(CodegenFallbackWarning, match="no compiled EKF"):
+        est = make_base_estimator("ekf", cassie, DT, IMU)
+    assert est.compiled is None
+    out = est.fill(_standing(cassie, 0))
+    np.testing.assert_allclose(out.q[0:3], cassie.q_stand[0:3], atol=1e-9)
