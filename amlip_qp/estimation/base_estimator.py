@@ -38,6 +38,7 @@ from amlip_qp.estimation.leg_kinematics import LegKinematics
 from amlip_qp.exceptions import InputError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.estimation.ekf_compiled import CompiledEkf
     from amlip_qp.robots.robot import Robot
 
 #: The estimator names :func:`make_base_estimator` knows.
@@ -146,7 +147,7 @@ class EkfBaseEstimator:
             raise InputError(f"the EKF backend must be 'c' or 'numpy', got {backend!r}")
         self.legs = LegKinematics(robot, imu_pos_in_base_m)
         self.ekf = InvariantEKF(noise)
-        self.compiled = None
+        self.compiled: CompiledEkf | None = None
         if backend == "c":
             from amlip_qp.codegen.runtime import CodegenFallbackWarning
             from amlip_qp.estimation.ekf_compiled import CompiledEkf
@@ -214,22 +215,22 @@ class EkfBaseEstimator:
             raise InputError("--estimator ekf needs an IMU reading in the measurement (imu)")
         contacts = self._contacts(measurement)
         t = float(measurement.t_s)
-        first = self._t_prev is None
-        compiled = self.compiled
-        if first or compiled is None:
-            y = self.legs.contacts_in_imu(measurement.q)
-        if first:
-            self._initialise(measurement, y)
-        dt = t - self._t_prev if not first else 0.0
-        if not first and not dt > 0:
-            dt = self.dt_s
+        t_prev, compiled = self._t_prev, self.compiled
         self._t_prev = t
+        if t_prev is None:
+            y = self.legs.contacts_in_imu(measurement.q)
+            self._initialise(measurement, y)
+            dt = 0.0  # no propagation on the first tick
+        else:
+            dt = t - t_prev if t > t_prev else self.dt_s
         if compiled is not None:
-            return self._fill_compiled(measurement, imu, contacts, dt)
+            return self._fill_compiled(compiled, measurement, imu, contacts, dt)
         ekf = self.ekf
+        if t_prev is not None:
+            y = self.legs.contacts_in_imu(measurement.q)
+            if self._imu_prev is not None:
+                ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
         gyro = np.asarray(imu.gyro_radps, dtype=float)
-        if not first:
-            ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
         ekf.set_contacts(contacts, y)
         ekf.correct(y)
         self._imu_prev = (gyro, np.asarray(imu.accel_mps2, dtype=float))
@@ -237,8 +238,7 @@ class EkfBaseEstimator:
             self.diverged = True
         return self._measurement(measurement, gyro)
 
-    def _fill_compiled(self, measurement, imu, contacts: tuple[bool, bool], dt: float):
-        c = self.compiled
+    def _fill_compiled(self, c: CompiledEkf, measurement, imu, contacts: tuple[bool, bool], dt: float):
         inp = c.input
         inp[6] = dt
         inp[7], inp[8] = contacts
