@@ -65,8 +65,11 @@ RULES: dict[str, Rule] = {
         CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation"),
         ("mujoco", "proxsuite", "qpsolvers"),
     ),
-    # base-state estimation from the robot's sensors: never the plant
-    "amlip_qp.estimation": Rule(CONTROL_BASE + ("amlip_qp.estimation",), ("mujoco", "proxsuite", "qpsolvers")),
+    # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
+    "amlip_qp.estimation": Rule(
+        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen"),
+        ("mujoco", "proxsuite", "qpsolvers", "scipy", "amlip_qp.control", "amlip_qp.sim"),
+    ),
     # the paper's tracker: no QP
     "amlip_qp.control.pbc": Rule(
         CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pbc"), ("mujoco", "proxsuite", "qpsolvers")

@@ -134,3 +134,77 @@ def test_the_planner_sees_the_shaped_command(rabbit):
     assert ctrl.shaper.value[0] == pytest.approx(PROFILES["rabbit"].shaping.vx_accel_mps2 * 0.0005)
     ctrl.reset()
     assert ctrl.shaper.value == (0.0, 0.0, 0.0)
+
+
+class _StubEstimator:
+    """Returns the measurement with a NaN base while ``bad`` (or reports ``diverged``)."""
+
+    def __init__(self):
+        self.bad = True
+        self.diverged = False
+        self.resets = 0
+
+    def fill(self, m):
+        if not self.bad:
+            return m
+        q = m.q.copy()
+        q[0] = np.nan
+        return Measurement(m.t_s, q, m.v, m.foot_contact, m.imu, True)
+
+    def reset(self):
+        self.resets += 1
+
+
+def _safe_ctrl(robot, estimator):
+    return WalkingController(
+        robot, _NaNTracker(robot.nu), RobotKinematics(robot), planner_backend="numpy", base_estimator=estimator
+    )
+
+
+def test_a_nan_base_estimate_runs_the_damped_safe_mode_and_never_a_nan_torque(rabbit):
+    est = _StubEstimator()
+    ctrl = _safe_ctrl(rabbit, est)
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06)
+    v = np.zeros(rabbit.nv)
+    v[rabbit.actuated.pin_v_idx] = [1.0, -2.0, 0.5, 0.0]
+    with pytest.warns(RuntimeWarning, match="safe mode"):
+        tick = ctrl.step(Measurement(0.0, rabbit.q_stand.copy(), v), cmd)
+    np.testing.assert_allclose(tick.tau_Nm, -5.0 * np.array([1.0, -2.0, 0.5, 0.0]))
+    assert not tick.tracker_ok and ctrl.fallback_ticks == 0  # the tracker was not called
+    assert ctrl.safe_mode_ticks == 1 and ctrl.estimator_divergences == 1
+    v_nan = v.copy()
+    v_nan[rabbit.actuated.pin_v_idx[0]] = np.nan  # non-finite encoders: zero torque
+    tick = ctrl.step(Measurement(0.0005, rabbit.q_stand.copy(), v_nan), cmd)
+    np.testing.assert_array_equal(tick.tau_Nm, np.zeros(rabbit.nu))
+    assert ctrl.safe_mode_ticks == 2 and ctrl.estimator_divergences == 1  # one event, two ticks
+    assert np.isnan(tick.plan.h_d).all() and np.isnan(tick.estimate.com_m).all()
+
+
+def test_each_entry_into_the_safe_mode_counts_and_warns_once(rabbit):
+    import warnings
+
+    est = _StubEstimator()
+    ctrl = _safe_ctrl(rabbit, est)
+    ctrl.tracker = _HugeTracker(rabbit.nu)
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06)
+    v = np.zeros(rabbit.nv)
+    with pytest.warns(RuntimeWarning, match="safe mode"):
+        ctrl.step(Measurement(0.0, rabbit.q_stand.copy(), v), cmd)
+    est.bad = False
+    tick = ctrl.step(Measurement(0.0005, rabbit.q_stand.copy(), v), cmd)
+    np.testing.assert_allclose(tick.tau_Nm, rabbit.actuated.torque_limit_Nm[:, 1])  # the tracker ran again
+    est.diverged = True  # a diverged estimator with a finite base: safe mode too
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tick = ctrl.step(Measurement(0.001, rabbit.q_stand.copy(), v), cmd)
+    np.testing.assert_array_equal(tick.tau_Nm, np.zeros(rabbit.nu))
+    assert ctrl.safe_mode_ticks == 2 and ctrl.estimator_divergences == 2
+    ctrl.reset()
+    assert ctrl.safe_mode_ticks == 0 and ctrl.estimator_divergences == 0 and est.resets == 1
+
+
+def test_the_default_base_estimator_is_the_truth(rabbit):
+    from amlip_qp.estimation import TruthBaseEstimator
+
+    ctrl, _ = _tick(rabbit, _HugeTracker(rabbit.nu), np.zeros(rabbit.nv))
+    assert isinstance(ctrl.base_estimator, TruthBaseEstimator) and ctrl.safe_mode_ticks == 0

@@ -1,4 +1,9 @@
-"""One IMU sample, as the harness's sensors report it to the controller."""
+"""One IMU reading, as the controller receives it.
+
+The IMU frame is rigidly attached to the base body at the robot's
+``imu_pos_in_base_m`` with the base's orientation (identity mounting), so its
+axes are the base axes.
+"""
 
 from __future__ import annotations
 
@@ -9,12 +14,14 @@ import numpy as np
 
 @dataclass(frozen=True)
 class ImuReading:
-    """One IMU sample (SI units, the IMU's own axes).
+    """What the IMU reports at one tick (SI units).
 
     Attributes:
-        quat_xyzw: IMU frame orientation in world, as the IMU's own filter reports it (4,).
-        gyro_radps: Angular velocity of the IMU frame, IMU axes, rad/s (3,).
-        accel_mps2: Specific force (a - g) in IMU axes, m/s² (3,) (reads +9.81 z when at rest, level).
+        quat_xyzw: Orientation of the IMU frame in the world, as the IMU's own
+            filter reports it (unit quaternion, x y z w), shape (4,).
+        gyro_radps: Angular velocity of the IMU frame, IMU axes, rad/s, shape (3,).
+        accel_mps2: Specific force ``a - g`` in IMU axes, m/s^2, shape (3,)
+            (reads ``+9.81`` on z at rest, level).
     """
 
     quat_xyzw: np.ndarray

@@ -2,6 +2,10 @@
 
 One :meth:`WalkingController.step` per control tick (2 kHz by default):
 
+0. the base-state estimator (:mod:`amlip_qp.estimation`; by default the
+   simulator's truth, passed through untouched) fills the base pose and
+   velocity; a non-finite or diverged estimate switches to the damped safe
+   mode for the tick (no planner, no tracker: ``tau = -kd * joint velocity``);
 1. the estimator updates the Pinocchio kinematics once at the measured state;
 2. the gait logic decides whether the swing foot touched down (from the step
    clock's phase); at touchdown the planner starts a new step, from the
@@ -36,6 +40,7 @@ from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
+from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.outputs import output_layout
@@ -120,6 +125,9 @@ class WalkingController:
             sees it (:class:`~amlip_qp.alip.command_shaping.CommandShaper`);
             default: the robot's profile (:mod:`amlip_qp.profiles`), no limit
             for a robot without one.
+        base_estimator: Where the base pose and velocity come from
+            (:func:`~amlip_qp.estimation.base_estimator.make_base_estimator`);
+            default: the measurement's own base state (the simulator's truth).
     """
 
     def __init__(
@@ -136,6 +144,7 @@ class WalkingController:
         speed_correction: SpeedCorrection | None = None,
         output_backend: str = "c",
         command_shaping: CommandShaping | None = None,
+        base_estimator: BaseStateEstimator | None = None,
     ):
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
@@ -161,6 +170,16 @@ class WalkingController:
         self.kin = kinematics
         self.dt_s = float(dt_s)
         self.estimator = Estimator(kinematics, dt_s, kalman=kalman)
+        #: The base-state estimator (called first in every :meth:`step`).
+        self.base_estimator: BaseStateEstimator = base_estimator or TruthBaseEstimator()
+        #: Ticks run in the damped safe mode (a non-finite or diverged base estimate).
+        self.safe_mode_ticks = 0
+        #: Times the controller entered the safe mode.
+        self.estimator_divergences = 0
+        self._in_safe_mode = False
+        n_joints = len(robot.joint_names)
+        self._n_base_q, self._n_base_v = robot.nq - n_joints, robot.nv - n_joints
+        self._nan_tick_parts: tuple[Estimate, PlannerOutput, np.ndarray] | None = None
         self.gait = GaitLogic(gait)
         plan_fn = reference_fn = None
         if planner_backend == "c":
@@ -212,6 +231,10 @@ class WalkingController:
         self.shaper.reset()
         self.steps.clear()
         self.fallback_ticks = 0
+        self.base_estimator.reset()
+        self.safe_mode_ticks = 0
+        self.estimator_divergences = 0
+        self._in_safe_mode = False
         self._last_plan = None
         self._L_target_this_step = np.full(2, np.nan)
         self.speed.reset()
@@ -254,6 +277,13 @@ class WalkingController:
     def step(self, measurement: Measurement, command: Command) -> TickInfo:
         """One control tick: joint torques (actuator order, joint side, N m) and signals."""
         t = float(measurement.t_s)
+        measurement = self.base_estimator.fill(measurement)
+        q, v = measurement.q, measurement.v
+        # A finite sum implies finite entries (NaN and inf propagate).
+        nq, nv = self._n_base_q, self._n_base_v
+        if self.base_estimator.diverged or not math.isfinite(sum(q[:nq].tolist()) + sum(v[:nv].tolist())):
+            return self._safe_mode(t, v)
+        self._in_safe_mode = False
         command = self.shaper.update(command, t)
         estimator = self.estimator
         estimator.observe(measurement)
@@ -336,6 +366,49 @@ class WalkingController:
             touchdown=touchdown,
             info=result.info,
         )
+
+    def _safe_mode(self, t: float, v: np.ndarray) -> TickInfo:
+        """The damped safe mode: ``tau = -kd * joint velocity`` from the encoders (zero if those are not finite)."""
+        if not self._in_safe_mode:
+            self._in_safe_mode = True
+            self.estimator_divergences += 1
+            if self.estimator_divergences == 1:
+                warnings.warn(
+                    f"the base-state estimate is non-finite or diverged at t={t:.4f} s; the controller is in its "
+                    "damped safe mode (counted in safe_mode_ticks and estimator_divergences)",
+                    RuntimeWarning,
+                    stacklevel=3,
+                )
+        self.safe_mode_ticks += 1
+        qd = np.asarray(v, dtype=float)[self._act_v]
+        tau = -self._fallback_kd * qd if np.isfinite(qd).all() else np.zeros(self._tau_shape)
+        tau = np.maximum(tau, self._tau_lo)
+        np.minimum(tau, self._tau_hi, out=tau)
+        est, plan, h = self._nan_parts()
+        stance = self.clock.stance or self.initial_stance
+        return TickInfo(
+            t_s=t, stance=stance, phase=math.nan, estimate=est, plan=plan, h=h, tau_Nm=tau,
+            tracker_ok=False, touchdown=False, info={"safe_mode": True},
+        )  # fmt: skip
+
+    def _nan_parts(self) -> tuple[Estimate, PlannerOutput, np.ndarray]:
+        """NaN estimate, plan and outputs for the logs of a safe-mode tick (made once)."""
+        if self._nan_tick_parts is None:
+            n = len(self.planner.output_names)
+            nan = math.nan
+
+            def vec(k: int) -> np.ndarray:
+                return np.full(k, nan)
+
+            est = Estimate(vec(3), vec(3), vec(3), vec(3), vec(3), vec(3), vec(3))
+            plan = PlannerOutput(
+                s=nan, t_remaining_s=nan, L_hat_Nms=vec(2), p_hat_m=vec(2), L_des_Nms=vec(2),
+                p_sw_des_world_m=vec(2), p_sw_des_heading_m=vec(2), swing_target_world_m=vec(3),
+                h_d=vec(n), dh_d=vec(n), ddh_d=vec(n), heading_rad=nan, heading_next_rad=nan, turn_rad=nan,
+                v_z_used_mps=nan,
+            )  # fmt: skip
+            self._nan_tick_parts = (est, plan, vec(n))
+        return self._nan_tick_parts
 
     @staticmethod
     def _swing_contact_weight(phase: float) -> float:

@@ -22,6 +22,8 @@ from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RA
 from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
 
+__all__ = ["Estimate", "Estimator", "ImuReading", "Measurement"]
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
 
@@ -32,16 +34,16 @@ class Measurement:
 
     Attributes:
         t_s: Time, s.
-        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw);
-            with ``base_known`` False the base part ``q[:7]`` is NOT valid.
-        v: Velocity, Pinocchio convention (free-flyer twist in the base frame);
-            with ``base_known`` False the base part ``v[:6]`` is NOT valid.
+        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw).
+        v: Velocity, Pinocchio convention (free-flyer twist in the base frame).
         foot_contact: Side -> contact switch (True when the foot carries load);
             an empty dict means "no contact sensing": touchdown is then
             detected from the swing foot's height.
-        imu: The IMU sample, or ``None`` without an IMU.
-        base_known: False when the sensors give no base state (``--sensors robot``
-            without ``--estimator truth``): the base state must come from the estimator.
+        imu: The IMU reading (:class:`~amlip_qp.estimation.imu.ImuReading`),
+            or ``None`` without an IMU.
+        base_known: False when the base part (``q[:7]``, ``v[:6]``) is not a
+            measurement (robot sensors): a base-state estimator must fill it
+            (:mod:`amlip_qp.estimation.base_estimator`).
     """
 
     t_s: float

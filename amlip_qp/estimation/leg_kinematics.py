@@ -1,0 +1,73 @@
+"""The contact points in the IMU frame from the joint encoders (forward kinematics).
+
+The contact-aided filter measures where each foot's contact site is seen from
+the IMU. That vector depends on the joint angles only: the kinematics run on
+the controller's Pinocchio model with the base at the origin (identity pose),
+so the contact site's world position is its position in the base frame; the
+IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes, so
+the vector from the IMU to the site, in IMU axes, is that position minus
+``imu_pos_in_base_m``. This object keeps its own ``pinocchio.Data``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from amlip_qp.exceptions import InputError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.robot import Robot
+
+
+class LegKinematics:
+    """Contact-site positions in the IMU frame from the joint angles.
+
+    Args:
+        robot: A floating-base :class:`~amlip_qp.robots.robot.Robot` (free-flyer root).
+        imu_pos_in_base_m: Position of the IMU in the base frame, m, shape (3,).
+
+    Raises:
+        InputError: A robot without a free-flyer base, or a bad IMU position.
+    """
+
+    def __init__(self, robot: Robot, imu_pos_in_base_m):
+        import pinocchio as pin
+
+        if not robot.is_floating:
+            raise InputError(
+                f"{robot.name}: the contact-aided EKF needs a free-floating base (a free joint); "
+                "use --estimator truth for this robot"
+            )
+        imu = np.array(imu_pos_in_base_m, dtype=float)
+        if imu.shape != (3,) or not np.isfinite(imu).all():
+            raise InputError(f"imu_pos_in_base_m must be 3 finite numbers in m, got {imu_pos_in_base_m!r}")
+        self._pin = pin
+        self.model = robot.pin_model
+        self.data = self.model.createData()
+        self.sides = tuple(robot.foot_sides)
+        #: Pinocchio frame ids of the contact sites (``sides`` order).
+        self.frame_ids = tuple(robot.contact_frame_ids[s] for s in self.sides)
+        self.imu_pos_in_base_m = imu
+        self._q = np.zeros(self.model.nq)
+        self._q[6] = 1.0  # identity base quaternion (x y z w)
+        self._nq = self.model.nq
+
+    def contacts_in_imu(self, q) -> np.ndarray:
+        """Each side's contact site seen from the IMU, IMU axes, m, shape (2, 3) (``self.sides`` order).
+
+        Args:
+            q: A Pinocchio configuration, shape (nq,); only its joint part
+                ``q[7:]`` (the encoder angles) is used.
+        """
+        pin = self._pin
+        qq = self._q
+        qq[7:] = q[7 : self._nq]
+        m, d = self.model, self.data
+        pin.forwardKinematics(m, d, qq)
+        out = np.empty((2, 3))
+        for i, fid in enumerate(self.frame_ids):
+            out[i] = pin.updateFramePlacement(m, d, fid).translation
+        out -= self.imu_pos_in_base_m
+        return out

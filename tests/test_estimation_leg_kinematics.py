@@ -1,0 +1,48 @@
+"""LegKinematics: the contact sites seen from the IMU, from the joint angles only, against the full
+model's kinematics at an arbitrary base pose."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.estimation.base_estimator import quat_xyzw_to_rot
+from amlip_qp.estimation.leg_kinematics import LegKinematics
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import RobotKinematics, load_robot
+
+IMU = np.array([0.03, -0.01, 0.09])
+
+
+@pytest.fixture(scope="module")
+def cassie():
+    return load_robot("cassie")
+
+
+def test_the_contacts_in_the_imu_frame_match_the_full_kinematics(cassie):
+    rng = np.random.default_rng(0)
+    legs = LegKinematics(cassie, IMU)
+    kin = RobotKinematics(cassie)
+    for _ in range(3):
+        q = cassie.q_stand.copy()
+        q[0:3] = rng.normal(size=3)
+        quat = rng.normal(size=4)
+        q[3:7] = quat / np.linalg.norm(quat)
+        q[7:] += 0.2 * rng.normal(size=cassie.nq - 7)
+        kin.update_positions(q)
+        R = quat_xyzw_to_rot(q[3:7])
+        y = legs.contacts_in_imu(q)
+        for i, side in enumerate(legs.sides):
+            world = q[0:3] + R @ (IMU + y[i])
+            np.testing.assert_allclose(world, kin.contact_position(side), atol=1e-12)
+    # the base part of q is ignored
+    q2 = q.copy()
+    q2[0:7] = [5.0, 5.0, 5.0, 0.0, 0.0, 0.0, 1.0]
+    np.testing.assert_array_equal(legs.contacts_in_imu(q2), y)
+
+
+def test_a_robot_without_a_floating_base_or_a_bad_imu_position_is_refused(cassie):
+    with pytest.raises(InputError, match="free-floating base"):
+        LegKinematics(load_robot("rabbit"), IMU)
+    with pytest.raises(InputError, match="imu_pos_in_base_m"):
+        LegKinematics(cassie, [0.0, np.nan, 0.0])
+    with pytest.raises(InputError, match="imu_pos_in_base_m"):
+        LegKinematics(cassie, [0.0, 0.0])
