@@ -198,3 +198,18 @@ def test_without_the_truth_the_measurement_has_no_base():
 def test_gaussian_noise_is_for_the_ideal_sensors_only():
     with pytest.raises(InputError, match="robot sensors have their own"):
         factory.build_simulation(Scenario("test", "cassie", 0.01), "qp", noise=SensorNoise(), sensors="robot")
+
+
+def test_plant_edits_and_the_control_filter_reach_the_plant_through_the_factory():
+    def heavy_pelvis(spec):
+        spec.body("cassie-pelvis").mass = 20.0
+
+    def halve(ctrl):
+        return 0.5 * ctrl
+
+    robot = factory.load("cassie")
+    sc = Scenario("test", "cassie", 0.01)
+    sim = factory.build_simulation(sc, HoldTracker(robot), plant_edits=[heavy_pelvis], ctrl_filter=halve)
+    assert sim.model.body_mass[sim.plant.base_body_id] == 20.0 and sim.ctrl_filter is halve
+    with pytest.raises(InputError, match="give the plant by name or path"):
+        factory.build_simulation(sc, HoldTracker(robot), plant=sim.plant, plant_edits=[heavy_pelvis])

@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import importlib
 import inspect
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, cast
 
 from amlip_qp.control.tracker import Tracker
@@ -22,8 +22,10 @@ from amlip_qp.sim.run_types import RunResult, SensorNoise, TickCallback
 from amlip_qp.sim.scenarios import Scenario
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    import numpy as np
+
     from amlip_qp.robots.robot import Robot
-    from amlip_qp.sim.plant import Plant
+    from amlip_qp.sim.plant import Plant, SpecEdit
 
 #: The control period of the closed loops built here, s (2 kHz, as on Cassie).
 CONTROL_DT_S = 0.0005
@@ -91,6 +93,8 @@ def build_simulation(
     plant: str | Plant | None = None,
     sensors: str = "ideal",
     estimator: str = "truth",
+    plant_edits: Sequence[SpecEdit] = (),
+    ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Simulation:
     """The :class:`Simulation` of ``scenario`` with ``tracker`` (a name or an instance).
 
@@ -107,6 +111,10 @@ def build_simulation(
         sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`).
         estimator: The controller's base estimator, ``"truth"`` or ``"ekf"``
             (:func:`amlip_qp.estimation.make_base_estimator`).
+        plant_edits: Changes of the plant's model before it is compiled (e.g. plant
+            modifiers), for a plant given by name or path.
+        ctrl_filter: Applied to the actuator controls before they reach the plant
+            (e.g. an actuator delay's ``push``); see :class:`Simulation`.
     """
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
@@ -114,7 +122,12 @@ def build_simulation(
 
     check_estimator(estimator)
     robot = load(scenario.robot)
-    the_plant = plant if isinstance(plant, Plant) else load_plant(robot.name if plant is None else plant, robot)
+    if isinstance(plant, Plant):
+        if plant_edits:
+            raise InputError("plant_edits change a plant before it is compiled: give the plant by name or path")
+        the_plant = plant
+    else:
+        the_plant = load_plant(robot.name if plant is None else plant, robot, edits=plant_edits)
     trk = make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
@@ -144,6 +157,7 @@ def build_simulation(
         plant=the_plant,
         sensors=sensors,
         estimator=estimator,
+        ctrl_filter=ctrl_filter,
     )
 
 
@@ -157,9 +171,21 @@ def run_scenario(
     plant: str | Plant | None = None,
     sensors: str = "ideal",
     estimator: str = "truth",
+    plant_edits: Sequence[SpecEdit] = (),
+    ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> RunResult:
     """Build and run ``scenario`` for its full duration (see :func:`build_simulation`)."""
-    sim = build_simulation(scenario, tracker, seed=seed, noise=noise, plant=plant, sensors=sensors, estimator=estimator)
+    sim = build_simulation(
+        scenario,
+        tracker,
+        seed=seed,
+        noise=noise,
+        plant=plant,
+        sensors=sensors,
+        estimator=estimator,
+        plant_edits=plant_edits,
+        ctrl_filter=ctrl_filter,
+    )
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick)
     result.info["scenario"] = scenario.name
     return result
