@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amlip_qp.control.pbc.gains import CASSIE_GAINS, RABBIT_GAINS, PBCGains, default_gains
+from amlip_qp.control.pbc.gains import CASSIE_ACHILLES, CASSIE_GAINS, RABBIT_GAINS, PBCGains, default_gains
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import get_profile
 from amlip_qp.robots import load_robot
@@ -48,3 +48,13 @@ def test_a_profile_entry_that_is_not_pbc_gains_is_a_typed_error():
     profile = dataclasses.replace(robot.profile, tracker_configs={"pbc": "amlip_qp.control.pbc.gains:default_gains"})
     with pytest.raises(InputError, match="not PBCGains"):
         default_gains(dataclasses.replace(robot, profile=profile))
+
+
+def test_spring_model_settings_are_validated():
+    with pytest.raises(InputError, match="spring_model_load"):
+        PBCGains(spring_model_load="encoders")
+    with pytest.raises(InputError, match="AchillesLinkage"):
+        PBCGains(spring_model_linkage=(1.36, 0.81, 1250.0))
+    # Cassie's spring model: the robot's achilles linkage under its weight (docs/TUNING.md)
+    assert CASSIE_GAINS.spring_model_linkage is CASSIE_ACHILLES and CASSIE_GAINS.spring_model_load == "weight"
+    assert RABBIT_GAINS.spring_model_linkage is None

@@ -180,3 +180,26 @@ def test_spring_model_offset_holds_the_stance_springs_at_the_model_deflection():
     for side, expect in (("left", rest + achilles), ("right", rest)):
         length = q_r[smap.joint_pin_q[f"{side}-knee"]] + q_r[smap.joint_pin_q[f"{side}-tarsus"]]
         assert length == pytest.approx(expect, abs=1e-9)
+
+
+def test_cassie_spring_model_holds_the_linkage_deflection_under_the_weight():
+    """Cassie's gains (achilles linkage, weight load): the IK holds the stance shin and achilles at
+    rest + the linkage's deflections under m g, whatever force the PBC commanded before."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    q, v = _state(robot, 14)
+    kin.update(q, v)
+    gains = default_gains(robot)
+    assert gains.spring_model_load == "weight" and gains.spring_model_linkage is not None
+    tracker = PBCTracker(robot, gains=gains)
+    tgt = _target_at_estimate(kin, "left")
+    assert tracker.compute(kin, tgt).ok
+    assert tracker.compute(kin, tgt).ok
+    q_r = tracker.ik.last_result.q_r
+    smap = robot.state_map
+    shin, achilles = spring_deflections_rad(kin, "left", None, gains.spring_model_linkage)
+    assert shin < -0.03  # the rod's tension bends the knee spring (the tendon model: about 0)
+    assert q_r[smap.joint_pin_q["left-shin"]] == pytest.approx(shin, abs=1e-9)
+    rest = tracker.ik.equations.spring_rest_values()[-1]
+    length = q_r[smap.joint_pin_q["left-knee"]] + q_r[smap.joint_pin_q["left-tarsus"]]
+    assert length == pytest.approx(rest + achilles, abs=1e-9)

@@ -24,6 +24,40 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 
 @dataclass(frozen=True)
+class AchillesLinkage:
+    """The achilles rod of a Cassie leg as the simplified spring model sees it (:mod:`amlip_qp.control.pbc.springs`).
+
+    Attributes:
+        shin_ratio: ``a_s / a_t``, the rod's moment arm about the shin (knee
+            spring) joint over its arm about the tarsus joint (dimensionless).
+        heel_ratio: ``a_h / a_t``, its arm about the heel-spring joint over its
+            arm about the tarsus joint (dimensionless, > 0).
+        heel_stiffness_Nmprad: The heel spring's stiffness, N m/rad (> 0).
+    """
+
+    shin_ratio: float
+    heel_ratio: float
+    heel_stiffness_Nmprad: float
+
+    def __post_init__(self):
+        vals = (self.shin_ratio, self.heel_ratio, self.heel_stiffness_Nmprad)
+        if not (all(np.isfinite(vals)) and self.heel_ratio > 0 and self.heel_stiffness_Nmprad > 0):
+            raise InputError(
+                f"achilles linkage: ratios must be finite, heel_ratio and heel stiffness > 0, got {self!r}"
+            )
+
+
+#: Cassie's achilles rod: the moment-arm ratios of the parameter sheet's linkage at the ``stand``
+#: keyframe (knee -1.1997 rad), measured on ``cassie-closed-chain.xml`` by differentiating the
+#: rod's end-to-end distance (``tests/test_control_pbc_springs.py``); heel spring 1250 N m/rad.
+CASSIE_ACHILLES = AchillesLinkage(shin_ratio=1.3604, heel_ratio=0.8077, heel_stiffness_Nmprad=1250.0)
+
+
+#: The loads the spring model can be given (:attr:`PBCGains.spring_model_load`).
+SPRING_MODEL_LOADS = ("weight", "commanded")
+
+
+@dataclass(frozen=True)
 class PBCGains:
     """Gains of the PBC (acceleration level) and of its fallback (torque level).
 
@@ -52,6 +86,14 @@ class PBCGains:
             swing leg rigid at rest) instead of at their encoder estimates; the
             stance knee reference then carries the compensating offset, exactly,
             through the IK.
+        spring_model_linkage: The leg's achilles linkage for the spring model
+            (:class:`~amlip_qp.control.pbc.springs.AchillesLinkage`: the rod's
+            moment on the shin and the heel spring's lever), or ``None`` for the
+            controller model's own springs (the tendon of ``cassie.xml``).
+        spring_model_load: The load of the spring model: ``"weight"`` (the
+            whole weight ``m g``, vertical, at the stance contact) or
+            ``"commanded"`` (the PBC's commanded contact force of the previous
+            tick). ``docs/TUNING.md`` ("Spring model") says why Cassie uses the weight.
     """
 
     kp_stance_ps2: float = 400.0
@@ -65,9 +107,19 @@ class PBCGains:
     fallback_kd_Nmsprad: float = 5.0
     swing_torso_compensation: float = 0.0
     spring_model_offset: bool = False
+    spring_model_linkage: AchillesLinkage | None = None
+    spring_model_load: str = "commanded"
 
     def __post_init__(self):
-        vals = [getattr(self, f) for f in self.__dataclass_fields__ if f != "spring_model_offset"]
+        if self.spring_model_load not in SPRING_MODEL_LOADS:
+            raise InputError(
+                f"spring_model_load must be one of {', '.join(SPRING_MODEL_LOADS)}, got {self.spring_model_load!r}"
+            )
+        if self.spring_model_linkage is not None and not isinstance(self.spring_model_linkage, AchillesLinkage):
+            raise InputError(
+                f"spring_model_linkage must be an AchillesLinkage or None, got {self.spring_model_linkage!r}"
+            )
+        vals = [getattr(self, f) for f in self.__dataclass_fields__ if not f.startswith("spring_model")]
         if (
             not all(np.isfinite(v) and v >= 0 for v in vals)
             or self.touchdown_gain_drop > 1
@@ -89,7 +141,8 @@ class PBCGains:
         return start * (1.0 - self.touchdown_gain_drop * w)
 
 
-#: Cassie (leg springs): softer stance gains, swing-leg torso compensation, the paper's spring model.
+#: Cassie (leg springs): softer stance gains, swing-leg torso compensation, the paper's spring model
+#: (the robot's achilles linkage under the robot's weight).
 CASSIE_GAINS = PBCGains(
     kp_stance_ps2=200.0,
     kd_stance_ps=28.0,
@@ -97,6 +150,8 @@ CASSIE_GAINS = PBCGains(
     kd_swing_ps=40.0,
     swing_torso_compensation=1.0,
     spring_model_offset=True,
+    spring_model_linkage=CASSIE_ACHILLES,
+    spring_model_load="weight",
 )
 
 #: Rabbit (rigid legs): the defaults, 400 1/s^2 and 40 1/s on both legs, no torso compensation.

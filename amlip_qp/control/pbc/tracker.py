@@ -254,7 +254,9 @@ class PBCTracker(Tracker):
         held = None
         if self.gains.spring_model_offset and len(self._spring_rest):
             held = self._spring_rest.copy()
-            defl = spring_deflections_rad(kin, stance, self._last_force[stance])
+            g = self.gains
+            load = self._last_force[stance] if g.spring_model_load == "commanded" else None
+            defl = spring_deflections_rad(kin, stance, load, g.spring_model_linkage)
             if len(defl) == len(self._spring_idx[stance]):
                 held[self._spring_idx[stance]] += defl
         ik = self.ik.solve(kin, stance, target.heading_rad, target.h_d, target.dh_d, target.ddh_d, held_springs=held)
