@@ -110,7 +110,7 @@ _ESTIMATORS = ("truth", "ekf")
 
 
 def _add_plant_options(p: argparse.ArgumentParser) -> None:
-    """``--plant``, ``--sensors`` and ``--estimator`` of ``walk`` and ``compare``."""
+    """``--plant``, ``--sensors``, ``--estimator`` and the plant modifiers of ``walk`` and ``compare``."""
     p.add_argument(
         "--plant",
         metavar="NAME|PATH",
@@ -121,15 +121,44 @@ def _add_plant_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--sensors",
         choices=_SENSORS,
-        default="ideal",
+        default=None,
         help="ideal: the exact state; robot: IMU, encoders and contact switches with noise, no base state "
-        "(default ideal)",
+        "(default: the scenario's, ideal)",
     )
     p.add_argument(
         "--estimator",
         choices=_ESTIMATORS,
-        default="truth",
-        help="base state: truth (the simulator's) or ekf (contact-aided invariant EKF) (default truth)",
+        default=None,
+        help="base state: truth (the simulator's) or ekf (contact-aided invariant EKF) "
+        "(default: the scenario's, truth)",
+    )
+    m = p.add_argument_group("plant modifiers (model mismatch; the controller keeps its own model)")
+    m.add_argument(
+        "--plant-mass-scale",
+        type=float,
+        default=None,
+        metavar="S",
+        help="scale the mass and inertia of every plant body (0 < S <= 10)",
+    )
+    m.add_argument(
+        "--payload",
+        default=None,
+        metavar="KG[@X,Y,Z]",
+        help="weld a 0.2 x 0.15 x 0.1 m box of KG kg to the base at (X, Y, Z) m in the base frame "
+        "(default: at its origin)",
+    )
+    m.add_argument(
+        "--plant-spring-scale", type=float, default=None, metavar="S", help="scale every joint and tendon spring"
+    )
+    m.add_argument(
+        "--friction", type=float, default=None, metavar="MU", help="sliding friction of every foot-floor contact"
+    )
+    m.add_argument(
+        "--actuator-delay",
+        type=int,
+        default=None,
+        metavar="TICKS",
+        help="delay the actuator commands by TICKS control ticks (0.5 ms each)",
     )
 
 

@@ -20,7 +20,8 @@ import numpy as np  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
-from amlip_qp.sim.run_types import Push, RunResult, SensorNoise  # noqa: E402
+from amlip_qp.sim.plant_modifiers import parse_payload  # noqa: E402
+from amlip_qp.sim.run_types import PlantSetting, Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.
@@ -66,6 +67,9 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
     elif args.accel_limit is not None:
         shaping = base.shaping or get_profile(base.robot).shaping
         changes["shaping"] = replace(shaping, vx_accel_mps2=args.accel_limit, vy_accel_mps2=args.accel_limit)
+    setting = setting_from_args(args, base.setting)
+    if setting != base.setting:
+        changes["setting"] = setting
     if changes and base.name != "custom":
         changes["name"] = f"{base.name}+options"
     scenario = base.with_(**changes) if changes else base
@@ -121,25 +125,33 @@ def _check_output_paths(args: argparse.Namespace) -> None:
         check_output_path(f"--{opt}", value)
 
 
-def check_sensor_options(args: argparse.Namespace) -> None:
-    """Refuse ``--noise`` with ``--sensors robot`` (the robot sensors have their own noise)."""
-    if args.noise and args.sensors != "ideal":
-        raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")
-
-
-def plant_from_args(args: argparse.Namespace, robot_name: str):
-    """The :class:`~amlip_qp.sim.plant.Plant` of ``--plant`` for ``robot_name`` (default: its own model).
+def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSetting:
+    """``base`` (a scenario's setting) with ``--plant``, ``--sensors``, ``--estimator`` and the plant modifiers applied.
 
     Raises:
-        InputError: An unknown plant name, or a plant that lacks what the controller needs.
-        ModelFileError: The plant file does not exist.
-        MJCFError: MuJoCo cannot load it.
+        InputError: ``--noise`` with robot sensors, a malformed ``--payload``, or a
+            nonsensical modifier value (one line saying what to fix).
     """
-    from amlip_qp.sim import factory
-    from amlip_qp.sim.plant import load_plant
-
-    robot = factory.load(robot_name)
-    return load_plant(args.plant if args.plant is not None else robot.name, robot)
+    mods: dict = {}
+    if args.plant_mass_scale is not None:
+        mods["mass_scale"] = args.plant_mass_scale
+    if args.payload is not None:
+        mods["payload_kg"], mods["payload_pos_m"] = parse_payload(args.payload)
+    if args.plant_spring_scale is not None:
+        mods["spring_scale"] = args.plant_spring_scale
+    if args.friction is not None:
+        mods["friction"] = args.friction
+    if args.actuator_delay is not None:
+        mods["actuator_delay_ticks"] = args.actuator_delay
+    setting = PlantSetting(
+        plant=base.plant if args.plant is None else args.plant,
+        sensors=base.sensors if args.sensors is None else args.sensors,
+        estimator=base.estimator if args.estimator is None else args.estimator,
+        modifiers=replace(base.modifiers, **mods) if mods else base.modifiers,
+    )
+    if args.noise and setting.sensors != "ideal":
+        raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")
+    return setting
 
 
 def run_walk(args: argparse.Namespace) -> int:
@@ -148,18 +160,8 @@ def run_walk(args: argparse.Namespace) -> int:
 
     scenario = scenario_from_args(args)
     _check_output_paths(args)
-    check_sensor_options(args)
-    plant = plant_from_args(args, scenario.robot)
     noise = SensorNoise() if args.noise else None
-    sim = factory.build_simulation(
-        scenario,
-        args.tracker,
-        seed=args.seed,
-        noise=noise,
-        plant=plant,
-        sensors=args.sensors,
-        estimator=args.estimator,
-    )
+    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
     recorder = None
     if args.video is not None:
         from amlip_qp.sim.video import VideoRecorder
@@ -172,6 +174,7 @@ def run_walk(args: argparse.Namespace) -> int:
         if recorder is not None:
             recorder.close()
     result.info["scenario"] = scenario.name
+    result.info["modifiers"] = scenario.setting.modifiers.describe()
     summ = summary.summarize(result)
     if args.json is not None:
         _write_text("--json", args.json, summary.dumps(summ))
@@ -195,8 +198,10 @@ def _one_line(s: dict) -> str:
     state = f"FELL at {s['fall_time_s']:.2f} s" if s["fell"] else "walked"
     mv = s["mean_velocity"]
     setting = ""
-    if (s.get("plant"), s.get("sensors"), s.get("estimator")) != (s["robot"], "ideal", "truth"):
-        setting = f" (plant {s.get('plant')}, {s.get('sensors')} sensors, {s.get('estimator')} estimator)"
+    mods = s.get("plant_modifiers") or {}
+    if (s.get("plant"), s.get("sensors"), s.get("estimator")) != (s["robot"], "ideal", "truth") or mods:
+        changed = "".join(f", {k} {v}" for k, v in mods.items())
+        setting = f" (plant {s.get('plant')}{changed}, {s.get('sensors')} sensors, {s.get('estimator')} estimator)"
     return (
         f"{s['robot']}/{s['tracker']}{setting} {state}: {s['sim_time_s']:.2f} s simulated, {s['steps']} steps, "
         f"mean v = [{f(mv[0], '.3f')}, {f(mv[1], '.3f')}] m/s, "

@@ -63,15 +63,7 @@ class _Task:
 def _run(scenario: Scenario, tracker: str, seed: int, noise: bool, setting: PlantSetting) -> RunResult:
     from amlip_qp.sim.factory import run_scenario
 
-    return run_scenario(
-        scenario,
-        tracker,
-        seed=seed,
-        noise=SensorNoise() if noise else None,
-        plant=setting.plant,
-        sensors=setting.sensors,
-        estimator=setting.estimator,
-    )
+    return run_scenario(scenario.with_(setting=setting), tracker, seed=seed, noise=SensorNoise() if noise else None)
 
 
 def _execute(task: _Task) -> dict[str, Any]:
@@ -140,8 +132,9 @@ def build_tasks(
         nominal = nominal_scenario(robot, scenario_names, settings)
         loaded = load(robot)
         planar = loaded.is_planar
-        if setting.plant is not None:
-            load_plant(setting.plant, loaded)  # fail fast (exit 2) on a plant that does not fit
+        if setting.plant is not None or setting.modifiers.spec_edits(loaded.base_body):
+            # fail fast (exit 2) on a plant that does not fit or cannot take the modifiers
+            load_plant(setting.plant or robot, loaded, edits=setting.modifiers.spec_edits(loaded.base_body))
         for trk in trackers:
             tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise, setting))
             if ramp:
@@ -315,10 +308,10 @@ def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.sim.cli`). Exit 0 (falls are results, not errors)."""
     from amlip_qp.output_paths import check_output_path, writing
     from amlip_qp.sim import summary
-    from amlip_qp.sim.cli import check_sensor_options
+    from amlip_qp.sim.cli import setting_from_args
 
     settings = settings_from_args(args)
-    check_sensor_options(args)
+    setting = setting_from_args(args, PlantSetting())
     for trk in args.trackers:
         from amlip_qp.sim.factory import tracker_class
 
@@ -332,7 +325,7 @@ def main(args: argparse.Namespace) -> int:
         noise=args.noise,
         ramp=not args.no_ramp,
         push=not args.no_push,
-        setting=PlantSetting(args.plant, args.sensors, args.estimator),
+        setting=setting,
     )
     # Outputs are checked before anything runs; the figure's folder (default out/) is created.
     check_output_path("--json", args.json)
@@ -376,7 +369,9 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d = asdict(settings)
     d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
-    d.update(plant=args.plant, sensors=args.sensors, estimator=args.estimator)
+    from amlip_qp.sim.cli import setting_from_args
+
+    d.update(setting_from_args(args, PlantSetting()).describe())
     # the per-robot ranges of the profiles, as (robot, value) pairs
     d.update(
         ramp_end_mps=tuple((r, compare_ranges(r).ramp_end_mps) for r in ROBOT_NAMES),

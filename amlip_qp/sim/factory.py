@@ -84,6 +84,21 @@ def check_estimator(name: str) -> str:
     return name
 
 
+def _with_delay(
+    ticks: int, nu: int, ctrl_filter: Callable[[np.ndarray], np.ndarray] | None
+) -> Callable[[np.ndarray], np.ndarray] | None:
+    """``ctrl_filter`` preceded by an actuator delay of ``ticks`` control ticks (none for 0)."""
+    if ticks == 0:
+        return ctrl_filter
+    from amlip_qp.sim.plant_modifiers import ActuatorDelay
+
+    delay = ActuatorDelay(ticks, nu)
+    if ctrl_filter is None:
+        return delay.push
+    then = ctrl_filter
+    return lambda ctrl: then(delay.push(ctrl))
+
+
 def build_simulation(
     scenario: Scenario,
     tracker: str | Tracker,
@@ -91,8 +106,8 @@ def build_simulation(
     noise: SensorNoise | None = None,
     planner_backend: str = "c",
     plant: str | Plant | None = None,
-    sensors: str = "ideal",
-    estimator: str = "truth",
+    sensors: str | None = None,
+    estimator: str | None = None,
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Simulation:
@@ -107,27 +122,34 @@ def build_simulation(
         planner_backend: ``"c"`` (generated kernels) or ``"numpy"``.
         plant: A plant name of the robot or an MJCF path (loaded with
             :func:`~amlip_qp.sim.plant.load_plant`), a loaded
-            :class:`~amlip_qp.sim.plant.Plant`, or ``None``: the robot's own model.
-        sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`).
+            :class:`~amlip_qp.sim.plant.Plant`, or ``None``: the scenario's
+            (``scenario.setting.plant``; ``None`` there: the robot's own model).
+        sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`); ``None``: the scenario's.
         estimator: The controller's base estimator, ``"truth"`` or ``"ekf"``
-            (:func:`amlip_qp.estimation.make_base_estimator`).
-        plant_edits: Changes of the plant's model before it is compiled (e.g. plant
-            modifiers), for a plant given by name or path.
-        ctrl_filter: Applied to the actuator controls before they reach the plant
-            (e.g. an actuator delay's ``push``); see :class:`Simulation`.
+            (:func:`amlip_qp.estimation.make_base_estimator`); ``None``: the scenario's.
+        plant_edits: Further changes of the plant's model before it is compiled,
+            after the scenario's plant modifiers (``scenario.setting.modifiers``),
+            for a plant given by name or path.
+        ctrl_filter: Applied to the actuator controls before they reach the plant,
+            after the scenario's actuator delay; see :class:`Simulation`.
     """
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
     from amlip_qp.sim.plant import Plant, load_plant
 
-    check_estimator(estimator)
+    setting = scenario.setting
+    plant = setting.plant if plant is None else plant
+    sensors = setting.sensors if sensors is None else sensors
+    estimator = check_estimator(setting.estimator if estimator is None else estimator)
     robot = load(scenario.robot)
+    edits = [*setting.modifiers.spec_edits(robot.base_body), *plant_edits]
     if isinstance(plant, Plant):
-        if plant_edits:
-            raise InputError("plant_edits change a plant before it is compiled: give the plant by name or path")
+        if edits:
+            raise InputError("plant edits and modifiers change a plant before it is compiled: give it by name or path")
         the_plant = plant
     else:
-        the_plant = load_plant(robot.name if plant is None else plant, robot, edits=plant_edits)
+        the_plant = load_plant(robot.name if plant is None else plant, robot, edits=edits)
+    ctrl_filter = _with_delay(setting.modifiers.actuator_delay_ticks, len(robot.actuated.names), ctrl_filter)
     trk = make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
@@ -169,8 +191,8 @@ def run_scenario(
     progress: bool = False,
     on_tick: TickCallback | None = None,
     plant: str | Plant | None = None,
-    sensors: str = "ideal",
-    estimator: str = "truth",
+    sensors: str | None = None,
+    estimator: str | None = None,
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> RunResult:
@@ -188,4 +210,5 @@ def run_scenario(
     )
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick)
     result.info["scenario"] = scenario.name
+    result.info["modifiers"] = scenario.setting.modifiers.describe()
     return result

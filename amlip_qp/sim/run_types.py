@@ -17,6 +17,7 @@ import numpy as np
 
 from amlip_qp.control.walking.controller import StepRecord
 from amlip_qp.exceptions import InputError
+from amlip_qp.sim.plant_modifiers import PlantModifiers
 
 if TYPE_CHECKING:
     import mujoco
@@ -83,11 +84,23 @@ class PlantSetting:
         plant: A plant name or MJCF path, or ``None``: each robot's own model.
         sensors: ``"ideal"`` or ``"robot"``.
         estimator: ``"truth"`` or ``"ekf"``.
+        modifiers: Model mismatch applied to the plant (mass scale, payload,
+            spring scale, friction, actuator delay); the defaults change nothing.
     """
 
     plant: str | None = None
     sensors: str = "ideal"
     estimator: str = "truth"
+    modifiers: PlantModifiers = field(default_factory=PlantModifiers)
+
+    def describe(self) -> dict:
+        """The setting as plain data for a summary (modifiers: only the non-default ones)."""
+        return {
+            "plant": self.plant,
+            "sensors": self.sensors,
+            "estimator": self.estimator,
+            "modifiers": self.modifiers.describe(),
+        }
 
 
 @dataclass(frozen=True)

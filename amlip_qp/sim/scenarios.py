@@ -1,9 +1,12 @@
-"""Walking scenarios: commands over time, pushes, durations.
+"""Walking scenarios: commands over time, pushes, durations, and the plant they run on.
 
 A :class:`Scenario` is everything a run needs besides the robot and the
 tracker. The named scenarios of :data:`SCENARIOS` are the acceptance
 scenarios of the walking issues; the CLI, the examples, the comparison and
-the tests all take them from here.
+the tests all take them from here. Each ideal Cassie scenario also exists on
+the hardware-like setting :data:`CLOSED_CHAIN_EKF` (name suffix ``-cc-ekf``),
+and ``cassie-1mps-cc-ekf`` also under each model mismatch of
+:data:`MISMATCHES`.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ import numpy as np
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES, CommandShaping, GaitSettings, RobotProfile, get_profile
-from amlip_qp.sim.run_types import Push
+from amlip_qp.sim.plant_modifiers import PlantModifiers
+from amlip_qp.sim.run_types import PlantSetting, Push
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,8 @@ class Scenario:
         gait: Gait parameters (``None``: the robot's profile's).
         shaping: Rate limits of the velocity command before the planner
             (``None``: the robot's profile's; :data:`~amlip_qp.profiles.NO_SHAPING`: none).
+        setting: The plant, sensors, base estimator and model mismatch
+            (default: the robot's own model, ideal sensors, the true base state).
         description: One line for people.
     """
 
@@ -98,6 +104,7 @@ class Scenario:
     pushes: tuple[Push, ...] = ()
     gait: GaitSettings | None = None
     shaping: CommandShaping | None = None
+    setting: PlantSetting = field(default_factory=PlantSetting)
     description: str = ""
 
     def __post_init__(self):
@@ -197,6 +204,53 @@ SCENARIOS: dict[str, Scenario] = {
         Scenario("rabbit-1mps", "rabbit", 20.0, vx=_ramp(1.0, 3.0), description="Rabbit walks at 1.0 m/s"),
     )
 }
+
+#: The hardware-like setting of issue "a plant it was not built from": the closed-chain Cassie plant
+#: (achilles and plantar rods closed by equality constraints), the robot's own sensors (IMU,
+#: encoders, contact switches; no base state) and the contact-aided invariant EKF.
+CLOSED_CHAIN_EKF = PlantSetting(plant="cassie-closed-chain", sensors="robot", estimator="ekf")
+
+#: Model mismatches under which the QP tracker must still walk ``cassie-1mps-cc-ekf``: name suffix -> modifiers.
+MISMATCHES: dict[str, PlantModifiers] = {
+    "mass-0.8": PlantModifiers(mass_scale=0.8),
+    "mass-1.2": PlantModifiers(mass_scale=1.2),
+    "payload-5kg": PlantModifiers(payload_kg=5.0, payload_pos_m=(-0.10, 0.0, 0.0)),
+    "friction-0.5": PlantModifiers(friction=0.5),
+    "delay-1": PlantModifiers(actuator_delay_ticks=1),
+}
+_MISMATCH_TEXT = {
+    "mass-0.8": "every plant body's mass and inertia x0.8",
+    "mass-1.2": "every plant body's mass and inertia x1.2",
+    "payload-5kg": "a 5 kg payload 10 cm behind the pelvis",
+    "friction-0.5": "foot-floor friction 0.5",
+    "delay-1": "a 1-tick (0.5 ms) actuator delay",
+}
+
+
+def _on_closed_chain(s: Scenario) -> Scenario:
+    return s.with_(
+        name=f"{s.name}-cc-ekf",
+        setting=CLOSED_CHAIN_EKF,
+        description=f"{s.description}; closed-chain plant, robot sensors, invariant EKF",
+    )
+
+
+SCENARIOS.update({c.name: c for c in [_on_closed_chain(s) for s in SCENARIOS.values() if s.robot == "cassie"]})
+SCENARIOS.update(
+    {
+        f"cassie-1mps-cc-ekf-{key}": SCENARIOS["cassie-1mps-cc-ekf"].with_(
+            name=f"cassie-1mps-cc-ekf-{key}",
+            setting=replace(CLOSED_CHAIN_EKF, modifiers=mods),
+            description=f"{SCENARIOS['cassie-1mps-cc-ekf'].description}; {_MISMATCH_TEXT[key]}",
+        )
+        for key, mods in MISMATCHES.items()
+    }
+)
+
+
+def ideal_scenarios() -> list[str]:
+    """The names of the scenarios on each robot's own model with ideal sensors and the true base state."""
+    return [name for name, s in SCENARIOS.items() if s.setting == PlantSetting()]
 
 
 def get_scenario(name: str) -> Scenario:

@@ -188,6 +188,7 @@ def summarize(
         "plant": result.info.get("plant"),
         "sensors": result.info.get("sensors"),
         "estimator": result.info.get("estimator"),
+        "plant_modifiers": result.info.get("modifiers", {}),
         "safe_mode_ticks": int(result.safe_mode_ticks),
         "estimator_divergences": int(result.estimator_divergences),
         "base_velocity_error_rms_mps": base_vel_err,
