@@ -114,6 +114,18 @@ BAD_INPUTS = [
     (["compare", "--sensors", "perfect"], "argument --sensors: invalid choice"),
     (["compare", "--estimator", "kalman"], "argument --estimator: invalid choice"),
     (["compare", "--jobs", "1", "--noise", "--sensors", "robot"], "--sensors robot has its own"),
+    # plant modifiers (issue "a plant it was not built from"): nonsensical values
+    (["walk", "--plant-mass-scale", "0"], "--plant-mass-scale) must be a number in (0, 10]"),
+    (["walk", "--plant-mass-scale", "nan"], "--plant-mass-scale) must be a number in (0, 10]"),
+    (["walk", "--payload", "-5"], "--payload) must be a mass in [0, 100] kg"),
+    (["walk", "--payload", "5@1,2"], "--payload position needs 3 coordinates"),
+    (["walk", "--payload", "five"], "--payload takes KG or KG@X,Y,Z"),
+    (["walk", "--plant-spring-scale", "-1"], "--plant-spring-scale) must be a finite number >= 0"),
+    (["walk", "--friction", "0"], "--friction) must be a coefficient in (0, 10]"),
+    (["walk", "--actuator-delay", "-1"], "--actuator-delay) must be a whole number of ticks in [0, 100]"),
+    (["walk", "--actuator-delay", "1.5"], "argument --actuator-delay: invalid int value"),
+    (["compare", "--jobs", "1", "--friction", "-0.5"], "--friction) must be a coefficient in (0, 10]"),
+    (["compare", "--jobs", "1", "--payload", "5@9,0,0"], "must be 3 numbers within 1 m of the base body"),
     # compare and the benchmarks
     (["compare", "--jobs", "1", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
     (["compare", "--jobs", "1", "--plot", "/proc/x.png"], "--plot /proc/x.png: cannot write"),

@@ -154,12 +154,29 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
     return setting
 
 
+def check_plant(scenario: Scenario) -> None:
+    """Load the scenario's plant with its modifiers once, to fail (exit 2) before the closed loop is built.
+
+    Raises:
+        InputError: An unknown plant name, or a plant that lacks what the controller needs.
+        ModelFileError: The plant file does not exist.
+        MJCFError: MuJoCo cannot load it, or it cannot take the modifiers.
+    """
+    from amlip_qp.sim import factory
+    from amlip_qp.sim.plant import load_plant
+
+    robot = factory.load(scenario.robot)
+    setting = scenario.setting
+    load_plant(setting.plant or robot.name, robot, edits=setting.modifiers.spec_edits(robot.base_body))
+
+
 def run_walk(args: argparse.Namespace) -> int:
     """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
     from amlip_qp.sim import factory, summary
 
     scenario = scenario_from_args(args)
     _check_output_paths(args)
+    check_plant(scenario)
     noise = SensorNoise() if args.noise else None
     sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
     recorder = None

@@ -145,7 +145,9 @@ def build_simulation(
     edits = [*setting.modifiers.spec_edits(robot.base_body), *plant_edits]
     if isinstance(plant, Plant):
         if edits:
-            raise InputError("plant edits and modifiers change a plant before it is compiled: give it by name or path")
+            raise InputError(
+                "plant edits and modifiers change a plant before it is compiled: give the plant by name or path"
+            )
         the_plant = plant
     else:
         the_plant = load_plant(robot.name if plant is None else plant, robot, edits=edits)
