@@ -128,3 +128,31 @@ def test_check_scenario_names_the_bound(robot, changes, needle):
         wide = replace(get_profile(robot).bounds, vx_mps=(-99.0, 99.0), vy_max_mps=99.0, turn_rate_max_radps=99.0,
                        duration_max_s=1e4, push_impulse_max_Ns=1e4, push_force_max_N=1e5)  # fmt: skip
         check_scenario(sc, replace(get_profile(robot), bounds=wide))
+
+
+def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_setting():
+    from dataclasses import replace
+
+    from amlip_qp.sim.run_types import PlantSetting
+    from amlip_qp.sim.scenarios import CLOSED_CHAIN_EKF, MISMATCHES, ideal_scenarios
+
+    ideal = ideal_scenarios()
+    assert ideal == [n for n, s in SCENARIOS.items() if "-cc-ekf" not in n]
+    assert CLOSED_CHAIN_EKF == PlantSetting("cassie-closed-chain", "robot", "ekf")
+    for name in ideal:
+        twin = SCENARIOS.get(f"{name}-cc-ekf")
+        if SCENARIOS[name].robot != "cassie":
+            assert twin is None
+            continue
+        assert twin is not None and twin.setting == CLOSED_CHAIN_EKF
+        # the same commands, pushes, gait and duration: only the setting differs
+        assert replace(twin, name=name, setting=PlantSetting(), description="") == replace(
+            SCENARIOS[name], description=""
+        )
+    assert set(MISMATCHES) == {"mass-0.8", "mass-1.2", "payload-5kg", "friction-0.5", "delay-1"}
+    payload = SCENARIOS["cassie-1mps-cc-ekf-payload-5kg"].setting.modifiers
+    assert (payload.payload_kg, payload.payload_pos_m) == (5.0, (-0.10, 0.0, 0.0))  # 10 cm behind the pelvis
+    for key, mods in MISMATCHES.items():
+        sc = SCENARIOS[f"cassie-1mps-cc-ekf-{key}"]
+        assert sc.setting == replace(CLOSED_CHAIN_EKF, modifiers=mods)
+        assert sc.duration_s == 10.0 and sc.vx.final_mps == 1.0
