@@ -94,6 +94,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--ticks", type=_positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
     b.set_defaults(func=_handler("amlip_qp.sim.bench_qp:run_bench"))
+    b = bench.add_parser(
+        "ekf", help="the invariant EKF's cost inside the closed loop, against the rest of the QP tracker's tick"
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument(
+        "--scenario",
+        default="cassie-1mps-cc-ekf",
+        help="a scenario with the EKF estimator to walk (default cassie-1mps-cc-ekf)",
+    )
+    b.add_argument("--duration", type=_positive_float, default=4.0, metavar="S", help="simulated time, s (default 4)")
+    b.set_defaults(func=_handler("amlip_qp.sim.bench_ekf:run_bench"))
 
     _add_walk(sub)
     _add_compare(sub)

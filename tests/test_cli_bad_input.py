@@ -125,6 +125,9 @@ BAD_INPUTS = [
     (["walk", "--actuator-delay", "-1"], "--actuator-delay) must be a whole number of ticks in [0, 100]"),
     (["walk", "--actuator-delay", "1.5"], "argument --actuator-delay: invalid int value"),
     (["compare", "--jobs", "1", "--friction", "-0.5"], "--friction) must be a coefficient in (0, 10]"),
+    (["bench", "ekf", "--scenario", "cassie-1mps"], "needs a scenario with the EKF estimator"),
+    (["bench", "ekf", "--scenario", "nowhere"], "unknown scenario 'nowhere'"),
+    (["bench", "ekf", "--duration", "0"], "--duration"),
     (["compare", "--jobs", "1", "--payload", "5@9,0,0"], "must be 3 numbers within 1 m of the base body"),
     # compare and the benchmarks
     (["compare", "--jobs", "1", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
