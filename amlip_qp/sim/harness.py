@@ -337,8 +337,8 @@ class Simulation:
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
             fallback_ticks=ctrl.fallback_ticks,
-            safe_mode_ticks=int(getattr(ctrl, "safe_mode_ticks", 0)),
-            estimator_divergences=int(getattr(ctrl, "estimator_divergences", 0)),
+            safe_mode_ticks=ctrl.safe_mode_ticks,
+            estimator_divergences=ctrl.estimator_divergences,
             pushes=self.pushes,
             info={
                 "output_names": tuple(ctrl.planner.output_names),
