@@ -18,6 +18,10 @@ def test_gains_validation_and_swing_schedule():
         PBCGains(kp_stance_ps2=-1.0)
     with pytest.raises(InputError):
         PBCGains(swing_start_fraction=2.0)
+    with pytest.raises(InputError, match="hip_yaw_feedback"):
+        PBCGains(hip_yaw_feedback=1.5)
+    with pytest.raises(InputError):
+        PBCGains(hip_yaw_feedback=-0.5)
     g = PBCGains(swing_start_fraction=0.2, swing_ramp_phase=0.5, touchdown_gain_drop=0.5)
     assert g.swing_scale(0.0, 0.0) == pytest.approx(0.2)
     assert g.swing_scale(0.25, 0.0) == pytest.approx(0.6)

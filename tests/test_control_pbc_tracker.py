@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pinocchio as pin
@@ -14,6 +15,7 @@ from amlip_qp.control.pbc.tracker import PBCTracker
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.outputs import OutputMap
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])
@@ -30,9 +32,10 @@ def _state(robot, seed):
 
 
 def _encoder_tracker(robot):
-    """The default gains with the springs held at their estimates in the IK (no spring model):
-    then references equal to the measured outputs give zero tracking errors."""
-    return PBCTracker(robot, gains=dataclasses.replace(default_gains(robot), spring_model_offset=False))
+    """The default gains with the springs held at their estimates in the IK (no spring model) and no
+    pelvis-yaw feedback: then references equal to the measured outputs give zero tracking errors."""
+    gains = dataclasses.replace(default_gains(robot), spring_model_offset=False, hip_yaw_feedback=0.0)
+    return PBCTracker(robot, gains=gains)
 
 
 def _target_at_estimate(kin, stance, phase=0.5):
@@ -203,3 +206,31 @@ def test_cassie_spring_model_holds_the_linkage_deflection_under_the_weight():
     rest = tracker.ik.equations.spring_rest_values()[-1]
     length = q_r[smap.joint_pin_q["left-knee"]] + q_r[smap.joint_pin_q["left-tarsus"]]
     assert length == pytest.approx(rest + achilles, abs=1e-9)
+
+
+def test_hip_yaw_feedback_turns_the_swing_hip_yaw_reference_against_the_pelvis_yaw_error():
+    """Cassie's gains feed the pelvis yaw back into the swing hip-yaw reference: with references at
+    the estimate and a pelvis yawed 0.2 rad off its nominal yaw, the IK's swing hip-yaw joint
+    reference is the measured angle minus 0.2 rad (the output is that joint's angle)."""
+    robot = load_robot("cassie")
+    gains = default_gains(robot)
+    assert gains.hip_yaw_feedback == 1.0
+    q, v = _state(robot, 3)
+    q[3:7] = pin.Quaternion(pin.utils.rpyToMatrix(0.0, 0.0, 0.5)).coeffs()
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    names = OutputMap(robot).names
+    tgt = _target_at_estimate(kin, "left")
+    i_st = names.index("stance_hip_yaw")
+    heading = 0.5 + float(tgt.h_d[i_st]) - 0.2  # nominal pelvis yaw D - h_d[stance] = 0.3 rad
+    tgt = dataclasses.replace(tgt, heading_rad=heading)
+    h, J, _ = kin.outputs("left", heading)
+    tgt = dataclasses.replace(tgt, h_d=h, dh_d=J @ kin.v)
+    tracker = PBCTracker(robot, gains=dataclasses.replace(gains, spring_model_offset=False))
+    assert tracker.compute(kin, tgt).ok
+    q_r = tracker.ik.last_result.q_r
+    iq = robot.state_map.joint_pin_q["right-hip-yaw"]
+    R = kin.base_rotation()
+    e = math.atan2(R[1, 0], R[0, 0]) - (heading - float(h[i_st]))
+    assert e == pytest.approx(0.2, abs=1e-9)
+    assert q_r[iq] == pytest.approx(q[iq] - e, abs=1e-6)

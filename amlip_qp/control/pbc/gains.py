@@ -94,6 +94,9 @@ class PBCGains:
             whole weight ``m g``, vertical, at the stance contact) or
             ``"commanded"`` (the PBC's commanded contact force of the previous
             tick). ``docs/TUNING.md`` ("Spring model") says why Cassie uses the weight.
+        hip_yaw_feedback: Gain (dimensionless, 0..1, 0 disables) of the pelvis-yaw
+            feedback on the swing hip-yaw reference
+            (:mod:`amlip_qp.control.pbc.yaw_feedback`).
     """
 
     kp_stance_ps2: float = 400.0
@@ -109,6 +112,7 @@ class PBCGains:
     spring_model_offset: bool = False
     spring_model_linkage: AchillesLinkage | None = None
     spring_model_load: str = "commanded"
+    hip_yaw_feedback: float = 0.0
 
     def __post_init__(self):
         if self.spring_model_load not in SPRING_MODEL_LOADS:
@@ -126,9 +130,11 @@ class PBCGains:
             or self.swing_start_fraction > 1
             or self.swing_ramp_phase <= 0
             or self.swing_torso_compensation > 1
+            or self.hip_yaw_feedback > 1
         ):
             raise InputError(
-                "PBC gains must be finite and >= 0 (touchdown_gain_drop, swing_start_fraction <= 1, "
+                "PBC gains must be finite and >= 0 (touchdown_gain_drop, swing_start_fraction, "
+                "swing_torso_compensation, hip_yaw_feedback <= 1, "
                 f"swing_ramp_phase > 0), got {self!r}"
             )
 
@@ -141,14 +147,15 @@ class PBCGains:
         return start * (1.0 - self.touchdown_gain_drop * w)
 
 
-#: Cassie (leg springs): softer stance gains, swing-leg torso compensation, the paper's spring model
-#: (the robot's achilles linkage under the robot's weight).
+#: Cassie (leg springs): softer stance gains, swing-leg torso compensation, pelvis-yaw feedback on the
+#: swing hip yaw, the paper's spring model (the robot's achilles linkage under the robot's weight).
 CASSIE_GAINS = PBCGains(
     kp_stance_ps2=200.0,
     kd_stance_ps=28.0,
     kp_swing_ps2=400.0,
     kd_swing_ps=40.0,
     swing_torso_compensation=1.0,
+    hip_yaw_feedback=1.0,
     spring_model_offset=True,
     spring_model_linkage=CASSIE_ACHILLES,
     spring_model_load="weight",

@@ -62,6 +62,7 @@ from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
+from amlip_qp.control.pbc.yaw_feedback import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.robots.outputs import OutputMap
 
@@ -139,6 +140,7 @@ class PBCTracker(Tracker):
             lay.K, lay.rhs, lay.n_contact = K, np.zeros(nv + nc + na), ncf
         self._nv = nv
         names = OutputMap(robot).names
+        self._yaw_feedback = PelvisYawFeedback.for_outputs(names, self.gains.hip_yaw_feedback)
         self._torso_rows = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
         self._rhs_comp = np.zeros(nv)
         # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
@@ -259,7 +261,18 @@ class PBCTracker(Tracker):
             defl = spring_deflections_rad(kin, stance, load, g.spring_model_linkage)
             if len(defl) == len(self._spring_idx[stance]):
                 held[self._spring_idx[stance]] += defl
-        ik = self.ik.solve(kin, stance, target.heading_rad, target.h_d, target.dh_d, target.ddh_d, held_springs=held)
+        h_d, dh_d = target.h_d, target.dh_d
+        if self._yaw_feedback is not None:
+            h_d, dh_d = self._yaw_feedback.references(kin, target)
+        ik = self.ik.solve(
+            kin,
+            stance,
+            target.heading_rad,
+            h_d,
+            dh_d,
+            target.ddh_d,
+            held_springs=held,
+        )
         info = {"ik_iterations": float(ik.iterations), "ik_residual": float(ik.residual)}
         q_r = ik.q_r[lay.ctrl_q].copy()
         v_r = ik.v_r[lay.ctrl_v]

@@ -1,0 +1,63 @@
+"""Pelvis-yaw feedback on the swing hip-yaw reference (:attr:`PBCGains.hip_yaw_feedback
+<amlip_qp.control.pbc.gains.PBCGains.hip_yaw_feedback>`).
+
+Cassie's two hip-yaw outputs are joint angles, so yaw that the stance foot
+creeps in the plant carries over to the pelvis and, through the next foot's
+placement, to every later step; the paper's hip-yaw references are open-loop.
+With the feedback the swing hip-yaw reference becomes
+``h_d[swing_hip_yaw] - k e_psi`` (rad), with
+``e_psi = wrap(psi_pelvis - (D - h_d[stance_hip_yaw]))`` the pelvis yaw error
+against its nominal value (heading ``D``), and its rate reference
+``dh_d[swing_hip_yaw] - k (psidot_pelvis + dh_d[stance_hip_yaw])`` (rad/s):
+the swing foot lands turned back towards the heading. It is the QP tracker's
+``QPConfig.hip_yaw_feedback``, written again here because the PBC does not
+import the QP's package (``docs/ARCHITECTURE.md``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.control.tracker import TrackingTarget
+    from amlip_qp.robots.kinematics import RobotKinematics
+
+
+class PelvisYawFeedback:
+    """The feedback of the module doc for one output layout.
+
+    Args:
+        gain: ``k`` (dimensionless, > 0).
+        stance_index: Index of the ``stance_hip_yaw`` output.
+        swing_index: Index of the ``swing_hip_yaw`` output.
+    """
+
+    def __init__(self, gain: float, stance_index: int, swing_index: int):
+        self.gain = float(gain)
+        self.stance_index = int(stance_index)
+        self.swing_index = int(swing_index)
+
+    @classmethod
+    def for_outputs(cls, names, gain: float) -> PelvisYawFeedback | None:
+        """The feedback for the output ``names``; ``None`` when ``gain`` is 0 or an output is missing."""
+        names = tuple(names)
+        if gain > 0 and "stance_hip_yaw" in names and "swing_hip_yaw" in names:
+            return cls(gain, names.index("stance_hip_yaw"), names.index("swing_hip_yaw"))
+        return None
+
+    def references(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of ``target.h_d`` (rad, m) and ``target.dh_d`` with the swing hip-yaw entries corrected."""
+        i_st, i_sw, k = self.stance_index, self.swing_index, self.gain
+        R = kin.base_rotation()
+        psi = math.atan2(R[1, 0], R[0, 0])
+        psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
+        e = psi - (target.heading_rad - float(target.h_d[i_st]))
+        e = (e + math.pi) % (2.0 * math.pi) - math.pi
+        h_d = np.array(target.h_d, dtype=float)
+        dh_d = np.array(target.dh_d, dtype=float)
+        h_d[i_sw] -= k * e
+        dh_d[i_sw] -= k * (psi_dot + float(target.dh_d[i_st]))
+        return h_d, dh_d

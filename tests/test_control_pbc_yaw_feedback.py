@@ -1,0 +1,66 @@
+"""Tests of the PBC's pelvis-yaw feedback (amlip_qp.control.pbc.yaw_feedback)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from amlip_qp.control.pbc.yaw_feedback import PelvisYawFeedback
+from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.outputs import OutputMap
+
+
+def _kin_with_base_yaw(robot, yaw_rad: float, yaw_rate_radps: float) -> RobotKinematics:
+    q = robot.q_stand.copy()
+    q[3:7] = pin.Quaternion(pin.utils.rpyToMatrix(0.0, 0.0, yaw_rad)).coeffs()
+    v = np.zeros(robot.nv)
+    v[5] = yaw_rate_radps  # base angular velocity z (local = world for a level base)
+    kin = RobotKinematics(robot)
+    kin.update(q, v)
+    return kin
+
+
+def test_swing_hip_yaw_reference_turns_the_pelvis_back_to_its_nominal_yaw():
+    robot = load_robot("cassie")
+    names = OutputMap(robot).names
+    fb = PelvisYawFeedback.for_outputs(names, 0.8)
+    assert fb is not None
+    i_st, i_sw = names.index("stance_hip_yaw"), names.index("swing_hip_yaw")
+    kin = _kin_with_base_yaw(robot, 0.3, 0.5)
+    h_d = np.linspace(0.1, 0.9, len(names))
+    dh_d = np.linspace(-0.2, 0.2, len(names))
+    heading = 0.25
+    tgt = TrackingTarget(stance="left", phase=0.4, heading_rad=heading, h_d=h_d, dh_d=dh_d, ddh_d=np.zeros_like(h_d))
+    h, dh = fb.references(kin, tgt)
+    e = 0.3 - (heading - h_d[i_st])  # pelvis yaw error against its nominal value
+    assert h[i_sw] == pytest.approx(h_d[i_sw] - 0.8 * e, abs=1e-12)
+    assert dh[i_sw] == pytest.approx(dh_d[i_sw] - 0.8 * (0.5 + dh_d[i_st]), abs=1e-12)
+    others = np.arange(len(names)) != i_sw
+    np.testing.assert_array_equal(h[others], h_d[others])
+    np.testing.assert_array_equal(dh[others], dh_d[others])
+    assert tgt.h_d[i_sw] == h_d[i_sw]  # the target is not changed
+
+
+def test_the_yaw_error_is_wrapped_and_no_error_changes_nothing():
+    robot = load_robot("cassie")
+    names = OutputMap(robot).names
+    fb = PelvisYawFeedback.for_outputs(names, 1.0)
+    i_st = names.index("stance_hip_yaw")
+    h_d = np.zeros(len(names))
+    h_d[i_st] = 0.1
+    # pelvis at its nominal yaw D - h_d[stance], 2 pi away: no correction
+    kin = _kin_with_base_yaw(robot, 3.0 - 0.1 - 2.0 * math.pi, 0.0)
+    tgt = TrackingTarget(stance="right", phase=0.1, heading_rad=3.0, h_d=h_d, dh_d=np.zeros_like(h_d), ddh_d=h_d)
+    h, dh = fb.references(kin, tgt)
+    np.testing.assert_allclose(h, h_d, atol=1e-12)
+    np.testing.assert_allclose(dh, 0.0, atol=1e-12)
+
+
+def test_no_feedback_without_gain_or_hip_yaw_outputs():
+    assert PelvisYawFeedback.for_outputs(("stance_hip_yaw", "swing_hip_yaw"), 0.0) is None
+    assert PelvisYawFeedback.for_outputs(OutputMap(load_robot("rabbit")).names, 1.0) is None
