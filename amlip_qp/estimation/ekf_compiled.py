@@ -181,8 +181,8 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
     if blades is not None:
         sin_tol = float(np.sin(n.max_blade_slope_rad))
         for i in range(2):
-            b = ca.mtimes(R, blades[i])
-            flat = ca.fabs(b[2]) <= sin_tol * ca.sqrt(ca.dot(b, b))
+            blade_w = ca.mtimes(R, blades[i])
+            flat = ca.fabs(blade_w[2]) <= sin_tol * ca.sqrt(ca.dot(blade_w, blade_w))
             c_now[i] = ca.if_else(flat, c_now[i], 0.0)
 
     # --- touchdown: restart the slot at p + R y with the covariance augmentation (InvariantEKF._augment)

@@ -146,7 +146,7 @@ def so3_exp(phi) -> tuple[np.ndarray, np.ndarray]:
 
 
 def blade_is_flat(R, blade, max_slope_rad: float) -> bool:
-    """True when ``R @ blade`` (a blade in IMU axes, seen in the world) is within ``max_slope_rad`` of the horizontal."""
+    """True when ``R @ blade`` (a blade in IMU axes, in the world) is within ``max_slope_rad`` of the horizontal."""
     b = np.asarray(R, dtype=float) @ np.asarray(blade, dtype=float)
     return abs(float(b[2])) <= math.sin(max_slope_rad) * math.sqrt(float(b @ b))
 
