@@ -6,6 +6,7 @@ import pytest
 
 from amlip_qp.estimation import make_base_estimator
 from amlip_qp.estimation.bench import stand_in_measurements
+from amlip_qp.estimation.invariant_ekf import EkfNoise
 from amlip_qp.robots import load_robot
 
 IMU = [0.03, 0.0, 0.09]
@@ -21,14 +22,21 @@ def test_the_compiled_tick_equals_the_numpy_filter(cassie):
     rng = np.random.default_rng(4)
     for m in ms:  # the joints move independently, so each leg's chain is exercised
         m.q[7:] += 0.3 * rng.normal(size=cassie.nq - 7)
-    ref = make_base_estimator("ekf", cassie, 0.0005, IMU, backend="numpy")
-    c = make_base_estimator("ekf", cassie, 0.0005, IMU, backend="c")
+    noise = EkfNoise(max_blade_slope_rad=0.3)  # the joints jitter by 0.3 rad: some blades are that flat
+    ref = make_base_estimator("ekf", cassie, 0.0005, IMU, noise=noise, backend="numpy")
+    c = make_base_estimator("ekf", cassie, 0.0005, IMU, noise=noise, backend="c")
     assert c.compiled is not None
     worst = 0.0
+    used, gated = 0, 0  # ticks a switched-on foot was used / left out (its blade not flat)
     for m in ms:
         a, b = ref.fill(m), c.fill(m)
         worst = max(worst, np.abs(a.q - b.q).max(), np.abs(a.v - b.v).max())
+        assert tuple(c.compiled.contacts == 1.0) == ref.ekf.in_contact
+        switches = [m.foot_contact[s] for s in cassie.foot_sides]
+        used += sum(ref.ekf.in_contact)
+        gated += sum(s and not u for s, u in zip(switches, ref.ekf.in_contact))
     assert worst < 1e-10
+    assert used > 100 and gated > 100  # both branches of the flat-blade gate ran
     sa, sb = ref.state(), c.state()
     for name in ("R", "v", "p", "d", "bg", "ba", "P"):
         np.testing.assert_allclose(getattr(sb, name), getattr(sa, name), atol=1e-10, err_msg=name)

@@ -11,6 +11,7 @@ from amlip_qp.estimation.invariant_ekf import (
     GRAVITY_MPS2,
     EkfNoise,
     InvariantEKF,
+    blade_is_flat,
     measurement_matrix,
     so3_exp,
 )
@@ -176,7 +177,30 @@ def test_a_swing_foot_is_re_initialised_at_touchdown():
     assert np.allclose(e.P[9:12, 0:6], e.P[6:9, 0:6])
 
 
-@pytest.mark.parametrize("field", ["gyro_std", "kinematics_std", "max_speed_mps"])
+def test_a_blade_foot_is_a_contact_only_once_it_rests_flat():
+    """A blade landing on its heel (toe 3 degrees up) rolls while loaded: the filter waits until it is
+    flat (within 1 degree), then restarts the slot from the kinematics of that tick."""
+    e = _run_standing(0.1, 0.002, (0, 0, 0), (0, 0, 0), 0.0)
+    flat = np.array([[0.16, 0.0, 0.0], [0.16, 0.0, 0.0]])
+    tilted = flat.copy()
+    tilted[0] = [0.16 * np.cos(np.radians(3.0)), 0.0, 0.16 * np.sin(np.radians(3.0))]
+    e.set_contacts((False, True), np.zeros((2, 3)), flat)
+    y_heel = np.array([[0.3, 0.13, -0.9], [0.0, -0.13, -1.0]])
+    e.set_contacts((True, True), y_heel, tilted)
+    assert e.in_contact == (False, True)
+    y_flat = np.array([[0.31, 0.13, -0.91], [0.0, -0.13, -1.0]])
+    e.set_contacts((True, True), y_flat, flat)
+    assert e.in_contact == (True, True)
+    assert np.allclose(e.d[0], e.p + e.R @ y_flat[0])
+    # the slope is judged in the world: the same blade is flat for a filter that is pitched by 3 degrees
+    e.R = so3_exp([0.0, np.radians(3.0), 0.0])[0]
+    assert blade_is_flat(e.R, tilted[0], np.radians(1.0)) and not blade_is_flat(e.R, flat[0], np.radians(1.0))
+    # a switch that reports no contact is never overruled by a flat blade
+    e.set_contacts((False, False), y_flat, flat)
+    assert e.in_contact == (False, False)
+
+
+@pytest.mark.parametrize("field", ["gyro_std", "kinematics_std", "max_speed_mps", "max_blade_slope_rad"])
 @pytest.mark.parametrize("bad", [0.0, -1.0, float("nan")])
 def test_bad_noise_settings_say_what_to_fix(field, bad):
     with pytest.raises(InputError, match=field):

@@ -30,13 +30,23 @@ def test_the_contacts_in_the_imu_frame_match_the_full_kinematics(cassie):
         kin.update_positions(q)
         R = quat_xyzw_to_rot(q[3:7])
         y = legs.contacts_in_imu(q)
+        blades = legs.blades_in_imu(q)
         for i, side in enumerate(legs.sides):
             world = q[0:3] + R @ (IMU + y[i])
             np.testing.assert_allclose(world, kin.contact_position(side), atol=1e-12)
+            toe, heel = (kin.frame_translation_view(f) for f in cassie.force_frame_ids[side])
+            np.testing.assert_allclose(R @ blades[i], toe - heel, atol=1e-12)
+            assert abs(np.linalg.norm(blades[i]) - 0.16) < 1e-6  # Cassie's blade: 0.16 m from heel to toe
     # the base part of q is ignored
     q2 = q.copy()
     q2[0:7] = [5.0, 5.0, 5.0, 0.0, 0.0, 0.0, 1.0]
     np.testing.assert_array_equal(legs.contacts_in_imu(q2), y)
+
+
+def test_standing_the_blades_are_flat(cassie):
+    blades = LegKinematics(cassie, IMU).blades_in_imu(cassie.q_stand)
+    world = blades @ quat_xyzw_to_rot(cassie.q_stand[3:7]).T
+    assert np.abs(world[:, 2]).max() < 1e-6 and np.all(world[:, 0] > 0.15)
 
 
 def test_a_robot_without_a_floating_base_or_a_bad_imu_position_is_refused(cassie):

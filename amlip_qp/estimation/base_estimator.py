@@ -12,7 +12,8 @@ both in base axes) is the estimate.
   :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` on the IMU reading
   and the leg kinematics of the encoder angles
   (:class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`), with the
-  foot-contact switches of the measurement.
+  foot-contact switches of the measurement (a blade foot counts once it rests
+  flat, see :mod:`~amlip_qp.estimation.invariant_ekf`).
 
 **Initialisation of the EKF** (first measurement, and after :meth:`reset`):
 the robot is assumed at rest with both feet on the ground. The orientation is
@@ -231,7 +232,7 @@ class EkfBaseEstimator:
             if self._imu_prev is not None:
                 ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
         gyro = np.asarray(imu.gyro_radps, dtype=float)
-        ekf.set_contacts(contacts, y)
+        ekf.set_contacts(contacts, y, self.legs.blades_in_imu(measurement.q))
         ekf.correct(y)
         self._imu_prev = (gyro, np.asarray(imu.accel_mps2, dtype=float))
         if not self.diverged and ekf.diverged():
@@ -246,10 +247,11 @@ class EkfBaseEstimator:
         q = measurement.q
         c.q_joints[:] = q[7:]
         c.tick()
-        # The next tick propagates with this tick's IMU, from these contacts.
+        # The next tick propagates with this tick's IMU, from the contacts the filter used
+        # (a blade foot counts only once flat).
         inp[0:3] = imu.gyro_radps
         inp[3:6] = imu.accel_mps2
-        inp[9], inp[10] = contacts
+        inp[9:11] = c.contacts
         base, (tr, speed2) = c.base, c.checks.tolist()
         if not math.isfinite(sum(base.tolist()) + tr + speed2) or tr > self._max_trace or speed2 > self._max_speed2:
             self.diverged = True

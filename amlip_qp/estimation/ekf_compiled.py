@@ -40,7 +40,7 @@ LIBRARY_FILE = "libamlip_ekf.so"
 #: Size of the packed filter state: R (9, row-major), v, p, d_left, d_right, b_g, b_a (3 each), P (441).
 N_STATE = 27 + DIM * DIM
 #: Size of the packed tick input before the joint angles: gyro, accel (of the previous tick), dt,
-#: contact now (2), contact before (2), gyro now; then ``q[7:]``.
+#: contact switches now (2), contacts the previous tick used (2), gyro now; then ``q[7:]``.
 N_INPUT_HEAD = 3 + 3 + 1 + 2 + 2 + 3
 #: The joint types the generated leg kinematics knows: Pinocchio short name -> rotation axis.
 _REVOLUTE_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
@@ -90,7 +90,8 @@ def _rotation(axis, angle):
 
 def _contacts_in_imu(legs: LegKinematics, q_joints):
     """:meth:`LegKinematics.contacts_in_imu <amlip_qp.estimation.leg_kinematics.LegKinematics.contacts_in_imu>`
-    on symbols: the joint chains from the base (at the identity) to the contact frames.
+    and :meth:`~amlip_qp.estimation.leg_kinematics.LegKinematics.blades_in_imu` on symbols (the blades
+    ``None`` without blade feet): the joint chains from the base (at the identity) to the contact frames.
 
     Raises:
         CodegenError: A joint on a chain is not a revolute joint about x, y or z.
@@ -116,12 +117,15 @@ def _contacts_in_imu(legs: LegKinematics, q_joints):
                 )
         return placements[j]
 
-    out = []
-    for fid in legs.frame_ids:
+    def position(fid: int):
         frame = model.frames[fid]
         R_j, p_j = joint(frame.parentJoint)
-        out.append(p_j + ca.mtimes(R_j, ca.DM(frame.placement.translation)) - ca.DM(legs.imu_pos_in_base_m))
-    return out
+        return p_j + ca.mtimes(R_j, ca.DM(frame.placement.translation))
+
+    out = [position(fid) - ca.DM(legs.imu_pos_in_base_m) for fid in legs.frame_ids]
+    if legs.blade_frame_ids is None:
+        return out, None
+    return out, [position(toe) - position(heel) for toe, heel in legs.blade_frame_ids]
 
 
 def _sym(P):
@@ -146,7 +150,7 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
     gyro, accel, dt = u[0:3], u[3:6], u[6]
     c_now, c_before = [u[7], u[8]], [u[9], u[10]]
     gyro_now = u[11:14]
-    y = _contacts_in_imu(legs, u[N_INPUT_HEAD:])
+    y, blades = _contacts_in_imu(legs, u[N_INPUT_HEAD:])
     r_imu = ca.DM(legs.imu_pos_in_base_m)
     g = ca.DM(GRAVITY_MPS2)
     I3 = ca.SX.eye(3)
@@ -172,6 +176,14 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
     p = p + v * dt + (0.5 * dt * dt) * acc
     v = v + acc * dt
     R = ca.mtimes(R, _so3_exp(w)[0])
+
+    # --- a blade foot counts as in contact only while flat (InvariantEKF.set_contacts / blade_is_flat)
+    if blades is not None:
+        sin_tol = float(np.sin(n.max_blade_slope_rad))
+        for i in range(2):
+            blade_w = ca.mtimes(R, blades[i])
+            flat = ca.fabs(blade_w[2]) <= sin_tol * ca.sqrt(ca.dot(blade_w, blade_w))
+            c_now[i] = ca.if_else(flat, c_now[i], 0.0)
 
     # --- touchdown: restart the slot at p + R y with the covariance augmentation (InvariantEKF._augment)
     for i in range(2):
@@ -218,9 +230,11 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
     base_v = ca.vertcat(ca.mtimes(R.T, v) - ca.cross(w_b, r_imu), w_b)
     state = ca.vertcat(ca.reshape(R.T, 9, 1), v, p, d[0], d[1], bg, ba, ca.reshape(P.T, DIM * DIM, 1))
     checks = ca.vertcat(ca.trace(P), ca.dot(v, v))
+    used = ca.vertcat(c_now[0], c_now[1])
     return ca.Function(
-        FUNCTION_NAME, [x, u], [ca.densify(state), ca.densify(ca.vertcat(base_q, base_v)), ca.densify(checks)],
-        ["state", "input"], ["state_next", "base", "checks"],
+        FUNCTION_NAME, [x, u],
+        [ca.densify(state), ca.densify(ca.vertcat(base_q, base_v)), ca.densify(checks), ca.densify(used)],
+        ["state", "input"], ["state_next", "base", "checks", "contacts"],
     )  # fmt: skip
 
 
@@ -260,10 +274,12 @@ class CompiledEkf:
         self.base = np.zeros(13)
         #: ``trace(P)`` and ``|v|^2`` after the last tick.
         self.checks = np.zeros(2)
+        #: The contacts the last tick used (0/1, left and right; a blade foot counts once flat).
+        self.contacts = np.zeros(2)
         self._buffer, self._eval = fn.buffer()
         for i, arr in enumerate((self.state, self.input)):
             self._buffer.set_arg(i, memoryview(arr))  # type: ignore[call-arg, arg-type]
-        for i, arr in enumerate((self._next, self.base, self.checks)):
+        for i, arr in enumerate((self._next, self.base, self.checks, self.contacts)):
             if fn.nnz_out(i) != arr.size:
                 raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} output {i} has the wrong size")
             self._buffer.set_res(i, memoryview(arr))  # type: ignore[call-arg, arg-type]

@@ -19,6 +19,17 @@ covariance (``P_dd = P_pp + R Sigma_fk R^T``, ``P_dx = P_px``), so whatever it
 held in swing is forgotten. Feet in contact are assumed stationary up to a
 white slip velocity (``contact_std``).
 
+**A blade foot counts as a fixed contact only while it rests flat.** Cassie's
+foot is a blade that lands on its heel and rolls onto the toe while already
+loaded: on the closed-chain plant the contact site (the foot joint, above the
+blade) moves by about 0.3 m/s forward and 0.25 m/s down for the first ~40 ms
+of every stance. Taken as a fixed point, that motion biased the velocity
+estimate by 0.04 m/s. So a foot whose switch reports contact is used only while
+its blade (toe minus heel, from the leg kinematics) lies within
+``max_blade_slope_rad`` of the horizontal by the estimated orientation (flat
+ground); it touches down, for the filter, when it lands flat. Feet without a
+blade (``blades_in_imu`` ``None``) are used from the switch alone.
+
 **Propagation** (IMU, control period ``dt``): ``R <- R Exp(w dt)``,
 ``p <- p + v dt + (R a + g) dt^2/2``, ``v <- v + (R a + g) dt`` with the
 bias-corrected gyro ``w`` and specific force ``a``; the covariance with the
@@ -75,6 +86,8 @@ class EkfNoise:
         init_accel_bias_std_mps2: Initial accelerometer bias uncertainty, m/s^2.
         max_covariance_trace: Divergence when ``trace(P)`` exceeds this.
         max_speed_mps: Divergence when the estimated speed exceeds this, m/s.
+        max_blade_slope_rad: A blade foot is a fixed contact only while its blade is this
+            close to the horizontal, rad (1 degree: a blade of 0.16 m with its toe 3 mm up).
     """
 
     gyro_std: float = 0.01
@@ -90,6 +103,7 @@ class EkfNoise:
     init_accel_bias_std_mps2: float = 0.1
     max_covariance_trace: float = 1e4
     max_speed_mps: float = 20.0
+    max_blade_slope_rad: float = math.radians(1.0)
 
     def __post_init__(self):
         for name, value in self.__dict__.items():
@@ -129,6 +143,12 @@ def so3_exp(phi) -> tuple[np.ndarray, np.ndarray]:
         a, b, c = s / th, (1.0 - co) / th2, (th - s) / (th2 * th)
     eye = np.eye(3)
     return eye + a * K + b * K2, eye + b * K + c * K2
+
+
+def blade_is_flat(R, blade, max_slope_rad: float) -> bool:
+    """True when ``R @ blade`` (a blade in IMU axes, in the world) is within ``max_slope_rad`` of the horizontal."""
+    b = np.asarray(R, dtype=float) @ np.asarray(blade, dtype=float)
+    return abs(float(b[2])) <= math.sin(max_slope_rad) * math.sqrt(float(b @ b))
 
 
 def measurement_matrix(in_contact: tuple[bool, bool]) -> np.ndarray:
@@ -256,12 +276,25 @@ class InvariantEKF:
         self.v = self.v + acc * dt_s
         self.R = self.R @ so3_exp(w)[0]
 
-    def set_contacts(self, in_contact: tuple[bool, bool], contacts_in_imu) -> None:
-        """Declare which feet are in contact; a foot that just touched down restarts its slot."""
+    def set_contacts(self, in_contact: tuple[bool, bool], contacts_in_imu, blades_in_imu=None) -> None:
+        """Declare which feet are in contact; a foot that just touched down restarts its slot.
+
+        Args:
+            in_contact: The contact switches (left, right).
+            contacts_in_imu: The contact points seen from the IMU, IMU axes, m, shape (2, 3).
+            blades_in_imu: Each blade foot's toe minus heel, IMU axes, m, shape (2, 3), or
+                ``None`` (no blades). With blades, a foot counts as in contact only while its
+                blade lies flat (:func:`blade_is_flat`).
+        """
+        c = [bool(in_contact[0]), bool(in_contact[1])]
+        if blades_in_imu is not None:
+            tol = self.noise.max_blade_slope_rad
+            for i in range(2):
+                c[i] = c[i] and blade_is_flat(self.R, blades_in_imu[i], tol)
         for i in range(2):
-            if in_contact[i] and not self.in_contact[i]:
+            if c[i] and not self.in_contact[i]:
                 self._augment(i, np.asarray(contacts_in_imu[i], dtype=float))
-        self.in_contact = (bool(in_contact[0]), bool(in_contact[1]))
+        self.in_contact = (c[0], c[1])
 
     def innovation(self, contacts_in_imu) -> np.ndarray:
         """``z = R y - (d - p)`` of the feet in contact (left first), world axes, m, shape (3k,)."""

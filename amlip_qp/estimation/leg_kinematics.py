@@ -7,6 +7,11 @@ so the contact site's world position is its position in the base frame; the
 IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes, so
 the vector from the IMU to the site, in IMU axes, is that position minus
 ``imu_pos_in_base_m``. This object keeps its own ``pinocchio.Data``.
+
+For a blade foot (toe and heel force sites, Cassie) it also gives the blade,
+the vector from the heel to the toe, in IMU axes: with the estimated
+orientation it tells whether the blade rests flat on the ground (see
+:meth:`~amlip_qp.estimation.invariant_ekf.InvariantEKF.set_contacts`).
 """
 
 from __future__ import annotations
@@ -49,6 +54,10 @@ class LegKinematics:
         self.sides = tuple(robot.foot_sides)
         #: Pinocchio frame ids of the contact sites (``sides`` order).
         self.frame_ids = tuple(robot.contact_frame_ids[s] for s in self.sides)
+        #: Pinocchio frame ids of each side's (toe, heel) sites, or ``None`` without blade feet.
+        self.blade_frame_ids: tuple[tuple[int, int], ...] | None = None
+        if all(len(robot.force_frame_ids[s]) == 2 for s in self.sides):
+            self.blade_frame_ids = tuple(tuple(robot.force_frame_ids[s]) for s in self.sides)  # type: ignore[misc]
         self.imu_pos_in_base_m = imu
         self._q = np.zeros(self.model.nq)
         self._q[6] = 1.0  # identity base quaternion (x y z w)
@@ -70,4 +79,22 @@ class LegKinematics:
         for i, fid in enumerate(self.frame_ids):
             out[i] = pin.updateFramePlacement(m, d, fid).translation
         out -= self.imu_pos_in_base_m
+        return out
+
+    def blades_in_imu(self, q) -> np.ndarray | None:
+        """Each side's blade (toe minus heel site), IMU axes, m, shape (2, 3); ``None`` without blade feet.
+
+        Args:
+            q: A Pinocchio configuration; only ``q[7:]`` is used.
+        """
+        if self.blade_frame_ids is None:
+            return None
+        pin = self._pin
+        qq = self._q
+        qq[7:] = q[7 : self._nq]
+        m, d = self.model, self.data
+        pin.forwardKinematics(m, d, qq)
+        out = np.empty((2, 3))
+        for i, (toe, heel) in enumerate(self.blade_frame_ids):
+            out[i] = pin.updateFramePlacement(m, d, toe).translation - pin.updateFramePlacement(m, d, heel).translation
         return out
