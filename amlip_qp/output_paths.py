@@ -62,3 +62,25 @@ def writing(option: str, path: str) -> Iterator[None]:
         yield
     except OSError as exc:
         raise InputError(f"{option} {path}: writing failed ({exc.strerror or exc}); give a writable path") from exc
+
+
+def emit_report(table: str, report: dict, target: str | None) -> None:
+    """Print a benchmark's ``table`` and write its ``report`` as JSON to ``target`` (``--json``).
+
+    ``target`` ``None``: the table on stdout only; ``"-"``: the table on stderr
+    and the JSON on stdout; a path: the table on stdout and the JSON to the
+    file (an :class:`~amlip_qp.exceptions.InputError` naming ``--json`` if it
+    cannot be written, see :func:`writing`).
+    """
+    import json
+    import sys
+
+    if target == "-":
+        sys.stderr.write(table + "\n")
+        sys.stdout.write(json.dumps(report, indent=2) + "\n")
+        return
+    print(table)
+    if target:
+        with writing("--json", target):
+            Path(target).write_text(json.dumps(report, indent=2) + "\n")
+        print(f"wrote {target}")

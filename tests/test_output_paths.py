@@ -54,3 +54,21 @@ def test_writing_turns_an_oserror_into_an_input_error():
             raise OSError(28, "No space left on device")
     with writing("--log", "/ok.npz"):  # no error, no effect
         pass
+
+
+def test_emit_report_prints_the_table_and_writes_the_json_where_asked(tmp_path, capsys):
+    import json
+
+    from amlip_qp.output_paths import emit_report
+
+    report = {"ratio": 0.05, "ticks": 10}
+    emit_report("TABLE", report, None)
+    out, err = capsys.readouterr()
+    assert out == "TABLE\n" and err == ""
+    emit_report("TABLE", report, "-")
+    out, err = capsys.readouterr()
+    assert json.loads(out) == report and err == "TABLE\n"
+    path = tmp_path / "r.json"
+    emit_report("TABLE", report, str(path))
+    out, _ = capsys.readouterr()
+    assert json.loads(path.read_text()) == report and out == f"TABLE\nwrote {path}\n"

@@ -17,10 +17,7 @@ Recording needs the plant, so the benchmark lives in ``sim``.
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -100,20 +97,10 @@ def format_report(r: dict) -> str:
 
 def run_bench(args: argparse.Namespace) -> int:
     """``amlip-qp bench ekf``: print the report (and write JSON)."""
-    from amlip_qp.output_paths import check_output_path, writing
+    from amlip_qp.output_paths import check_output_path, emit_report
 
     target = getattr(args, "json", None)
     check_output_path("--json", target)
     report = run(scenario=args.scenario, duration_s=args.duration)
-    table = format_report(report)
-    if target == "-":
-        sys.stderr.write(table + "\n")
-        json.dump(report, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    print(table)
-    if target:
-        with writing("--json", target):
-            Path(target).write_text(json.dumps(report, indent=2) + "\n")
-        print(f"wrote {target}")
+    emit_report(format_report(report), report, target)
     return 0

@@ -34,11 +34,8 @@ Arguments :func:`run_bench` reads from the namespace:
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 import warnings
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -268,22 +265,12 @@ def format_report(report: dict) -> str:
 
 def run_bench(args: argparse.Namespace) -> int:
     """Record a walk, replay its QPs through every solver, print the table (and JSON)."""
-    from amlip_qp.output_paths import check_output_path, writing
+    from amlip_qp.output_paths import check_output_path, emit_report
 
     n_ticks = int(getattr(args, "ticks", None) or 1200)
     scenario = getattr(args, "scenario", None) or "cassie-1mps"
     target = getattr(args, "json", None)
     check_output_path("--json", target)
     report = run(n_ticks=n_ticks, scenario=scenario)
-    table = format_report(report)
-    if target == "-":
-        sys.stderr.write(table + "\n")
-        json.dump(report, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    print(table)
-    if target:
-        with writing("--json", target):
-            Path(target).write_text(json.dumps(report, indent=2) + "\n")
-        print(f"wrote {target}")
+    emit_report(format_report(report), report, target)
     return 0 if not report["fell"] else 1
