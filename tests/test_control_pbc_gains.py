@@ -22,6 +22,8 @@ def test_gains_validation_and_swing_schedule():
         PBCGains(hip_yaw_feedback=1.5)
     with pytest.raises(InputError):
         PBCGains(hip_yaw_feedback=-0.5)
+    with pytest.raises(InputError, match="swing_ankle_gain_scale"):
+        PBCGains(swing_ankle_gain_scale=0.0)
     g = PBCGains(swing_start_fraction=0.2, swing_ramp_phase=0.5, touchdown_gain_drop=0.5)
     assert g.swing_scale(0.0, 0.0) == pytest.approx(0.2)
     assert g.swing_scale(0.25, 0.0) == pytest.approx(0.6)

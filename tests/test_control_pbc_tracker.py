@@ -234,3 +234,20 @@ def test_hip_yaw_feedback_turns_the_swing_hip_yaw_reference_against_the_pelvis_y
     e = math.atan2(R[1, 0], R[0, 0]) - (heading - float(h[i_st]))
     assert e == pytest.approx(0.2, abs=1e-9)
     assert q_r[iq] == pytest.approx(q[iq] - e, abs=1e-6)
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_swing_ankle_gain_scale_stiffens_only_the_swing_ankle(stance):
+    """Cassie's swing toe gets ``scale`` x K_p and sqrt(scale) x K_d; every other joint keeps its gains."""
+    robot = load_robot("cassie")
+    base = dataclasses.replace(default_gains(robot), swing_ankle_gain_scale=1.0)
+    stiff = dataclasses.replace(base, swing_ankle_gain_scale=10.0)
+    a, b = PBCTracker(robot, gains=base).layout(stance), PBCTracker(robot, gains=stiff).layout(stance)
+    names = [robot.actuated.joint_names[k] for k in a.ctrl]
+    swing = "right" if stance == "left" else "left"
+    toe = np.array([n == f"{swing}-foot" for n in names])
+    assert toe.sum() == 1 and f"{stance}-foot" not in names  # the stance toe is passive
+    assert b.kp[toe][0] == pytest.approx(10.0 * base.kp_swing_ps2)
+    assert b.kd[toe][0] == pytest.approx(math.sqrt(10.0) * base.kd_swing_ps)
+    np.testing.assert_array_equal(b.kp[~toe], a.kp[~toe])
+    np.testing.assert_array_equal(b.kd[~toe], a.kd[~toe])

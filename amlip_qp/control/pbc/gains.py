@@ -97,6 +97,15 @@ class PBCGains:
         hip_yaw_feedback: Gain (dimensionless, 0..1, 0 disables) of the pelvis-yaw
             feedback on the swing hip-yaw reference
             (:mod:`amlip_qp.control.pbc.yaw_feedback`).
+        swing_ankle_gain_scale: Factor (>= 1 in practice, > 0) on ``K_p`` of the
+            swing leg's ankle (the joint the contact frame hangs on, held passive
+            in stance), and its square root on ``K_d`` (same damping ratio). The
+            PD is an acceleration, so its torque scales with the ankle's own tiny
+            inertia (Cassie: about 0.013 kg m^2, i.e. about 5 N m/rad at 400
+            1/s^2); a plant whose foot carries more than the model (a crank,
+            a rod, their damping) then pulls the swing foot off its pitch
+            reference. ``docs/TUNING.md`` ("Closed-chain plant: the swing
+            ankle") has the numbers.
     """
 
     kp_stance_ps2: float = 400.0
@@ -113,6 +122,7 @@ class PBCGains:
     spring_model_linkage: AchillesLinkage | None = None
     spring_model_load: str = "commanded"
     hip_yaw_feedback: float = 0.0
+    swing_ankle_gain_scale: float = 1.0
 
     def __post_init__(self):
         if self.spring_model_load not in SPRING_MODEL_LOADS:
@@ -131,11 +141,12 @@ class PBCGains:
             or self.swing_ramp_phase <= 0
             or self.swing_torso_compensation > 1
             or self.hip_yaw_feedback > 1
+            or self.swing_ankle_gain_scale <= 0
         ):
             raise InputError(
                 "PBC gains must be finite and >= 0 (touchdown_gain_drop, swing_start_fraction, "
                 "swing_torso_compensation, hip_yaw_feedback <= 1, "
-                f"swing_ramp_phase > 0), got {self!r}"
+                f"swing_ramp_phase, swing_ankle_gain_scale > 0), got {self!r}"
             )
 
     def swing_scale(self, phase: float, contact_weight: float) -> float:
@@ -147,13 +158,15 @@ class PBCGains:
         return start * (1.0 - self.touchdown_gain_drop * w)
 
 
-#: Cassie (leg springs): softer stance gains, swing-leg torso compensation, pelvis-yaw feedback on the
-#: swing hip yaw, the paper's spring model (the robot's achilles linkage under the robot's weight).
+#: Cassie (leg springs): softer stance gains, a stiffer swing ankle, swing-leg torso compensation,
+#: pelvis-yaw feedback on the swing hip yaw, the paper's spring model (the robot's achilles linkage
+#: under the robot's weight).
 CASSIE_GAINS = PBCGains(
     kp_stance_ps2=200.0,
     kd_stance_ps=28.0,
     kp_swing_ps2=400.0,
     kd_swing_ps=40.0,
+    swing_ankle_gain_scale=10.0,
     swing_torso_compensation=1.0,
     hip_yaw_feedback=1.0,
     spring_model_offset=True,
