@@ -72,11 +72,14 @@ RULES: dict[str, Rule] = {
     ),
     # the paper's tracker: no QP
     "amlip_qp.control.pbc": Rule(
-        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pbc"), ("mujoco", "proxsuite", "qpsolvers")
+        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.pbc"),
+        ("mujoco", "proxsuite", "qpsolvers"),
     ),
     # the whole-body QP: may use the QP layer
     "amlip_qp.control.wbc": Rule(
-        CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.wbc"), ("mujoco",)
+        CONTROL_BASE
+        + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc"),
+        ("mujoco",),
     ),
     # the MuJoCo harness sits on top
     "amlip_qp.sim": Rule(("amlip_qp",)),

@@ -96,7 +96,7 @@ class PBCGains:
             tick). ``docs/TUNING.md`` ("Spring model") says why Cassie uses the weight.
         hip_yaw_feedback: Gain (dimensionless, 0..1, 0 disables) of the pelvis-yaw
             feedback on the swing hip-yaw reference
-            (:mod:`amlip_qp.control.pbc.yaw_feedback`).
+            (:mod:`amlip_qp.control.pelvis_yaw`, shared with the QP tracker).
         swing_ankle_gain_scale: Factor (>= 1 in practice, > 0) on ``K_p`` of the
             swing leg's ankle (the joint the contact frame hangs on, held passive
             in stance), and its square root on ``K_d`` (same damping ratio). The

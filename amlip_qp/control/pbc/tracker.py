@@ -62,7 +62,7 @@ from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
-from amlip_qp.control.pbc.yaw_feedback import PelvisYawFeedback
+from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
 from amlip_qp.robots.outputs import OutputMap
 

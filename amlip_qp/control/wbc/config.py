@@ -102,7 +102,7 @@ class QPConfig:
             the swing foot lands along ``D_{k+1}`` (world yaw) whatever the
             pelvis yaw error, and the next stance's hip-yaw line returns the
             pelvis to the heading. Applied to the output task's residual
-            (:class:`~amlip_qp.control.wbc.inputs.PelvisYawFeedback`); robots
+            (:class:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback`); robots
             without hip-yaw outputs ignore it.
     """
 

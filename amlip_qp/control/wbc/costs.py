@@ -128,7 +128,7 @@ class OutputTaskCost(Cost):
     """The output task ``||W^(1/2) (J vdot + r)||^2``
     (:class:`~amlip_qp.control.wbc.tasks.OutputTask`), its residual lowered
     by the pelvis-yaw feedback's shift
-    (:class:`~amlip_qp.control.wbc.inputs.PelvisYawFeedback`)."""
+    (:class:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback`)."""
 
     def __init__(self, layout: VariableLayout, task: OutputTask):
         super().__init__(task.name, task.size)

@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.alip import other_side
+from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
@@ -51,47 +52,15 @@ def swing_force_weight(config: QPConfig, target: TrackingTarget) -> float:
     return min(max(w, 0.0), 1.0)
 
 
-class PelvisYawFeedback:
-    """The pelvis-yaw feedback on the swing hip-yaw reference (``QPConfig.hip_yaw_feedback``).
-
-    Args:
-        gain: The feedback gain ``k`` (dimensionless, > 0).
-        stance_index: Index of the ``stance_hip_yaw`` output.
-        swing_index: Index of the ``swing_hip_yaw`` output.
-    """
-
-    def __init__(self, gain: float, stance_index: int, swing_index: int):
-        self.gain = gain
-        self.stance_index = stance_index
-        self.swing_index = swing_index
-
-    @classmethod
-    def for_outputs(cls, names: tuple[str, ...], gain: float) -> PelvisYawFeedback | None:
-        """The feedback for outputs ``names``; ``None`` when off or without both hip-yaw outputs."""
-        if gain > 0 and "stance_hip_yaw" in names and "swing_hip_yaw" in names:
-            return cls(gain, names.index("stance_hip_yaw"), names.index("swing_hip_yaw"))
-        return None
-
-    def correction(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[float, float]:
-        """The change of the swing hip-yaw reference (rad) and of its rate
-        (rad/s): ``(-k e_psi, -k (psidot + dh_d[stance_hip_yaw]))``, with
-        ``e_psi`` the wrapped pelvis yaw minus ``D - h_d[stance_hip_yaw]``."""
-        i_st = self.stance_index
-        k = self.gain
-        R = kin.base_rotation()
-        psi = math.atan2(R[1, 0], R[0, 0])
-        psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
-        e = psi - (target.heading_rad - float(target.h_d[i_st]))
-        e = (e + math.pi) % (2.0 * math.pi) - math.pi
-        return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))
-
-    def residual_shift(self, kin: RobotKinematics, target: TrackingTarget, task: OutputTask) -> float:
-        """How much the feedback lowers the swing hip-yaw component of the
-        output task's residual ``r = ... - K_d (yd_d - J v) - K_p (y_d - y)``:
-        ``K_d ddh + K_p dh`` (rad/s^2) for the correction ``(dh, ddh)``."""
-        dh, ddh = self.correction(kin, target)
-        i = self.swing_index
-        return task.gains.kd[i] * ddh + task.gains.kp[i] * dh
+def feedback_residual_shift(
+    feedback: PelvisYawFeedback, kin: RobotKinematics, target: TrackingTarget, task: OutputTask
+) -> float:
+    """How much the pelvis-yaw feedback lowers the swing hip-yaw component of the
+    output task's residual ``r = ... - K_d (yd_d - J v) - K_p (y_d - y)``:
+    ``K_d ddh + K_p dh`` (rad/s^2) for the feedback's correction ``(dh, ddh)``."""
+    dh, ddh = feedback.correction(kin, target)
+    i = feedback.swing_index
+    return task.gains.kd[i] * ddh + task.gains.kp[i] * dh
 
 
 class TickInputs:
@@ -180,7 +149,7 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
     task = inputs.output_task
     inputs.output_jacobian, inputs.output_residual = task.least_squares(kin, target)
     fb = inputs.feedback
-    inputs.residual_shift = 0.0 if fb is None else fb.residual_shift(kin, target, task)
+    inputs.residual_shift = 0.0 if fb is None else feedback_residual_shift(fb, kin, target, task)
     inputs.swing_force_weight = swing_force_weight(inputs.config, target)
     return inputs
 

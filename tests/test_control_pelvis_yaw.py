@@ -1,4 +1,4 @@
-"""Tests of the PBC's pelvis-yaw feedback (amlip_qp.control.pbc.yaw_feedback)."""
+"""Tests of the pelvis-yaw feedback both trackers use (amlip_qp.control.pelvis_yaw)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.control.pbc.yaw_feedback import PelvisYawFeedback
+from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics

@@ -1,5 +1,6 @@
-"""Pelvis-yaw feedback on the swing hip-yaw reference (:attr:`PBCGains.hip_yaw_feedback
-<amlip_qp.control.pbc.gains.PBCGains.hip_yaw_feedback>`).
+"""Pelvis-yaw feedback on the swing hip-yaw reference, shared by both trackers
+(:attr:`QPConfig.hip_yaw_feedback <amlip_qp.control.wbc.config.QPConfig.hip_yaw_feedback>`,
+:attr:`PBCGains.hip_yaw_feedback <amlip_qp.control.pbc.gains.PBCGains.hip_yaw_feedback>`).
 
 Cassie's two hip-yaw outputs are joint angles, so yaw that the stance foot
 creeps in the plant carries over to the pelvis and, through the next foot's
@@ -9,9 +10,7 @@ With the feedback the swing hip-yaw reference becomes
 ``e_psi = wrap(psi_pelvis - (D - h_d[stance_hip_yaw]))`` the pelvis yaw error
 against its nominal value (heading ``D``), and its rate reference
 ``dh_d[swing_hip_yaw] - k (psidot_pelvis + dh_d[stance_hip_yaw])`` (rad/s):
-the swing foot lands turned back towards the heading. It is the QP tracker's
-``QPConfig.hip_yaw_feedback``, written again here because the PBC does not
-import the QP's package (``docs/ARCHITECTURE.md``).
+the swing foot lands turned back towards the heading.
 """
 
 from __future__ import annotations
@@ -48,16 +47,23 @@ class PelvisYawFeedback:
             return cls(gain, names.index("stance_hip_yaw"), names.index("swing_hip_yaw"))
         return None
 
-    def references(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray]:
-        """Copies of ``target.h_d`` (rad, m) and ``target.dh_d`` with the swing hip-yaw entries corrected."""
-        i_st, i_sw, k = self.stance_index, self.swing_index, self.gain
+    def correction(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[float, float]:
+        """The change of the swing hip-yaw reference (rad) and of its rate
+        (rad/s): ``(-k e_psi, -k (psidot + dh_d[stance_hip_yaw]))``."""
+        i_st = self.stance_index
+        k = self.gain
         R = kin.base_rotation()
         psi = math.atan2(R[1, 0], R[0, 0])
         psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
         e = psi - (target.heading_rad - float(target.h_d[i_st]))
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
+        return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))
+
+    def references(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of ``target.h_d`` (rad, m) and ``target.dh_d`` with the swing hip-yaw entries corrected."""
+        dh, ddh = self.correction(kin, target)
         h_d = np.array(target.h_d, dtype=float)
         dh_d = np.array(target.dh_d, dtype=float)
-        h_d[i_sw] -= k * e
-        dh_d[i_sw] -= k * (psi_dot + float(target.dh_d[i_st]))
+        h_d[self.swing_index] += dh
+        dh_d[self.swing_index] += ddh
         return h_d, dh_d
