@@ -305,9 +305,9 @@ PROFILES: dict[str, RobotProfile] = {
             nominal_scenario="cassie-1mps", ramp_end_mps=2.1, push_max_impulse_Ns=60.0, relative_cost=3.0
         ),
         plants={"cassie": "cassie.xml", "cassie-closed-chain": "cassie-closed-chain.xml"},
-        # The VectorNav VN-100's site in the pelvis of Agility Robotics' Cassie MuJoCo model
-        # (cassie-mujoco-sim, model/cassie.xml: <site name='imu' pos='0.03155 0 -0.07996'/>, axes
-        # those of the pelvis); cassie.xml's pelvis frame is the same.
+        # The VectorNav VN-100's place in the pelvis as recalled from Agility Robotics' cassie-mujoco-sim
+        # model (<site name='imu' pos='0.03155 0 -0.07996'/>, pelvis axes). It is not in the parameter
+        # sheet and was not checked against that file here; the EKF takes any position.
         imu_pos_in_base_m=(0.03155, 0.0, -0.07996),
     ),
     "rabbit": RobotProfile(
