@@ -1,4 +1,4 @@
-"""LegKinematics: the contact points (Cassie: the heels) seen from the IMU, from the joint angles only, against the full
+"""LegKinematics: the contact sites seen from the IMU, from the joint angles only, against the full
 model's kinematics at an arbitrary base pose."""
 
 import numpy as np
@@ -33,8 +33,8 @@ def test_the_contacts_in_the_imu_frame_match_the_full_kinematics(cassie):
         blades = legs.blades_in_imu(q)
         for i, side in enumerate(legs.sides):
             world = q[0:3] + R @ (IMU + y[i])
+            np.testing.assert_allclose(world, kin.contact_position(side), atol=1e-12)
             toe, heel = (kin.frame_translation_view(f) for f in cassie.force_frame_ids[side])
-            np.testing.assert_allclose(world, heel, atol=1e-12)  # a blade foot's fixed point: its heel
             np.testing.assert_allclose(R @ blades[i], toe - heel, atol=1e-12)
             assert abs(np.linalg.norm(blades[i]) - 0.16) < 1e-6  # Cassie's blade: 0.16 m from heel to toe
     # the base part of q is ignored

@@ -8,14 +8,7 @@ IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes, so
 the vector from the IMU to the site, in IMU axes, is that position minus
 ``imu_pos_in_base_m``. This object keeps its own ``pinocchio.Data``.
 
-The point of a foot taken as fixed while in contact is the contact site, or
-for a blade foot (toe and heel force sites, Cassie) its heel site: a flat
-blade pivots in yaw about its heel (the PBC on the closed-chain plant: foot yaw
-rates up to 1 rad/s in stance, the heel still within about 0.01 m/s, the foot
-joint 0.07 m from it at 0.02 to 0.04 m/s), so the heel gave a third of the
-velocity error (0.013 against 0.030 m/s over 16 s) and the same with the QP.
-
-For a blade foot it also gives the blade,
+For a blade foot (toe and heel force sites, Cassie) it also gives the blade,
 the vector from the heel to the toe, in IMU axes: with the estimated
 orientation it tells whether the blade rests flat on the ground (see
 :meth:`~amlip_qp.estimation.invariant_ekf.InvariantEKF.set_contacts`).
@@ -34,7 +27,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 
 class LegKinematics:
-    """Contact-point positions in the IMU frame from the joint angles (see the module doc).
+    """Contact-site positions in the IMU frame from the joint angles.
 
     Args:
         robot: A floating-base :class:`~amlip_qp.robots.robot.Robot` (free-flyer root).
@@ -59,24 +52,19 @@ class LegKinematics:
         self.model = robot.pin_model
         self.data = self.model.createData()
         self.sides = tuple(robot.foot_sides)
+        #: Pinocchio frame ids of the contact sites (``sides`` order).
+        self.frame_ids = tuple(robot.contact_frame_ids[s] for s in self.sides)
         #: Pinocchio frame ids of each side's (toe, heel) sites, or ``None`` without blade feet.
         self.blade_frame_ids: tuple[tuple[int, int], ...] | None = None
         if all(len(robot.force_frame_ids[s]) == 2 for s in self.sides):
             self.blade_frame_ids = tuple(tuple(robot.force_frame_ids[s]) for s in self.sides)  # type: ignore[misc]
-        #: Pinocchio frame ids of the points the filter takes as fixed in contact (``sides`` order):
-        #: a blade foot's heel site, else the contact site (see the module doc).
-        self.frame_ids = (
-            tuple(robot.contact_frame_ids[s] for s in self.sides)
-            if self.blade_frame_ids is None
-            else tuple(heel for _, heel in self.blade_frame_ids)
-        )
         self.imu_pos_in_base_m = imu
         self._q = np.zeros(self.model.nq)
         self._q[6] = 1.0  # identity base quaternion (x y z w)
         self._nq = self.model.nq
 
     def contacts_in_imu(self, q) -> np.ndarray:
-        """Each side's contact point (:attr:`frame_ids`) seen from the IMU, IMU axes, m, shape (2, 3) (``sides`` order).
+        """Each side's contact site seen from the IMU, IMU axes, m, shape (2, 3) (``self.sides`` order).
 
         Args:
             q: A Pinocchio configuration, shape (nq,); only its joint part
