@@ -16,7 +16,7 @@ from amlip_qp.estimation.invariant_ekf import (
     so3_exp,
 )
 from amlip_qp.exceptions import InputError
-from tests.ekf_cases import walk
+from ekf_cases import walk
 
 
 def _random_filter(seed=1) -> InvariantEKF:
