@@ -105,6 +105,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     b.add_argument("--duration", type=_positive_float, default=4.0, metavar="S", help="simulated time, s (default 4)")
     b.set_defaults(func=_handler("amlip_qp.sim.bench_ekf:run_bench"))
+    b = bench.add_parser(
+        "harness",
+        help="where a closed-loop tick goes: controller, MuJoCo and the harness's own time, per tracker and log mode",
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--scenario", default="cassie-1mps", help="scenario to walk (default cassie-1mps)")
+    b.add_argument(
+        "--duration", type=_positive_float, default=3.0, metavar="S", help="simulated time per walk, s (default 3)"
+    )
+    b.add_argument(
+        "--repeats", type=_positive_int, default=3, help="walks per tracker and log mode, interleaved (default 3)"
+    )
+    b.add_argument("--trackers", default="qp,pbc", metavar="NAMES", help="comma-separated trackers (default qp,pbc)")
+    b.set_defaults(func=_handler("amlip_qp.sim.bench_harness:run_bench"))
 
     _add_walk(sub)
     _add_compare(sub)
@@ -228,7 +242,13 @@ def _add_walk(sub) -> None:
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     _add_plant_options(p)
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
-    p.add_argument("--log", metavar="PATH", default=None, help="write the per-tick time series to PATH (.npz)")
+    p.add_argument(
+        "--log",
+        metavar="summary|full|PATH",
+        default=None,
+        help="'summary': record only what the JSON summary needs (faster, less memory; no --plot); "
+        "'full' (the default): record every per-tick signal; PATH: record them all and write them to PATH (.npz)",
+    )
     p.add_argument(
         "--plot",
         metavar="PATH",

@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
+from amlip_qp.sim.harness import LOG_MODES  # noqa: E402
 from amlip_qp.sim.plant_modifiers import parse_payload  # noqa: E402
 from amlip_qp.sim.run_types import PlantSetting, Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
@@ -108,9 +109,22 @@ def _write_text(option: str, path: str, text: str) -> None:
             fh.write(text + "\n")
 
 
+def log_mode(log_option: str | None) -> str:
+    """The :meth:`~amlip_qp.sim.harness.Simulation.run` log mode of ``walk --log``: ``summary``, else ``full``."""
+    return "summary" if log_option == "summary" else "full"
+
+
+def log_file(log_option: str | None) -> str | None:
+    """The file ``walk --log`` writes: its value unless it is a log mode (``summary``, ``full``) or absent."""
+    return None if log_option in (None, *LOG_MODES) else log_option
+
+
 def _check_output_paths(args: argparse.Namespace) -> None:
     """Fail early (exit 2) on output paths that cannot be written, before a long run."""
     from amlip_qp.sim.video import check_video_path
+
+    if args.plot is not None and log_mode(args.log) == "summary":
+        raise InputError("--plot draws the full log: drop --log summary (or give --log full)")
 
     if args.video is not None:
         check_video_path(args.video)
@@ -119,7 +133,7 @@ def _check_output_paths(args: argparse.Namespace) -> None:
 
         check_figure_path(args.plot)
     for opt in ("json", "log", "plot", "video"):
-        value = getattr(args, opt)
+        value = log_file(args.log) if opt == "log" else getattr(args, opt)
         if opt != "json" and value == "-":
             raise InputError(f"--{opt} cannot write to stdout ('-'); give a file name")
         check_output_path(f"--{opt}", value)
@@ -186,7 +200,7 @@ def run_walk(args: argparse.Namespace) -> int:
         recorder = VideoRecorder(sim.model, args.video, fps=args.video_fps)
     progress = not args.no_progress and scenario.duration_s >= PROGRESS_MIN_DURATION_S
     try:
-        result = sim.run(scenario.duration_s, progress=progress, on_tick=recorder)
+        result = sim.run(scenario.duration_s, progress=progress, on_tick=recorder, log=log_mode(args.log))
     finally:
         if recorder is not None:
             recorder.close()
@@ -195,9 +209,10 @@ def run_walk(args: argparse.Namespace) -> int:
     summ = summary.summarize(result)
     if args.json is not None:
         _write_text("--json", args.json, summary.dumps(summ))
-    if args.log is not None:
-        with writing("--log", args.log):
-            save_log(result, args.log)
+    path = log_file(args.log)
+    if path is not None:
+        with writing("--log", path):
+            save_log(result, path)
     if args.plot is not None:
         from amlip_qp.sim.plots import walk_figure
 

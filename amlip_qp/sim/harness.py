@@ -146,19 +146,7 @@ class Simulation:
                 v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
         return self.sensors.measure(self.data, q, v, base_known=self.true_base)
 
-    # ------------------------------------------------------------ checks
-    def _base_height_and_tilt(self) -> tuple[float, float]:
-        d = self.data
-        z = float(d.xpos[self._base_body][2])
-        R = d.xmat[self._base_body].reshape(3, 3)
-        tilt = math.acos(max(-1.0, min(1.0, float(R[2, 2]))))
-        return z, tilt
-
-    def _base_yaw(self) -> float:
-        """Yaw of the base body (rad, in (-pi, pi])."""
-        R = self.data.xmat[self._base_body].reshape(3, 3)
-        return math.atan2(float(R[1, 0]), float(R[0, 0]))
-
+    # ------------------------------------------------------------ pushes
     def push_force(self, t_s: float) -> np.ndarray:
         """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[t, t + duration)``.
 
@@ -172,7 +160,13 @@ class Simulation:
         return f
 
     # --------------------------------------------------------------- run
-    def run(self, duration_s: float, progress: bool = False, on_tick: TickCallback | None = None) -> RunResult:
+    def run(
+        self,
+        duration_s: float,
+        progress: bool = False,
+        on_tick: TickCallback | None = None,
+        log: str = "full",
+    ) -> RunResult:
         """Simulate ``duration_s`` seconds (stops early at a fall).
 
         Args:
@@ -180,6 +174,10 @@ class Simulation:
             progress: Show a tqdm progress bar on stderr.
             on_tick: Optional ``on_tick(t_s, data)`` called after every control
                 tick's plant steps (e.g. a video recorder); it must not modify ``data``.
+            log: ``"full"``: every signal below; ``"summary"``: only the entries
+                :func:`~amlip_qp.sim.summary.summarize` reads
+                (:data:`~amlip_qp.sim.summary.SUMMARY_LOG_KEYS`). The trajectory is
+                the same in both modes.
 
         The log holds, per control tick: ``t``, ``com`` (3), ``com_vel`` (3),
         ``base_pos`` (3), ``base_tilt``, ``base_yaw`` (rad, wrapped to (-pi, pi]),
@@ -195,7 +193,13 @@ class Simulation:
         ``base_pos_true``, ``base_vel_true`` (3, world, m/s), ``base_yaw_true``,
         and ``base_pos_est``, ``base_vel_est``, ``base_yaw_est`` (equal to the
         truth with ``--estimator truth`` and exact sensors).
+
+        Per tick, the result also has the wall times (µs) of the controller
+        (``tick_time_us``), of MuJoCo's plant steps (``mujoco_time_us``) and of
+        the rest of the loop, the harness's own (``harness_time_us``).
         """
+        if log not in LOG_MODES:
+            raise InputError(f"log must be one of {', '.join(LOG_MODES)}, got {log!r}")
         if not (duration_s > 0 and math.isfinite(duration_s)):
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
         m, d, ctrl = self.model, self.data, self.controller
@@ -203,42 +207,37 @@ class Simulation:
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
-        nu = self.robot.nu
+        full = log == "full"
         n_out = ctrl.planner.n_outputs
-        log = {
-            "t": np.zeros(n_ticks),
-            "com": np.zeros((n_ticks, 3)),
-            "com_vel": np.zeros((n_ticks, 3)),
-            "base_pos": np.zeros((n_ticks, 3)),
-            "base_tilt": np.zeros(n_ticks),
-            "base_yaw": np.zeros(n_ticks),
-            "stance_left": np.zeros(n_ticks),
-            "phase": np.zeros(n_ticks),
-            "t_remaining": np.zeros(n_ticks),
-            "heading": np.zeros(n_ticks),
-            "p_st": np.zeros((n_ticks, 3)),
-            "L_meas": np.zeros((n_ticks, 3)),
-            "L": np.zeros((n_ticks, 3)),
-            "L_hat": np.zeros((n_ticks, 2)),
-            "L_des": np.zeros((n_ticks, 2)),
-            "p_sw_des": np.zeros((n_ticks, 2)),
-            "swing_target": np.zeros((n_ticks, 3)),
-            "h": np.zeros((n_ticks, n_out)),
-            "h_d": np.zeros((n_ticks, n_out)),
-            "tau": np.zeros((n_ticks, nu)),
-            "tracker_ok": np.zeros(n_ticks),
-            "push": np.zeros((n_ticks, 3)),
-            "cmd_vx": np.zeros(n_ticks),
-            "cmd_vy": np.zeros(n_ticks),
-            "cmd_turn_rate": np.zeros(n_ticks),
-        }
+        # One row per tick: the Python scalars go to a list of tuples, the vectors
+        # to one preallocated row each, written by one np.concatenate.
+        scalar_keys = _SCALAR_KEYS + (_SCALAR_KEYS_FULL if full else ())
+        vector_keys = _vector_groups(n_out, self.robot.nu) + (_VECTOR_GROUPS_FULL if full else ())
+        vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
+        scalars: list[tuple] = []
+        floating = self.robot.is_floating
         bq, bv = self._base_q, self._base_v
         nbq, nbv = self._base_size
         base_true = np.zeros((n_ticks, nbq + nbv))
         base_est = np.zeros((n_ticks, nbq + nbv))
-        plant, ctrl_filter = self.plant, self.ctrl_filter
         tick_us = np.zeros(n_ticks)
-        z0, _ = self._base_height_and_tilt()
+        mujoco_us = np.zeros(n_ticks)
+        total_us = np.zeros(n_ticks)
+        # Hoisted lookups: views into MjData stay valid across mj_step.
+        plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
+        read_state, measure_state, push_force = plant.read_state, self.measure_state, self.push_force
+        ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
+        ctrl_step, kin_state = ctrl.step, ctrl.kin.state
+        step, substeps, qpos = mujoco.mj_step, self.substeps, d.qpos
+        xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
+        xfrc_b = d.xfrc_applied[self._base_body, :3]
+        warn_number = d.warning.number
+        warn_idx = [int(w) for w in _DIVERGENCE_WARNINGS]
+        warn0 = [int(warn_number[i]) for i in warn_idx]
+        concatenate, perf_ns = np.concatenate, time.perf_counter_ns
+        acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
+        z0 = float(xpos_b[2])
+        min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
         fell, fall_time = False, float("nan")
         bar = None
         if progress:
@@ -246,85 +245,81 @@ class Simulation:
 
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
-        warn0 = [d.warning[w].number for w in _DIVERGENCE_WARNINGS]
         sim_time = float(d.time)
         k = 0
         for k in range(n_ticks):
+            t_tick = perf_ns()
             t = float(d.time)
-            cmd = self.command_fn(t)
-            q, v = plant.read_state(d)
-            row = base_true[k]
-            row[:nbq], row[nbq:] = q[bq], v[bv]
-            meas = self.measure_state(q, v)
-            t0 = time.perf_counter_ns()
-            tick = ctrl.step(meas, cmd)
-            tick_us[k] = (time.perf_counter_ns() - t0) * 1e-3
-            q_est, v_est = ctrl.kin.state()
-            row = base_est[k]
-            row[:nbq], row[nbq:] = q_est[bq], v_est[bv]
-            ctrl_now = plant.ctrl_from_tau(tick.tau_Nm)
+            cmd = command_fn(t)
+            q, v = read_state(d)
+            if floating:
+                concatenate((q[bq], v[bv]), out=base_true[k])
+            meas = measure_state(q, v)
+            t0 = perf_ns()
+            tick = ctrl_step(meas, cmd)
+            tick_us[k] = (perf_ns() - t0) * 1e-3
+            if floating:
+                q_est, v_est = kin_state()
+                concatenate((q_est[bq], v_est[bv]), out=base_est[k])
+            tau = tick.tau_Nm
+            ctrl_now = ctrl_from_tau(tau)
             if ctrl_filter is not None:  # e.g. an actuator delay
                 ctrl_now = ctrl_filter(ctrl_now)
-            plant.apply_ctrl(d, ctrl_now)
-            push = self.push_force(t)
-            d.xfrc_applied[self._base_body, :3] = push
+            apply_ctrl(d, ctrl_now)
+            push = push_force(t)
+            xfrc_b[:] = push
             # log
             est, plan = tick.estimate, tick.plan
-            z, tilt = self._base_height_and_tilt()
-            log["t"][k] = t
-            log["com"][k] = est.com_m
-            log["com_vel"][k] = est.com_vel_mps
-            log["base_pos"][k] = d.xpos[self._base_body]
-            log["base_tilt"][k] = tilt
-            log["base_yaw"][k] = self._base_yaw()
-            log["stance_left"][k] = 1.0 if tick.stance == "left" else 0.0
-            log["phase"][k] = tick.phase
-            log["t_remaining"][k] = plan.t_remaining_s
-            log["heading"][k] = plan.heading_rad
-            log["p_st"][k] = est.p_st_m
-            log["L_meas"][k] = est.L_meas_Nms
-            log["L"][k] = est.L_Nms
-            log["L_hat"][k] = plan.L_hat_Nms
-            log["L_des"][k] = plan.L_des_Nms
-            log["p_sw_des"][k] = plan.p_sw_des_world_m
-            log["swing_target"][k] = plan.swing_target_world_m
-            log["h"][k] = tick.h
-            log["h_d"][k] = plan.h_d
-            log["tau"][k] = tick.tau_Nm
-            log["tracker_ok"][k] = 1.0 if tick.tracker_ok else 0.0
-            log["push"][k] = push
-            log["cmd_vx"][k] = cmd.vx_mps
-            log["cmd_vy"][k] = cmd.vy_mps
-            log["cmd_turn_rate"][k] = cmd.turn_rate_radps
+            r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
+            z = float(xpos_b[2])
+            tilt = acos(max(-1.0, min(1.0, r22)))
+            ok = 1.0 if tick.tracker_ok else 0.0
+            if full:
+                scalars.append(
+                    (
+                        t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
+                        tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
+                        cmd.turn_rate_radps,
+                    )
+                )  # fmt: skip
+                concatenate(
+                    (
+                        est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau,
+                        xpos_b, est.p_st_m, est.L_meas_Nms, est.L_Nms, plan.L_hat_Nms, plan.L_des_Nms,
+                        plan.p_sw_des_world_m, plan.swing_target_world_m, push,
+                    ),
+                    out=vectors[k],
+                )  # fmt: skip
+            else:
+                scalars.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
+                concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
             t_before = d.time
-            for _ in range(self.substeps):
-                mujoco.mj_step(m, d)
+            t0 = perf_ns()
+            for _ in range(substeps):
+                step(m, d)
+            mujoco_us[k] = (perf_ns() - t0) * 1e-3
             # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
             # counts a warning; that is a divergence, reported as a fall.
-            if d.time < t_before or any(d.warning[w].number > warn0[i] for i, w in enumerate(_DIVERGENCE_WARNINGS)):
+            if d.time < t_before or any(warn_number[i] > w for i, w in zip(warn_idx, warn0)):
                 fell, fall_time, sim_time = True, t, t
+                total_us[k] = (perf_ns() - t_tick) * 1e-3
                 break
             sim_time = float(d.time)
             if on_tick is not None:
-                on_tick(float(d.time), d)
+                on_tick(sim_time, d)
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
-            if (
-                z < self.fall.min_height_fraction * z0
-                or tilt > self.fall.max_tilt_rad
-                or not np.all(np.isfinite(d.qpos))
-            ):
+            # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
+            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos.tolist())) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
+                total_us[k] = (perf_ns() - t_tick) * 1e-3
                 break
+            total_us[k] = (perf_ns() - t_tick) * 1e-3
         wall = time.perf_counter() - wall0
         n = k + 1
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
-        log = {key: value[:n] for key, value in log.items()}
-        if self.robot.is_floating:
-            log.update(_world_base(base_true[:n], "true"))
-            log.update(_world_base(base_est[:n], "est"))
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -333,9 +328,11 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=log,
+            log=_unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating),
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
+            mujoco_time_us=mujoco_us[:n],
+            harness_time_us=total_us[:n] - tick_us[:n] - mujoco_us[:n],
             fallback_ticks=ctrl.fallback_ticks,
             safe_mode_ticks=ctrl.safe_mode_ticks,
             estimator_divergences=ctrl.estimator_divergences,
@@ -350,8 +347,56 @@ class Simulation:
                 "plant": self.plant.name,
                 "sensors": self.sensors.model,
                 "estimator": self.estimator,
+                "log": log,
             },
         )
+
+
+#: The log modes of :meth:`Simulation.run`.
+LOG_MODES: tuple[str, ...] = ("full", "summary")
+
+#: The order of the log's entries (as documented in :meth:`Simulation.run`).
+_LOG_ORDER = (
+    "t", "com", "com_vel", "base_pos", "base_tilt", "base_yaw", "stance_left", "phase", "t_remaining", "heading",
+    "p_st", "L_meas", "L", "L_hat", "L_des", "p_sw_des", "swing_target", "h", "h_d", "tau", "tracker_ok", "push",
+    "cmd_vx", "cmd_vy", "cmd_turn_rate",
+)  # fmt: skip
+#: The scalar log entries, in the order of the loop's tuples: those the summary reads, then the rest.
+_SCALAR_KEYS = ("t", "cmd_vx", "cmd_vy", "heading", "base_yaw", "tracker_ok")
+_SCALAR_KEYS_FULL = ("base_tilt", "stance_left", "phase", "t_remaining", "cmd_turn_rate")
+#: The vector log entries after those of :func:`_vector_groups` (full log only), ``(key, width)``.
+_VECTOR_GROUPS_FULL = (
+    ("base_pos", 3),
+    ("p_st", 3),
+    ("L_meas", 3),
+    ("L", 3),
+    ("L_hat", 2),
+    ("L_des", 2),
+    ("p_sw_des", 2),
+    ("swing_target", 3),
+    ("push", 3),
+)
+
+
+def _vector_groups(n_out: int, nu: int) -> tuple[tuple[str, int], ...]:
+    """The vector log entries the summary reads, in the order of the loop's rows, ``(key, width)``."""
+    return (("com", 3), ("com_vel", 3), ("h", n_out), ("h_d", n_out), ("tau", nu))
+
+
+def _unpack_log(scalars, scalar_keys, vectors, vector_keys, base_true, base_est, floating) -> dict[str, np.ndarray]:
+    """The log as name -> array (one row per tick) from the loop's scalar tuples and vector rows."""
+    n = vectors.shape[0]
+    table = np.array(scalars, dtype=float).reshape(n, len(scalar_keys))
+    columns = {key: table[:, i].copy() for i, key in enumerate(scalar_keys)}
+    col = 0
+    for key, width in vector_keys:
+        columns[key] = vectors[:, col : col + width].copy()
+        col += width
+    out = {key: columns[key] for key in _LOG_ORDER if key in columns}
+    if floating:
+        out.update(_world_base(base_true, "true"))
+        out.update(_world_base(base_est, "est"))
+    return out
 
 
 def _world_base(rows: np.ndarray, suffix: str) -> dict[str, np.ndarray]:

@@ -131,6 +131,9 @@ class RunResult:
         log: Name -> array with one row per control tick (see :meth:`~amlip_qp.sim.harness.Simulation.run`).
         steps: The completed steps.
         tick_time_us: Controller wall time per tick, µs.
+        mujoco_time_us: Wall time of MuJoCo's plant steps per tick, µs.
+        harness_time_us: Wall time per tick of the rest of the loop (the harness's own:
+            measurement, commands, controls, pushes, logging, checks), µs.
         fallback_ticks: Ticks that used the damped fallback torque.
         safe_mode_ticks: Ticks the controller spent in its safe mode after a diverged base estimate.
         estimator_divergences: How often the base estimate diverged.
@@ -139,7 +142,8 @@ class RunResult:
             ``actuator_names`` (the order of ``log["tau"]``), ``control_dt_s``,
             ``planar`` (True for a planar robot),
             ``seed``, ``noise`` (True if Gaussian noise was on), ``plant`` (its name or path),
-            ``sensors`` (``"ideal"`` or ``"robot"``) and ``estimator`` (the base estimator's name).
+            ``sensors`` (``"ideal"`` or ``"robot"``), ``estimator`` (the base estimator's name)
+            and ``log`` (``"full"`` or ``"summary"``: which entries ``log`` has).
     """
 
     robot: str
@@ -157,6 +161,8 @@ class RunResult:
     estimator_divergences: int = 0
     pushes: tuple[Push, ...] = ()
     info: dict = field(default_factory=dict)
+    mujoco_time_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    harness_time_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def quat_mul_small_rotation(quat_xyzw: np.ndarray, rotvec: np.ndarray) -> np.ndarray:

@@ -23,6 +23,19 @@ DEFAULT_SETTLE_S = 2.0
 #: Window (s) at the end of the run over which ``mean_velocity`` is averaged.
 DEFAULT_MEAN_WINDOW_S = 3.0
 
+#: The summary's wall-clock fields: they vary with the machine and its load, not with the run.
+TIMING_FIELDS: tuple[str, ...] = (
+    "tick_time_us", "realtime_factor", "controller_us_per_tick", "mujoco_us_per_tick", "harness_us_per_tick",
+)  # fmt: skip
+
+#: The log entries :func:`summarize` reads: all that a ``log="summary"`` run
+#: (:meth:`~amlip_qp.sim.harness.Simulation.run`) records. ``base_vel_*`` and
+#: ``base_yaw_*`` exist for a floating base only.
+SUMMARY_LOG_KEYS: tuple[str, ...] = (
+    "t", "com", "com_vel", "heading", "cmd_vx", "cmd_vy", "base_yaw", "h", "h_d", "tau", "tracker_ok",
+    "base_vel_true", "base_vel_est", "base_yaw_true", "base_yaw_est",
+)  # fmt: skip
+
 
 def heading_frame_xy(vec_world: np.ndarray, heading_rad: np.ndarray | float) -> np.ndarray:
     """Rotate the x, y components of world vectors into the heading frame (yaw ``heading_rad``).
@@ -36,6 +49,11 @@ def heading_frame_xy(vec_world: np.ndarray, heading_rad: np.ndarray | float) -> 
     """
     v = np.asarray(vec_world, dtype=float)
     return np.stack(world_to_heading_xy(v[..., 0], v[..., 1], np.cos(heading_rad), np.sin(heading_rad)), axis=-1)
+
+
+def _median(values) -> float | None:
+    a = np.asarray(values, dtype=float)
+    return float(np.median(a)) if a.size else None
 
 
 def _rms(values) -> float:
@@ -182,6 +200,9 @@ def summarize(
             "p99": float(np.percentile(tick, 99)) if tick.size else None,
         },
         "realtime_factor": result.sim_time_s / result.wall_time_s if result.wall_time_s > 0 else None,
+        "controller_us_per_tick": _median(tick),
+        "mujoco_us_per_tick": _median(result.mujoco_time_us),
+        "harness_us_per_tick": _median(result.harness_time_us),
         "fallback_ticks": int(result.fallback_ticks),
         "tracker_failed_ticks": int(np.sum(log["tracker_ok"] == 0.0)),
         "settle_s": float(settle_s),
