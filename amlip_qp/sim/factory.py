@@ -174,7 +174,7 @@ def build_simulation(
     return Simulation(
         robot,
         controller,
-        scenario.command,
+        scenario.command_function(),
         pushes=scenario.pushes,
         noise=noise,
         seed=seed,

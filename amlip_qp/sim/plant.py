@@ -206,6 +206,12 @@ class Plant:
             and np.array_equal(qsrc, np.arange(model.nq))
             and np.array_equal(vsrc, np.arange(model.nv))
         )
+        # contact forces: plant geom -> body, and body -> the sides whose foot it is
+        self._geom_body: list[int] = model.geom_bodyid.tolist()
+        self._sides_of_body: dict[int, tuple[str, ...]] = {}
+        for side, body in self.foot_body_ids.items():
+            self._sides_of_body[body] = self._sides_of_body.get(body, ()) + (side,)
+        self._force6 = np.zeros(6)
         if not self.free_base and robot.is_floating:
             smap = robot.state_map  # every hinge and slide joint of the controller's model
             self._pin_q, self._pin_v = smap.scalar_pin_q, smap.scalar_pin_v
@@ -267,8 +273,14 @@ class Plant:
         return q, v
 
     def ctrl_from_tau(self, tau_Nm: np.ndarray) -> np.ndarray:
-        """Actuator controls (controller order) for joint torques ``tau_Nm``: ``tau / gear``, clipped."""
-        return np.clip(tau_Nm / self.gear, self._ctrl_lo, self._ctrl_hi)
+        """Actuator controls (controller order) for joint torques ``tau_Nm``: ``tau / gear``, clipped.
+
+        The clip is ``minimum(maximum(.))`` in place: ``np.clip``'s values (NaN
+        stays NaN) at a fraction of its call overhead, paid every tick.
+        """
+        ctrl = tau_Nm / self.gear
+        np.maximum(ctrl, self._ctrl_lo, out=ctrl)
+        return np.minimum(ctrl, self._ctrl_hi, out=ctrl)
 
     def apply_ctrl(self, data: mujoco.MjData, ctrl: np.ndarray) -> None:
         """Write controls in the controller's actuator order to the plant's actuators."""
@@ -283,14 +295,17 @@ class Plant:
 
     def foot_normal_forces_N(self, data: mujoco.MjData, out: dict[str, float] | None = None) -> dict[str, float]:
         """Side -> normal force of the floor (world body) on that foot's body, N (summed over contacts)."""
-        m = self.model
         normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
-        force6 = np.zeros(6)
-        for i in range(data.ncon):
-            con = data.contact[i]
-            b1, b2 = int(m.geom_bodyid[con.geom1]), int(m.geom_bodyid[con.geom2])
-            for side, body in self.foot_body_ids.items():
-                if (b1 == body and b2 == 0) or (b2 == body and b1 == 0):
-                    mujoco.mj_contactForce(m, data, i, force6)
-                    normal[side] += abs(force6[0])
+        if data.ncon == 0:
+            return normal
+        m, geom_body, sides_of, force6 = self.model, self._geom_body, self._sides_of_body, self._force6
+        contact = data.contact
+        for i, (g1, g2) in enumerate(zip(contact.geom1.tolist(), contact.geom2.tolist())):
+            b1, b2 = geom_body[g1], geom_body[g2]
+            sides = sides_of.get(b1, ()) if b2 == 0 else ()
+            if b1 == 0:
+                sides += sides_of.get(b2, ())
+            for side in sides:
+                mujoco.mj_contactForce(m, data, i, force6)
+                normal[side] += abs(force6[0])
         return normal

@@ -12,6 +12,7 @@ and ``cassie-1mps-cc-ekf`` also under each model mismatch of
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -44,6 +45,8 @@ class SpeedProfile:
             raise InputError("speed profile times and speeds must be finite numbers")
         if t[0] < 0 or np.any(np.diff(t) <= 0):
             raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
+        # The knots as arrays, made once (``__call__`` runs every control tick).
+        object.__setattr__(self, "_knots", (t, v))
 
     @classmethod
     def parse(cls, text: str) -> SpeedProfile:
@@ -63,7 +66,8 @@ class SpeedProfile:
 
     def __call__(self, t_s: float) -> float:
         """Speed at time ``t_s``, m/s."""
-        return float(np.interp(t_s, self.times_s, self.speeds_mps))
+        times, speeds = self._knots
+        return float(np.interp(t_s, times, speeds))
 
     @property
     def final_mps(self) -> float:
@@ -142,6 +146,19 @@ class Scenario:
             turn_rate_radps=self.turn_rate_at(t_s),
             step_width_m=g.step_width_m,
         )
+
+    def command_function(self) -> Callable[[float], Command]:
+        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
+        last: list = [None, None]
+
+        def command(t_s: float) -> Command:
+            vx, turn = self.vx(t_s), self.turn_rate_at(t_s)
+            key = (vx, turn, math.copysign(1.0, vx), math.copysign(1.0, turn))  # a zero's sign counts too
+            if key != last[0]:
+                last[0], last[1] = key, self.command(t_s)
+            return last[1]
+
+        return command
 
     def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""
