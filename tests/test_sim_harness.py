@@ -213,3 +213,48 @@ def test_plant_edits_and_the_control_filter_reach_the_plant_through_the_factory(
     assert sim.model.body_mass[sim.plant.base_body_id] == 20.0 and sim.ctrl_filter is halve
     with pytest.raises(InputError, match="give the plant by name or path"):
         factory.build_simulation(sc, HoldTracker(robot), plant=sim.plant, plant_edits=[heavy_pelvis])
+
+
+@pytest.mark.parametrize("robot", ["cassie", "rabbit"])
+def test_the_summary_log_walks_the_same_trajectory_and_keeps_what_the_summary_reads(robot):
+    from amlip_qp.sim.summary import SUMMARY_LOG_KEYS, TIMING_FIELDS, summarize, to_jsonable
+
+    runs = {}
+    for mode in ("full", "summary"):
+        sim = _sim(robot, tracker_cls=HoldTracker, duration=0.1, pushes=[Push(0.02, (40.0, 20.0, 0.0), 0.03)])
+        res = sim.run(0.1, log=mode)
+        runs[mode] = (res, sim.data.qpos.copy(), sim.data.qvel.copy())
+    (full, qpos_f, qvel_f), (short, qpos_s, qvel_s) = runs["full"], runs["summary"]
+    assert np.array_equal(qpos_f, qpos_s) and np.array_equal(qvel_f, qvel_s)  # the same final state
+    floating = robot == "cassie"
+    expected = {k for k in SUMMARY_LOG_KEYS if floating or not k.startswith("base_") or k == "base_yaw"}
+    assert set(short.log) == expected and set(full.log) > expected and "push" in full.log
+    for key in expected:
+        assert np.array_equal(short.log[key], full.log[key]), key
+    assert short.info["log"] == "summary" and full.info["log"] == "full"
+
+    def numbers(res):
+        return to_jsonable({k: v for k, v in summarize(res).items() if k not in TIMING_FIELDS})
+
+    assert numbers(short) == numbers(full)
+    # the summary reads nothing else: a full log cut to those keys summarises the same
+    full.log = {k: v for k, v in full.log.items() if k in expected}
+    assert numbers(full) == numbers(short)
+
+
+def test_each_tick_is_timed_in_three_parts_and_an_unknown_log_mode_is_refused():
+    res = _sim("rabbit", duration=0.02).run(0.02)
+    n = res.log["t"].size
+    for times in (res.tick_time_us, res.mujoco_time_us, res.harness_time_us):
+        assert times.shape == (n,) and np.all(np.isfinite(times)) and np.all(times > 0.0)
+    with pytest.raises(InputError, match="log must be one of full, summary"):
+        _sim("rabbit").run(0.01, log="npz")
+
+
+def test_a_fall_is_found_at_the_same_tick_in_both_log_modes():
+    falls = []
+    for mode in ("full", "summary"):
+        sim = _sim("cassie", duration=0.5, pushes=[Push(0.0, (0.0, 2000.0, 0.0), 0.1)])  # knocked over
+        res = sim.run(0.5, log=mode)
+        falls.append((res.fell, res.fall_time_s, res.log["t"].size, res.harness_time_us.size))
+    assert falls[0] == falls[1] and falls[0][0]

@@ -171,3 +171,24 @@ def test_rabbit_plant_maps_its_planar_root_by_name():
     q, v = plant.read_state(d)
     assert np.array_equal(q, rabbit.q_stand) or np.allclose(q, rabbit.q_stand, atol=1e-12)
     assert plant.foot_normal_forces_N(d).keys() == {"left", "right"}
+
+
+def test_contact_forces_are_mujocos_summed_per_foot_and_controls_are_clipped(cassie):
+    plant = load_plant("cassie", cassie)
+    data = plant.new_data("stand")
+    for _ in range(200):  # settle on the floor: both feet in contact
+        mujoco.mj_step(plant.model, data)
+    assert data.ncon >= 2
+    expected = dict.fromkeys(plant.foot_body_ids, 0.0)
+    force6 = np.zeros(6)
+    for i in range(data.ncon):  # the definition, contact by contact
+        con = data.contact[i]
+        bodies = {int(plant.model.geom_bodyid[con.geom1]), int(plant.model.geom_bodyid[con.geom2])}
+        for side, body in plant.foot_body_ids.items():
+            if bodies == {body, 0}:
+                mujoco.mj_contactForce(plant.model, data, i, force6)
+                expected[side] += abs(force6[0])
+    got = plant.foot_normal_forces_N(data)
+    assert got == expected and min(got.values()) > 10.0  # both feet on the floor
+    tau = np.array([1e4, -1e4, np.nan, 0.5, -0.5, 3.0, -3.0, 1e-3, 0.0, 2.0])
+    assert np.array_equal(plant.ctrl_from_tau(tau), np.clip(tau / plant.gear, *plant.ctrl_range.T), equal_nan=True)

@@ -156,3 +156,13 @@ def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_
         sc = SCENARIOS[f"cassie-1mps-cc-ekf-{key}"]
         assert sc.setting == replace(CLOSED_CHAIN_EKF, modifiers=mods)
         assert sc.duration_s == 10.0 and sc.vx.final_mps == 1.0
+
+
+def test_the_command_function_of_a_run_gives_the_scenarios_commands():
+    sc = get_scenario("cassie-turn-90")
+    command = sc.command_function()
+    times = [k * 0.0005 for k in range(0, 14000, 7)] + [3.0, 3.0, 1.0]
+    made = [command(t) for t in times]
+    assert made == [sc.command(t) for t in times]
+    assert made[-3] is made[-2]  # unchanged values: the same Command, made once
+    assert made[0] is not made[-1]

@@ -28,6 +28,7 @@ from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
+from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
@@ -328,7 +329,9 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=_unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating),
+            log=_unpack_log(
+                scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating, full
+            ),
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
             mujoco_time_us=mujoco_us[:n],
@@ -383,7 +386,9 @@ def _vector_groups(n_out: int, nu: int) -> tuple[tuple[str, int], ...]:
     return (("com", 3), ("com_vel", 3), ("h", n_out), ("h_d", n_out), ("tau", nu))
 
 
-def _unpack_log(scalars, scalar_keys, vectors, vector_keys, base_true, base_est, floating) -> dict[str, np.ndarray]:
+def _unpack_log(
+    scalars, scalar_keys, vectors, vector_keys, base_true, base_est, floating, full
+) -> dict[str, np.ndarray]:
     """The log as name -> array (one row per tick) from the loop's scalar tuples and vector rows."""
     n = vectors.shape[0]
     table = np.array(scalars, dtype=float).reshape(n, len(scalar_keys))
@@ -396,7 +401,7 @@ def _unpack_log(scalars, scalar_keys, vectors, vector_keys, base_true, base_est,
     if floating:
         out.update(_world_base(base_true, "true"))
         out.update(_world_base(base_est, "est"))
-    return out
+    return out if full else {key: value for key, value in out.items() if key in SUMMARY_LOG_KEYS}
 
 
 def _world_base(rows: np.ndarray, suffix: str) -> dict[str, np.ndarray]:
