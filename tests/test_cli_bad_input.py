@@ -64,6 +64,7 @@ BAD_INPUTS = [
     (["walk", "--log", "{tmp}"], "is a folder"),
     (["walk", "--plot", "{file}/x.png"], "is a file, not a folder"),
     (["walk", "--log", "-"], "cannot write to stdout"),
+    (["walk", "--log", "summary", "--plot", "{tmp}/fig.png"], "--plot draws the full log: drop --log summary"),
     (["walk", "--video", "out.avi"], ".mp4 or .gif"),
     (["walk", "--plot", "{tmp}/fig.xyz"], "figure file must end in .png, .pdf, .svg"),
     # physical bounds (amlip_qp.profiles)

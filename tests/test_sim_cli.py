@@ -138,6 +138,17 @@ def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
     assert json.loads(summary_path.read_text())["steps"] == data["steps"]
 
 
+def test_walk_log_modes_give_the_same_summary_and_write_no_file(tmp_path, capsys, stand_in, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = ["walk", "--robot", "cassie", "--duration", "0.05", "--vx", "0.3", "--json", "-"]
+    runs = {}
+    for mode in ("summary", "full"):
+        code, out, err = _run(argv + ["--log", mode], capsys)
+        assert code == 0, err
+        runs[mode] = {k: v for k, v in json.loads(out).items() if k not in TIMING_FIELDS}
+    assert runs["summary"] == runs["full"] and list(tmp_path.iterdir()) == []
+
+
 def test_walk_is_deterministic_with_noise(capsys, stand_in):
     argv = ["walk", "--robot", "cassie", "--duration", "0.05", "--noise", "--seed", "3", "--json", "-"]
     a = json.loads(_run(argv, capsys)[1])

@@ -26,7 +26,7 @@ import numpy as np
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.factory import TRACKER_MODULES, build_simulation
-from amlip_qp.sim.harness import LOG_MODES
+from amlip_qp.sim.run_log import LOG_MODES
 from amlip_qp.sim.scenarios import get_scenario
 from amlip_qp.sim.summary import TIMING_FIELDS, summarize, to_jsonable
 

@@ -20,8 +20,8 @@ import numpy as np  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
 from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
-from amlip_qp.sim.harness import LOG_MODES  # noqa: E402
 from amlip_qp.sim.plant_modifiers import parse_payload  # noqa: E402
+from amlip_qp.sim.run_log import LOG_MODES  # noqa: E402
 from amlip_qp.sim.run_types import PlantSetting, Push, RunResult, SensorNoise  # noqa: E402
 from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
 

@@ -26,9 +26,16 @@ from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
+from amlip_qp.sim.run_log import (
+    LOG_MODES,
+    SCALAR_KEYS,
+    SCALAR_KEYS_FULL,
+    VECTOR_GROUPS_FULL,
+    unpack_log,
+    vector_groups,
+)
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
-from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
 
 #: Tolerance of the push-window time comparisons, s.
 _TIME_TOL_S = 1e-9
@@ -212,8 +219,8 @@ class Simulation:
         n_out = ctrl.planner.n_outputs
         # One row per tick: the Python scalars go to a list of tuples, the vectors
         # to one preallocated row each, written by one np.concatenate.
-        scalar_keys = _SCALAR_KEYS + (_SCALAR_KEYS_FULL if full else ())
-        vector_keys = _vector_groups(n_out, self.robot.nu) + (_VECTOR_GROUPS_FULL if full else ())
+        scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
+        vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
         vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
         scalars: list[tuple] = []
         floating = self.robot.is_floating
@@ -329,9 +336,7 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=_unpack_log(
-                scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating, full
-            ),
+            log=unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating, full),
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
             mujoco_time_us=mujoco_us[:n],
@@ -353,63 +358,3 @@ class Simulation:
                 "log": log,
             },
         )
-
-
-#: The log modes of :meth:`Simulation.run`.
-LOG_MODES: tuple[str, ...] = ("full", "summary")
-
-#: The order of the log's entries (as documented in :meth:`Simulation.run`).
-_LOG_ORDER = (
-    "t", "com", "com_vel", "base_pos", "base_tilt", "base_yaw", "stance_left", "phase", "t_remaining", "heading",
-    "p_st", "L_meas", "L", "L_hat", "L_des", "p_sw_des", "swing_target", "h", "h_d", "tau", "tracker_ok", "push",
-    "cmd_vx", "cmd_vy", "cmd_turn_rate",
-)  # fmt: skip
-#: The scalar log entries, in the order of the loop's tuples: those the summary reads, then the rest.
-_SCALAR_KEYS = ("t", "cmd_vx", "cmd_vy", "heading", "base_yaw", "tracker_ok")
-_SCALAR_KEYS_FULL = ("base_tilt", "stance_left", "phase", "t_remaining", "cmd_turn_rate")
-#: The vector log entries after those of :func:`_vector_groups` (full log only), ``(key, width)``.
-_VECTOR_GROUPS_FULL = (
-    ("base_pos", 3),
-    ("p_st", 3),
-    ("L_meas", 3),
-    ("L", 3),
-    ("L_hat", 2),
-    ("L_des", 2),
-    ("p_sw_des", 2),
-    ("swing_target", 3),
-    ("push", 3),
-)
-
-
-def _vector_groups(n_out: int, nu: int) -> tuple[tuple[str, int], ...]:
-    """The vector log entries the summary reads, in the order of the loop's rows, ``(key, width)``."""
-    return (("com", 3), ("com_vel", 3), ("h", n_out), ("h_d", n_out), ("tau", nu))
-
-
-def _unpack_log(
-    scalars, scalar_keys, vectors, vector_keys, base_true, base_est, floating, full
-) -> dict[str, np.ndarray]:
-    """The log as name -> array (one row per tick) from the loop's scalar tuples and vector rows."""
-    n = vectors.shape[0]
-    table = np.array(scalars, dtype=float).reshape(n, len(scalar_keys))
-    columns = {key: table[:, i].copy() for i, key in enumerate(scalar_keys)}
-    col = 0
-    for key, width in vector_keys:
-        columns[key] = vectors[:, col : col + width].copy()
-        col += width
-    out = {key: columns[key] for key in _LOG_ORDER if key in columns}
-    if floating:
-        out.update(_world_base(base_true, "true"))
-        out.update(_world_base(base_est, "est"))
-    return out if full else {key: value for key, value in out.items() if key in SUMMARY_LOG_KEYS}
-
-
-def _world_base(rows: np.ndarray, suffix: str) -> dict[str, np.ndarray]:
-    """``base_pos_*``, ``base_vel_*`` (world) and ``base_yaw_*`` from free-flyer rows ``(q[:7], v[:6])``."""
-    pos, quat, vel_body = rows[:, :3], rows[:, 3:7], rows[:, 7:10]
-    u, w = quat[:, :3], quat[:, 3:4]
-    uv = np.cross(u, vel_body)
-    vel_world = vel_body + 2.0 * w * uv + 2.0 * np.cross(u, uv)  # R(quat) @ v for unit quaternions
-    x, y, z, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return {f"base_pos_{suffix}": pos.copy(), f"base_vel_{suffix}": vel_world, f"base_yaw_{suffix}": yaw}

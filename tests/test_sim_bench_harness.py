@@ -1,0 +1,39 @@
+"""``amlip-qp bench harness``: where a closed-loop tick goes (numbers, not speed goals)."""
+
+from __future__ import annotations
+
+import pytest
+
+from amlip_qp import cli
+from amlip_qp.exceptions import InputError
+from amlip_qp.sim import bench_harness
+
+
+def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
+    r = bench_harness.run(duration_s=0.05, repeats=2, trackers=("pbc",))
+    assert set(r["runs"]) == {"pbc/full", "pbc/summary"}
+    for row in r["runs"].values():
+        assert row["ticks"] == 2 * 100 and not row["fell"]
+        parts = (row["controller_us_per_tick"], row["mujoco_us_per_tick"], row["harness_us_per_tick"])
+        assert min(parts) > 0.0 and row["sum_us_per_tick"] == pytest.approx(sum(parts))
+        assert row["realtime_factor"] > 0.0
+    assert r["same_summary"] == {"pbc": True}  # both modes walk the same trajectory
+    assert r["qp_meets_realtime_goal"] is None  # no QP walk timed
+    text = bench_harness.format_report(r)
+    assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
+
+
+def test_bad_trackers_and_counts_are_refused_before_simulating():
+    with pytest.raises(InputError, match="unknown trackers"):
+        bench_harness.run(trackers=("lqr",))
+    with pytest.raises(InputError, match="repeats >= 1"):
+        bench_harness.run(repeats=0)
+
+
+def test_the_cli_runs_it(capsys, tmp_path):
+    out = tmp_path / "bench.json"
+    code = cli.main(
+        ["bench", "harness", "--duration", "0.02", "--repeats", "1", "--trackers", "pbc", "--json", str(out)]
+    )
+    assert code == 0 and out.is_file()
+    assert "pbc/full" in capsys.readouterr().out
