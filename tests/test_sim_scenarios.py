@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
@@ -166,3 +167,10 @@ def test_the_command_function_of_a_run_gives_the_scenarios_commands():
     assert made == [sc.command(t) for t in times]
     assert made[-3] is made[-2]  # unchanged values: the same Command, made once
     assert made[0] is not made[-1]
+
+
+def test_a_speed_profile_is_np_interp_of_its_knots_exactly():
+    prof = SpeedProfile((0.0, 1.0, 3.0), (0.0, -0.0, 1.1))
+    for t in (0.0, 0.5, 1.0, 2.2, 3.0, 3.0 + 1e-12, 7.0, 1e9):
+        assert prof(t) == float(np.interp(t, prof.times_s, prof.speeds_mps))
+    assert math.copysign(1.0, SpeedProfile((0.0,), (-0.0,))(5.0)) == -1.0  # the held value, sign and all

@@ -299,8 +299,7 @@ class Plant:
         if data.ncon == 0:
             return normal
         m, geom_body, sides_of, force6 = self.model, self._geom_body, self._sides_of_body, self._force6
-        contact = data.contact
-        for i, (g1, g2) in enumerate(zip(contact.geom1.tolist(), contact.geom2.tolist())):
+        for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
             b1, b2 = geom_body[g1], geom_body[g2]
             sides = sides_of.get(b1, ()) if b2 == 0 else ()
             if b1 == 0:

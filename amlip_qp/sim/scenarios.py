@@ -67,6 +67,8 @@ class SpeedProfile:
     def __call__(self, t_s: float) -> float:
         """Speed at time ``t_s``, m/s."""
         times, speeds = self._knots
+        if t_s > times[-1]:  # held after the last knot: np.interp's value there, without its call
+            return float(speeds[-1])
         return float(np.interp(t_s, times, speeds))
 
     @property
@@ -136,14 +138,17 @@ class Scenario:
 
     def command(self, t_s: float) -> Command:
         """The :class:`~amlip_qp.alip.planner.Command` at time ``t_s``."""
+        return self._command(self.vx(t_s), self.turn_rate_at(t_s))
+
+    def _command(self, vx_mps: float, turn_rate_radps: float) -> Command:
         g = self.gait_settings
         return Command(
             step_time_s=g.step_time_s,
             com_height_m=g.com_height_m,
             clearance_m=g.clearance_m,
-            vx_mps=self.vx(t_s),
+            vx_mps=vx_mps,
             vy_mps=self.vy_mps,
-            turn_rate_radps=self.turn_rate_at(t_s),
+            turn_rate_radps=turn_rate_radps,
             step_width_m=g.step_width_m,
         )
 
@@ -155,7 +160,7 @@ class Scenario:
             vx, turn = self.vx(t_s), self.turn_rate_at(t_s)
             key = (vx, turn, math.copysign(1.0, vx), math.copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
-                last[0], last[1] = key, self.command(t_s)
+                last[0], last[1] = key, self._command(vx, turn)
             return last[1]
 
         return command
