@@ -258,3 +258,18 @@ def test_a_fall_is_found_at_the_same_tick_in_both_log_modes():
         res = sim.run(0.5, log=mode)
         falls.append((res.fell, res.fall_time_s, res.log["t"].size, res.harness_time_us.size))
     assert falls[0] == falls[1] and falls[0][0]
+
+
+@pytest.mark.slow
+def test_a_qp_walk_is_the_same_in_both_log_modes():
+    from amlip_qp.sim.scenarios import get_scenario
+    from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
+
+    runs = {}
+    for mode in ("full", "summary"):
+        sim = factory.build_simulation(get_scenario("cassie-1mps").with_(duration_s=1.0), "qp")
+        runs[mode] = (sim.run(1.0, log=mode), sim.data.qpos.copy())
+    (full, qpos_f), (short, qpos_s) = runs["full"], runs["summary"]
+    assert np.array_equal(qpos_f, qpos_s) and not full.fell and len(full.steps) == len(short.steps) > 0
+    for key in SUMMARY_LOG_KEYS:
+        assert np.array_equal(full.log[key], short.log[key]), key
