@@ -35,6 +35,8 @@ class SpeedProfile:
 
     times_s: tuple[float, ...]
     speeds_mps: tuple[float, ...]
+    #: The knots as arrays, made once in ``__post_init__`` (``__call__`` runs every control tick).
+    _knots: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         t = np.asarray(self.times_s, dtype=float)
@@ -45,7 +47,6 @@ class SpeedProfile:
             raise InputError("speed profile times and speeds must be finite numbers")
         if t[0] < 0 or np.any(np.diff(t) <= 0):
             raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
-        # The knots as arrays, made once (``__call__`` runs every control tick).
         object.__setattr__(self, "_knots", (t, v))
 
     @classmethod
