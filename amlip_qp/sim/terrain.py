@@ -277,7 +277,7 @@ class TerrainEdit:
                 g.group = TERRAIN_GEOM_GROUP
         floor.pos = [floor.pos[0], floor.pos[1], t.floor_z_m]
         world = spec.worldbody
-        rgba = [0.55, 0.5, 0.42, 1.0]
+        rgba = [1.0, 0.85, 0.6, 1.0]  # a sand tint of the floor's texture
         for i, s in enumerate(t.steps):
             pitch = math.atan(s.slope)
             length = (s.x1_m - s.x0_m) / math.cos(pitch)
@@ -317,8 +317,10 @@ class TerrainEdit:
 
 
 def _copy_contact(floor: mujoco.MjsGeom, geom: mujoco.MjsGeom) -> None:
+    """The floor's contact parameters and material (its texture, tinted by the geom's colour) on ``geom``."""
     for attr in _CONTACT_ATTRS:
         setattr(geom, attr, getattr(floor, attr))
+    geom.material = floor.material
     geom.group = TERRAIN_GEOM_GROUP
 
 
@@ -384,7 +386,7 @@ def ground_height_function(plant: Plant, terrain: TerrainSpec) -> Callable[[floa
         return by_group
     if not terrain.is_flat:
         raise InputError(f"plant {plant.name} has no terrain geoms: load it with the edit of --terrain {terrain.text}")
-    ids = np.flatnonzero(static)
+    ids = [int(g) for g in np.flatnonzero(static)]
 
     hfield = mujoco.mjtGeom.mjGEOM_HFIELD
 
