@@ -70,6 +70,9 @@ class Simulation:
         ctrl_filter: Applied to the actuator controls (controller order, after
             ``tau / gear`` and clipping) before they are written to the plant, e.g.
             an actuator delay's ``push``; ``None``: written as they are.
+        ground_height_m: World (x, y) m -> ground height m (the terrain's); the fall
+            check then takes the base height above the ground under the base.
+            ``None``: above z = 0 (flat ground).
     """
 
     def __init__(
@@ -88,6 +91,7 @@ class Simulation:
         estimator: str = "truth",
         sensor_settings: SensorSettings | None = None,
         ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
+        ground_height_m: Callable[[float, float], float] | None = None,
     ):
         self.robot = robot
         self.controller = controller
@@ -126,6 +130,7 @@ class Simulation:
         self.estimator = str(estimator)
         self.true_base = self.estimator == "truth"
         self.ctrl_filter = ctrl_filter
+        self.ground_height_m = ground_height_m
         self._base_q, self._base_v = base_indices(robot)
         self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
@@ -244,7 +249,8 @@ class Simulation:
         warn0 = [int(warn_number[i]) for i in warn_idx]
         concatenate, perf_ns = np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
-        z0 = float(xpos_b[2])
+        ground = self.ground_height_m  # None on flat ground: the height is z itself
+        z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
         min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
         fell, fall_time = False, float("nan")
         bar = None
@@ -280,6 +286,8 @@ class Simulation:
             est, plan = tick.estimate, tick.plan
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
             z = float(xpos_b[2])
+            if ground is not None:  # height above the ground under the base
+                z -= ground(float(xpos_b[0]), float(xpos_b[1]))
             tilt = acos(max(-1.0, min(1.0, r22)))
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:

@@ -78,7 +78,7 @@ class SensorNoise:
 
 @dataclass(frozen=True)
 class PlantSetting:
-    """The plant, sensors and base estimator of every run (``--plant``, ``--sensors``, ``--estimator``).
+    """The plant, sensors, base estimator and terrain of every run (``--plant``, ``--sensors``, ``--estimator``, ...).
 
     Attributes:
         plant: A plant name or MJCF path, or ``None``: each robot's own model.
@@ -86,12 +86,14 @@ class PlantSetting:
         estimator: ``"truth"`` or ``"ekf"``.
         modifiers: Model mismatch applied to the plant (mass scale, payload,
             spring scale, friction, actuator delay); the defaults change nothing.
+        terrain: The ``--terrain`` spec (:func:`amlip_qp.sim.terrain.parse_terrain`), ``"flat"``: the plant's floor.
     """
 
     plant: str | None = None
     sensors: str = "ideal"
     estimator: str = "truth"
     modifiers: PlantModifiers = field(default_factory=PlantModifiers)
+    terrain: str = "flat"
 
     def describe(self) -> dict:
         """The setting as plain data for a summary (modifiers: only the non-default ones)."""
@@ -100,6 +102,7 @@ class PlantSetting:
             "sensors": self.sensors,
             "estimator": self.estimator,
             "modifiers": self.modifiers.describe(),
+            "terrain": self.terrain,
         }
 
 
