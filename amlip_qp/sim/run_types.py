@@ -86,12 +86,23 @@ class PlantSetting:
         estimator: ``"truth"`` or ``"ekf"``.
         modifiers: Model mismatch applied to the plant (mass scale, payload,
             spring scale, friction, actuator delay); the defaults change nothing.
+        terrain_aware: The controller is given the terrain's height function
+            (``--terrain-aware``); ``False``: blind, it feels the ground by contact only.
+        clearance_m: Swing clearance ``z_cl`` of every step, m (``--clearance``);
+            ``None``: the scenario's gait's.
     """
 
     plant: str | None = None
     sensors: str = "ideal"
     estimator: str = "truth"
     modifiers: PlantModifiers = field(default_factory=PlantModifiers)
+    terrain_aware: bool = False
+    clearance_m: float | None = None
+
+    def __post_init__(self):
+        c = self.clearance_m
+        if c is not None and not (isinstance(c, (int, float)) and math.isfinite(c) and c >= 0.0):
+            raise InputError(f"the swing clearance must be a finite height >= 0 m, got {c!r}")
 
     def describe(self) -> dict:
         """The setting as plain data for a summary (modifiers: only the non-default ones)."""
@@ -100,6 +111,8 @@ class PlantSetting:
             "sensors": self.sensors,
             "estimator": self.estimator,
             "modifiers": self.modifiers.describe(),
+            "terrain_aware": self.terrain_aware,
+            "clearance_m": self.clearance_m,
         }
 
 

@@ -133,10 +133,11 @@ class Scenario:
     def command(self, t_s: float) -> Command:
         """The :class:`~amlip_qp.alip.planner.Command` at time ``t_s``."""
         g = self.gait_settings
+        clearance = self.setting.clearance_m
         return Command(
             step_time_s=g.step_time_s,
             com_height_m=g.com_height_m,
-            clearance_m=g.clearance_m,
+            clearance_m=g.clearance_m if clearance is None else clearance,
             vx_mps=self.vx(t_s),
             vy_mps=self.vy_mps,
             turn_rate_radps=self.turn_rate_at(t_s),
@@ -282,6 +283,11 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
         lateral += [f"push FY ({p.force_N[1]:g} N at {p.t_s:g} s)" for p in scenario.pushes if p.force_N[1] != 0.0]
         if lateral:
             raise InputError(f"{profile.name} is planar: {', '.join(lateral)} must be 0")
+    clearance, gait = scenario.setting.clearance_m, scenario.gait_settings
+    if clearance is not None and not clearance < gait.com_height_m:
+        raise InputError(
+            f"--clearance {clearance:g} m must be below the CoM height {gait.com_height_m:g} m of {profile.name}'s gait"
+        )
     profile.bounds.check(
         profile.name,
         vx_mps=scenario.vx.speeds_mps,
