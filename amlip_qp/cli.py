@@ -121,7 +121,7 @@ _ESTIMATORS = ("truth", "ekf")
 
 
 def _add_plant_options(p: argparse.ArgumentParser) -> None:
-    """``--plant``, ``--sensors``, ``--estimator`` and the plant modifiers of ``walk`` and ``compare``."""
+    """``--plant``, ``--sensors``, ``--estimator``, ``--terrain`` and plant modifiers of ``walk`` and ``compare``."""
     p.add_argument(
         "--plant",
         metavar="NAME|PATH",
@@ -142,6 +142,15 @@ def _add_plant_options(p: argparse.ArgumentParser) -> None:
         default=None,
         help="base state: truth (the simulator's) or ekf (contact-aided invariant EKF) "
         "(default: the scenario's, truth)",
+    )
+    p.add_argument(
+        "--terrain",
+        metavar="SPEC",
+        default=None,
+        help="ground in the plant: flat (default), slope:DEG (|DEG| < 45, up for DEG > 0), "
+        "stairs:RISE_M:RUN_M[:N] (N steps up, a landing, N down; N=4), rough:AMPLITUDE_M[:SEED], "
+        "waves:HEIGHT_M:WAVELENGTH_M, hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M (gray: black 0, white HEIGHT_M); "
+        "slopes, stairs and waves start 1 m ahead of the robot",
     )
     p.add_argument(
         "--terrain-aware",

@@ -25,7 +25,7 @@ SUMMARY_KEYS = {
     "commanded_velocity", "mean_velocity", "velocity_error_rms", "heading_change_deg", "foot_placement_error_rms_m",
     "L_end_of_step_error_rms", "L_end_of_step_error_rms_xy", "output_tracking_rms", "torque_peak_Nm", "torque_rms_Nm",
     "tick_time_us", "realtime_factor", "fallback_ticks", "tracker_failed_ticks", "settle_s",
-    "plant", "sensors", "estimator", "plant_modifiers", "safe_mode_ticks", "estimator_divergences",
+    "plant", "sensors", "estimator", "plant_modifiers", "terrain", "safe_mode_ticks", "estimator_divergences",
     "base_velocity_error_rms_mps", "yaw_estimate_error_deg",
 }  # fmt: skip
 

@@ -126,11 +126,11 @@ def _check_output_paths(args: argparse.Namespace) -> None:
 
 
 def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSetting:
-    """``base`` (a scenario's setting) with ``--plant``, ``--sensors``, ``--estimator`` and the plant modifiers applied.
+    """``base`` (a scenario's setting) with ``--plant``, ``--sensors``, ``--estimator``, ``--terrain``, the modifiers.
 
     Raises:
-        InputError: ``--noise`` with robot sensors, a malformed ``--payload``, or a
-            nonsensical modifier value (one line saying what to fix).
+        InputError: ``--noise`` with robot sensors, a malformed ``--payload`` or
+            ``--terrain``, or a nonsensical modifier value (one line saying what to fix).
     """
     mods: dict = {}
     if args.plant_mass_scale is not None:
@@ -143,11 +143,17 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
         mods["friction"] = args.friction
     if args.actuator_delay is not None:
         mods["actuator_delay_ticks"] = args.actuator_delay
+    terrain = base.terrain
+    if args.terrain is not None:
+        from amlip_qp.sim.terrain import parse_terrain
+
+        terrain = parse_terrain(args.terrain).text
     setting = PlantSetting(
         plant=base.plant if args.plant is None else args.plant,
         sensors=base.sensors if args.sensors is None else args.sensors,
         estimator=base.estimator if args.estimator is None else args.estimator,
         modifiers=replace(base.modifiers, **mods) if mods else base.modifiers,
+        terrain=terrain,
         terrain_aware=base.terrain_aware or args.terrain_aware,
         clearance_m=base.clearance_m if args.clearance is None else args.clearance,
     )
@@ -157,7 +163,7 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
 
 
 def check_plant(scenario: Scenario) -> None:
-    """Load the scenario's plant with its modifiers once, to fail (exit 2) before the closed loop is built.
+    """Load the scenario's plant with its modifiers and terrain once, to fail (exit 2) before the closed loop is built.
 
     Raises:
         InputError: An unknown plant name, or a plant that lacks what the controller needs.
@@ -169,7 +175,7 @@ def check_plant(scenario: Scenario) -> None:
 
     robot = factory.load(scenario.robot)
     setting = scenario.setting
-    load_plant(setting.plant or robot.name, robot, edits=setting.modifiers.spec_edits(robot.base_body))
+    load_plant(setting.plant or robot.name, robot, edits=factory.setting_edits(setting, robot))
 
 
 def run_walk(args: argparse.Namespace) -> int:
@@ -194,6 +200,7 @@ def run_walk(args: argparse.Namespace) -> int:
             recorder.close()
     result.info["scenario"] = scenario.name
     result.info["modifiers"] = scenario.setting.modifiers.describe()
+    result.info["terrain"] = scenario.setting.terrain
     summ = summary.summarize(result)
     if args.json is not None:
         _write_text("--json", args.json, summary.dumps(summ))

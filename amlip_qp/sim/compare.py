@@ -123,7 +123,7 @@ def build_tasks(
     Raises:
         InputError: A plant that does not fit one of the robots (loaded here, once per robot).
     """
-    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.factory import load, setting_edits
     from amlip_qp.sim.plant import load_plant
 
     setting = setting or PlantSetting()
@@ -132,9 +132,10 @@ def build_tasks(
         nominal = nominal_scenario(robot, scenario_names, settings)
         loaded = load(robot)
         planar = loaded.is_planar
-        if setting.plant is not None or setting.modifiers.spec_edits(loaded.base_body):
-            # fail fast (exit 2) on a plant that does not fit or cannot take the modifiers
-            load_plant(setting.plant or robot, loaded, edits=setting.modifiers.spec_edits(loaded.base_body))
+        edits = setting_edits(setting, loaded)
+        if setting.plant is not None or edits:
+            # fail fast (exit 2) on a plant that does not fit or cannot take the modifiers or the terrain
+            load_plant(setting.plant or robot, loaded, edits=edits)
         for trk in trackers:
             tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise, setting))
             if ramp:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
     from amlip_qp.robots.robot import Robot
     from amlip_qp.sim.plant import Plant, SpecEdit
+    from amlip_qp.sim.run_types import PlantSetting
 
 #: The control period of the closed loops built here, s (2 kHz, as on Cassie).
 CONTROL_DT_S = 0.0005
@@ -84,6 +85,21 @@ def check_estimator(name: str) -> str:
     return name
 
 
+def setting_edits(setting: PlantSetting, robot: Robot) -> list[SpecEdit]:
+    """The spec edits of a plant setting, in order: the plant modifiers', then the terrain's (none on flat).
+
+    Raises:
+        InputError: A malformed ``setting.terrain`` (:func:`~amlip_qp.sim.terrain.parse_terrain`).
+    """
+    from amlip_qp.sim.terrain import parse_terrain, terrain_edit
+
+    edits = setting.modifiers.spec_edits(robot.base_body)
+    terrain = parse_terrain(setting.terrain)
+    if not terrain.is_flat:
+        edits.append(terrain_edit(terrain))
+    return edits
+
+
 def _with_delay(
     ticks: int, nu: int, ctrl_filter: Callable[[np.ndarray], np.ndarray] | None
 ) -> Callable[[np.ndarray], np.ndarray] | None:
@@ -128,7 +144,7 @@ def build_simulation(
         estimator: The controller's base estimator, ``"truth"`` or ``"ekf"``
             (:func:`amlip_qp.estimation.make_base_estimator`); ``None``: the scenario's.
         plant_edits: Further changes of the plant's model before it is compiled,
-            after the scenario's plant modifiers (``scenario.setting.modifiers``),
+            after the scenario's plant modifiers and terrain (:func:`setting_edits`),
             for a plant given by name or path.
         ctrl_filter: Applied to the actuator controls before they reach the plant,
             after the scenario's actuator delay; see :class:`Simulation`.
@@ -136,13 +152,15 @@ def build_simulation(
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
     from amlip_qp.sim.plant import Plant, load_plant
+    from amlip_qp.sim.terrain import parse_terrain
 
     setting = scenario.setting
     plant = setting.plant if plant is None else plant
     sensors = setting.sensors if sensors is None else sensors
     estimator = check_estimator(setting.estimator if estimator is None else estimator)
     robot = load(scenario.robot)
-    edits = [*setting.modifiers.spec_edits(robot.base_body), *plant_edits]
+    edits = [*setting_edits(setting, robot), *plant_edits]
+    terrain = parse_terrain(setting.terrain)
     if isinstance(plant, Plant):
         if edits:
             raise InputError(
@@ -182,6 +200,7 @@ def build_simulation(
         sensors=sensors,
         estimator=estimator,
         ctrl_filter=ctrl_filter,
+        ground_height_m=None if terrain.is_flat else terrain.height_m,
     )
 
 
@@ -213,4 +232,5 @@ def run_scenario(
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick)
     result.info["scenario"] = scenario.name
     result.info["modifiers"] = scenario.setting.modifiers.describe()
+    result.info["terrain"] = scenario.setting.terrain
     return result

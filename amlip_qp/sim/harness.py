@@ -62,6 +62,9 @@ class Simulation:
         ctrl_filter: Applied to the actuator controls (controller order, after
             ``tau / gear`` and clipping) before they are written to the plant, e.g.
             an actuator delay's ``push``; ``None``: written as they are.
+        ground_height_m: World (x, y) m -> ground height m (the terrain's); the fall
+            check then takes the base height above the ground under the base.
+            ``None``: above z = 0 (flat ground).
     """
 
     def __init__(
@@ -80,6 +83,7 @@ class Simulation:
         estimator: str = "truth",
         sensor_settings: SensorSettings | None = None,
         ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
+        ground_height_m: Callable[[float, float], float] | None = None,
     ):
         self.robot = robot
         self.controller = controller
@@ -118,6 +122,7 @@ class Simulation:
         self.estimator = str(estimator)
         self.true_base = self.estimator == "truth"
         self.ctrl_filter = ctrl_filter
+        self.ground_height_m = ground_height_m
         self._base_q, self._base_v = base_indices(robot)
         self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
@@ -148,8 +153,12 @@ class Simulation:
 
     # ------------------------------------------------------------ checks
     def _base_height_and_tilt(self) -> tuple[float, float]:
+        """Base height (above the ground under the base with ``ground_height_m``, else z), m; base tilt, rad."""
         d = self.data
         z = float(d.xpos[self._base_body][2])
+        if self.ground_height_m is not None:
+            x, y = d.xpos[self._base_body][:2]
+            z -= self.ground_height_m(float(x), float(y))
         R = d.xmat[self._base_body].reshape(3, 3)
         tilt = math.acos(max(-1.0, min(1.0, float(R[2, 2]))))
         return z, tilt

@@ -78,7 +78,7 @@ class SensorNoise:
 
 @dataclass(frozen=True)
 class PlantSetting:
-    """The plant, sensors and base estimator of every run (``--plant``, ``--sensors``, ``--estimator``).
+    """The plant, sensors, base estimator and terrain of every run (``--plant``, ``--sensors``, ``--estimator``, ...).
 
     Attributes:
         plant: A plant name or MJCF path, or ``None``: each robot's own model.
@@ -86,6 +86,7 @@ class PlantSetting:
         estimator: ``"truth"`` or ``"ekf"``.
         modifiers: Model mismatch applied to the plant (mass scale, payload,
             spring scale, friction, actuator delay); the defaults change nothing.
+        terrain: The ``--terrain`` spec (:func:`amlip_qp.sim.terrain.parse_terrain`), ``"flat"``: the plant's floor.
         terrain_aware: The controller is given the terrain's height function
             (``--terrain-aware``); ``False``: blind, it feels the ground by contact only.
         clearance_m: Swing clearance ``z_cl`` of every step, m (``--clearance``);
@@ -96,6 +97,7 @@ class PlantSetting:
     sensors: str = "ideal"
     estimator: str = "truth"
     modifiers: PlantModifiers = field(default_factory=PlantModifiers)
+    terrain: str = "flat"
     terrain_aware: bool = False
     clearance_m: float | None = None
 
@@ -111,6 +113,7 @@ class PlantSetting:
             "sensors": self.sensors,
             "estimator": self.estimator,
             "modifiers": self.modifiers.describe(),
+            "terrain": self.terrain,
             "terrain_aware": self.terrain_aware,
             "clearance_m": self.clearance_m,
         }

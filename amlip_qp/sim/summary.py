@@ -189,6 +189,7 @@ def summarize(
         "sensors": result.info.get("sensors"),
         "estimator": result.info.get("estimator"),
         "plant_modifiers": result.info.get("modifiers", {}),
+        "terrain": result.info.get("terrain", "flat"),
         "safe_mode_ticks": int(result.safe_mode_ticks),
         "estimator_divergences": int(result.estimator_divergences),
         "base_velocity_error_rms_mps": base_vel_err,
