@@ -11,15 +11,15 @@ M, H, G, T = 32.0, 0.8, 9.81, 0.35
 def _plan_input(**kw):
     base = dict(
         p_st_x=0.04, p_st_y=-0.09, L_x=2.0, L_y=18.0, t_rem=0.12, v_z=0.15, vx_des=0.7, vy_des=0.2,
-        heading_next=0.4, next_stance_sign=-1.0, m=M, H=H, T=T, W=0.22, g=G,
+        heading_next=0.4, next_stance_sign=-1.0, m=M, H=H, T=T, W=0.22, g=G, dz_next=0.0,
     )  # fmt: skip
     base.update(kw)
     return np.array([base[n] for n in kernels.ALIP_PLAN_INPUTS]), base
 
 
 def test_layout_sizes():
-    assert len(kernels.ALIP_PLAN_INPUTS) == 15 and len(kernels.ALIP_PLAN_OUTPUTS) == 8
-    assert len(kernels.SWING_REFERENCE_INPUTS) == 11 and kernels.SWING_REFERENCE_N_OUT == 27
+    assert len(kernels.ALIP_PLAN_INPUTS) == 16 and len(kernels.ALIP_PLAN_OUTPUTS) == 8
+    assert len(kernels.SWING_REFERENCE_INPUTS) == 15 and kernels.SWING_REFERENCE_N_OUT == 27
 
 
 def test_alip_plan_matches_hand_derived_values():
@@ -55,7 +55,8 @@ def test_alip_plan_zero_horizon_returns_the_current_state():
 
 def _ref_input(s, **kw):
     base = dict(s=s, T=T, H=H, z_cl=0.1, stance_yaw0=0.05, swing_yaw0=-0.08, x0=-0.2, y0=0.15,
-                p_sw_des_x=0.18, p_sw_des_y=-0.12, dD=0.3)  # fmt: skip
+                p_sw_des_x=0.18, p_sw_des_y=-0.12, dD=0.3, dz_sw0=0.0, dz_sw=0.0, slope_pitch0=0.0,
+                slope_pitch=0.0)  # fmt: skip
     base.update(kw)
     return np.array([base[n] for n in kernels.SWING_REFERENCE_INPUTS]), base
 

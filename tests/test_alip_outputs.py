@@ -65,7 +65,7 @@ def test_injected_reference_fn_is_used():
 
     outputs.reference_outputs("cassie", 0.2, T, H, ZCL, H0_CASSIE, TARGET, 0.1, reference_fn=fn)
     assert len(calls) == 1
-    np.testing.assert_allclose(calls[0], [0.2, T, H, ZCL, 0.04, -0.06, -0.21, 0.13, 0.17, -0.11, 0.1])
+    np.testing.assert_allclose(calls[0], [0.2, T, H, ZCL, 0.04, -0.06, -0.21, 0.13, 0.17, -0.11, 0.1, 0, 0, 0, 0])
 
 
 @pytest.mark.parametrize(
