@@ -43,6 +43,7 @@ def test_sx_functions_match_numpy_reference():
         y = symbolic.function("alip_plan")(u).full().ravel()
         np.testing.assert_allclose(y, kernels.alip_plan(u), rtol=1e-12, atol=1e-12)
         v = np.concatenate([[rng.uniform(0, 1), rng.uniform(0.25, 0.5), rng.uniform(0.6, 1.0), rng.uniform(0.05, 0.2)],
-                            rng.uniform(-0.5, 0.5, 7), rng.uniform(-0.15, 0.15, 2), rng.uniform(-0.5, 0.5, 2)])  # fmt: skip
+                            rng.uniform(-0.5, 0.5, 7),
+                            rng.uniform(-0.15, 0.15, 2), rng.uniform(-0.5, 0.5, 2)])  # fmt: skip
         h = symbolic.function("swing_reference")(v).full().ravel()
         np.testing.assert_allclose(h, kernels.swing_reference(v), rtol=1e-12, atol=1e-12)

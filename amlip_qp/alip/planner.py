@@ -147,6 +147,8 @@ class Planner:
             C.positive("late_descent (descent rate)", late_descent, "m/s")
         #: The late-descent setting (see the class doc).
         self.late_descent = late_descent
+        self._descent_landing = late_descent == "landing"
+        self._descent_rate_mps = 0.0 if late_descent is None or self._descent_landing else float(late_descent)
         self.mass_kg = float(mass_kg)
         self.g = float(g)
         self.plan_fn = plan_fn or kernels.alip_plan
@@ -370,7 +372,7 @@ class Planner:
         h_d, dh_d, ddh_d = O.split_reference(self.robot, yr)
         if self.late_descent is not None and t_in > T:
             i = self._i_swing_z
-            rate = dh_d[i] if self.late_descent == "landing" else self.late_descent
+            rate = float(dh_d[i]) if self._descent_landing else self._descent_rate_mps
             h_d[i], dh_d[i], ddh_d[i] = O.late_descent(h_d[i], rate, t_in - T)
 
         c0, c1, c2 = estimate.com_m.tolist()
