@@ -14,6 +14,7 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.messages`: :class:`Command`, :class:`StateEstimate`, :class:`TerrainPrediction`,
   :class:`PlannerOutput` (planner I/O);
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
+- :mod:`~amlip_qp.alip.footholds`: :class:`FootholdPlane`, the ground plane from the last footholds (blind mode).
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 """
 
@@ -30,6 +31,7 @@ from amlip_qp.alip.desired import (
     other_side,
     stance_sign,
 )
+from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
 from amlip_qp.alip.formulas import GRAVITY_MPS2
 from amlip_qp.alip.heading import heading_to_world, hip_yaw_targets, rotation, world_to_heading, yaw_of
 from amlip_qp.alip.kalman import AngularMomentumFilter, MomentumFilter1D
@@ -56,6 +58,8 @@ __all__ = [
     "RABBIT_OUTPUTS",
     "AngularMomentumFilter",
     "Command",
+    "FootholdPlane",
+    "GroundPlane",
     "Lx_from_lateral_speed",
     "Lx_from_step_width",
     "Ly_from_forward_speed",
