@@ -90,3 +90,14 @@ def test_the_controller_plans_for_its_ground_mode():
     aware = make(terrain_height_fn=slope)
     assert aware.ground.mode == "aware" and aware.planner.late_descent == "landing"
     assert make(ground_mode="blind").planner.late_descent == "landing"
+
+
+def test_aware_pitch_beside_a_stair_edge_is_the_treads():
+    def stairs(x_m: float, y_m: float) -> float:
+        return 0.1 * math.floor(x_m / 0.3) if x_m > 0.0 else 0.0
+
+    g = GroundPredictor("aware", stairs)
+    g.touchdown(np.array([0.15, 0.0, 0.0]), 0.0)
+    for x in (0.28, 0.32, 0.45):  # just before an edge, just after it, mid-tread
+        assert g.predict(np.array([x, 0.0]), 0.0).slope_pitch_rad == 0.0
+    assert g.predict(np.array([0.32, 0.0]), 0.0).dz_sw_m == pytest.approx(0.1)

@@ -14,8 +14,9 @@ the modes of :data:`GROUND_MODES`:
 - ``"aware"``: the controller is handed a height function of the terrain,
   world ``(x, y)`` m -> ground ``z`` m (in simulation, ray casts into the
   plant's scene; the controller never sees the simulator), read at the swing
-  target (height, and pitch from two points half a blade apart along the heading)
-  and under the stance contact.
+  target (height, and pitch: the gentler of the grades half a blade behind and
+  ahead along the heading, so that a stair's edge reads as its tread) and under
+  the stance contact.
 
 In both terrain modes the height where the swing foot lifted off is the
 previous stance contact's, as measured (blind) or read (aware). The
@@ -43,8 +44,8 @@ GROUND_MODES: tuple[str, ...] = ("flat", "blind", "aware")
 MAX_DZ_M = 0.25
 #: Largest ground pitch a prediction may have (either sign), rad (30 degrees).
 MAX_PITCH_RAD = math.radians(30.0)
-#: Half the distance (m) along the heading between the two points an
-#: ``"aware"`` prediction reads the ground pitch from (about half a foot blade).
+#: How far behind and ahead of a point (m, along the heading) an ``"aware"``
+#: prediction reads the ground's grades for its pitch (about half a foot blade).
 PITCH_HALF_BASE_M = 0.05
 
 HeightFunction = Callable[[float, float], float]
@@ -127,9 +128,13 @@ class GroundPredictor:
         """The ground pitch along the heading at world ``(x, y)`` m, rad (clipped)."""
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         if self.mode == "aware":
+            # The gentler of the two one-sided grades: the same on a smooth slope,
+            # the tread's (level) beside a stair's edge rather than the riser's.
             d = PITCH_HALF_BASE_M
-            rise = self._height(x + d * c, y + d * s) - self._height(x - d * c, y - d * s)
-            return _clip(-math.atan2(rise, 2.0 * d), MAX_PITCH_RAD)
+            h = self._height(x, y)
+            back, front = h - self._height(x - d * c, y - d * s), self._height(x + d * c, y + d * s) - h
+            rise = back if abs(back) < abs(front) else front
+            return _clip(-math.atan2(rise, d), MAX_PITCH_RAD)
         return self._plane.pitch_rad
 
     def predict(self, target_xy_m: np.ndarray, heading_rad: float) -> TerrainPrediction:
