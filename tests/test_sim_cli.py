@@ -307,3 +307,14 @@ def test_clearance_option_reaches_the_planner_command_and_is_bounded():
         parser.parse_args(["walk", "--clearance", "-0.1"])
     assert info.value.code == 2
 
+
+
+def test_compare_takes_the_terrain_aware_and_clearance_settings():
+    from amlip_qp.sim.cli import setting_from_args
+    from amlip_qp.sim.run_types import PlantSetting
+
+    parser = cli.build_parser()
+    args = parser.parse_args(["compare", "--terrain", "slope:10", "--terrain-aware", "--clearance", "0.15"])
+    setting = setting_from_args(args, PlantSetting())
+    assert (setting.terrain, setting.terrain_aware, setting.clearance_m) == ("slope:10", True, 0.15)
+    assert setting_from_args(parser.parse_args(["compare"]), PlantSetting()) == PlantSetting()
