@@ -213,3 +213,25 @@ def test_plant_edits_and_the_control_filter_reach_the_plant_through_the_factory(
     assert sim.model.body_mass[sim.plant.base_body_id] == 20.0 and sim.ctrl_filter is halve
     with pytest.raises(InputError, match="give the plant by name or path"):
         factory.build_simulation(sc, HoldTracker(robot), plant=sim.plant, plant_edits=[heavy_pelvis])
+
+
+def test_the_fall_check_measures_the_base_height_above_the_ground_under_it():
+    from amlip_qp.sim.harness import Simulation
+    from amlip_qp.sim.run_types import PlantSetting
+
+    # a terrain reaches the harness through the factory: its analytic height
+    sc = Scenario("test", "cassie", 0.01, setting=PlantSetting(terrain="slope:10"))
+    robot = factory.load("cassie")
+    sim = factory.build_simulation(sc, HoldTracker(robot))
+    assert sim.ground_height_m is not None and sim.ground_height_m(3.0, 0.0) > 0.3
+    assert factory.build_simulation(Scenario("test", "cassie", 0.01), HoldTracker(robot)).ground_height_m is None
+    # standing still: ground at a constant height is no fall (the height above it is what counts) ...
+    level = Simulation(robot, sim.controller, sim.command_fn, plant=sim.plant, ground_height_m=lambda x, y: 0.5)
+    assert not level.run(0.02).fell
+    # ... ground rising to the base after the start value is taken is a fall at the first tick
+    heights = iter([0.0])
+    rising = Simulation(
+        robot, sim.controller, sim.command_fn, plant=sim.plant, ground_height_m=lambda x, y: next(heights, 0.9)
+    )
+    res = rising.run(0.02)
+    assert res.fell and res.fall_time_s == 0.0

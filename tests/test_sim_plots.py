@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
@@ -70,3 +71,49 @@ def test_comparison_figure_writes_the_file_and_checks_its_suffix(tmp_path):
     assert path.read_text().lstrip().startswith("<?xml")
     with pytest.raises(InputError, match="must end in .png, .pdf, .svg"):
         plots.comparison_figure(_rows(), tmp_path / "cmp.jpeg")
+
+
+def _walk_result(terrain: str):
+    """A synthetic 2 s walk up the first metres of ``terrain``: the CoM 0.85 m above the ground, 4 steps."""
+    from amlip_qp.control.walking.controller import StepRecord
+    from amlip_qp.sim.run_types import RunResult
+    from amlip_qp.sim.terrain import parse_terrain
+
+    ground = parse_terrain(terrain)
+    t = np.linspace(0.0, 2.0, 401)
+    x = 0.5 * t
+    com = np.stack([x, np.zeros_like(x), 0.85 + np.array([ground.height_m(xi, 0.0) for xi in x])], axis=1)
+    n = t.size
+    steps = [
+        StepRecord(
+            t_start_s=0.5 * k,
+            t_end_s=0.5 * (k + 1),
+            stance="left" if k % 2 else "right",
+            swing_target_m=np.array([0.25 * (k + 1), 0.0, 0.0]),
+            swing_actual_m=np.array([0.25 * (k + 1), 0.0, ground.height_m(0.25 * (k + 1), 0.0)]),
+            L_end_Nms=np.zeros(3),
+            L_target_Nms=np.zeros(3),
+            com_vel_end_mps=np.array([0.5, 0.0, 0.0]),
+            heading_rad=0.0,
+        )
+        for k in range(4)
+    ]
+    log = {
+        "t": t, "com": com, "com_vel": np.tile([0.5, 0.0, 0.0], (n, 1)), "heading": np.zeros(n),
+        "cmd_vx": np.full(n, 0.5), "cmd_vy": np.zeros(n), "L": np.zeros((n, 3)), "L_hat": np.zeros((n, 2)),
+        "L_des": np.zeros((n, 2)), "h": np.zeros((n, 2)), "h_d": np.zeros((n, 2)),
+    }  # fmt: skip
+    info = {"output_names": ("a", "b"), "terrain": terrain}
+    return RunResult("cassie", "qp", 2.0, 2.0, 1.0, False, float("nan"), log, steps, np.zeros(n), 0, info=info)
+
+
+def test_walk_figure_adds_a_side_view_on_a_terrain(tmp_path):
+    import imageio.v3 as iio
+
+    flat = iio.imread(plots.walk_figure(_walk_result("flat"), tmp_path / "flat.png"))
+    slope = iio.imread(plots.walk_figure(_walk_result("slope:10"), tmp_path / "slope.png"))
+    assert flat.shape[0] == 12 * 110 and slope.shape[0] == 15 * 110  # a fifth panel, 3 inches high
+    # the side view is drawn: the bottom fifth of the slope figure holds the ground's tan fill
+    bottom = slope[-3 * 110 :, :, :3].reshape(-1, 3).astype(int)
+    tan = np.array([210, 180, 140])
+    assert np.any(np.all(np.abs(bottom - (0.4 * 255 + 0.6 * tan)) < 12, axis=1))

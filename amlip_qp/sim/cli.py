@@ -222,6 +222,8 @@ def _one_line(s: dict) -> str:
         return "n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
     state = f"FELL at {s['fall_time_s']:.2f} s" if s["fell"] else "walked"
+    if s.get("terrain", "flat") != "flat":
+        state += f" on {s['terrain']}"
     mv = s["mean_velocity"]
     setting = ""
     mods = s.get("plant_modifiers") or {}

@@ -53,13 +53,43 @@ def _mark_fall(ax, result: RunResult) -> None:
         ax.axvline(result.fall_time_s, color="k", ls=":", lw=1.0, label="fall")
 
 
+def _side_view(ax, result: RunResult, terrain_text: str) -> None:
+    """Ground profile under the CoM's path, CoM height and the feet's touchdown points, against x."""
+    from amlip_qp.sim.terrain import parse_terrain
+
+    terrain = parse_terrain(terrain_text)
+    com = result.log["com"]
+    if com.shape[0] == 0:
+        return
+    xs = np.linspace(float(com[:, 0].min()) - 0.5, float(com[:, 0].max()) + 0.5, 600)
+    ys = np.interp(xs, com[:, 0], com[:, 1]) if np.all(np.diff(com[:, 0]) > 0) else np.full_like(xs, com[-1, 1])
+    ground = np.array([terrain.height_m(float(x), float(y)) for x, y in zip(xs, ys)])
+    ax.fill_between(xs, ground, ground.min() - 0.1, color="tan", alpha=0.6, label=f"ground ({terrain.text})")
+    ax.plot(com[:, 0], com[:, 2], color="C0", lw=0.8, label="CoM")
+    if result.steps:
+        touch = np.array([np.asarray(s.swing_actual_m, dtype=float) for s in result.steps])
+        ax.plot(touch[:, 0], touch[:, 2], "kv", ms=4, label="swing contact site at touchdown")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("height [m]")
+    _legend(ax, loc="upper left", fontsize=7, ncol=3)
+
+
 def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = None) -> Path:
-    """Four panels: speed, ``L`` and its prediction, foot-placement error, output tracking errors. Returns the path."""
+    """Speed, ``L`` and its prediction, foot-placement error, output tracking errors against time; on a
+    terrain (``result.info["terrain"]`` not flat) a fifth panel, the side view (:func:`_side_view`). Returns the path.
+    """
     check_figure_path(path)
     log = result.log
     t = log["t"]
     planar = bool(result.info.get("planar", False))
-    fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True)
+    terrain = str(result.info.get("terrain", "flat"))
+    if terrain == "flat":
+        fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True)
+    else:
+        fig, axes = plt.subplots(5, 1, figsize=(10, 15))
+        for ax in axes[1:4]:
+            ax.sharex(axes[0])
+        _side_view(axes[4], result, terrain)
     fig.suptitle(title or f"{result.robot} / {result.tracker}" + (" (fell)" if result.fell else ""))
 
     ax = axes[0]

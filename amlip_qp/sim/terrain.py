@@ -50,8 +50,10 @@ MAX_SLOPE_DEG = 45.0
 STAIRS_LANDING_M = 1.0
 #: Steps up (and down) of ``stairs:RISE:RUN`` without N.
 DEFAULT_STAIRS_STEPS = 4
-#: Thickness of the terrain boxes below their top faces, m.
+#: Thickness of the terrain boxes below their top faces, beyond what reaches the floor, m.
 BOX_DEPTH_M = 1.0
+#: Name (prefix) of the geoms and the height field the terrain adds.
+TERRAIN_NAME = "amlip-terrain"
 #: A height map's left edge lies this far behind the robot's start, m.
 HFIELD_BACK_M = 1.0
 
@@ -277,17 +279,19 @@ class TerrainEdit:
                 g.group = TERRAIN_GEOM_GROUP
         floor.pos = [floor.pos[0], floor.pos[1], t.floor_z_m]
         world = spec.worldbody
-        rgba = [0.55, 0.5, 0.42, 1.0]
+        rgba = [1.0, 0.85, 0.6, 1.0]  # a sand tint of the floor's texture
         for i, s in enumerate(t.steps):
             pitch = math.atan(s.slope)
             length = (s.x1_m - s.x0_m) / math.cos(pitch)
             top_mid = np.array([0.5 * (s.x0_m + s.x1_m), 0.0, s.z0_m + 0.5 * s.slope * (s.x1_m - s.x0_m)])
             normal = np.array([-math.sin(pitch), 0.0, math.cos(pitch)])
+            z1 = s.z0_m + s.slope * (s.x1_m - s.x0_m)
+            depth = BOX_DEPTH_M + max(abs(s.z0_m), abs(z1)) + abs(t.floor_z_m)  # down to the floor
             geom = world.add_geom(
-                name=f"terrain-{i}",
+                name=f"{TERRAIN_NAME}-{i}",
                 type=mujoco.mjtGeom.mjGEOM_BOX,
-                size=[0.5 * length, G.HALF_WIDTH_M, 0.5 * BOX_DEPTH_M],
-                pos=list(top_mid - 0.5 * BOX_DEPTH_M * normal),
+                size=[0.5 * length, G.HALF_WIDTH_M, 0.5 * depth],
+                pos=list(top_mid - 0.5 * depth * normal),
                 quat=[math.cos(-0.5 * pitch), 0.0, math.sin(-0.5 * pitch), 0.0],
                 rgba=[c * (0.9 if i % 2 else 1.0) for c in rgba[:3]] + [1.0],
             )
@@ -296,7 +300,7 @@ class TerrainEdit:
             grid = t.grid
             hx, hy = grid.half_size_m
             spec.add_hfield(
-                name="terrain",
+                name=TERRAIN_NAME,
                 size=[hx, hy, grid.elevation_m, 0.1],
                 nrow=grid.nrow,
                 ncol=grid.ncol,
@@ -304,9 +308,9 @@ class TerrainEdit:
             )
             cx, cy = grid.centre_m
             geom = world.add_geom(
-                name="terrain-hfield",
+                name=f"{TERRAIN_NAME}-hfield",
                 type=mujoco.mjtGeom.mjGEOM_HFIELD,
-                hfieldname="terrain",
+                hfieldname=TERRAIN_NAME,
                 pos=[cx, cy, grid.z0_m],
                 rgba=rgba,
             )
@@ -317,8 +321,10 @@ class TerrainEdit:
 
 
 def _copy_contact(floor: mujoco.MjsGeom, geom: mujoco.MjsGeom) -> None:
+    """The floor's contact parameters and material (its texture, tinted by the geom's colour) on ``geom``."""
     for attr in _CONTACT_ATTRS:
         setattr(geom, attr, getattr(floor, attr))
+    geom.material = floor.material
     geom.group = TERRAIN_GEOM_GROUP
 
 
@@ -384,7 +390,7 @@ def ground_height_function(plant: Plant, terrain: TerrainSpec) -> Callable[[floa
         return by_group
     if not terrain.is_flat:
         raise InputError(f"plant {plant.name} has no terrain geoms: load it with the edit of --terrain {terrain.text}")
-    ids = np.flatnonzero(static)
+    ids = [int(g) for g in np.flatnonzero(static)]
 
     hfield = mujoco.mjtGeom.mjGEOM_HFIELD
 

@@ -173,7 +173,7 @@ def read_gray_png(path: str) -> np.ndarray:
     import imageio.v3 as iio
 
     try:
-        img = np.asarray(iio.imread(path))
+        img = np.asarray(iio.imread(path, plugin="pillow"))
     except Exception as exc:
         raise InputError(f"cannot read the height map {path} as an image ({type(exc).__name__}); give a PNG") from None
     if img.dtype.kind == "u":

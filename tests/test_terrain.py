@@ -1,0 +1,287 @@
+"""Terrain in the plant (amlip_qp.sim.terrain, terrain_grids, terrain_lift): specs, MuJoCo's surface, keyframes."""
+
+from __future__ import annotations
+
+import math
+
+import imageio.v3 as iio
+import mujoco
+import numpy as np
+import pytest
+
+from amlip_qp.exceptions import InputError, MJCFError
+from amlip_qp.sim import factory
+from amlip_qp.sim.plant import load_plant
+from amlip_qp.sim.run_types import PlantSetting
+from amlip_qp.sim.terrain import (
+    START_X_M,
+    TERRAIN_GEOM_GROUP,
+    ground_height_function,
+    parse_terrain,
+    terrain_edit,
+)
+from amlip_qp.sim.terrain_grids import HALF_WIDTH_M
+
+KINDS = ["slope:10", "slope:-15", "stairs:0.1:0.3", "rough:0.04:3", "waves:0.3:4"]
+
+
+def _plant(robot: str, text: str):
+    spec = parse_terrain(text)
+    return load_plant(robot, factory.load(robot), edits=[terrain_edit(spec)]), spec
+
+
+def _ramp_png(path, size=(41, 101), dtype=np.uint8):
+    """A gray ramp along x (columns): black at the left edge, white at the right."""
+    top = np.iinfo(dtype).max
+    img = np.tile(np.round(np.linspace(0, top, size[1])).astype(dtype), (size[0], 1))
+    iio.imwrite(path, img)
+    return img
+
+
+# ------------------------------------------------------------------ parsing
+@pytest.mark.parametrize(
+    "text, kind, canonical, params",
+    [
+        ("flat", "flat", "flat", ()),
+        (" slope:10.0 ", "slope", "slope:10", (10.0,)),
+        ("slope:-22.5", "slope", "slope:-22.5", (-22.5,)),
+        ("stairs:0.1:0.3", "stairs", "stairs:0.1:0.3:4", (0.1, 0.3, 4.0)),
+        ("stairs:0.15:0.25:2", "stairs", "stairs:0.15:0.25:2", (0.15, 0.25, 2.0)),
+        ("rough:0.04", "rough", "rough:0.04:0", (0.04, 0.0)),
+        ("rough:0.05:7", "rough", "rough:0.05:7", (0.05, 7.0)),
+        ("waves:0.3:4", "waves", "waves:0.3:4", (0.3, 4.0)),
+    ],
+)
+def test_parse_good_specs(text, kind, canonical, params):
+    spec = parse_terrain(text)
+    assert (spec.kind, spec.text, spec.params) == (kind, canonical, params)
+    assert parse_terrain(spec.text) == spec  # the canonical text parses to itself
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("", "unknown terrain"),
+        ("hill", "unknown terrain"),
+        ("flat:1", "wrong number of fields for flat"),
+        ("slope:45", "less than 45 deg"),
+        ("slope:-45", "less than 45 deg"),
+        ("slope:inf", "less than 45 deg"),
+        ("slope:1:2", "wrong number of fields for slope"),
+        ("stairs:0.1", "wrong number of fields for stairs"),
+        ("stairs:0:0.3", "RISE_M must be a number in (0, 1]"),
+        ("stairs:0.1:-0.3", "RUN_M must be a number in (0, 10]"),
+        ("stairs:0.1:0.3:0", "N must be in [1, 50]"),
+        ("rough:nan", "AMPLITUDE_M must be a number in (0, 1]"),
+        ("rough:0.04:x", "SEED must be a whole number"),
+        ("waves:-0.3:4", "HEIGHT_M must be a number in (0, 5]"),
+        ("waves:0.3:0.1", "the wavelength must be at least 0.2 m"),
+        ("waves:1.5:4", "deg steep at their flanks"),
+        ("hfield:a.png:1:2", "give hfield:PATH.png"),
+        ("hfield:/nonexistent/h.png:10:4:0.5", "height map not found: /nonexistent/h.png"),
+        ("hfield:x.png:-10:4:0.5", "SIZE_X_M must be a number in (0, 1000]"),
+    ],
+)
+def test_parse_bad_specs_name_what_to_fix(text, needle):
+    with pytest.raises(InputError) as err:
+        parse_terrain(text)
+    msg = str(err.value)
+    assert needle in msg and "\n" not in msg
+
+
+def test_unreadable_and_tiny_pngs_are_input_errors(tmp_path):
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"not a png")
+    with pytest.raises(InputError, match="cannot read the height map"):
+        parse_terrain(f"hfield:{bad}:10:4:0.5")
+    tiny = tmp_path / "tiny.png"
+    iio.imwrite(tiny, np.zeros((1, 5), dtype=np.uint8))
+    with pytest.raises(InputError, match="at least 2 x 2 pixels"):
+        parse_terrain(f"hfield:{tiny}:10:4:0.5")
+
+
+# --------------------------------------------------------- analytic heights
+def test_analytic_profiles():
+    k = math.tan(math.radians(10.0))
+    slope = parse_terrain("slope:10")
+    assert slope.height_m(START_X_M - 0.01, 0.0) == 0.0
+    assert slope.height_m(START_X_M + 2.0, 1.0) == pytest.approx(2.0 * k)
+    down = parse_terrain("slope:-15")
+    assert down.height_m(START_X_M + 3.0, 0.0) == pytest.approx(-3.0 * math.tan(math.radians(15.0)))
+    stairs = parse_terrain("stairs:0.1:0.3:2")  # up at 1.0 and 1.3, landing 1.6-2.6, down at 2.6-2.9, floor after
+    expected = {0.9: 0.0, 1.1: 0.1, 1.4: 0.2, 2.0: 0.2, 2.7: 0.1, 3.0: 0.0}
+    assert {x: round(stairs.height_m(x, 0.5), 9) for x in expected} == expected
+    waves = parse_terrain("waves:0.3:4")
+    assert waves.height_m(START_X_M, 0.0) == pytest.approx(0.0, abs=1e-9)
+    assert waves.height_m(START_X_M + 2.0, 0.0) == pytest.approx(0.3, abs=1e-6)  # crest
+    assert waves.height_m(START_X_M + 4.0, 2.0) == pytest.approx(0.0, abs=1e-6)  # trough
+    rough = parse_terrain("rough:0.04:3")
+    xs, ys = np.meshgrid(np.linspace(-3.0, 25.0, 200), np.linspace(-3.5, 3.5, 30))
+    h = np.array([rough.height_m(x, y) for x, y in zip(xs.ravel(), ys.ravel())])
+    assert np.max(np.abs(h)) <= 0.04 + 1e-9 and np.max(np.abs(h)) > 0.03
+    assert abs(rough.height_m(0.3, -0.2)) < 1e-7  # the flat start patch
+    assert rough.height_m(5.0, 0.0) != parse_terrain("rough:0.04:4").height_m(5.0, 0.0)  # the seed matters
+
+
+@pytest.mark.parametrize("text", KINDS)
+def test_analytic_height_matches_mujoco_ray_casts(text):
+    plant, spec = _plant("cassie", text)
+    ground = ground_height_function(plant, spec)
+    grid = spec.grid
+    xs = np.linspace(-3.0, 24.0, 271)
+    ys = list(np.linspace(-HALF_WIDTH_M + 0.3, HALF_WIDTH_M - 0.3, 7))
+    if grid is not None:  # also exactly on a row of the height field (MuJoCo's ray misses some of those)
+        ys.append(grid.y0_m + 9 * grid.dy_m)
+    err = max(abs(ground(x, y) - spec.height_m(x, y)) for x in xs for y in ys)
+    assert err < 1e-3
+    # the robot's own geoms are not terrain: the ray under the pelvis finds the ground
+    assert ground(0.0, 0.0) == pytest.approx(spec.height_m(0.0, 0.0), abs=1e-6)
+
+
+def test_rabbit_walks_in_the_xz_plane_of_every_terrain():
+    for text in KINDS:
+        plant, spec = _plant("rabbit", text)
+        ground = ground_height_function(plant, spec)
+        for x in np.linspace(-1.0, 12.0, 53):
+            assert ground(x, 0.0) == pytest.approx(spec.height_m(x, 0.0), abs=1e-3)
+
+
+def test_terrain_geoms_are_in_their_group_with_the_floor_contact():
+    plant, _ = _plant("cassie", "stairs:0.1:0.3")
+    m = plant.model
+    static = np.flatnonzero(m.body_weldid[m.geom_bodyid] == 0)
+    floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    assert len(static) == 1 + 4 + 1 + 3  # the floor, 4 steps up, the landing, 3 steps down
+    assert np.all(m.geom_group[static] == TERRAIN_GEOM_GROUP)
+    for g in static:
+        assert (m.geom_contype[g], m.geom_conaffinity[g]) == (m.geom_contype[floor], m.geom_conaffinity[floor])
+        assert np.array_equal(m.geom_friction[g], m.geom_friction[floor])
+        assert np.array_equal(m.geom_solref[g], m.geom_solref[floor])
+
+
+def test_ground_function_of_a_flat_plant_and_a_mismatched_spec():
+    robot = factory.load("cassie")
+    plant = load_plant("cassie", robot)
+    flat = ground_height_function(plant, parse_terrain("flat"))
+    assert flat(0.0, 0.0) == 0.0 and flat(3.0, -1.0) == 0.0  # the floor, not the robot above it
+    with pytest.raises(InputError, match="has no terrain geoms"):
+        ground_height_function(plant, parse_terrain("slope:10"))
+
+
+# ---------------------------------------------------------------- keyframes
+def _foot_clearances_m(plant, spec):
+    """(min, max) over the foot contact geoms of their distance to the terrain below, m, at the keyframe."""
+    data = plant.new_data()
+    m = plant.model
+    out = []
+    for body in plant.foot_body_ids.values():
+        for g in np.flatnonzero(m.geom_bodyid == body):
+            if m.geom_conaffinity[g] or m.geom_contype[g]:
+                x, y, z = data.geom_xpos[g]
+                out.append(z - m.geom_size[g, 0] - spec.height_m(x, y))
+    return min(out), max(out), data
+
+
+@pytest.mark.parametrize("robot", ["cassie", "rabbit"])
+def test_keyframe_lifted_onto_a_ramp_under_the_feet(robot, tmp_path):
+    """A 2 m high, 10 m long gray ramp (11 deg) starting 1 m behind the robot: it stands on it at the start."""
+    _ramp_png(tmp_path / "ramp.png")
+    spec = parse_terrain(f"hfield:{tmp_path / 'ramp.png'}:10:4:2")
+    plant = load_plant(robot, factory.load(robot), edits=[terrain_edit(spec)])
+    flat_plant = load_plant(robot, factory.load(robot))
+    lo, hi, data = _foot_clearances_m(plant, spec)
+    assert -3e-3 < lo < 1e-3  # touching, not penetrating by more than a few mm
+    assert hi < 0.05  # the other foot hangs at most a few cm above the slope
+    penetration = [data.contact[i].dist for i in range(data.ncon)]
+    assert penetration and min(penetration) > -3e-3  # the first mj_forward has feet in contact
+    lift = plant.new_data().qpos - flat_plant.new_data().qpos
+    ground_under_start = spec.height_m(0.0, 0.0)
+    assert ground_under_start == pytest.approx(0.2, abs=0.01)  # 1 m into the ramp
+    assert np.count_nonzero(lift) == 1 and 0.15 < lift.max() < 0.3
+
+
+@pytest.mark.parametrize("text", KINDS)
+def test_terrains_starting_ahead_leave_the_keyframe_on_the_flat(text):
+    plant, spec = _plant("cassie", text)
+    flat_plant = load_plant("cassie", factory.load("cassie"))
+    assert np.allclose(plant.new_data().qpos, flat_plant.new_data().qpos, atol=1e-6)
+    lo, _, _ = _foot_clearances_m(plant, spec)
+    assert abs(lo) < 1e-6
+
+
+def test_a_plant_without_floor_or_liftable_root_is_an_mjcf_error():
+    no_floor = mujoco.MjSpec.from_string(
+        '<mujoco><worldbody><body pos="0 0 1"><freejoint/><geom size="0.1"/></body></worldbody></mujoco>'
+    )
+    with pytest.raises(MJCFError, match="no floor"):
+        terrain_edit(parse_terrain("slope:10"))(no_floor)
+    hinged = mujoco.MjSpec.from_string(
+        '<mujoco><worldbody><geom type="plane" size="0 0 1"/><body pos="0 0 1"><joint axis="0 1 0"/>'
+        '<geom size="0.1"/></body></worldbody><keyframe><key qpos="0"/></keyframe></mujoco>'
+    )
+    with pytest.raises(MJCFError, match="neither a free joint nor a slide joint along z"):
+        terrain_edit(parse_terrain("waves:0.3:4"))(hinged)
+
+
+# ------------------------------------------------------------- flat = today
+def test_flat_changes_nothing():
+    robot = factory.load("cassie")
+    assert factory.setting_edits(PlantSetting(), robot) == []
+    assert factory.setting_edits(PlantSetting(terrain="flat"), robot) == []
+    today = load_plant("cassie", robot)
+    flat = load_plant("cassie", robot, edits=[terrain_edit(parse_terrain("flat"))])
+    a, b = today.model, flat.model
+    assert (a.nbody, a.ngeom, a.nhfield) == (b.nbody, b.ngeom, b.nhfield)
+    assert np.array_equal(a.geom_group, b.geom_group) and np.array_equal(a.geom_pos, b.geom_pos)
+    da, db = today.new_data(), flat.new_data()
+    for _ in range(200):  # a passive drop: the same trajectory, bit for bit
+        mujoco.mj_step(a, da)
+        mujoco.mj_step(b, db)
+    assert np.array_equal(da.qpos, db.qpos)
+    assert PlantSetting().describe()["terrain"] == "flat"
+
+
+# ------------------------------------------------------------------ the PNG
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+def test_png_round_trip(tmp_path, dtype):
+    rng = np.random.default_rng(1)
+    top = np.iinfo(dtype).max
+    img = rng.integers(0, top + 1, size=(6, 9)).astype(dtype)
+    img[0, 0], img[-1, -1] = 0, top  # the full gray range: heights 0 .. HEIGHT_M
+    path = tmp_path / "map.png"
+    iio.imwrite(path, img)
+    spec = parse_terrain(f"hfield:{path}:8:5:0.4")
+    assert spec.text == f"hfield:{path}:8:5:0.4"
+    # pixel (row i, col j) is the grid point x = -1 + j, y = 2.5 - i (top row at +y)
+    for i in range(6):
+        for j in range(9):
+            assert spec.height_m(-1.0 + j, 2.5 - i) == pytest.approx(0.4 * img[i, j] / top, abs=1e-6)
+    plant = load_plant("cassie", factory.load("cassie"), edits=[terrain_edit(spec)])
+    ground = ground_height_function(plant, spec)
+    for x, y in rng.uniform([-1.0, -2.5], [7.0, 2.5], size=(300, 2)):
+        assert ground(x, y) == pytest.approx(spec.height_m(x, y), abs=1e-3)
+
+
+@pytest.mark.slow
+def test_the_qp_controller_stands_on_a_ramp_it_starts_on(tmp_path):
+    """Started on an 11 deg ramp (keyframe lifted), 0.5 s of the controller stepping in place: feet on the ground."""
+    from amlip_qp.sim.scenarios import Scenario
+
+    _ramp_png(tmp_path / "ramp.png")
+    setting = PlantSetting(terrain=f"hfield:{tmp_path / 'ramp.png'}:10:4:2")
+    sim = factory.build_simulation(Scenario("ramp", "cassie", 0.5, setting=setting), "qp")
+    res = sim.run(0.5)
+    assert not res.fell
+    spec = parse_terrain(setting.terrain)
+    m, d = sim.model, sim.data
+    clearance = []
+    for body in sim.plant.foot_body_ids.values():
+        for g in np.flatnonzero((m.geom_bodyid == body) & (m.geom_conaffinity > 0)):
+            x, y, z = d.geom_xpos[g]
+            clearance.append(z - m.geom_size[g, 0] - spec.height_m(x, y))
+    assert min(clearance) > -5e-3  # no foot sank into the ramp
+    stance = [min(clearance[:2]), min(clearance[2:])]
+    assert min(stance) < 5e-3  # a foot stands on it
+    base = res.log["base_pos"]
+    base_above_ground = base[:, 2] - np.array([spec.height_m(x, y) for x, y in base[:, :2]])
+    assert base_above_ground.min() > 0.8
