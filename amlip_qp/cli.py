@@ -166,6 +166,19 @@ def _add_plant_options(p: argparse.ArgumentParser) -> None:
         "waves:HEIGHT_M:WAVELENGTH_M, hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M (gray: black 0, white HEIGHT_M); "
         "slopes, stairs and waves start 1 m ahead of the robot",
     )
+    p.add_argument(
+        "--terrain-aware",
+        action="store_true",
+        help="give the controller the terrain's height function (swing target height and the placement law's "
+        "height difference from it); default: blind, the ground is felt by contact",
+    )
+    p.add_argument(
+        "--clearance",
+        type=_non_negative_float,
+        metavar="M",
+        default=None,
+        help="swing-foot clearance at mid-step, m (default: the scenario's gait's, Cassie 0.10)",
+    )
     m = p.add_argument_group("plant modifiers (model mismatch; the controller keeps its own model)")
     m.add_argument(
         "--plant-mass-scale",
@@ -362,6 +375,13 @@ def _positive_float(text: str) -> float:
     value = _finite_float(text)
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _non_negative_float(text: str) -> float:
+    value = _finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return value
 
 

@@ -47,7 +47,9 @@ def sample_alip_plan(rng, robot, n):
         t_rem, rng.uniform(-0.3, 0.3, n), vx, vy,
         rng.uniform(-np.pi, np.pi, n), rng.choice([-1.0, 1.0], n),
         m, H, T, rng.uniform(*r["W"], n), np.full(n, 9.81),
+        rng.uniform(-0.2, 0.2, n),  # dz_next
     ])  # fmt: skip
+    u[:100, -1] = 0.0  # flat ground too
     return u
 
 
@@ -56,12 +58,16 @@ def sample_swing_reference(rng, robot, n):
     lat = 1.0 if r["lateral"] else 0.0
     s = rng.uniform(0, 1, n)
     s[:20], s[20:40] = 0.0, 1.0
-    return np.column_stack([
+    u = np.column_stack([
         s, rng.uniform(*r["T"], n), rng.uniform(*r["H"], n), rng.uniform(*r["z_cl"], n),
         lat * rng.uniform(-0.5, 0.5, n), lat * rng.uniform(-0.5, 0.5, n),
         rng.uniform(-0.4, 0.4, n), lat * rng.uniform(-0.3, 0.3, n),
         rng.uniform(-0.4, 0.4, n), lat * rng.uniform(-0.3, 0.3, n), lat * rng.uniform(-0.6, 0.6, n),
+        rng.uniform(-0.15, 0.15, n), rng.uniform(-0.15, 0.15, n),  # dz_sw0, dz_sw
+        lat * rng.uniform(-0.5, 0.5, n), lat * rng.uniform(-0.5, 0.5, n),  # slope_pitch0, slope_pitch
     ])  # fmt: skip
+    u[:100, -4:] = 0.0  # flat ground too
+    return u
 
 
 SAMPLERS = {

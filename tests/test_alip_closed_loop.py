@@ -191,3 +191,106 @@ def test_rabbit_planar_walk_converges():
     print(f"rabbit: mean vx per step {np.array(v_mean)[:, 0]}")
     assert v_mean[-1][0] == pytest.approx(0.8, abs=1e-3)
     assert abs(v_mean[-1][1]) < 1e-12  # lateral command ignored by the planar robot
+
+
+class PointMassOnSlope:
+    """A point mass on the constraint plane z = k x + H over the ground z = k x (slope along world x).
+
+    Kajita's LIP on a plane: with the contact force along p = c - r and the CoM
+    kept on the plane, m c'' = (m g / H) p - m g e_z, so the horizontal motion is
+    the flat LIP p_xy'' = (g/H) p_xy exactly, for any grade k, and v_z = k v_x.
+    The angular momentum about the contact is L = p x m v (recomputed, not the
+    planner's pairs). At touchdown the contact moves to the ground under the
+    planner's target, and L about it is checked against the transfer
+    L_2 = L_1 + (r_1 - r_2) x m v with the contacts' height difference.
+    """
+
+    def __init__(self, k, c_xy, v_xy, stance):
+        self.k = k
+        self.r = np.zeros(3)
+        self.c = np.array([c_xy[0], c_xy[1], k * c_xy[0] + H])
+        self.v = np.array([v_xy[0], v_xy[1], k * v_xy[0]])
+        self.stance = stance
+        self.transfer_errors = []
+
+    def L(self, r=None):
+        return np.cross(self.c - (self.r if r is None else r), M * self.v)
+
+    def advance(self, dt):
+        p = self.c[:2] - self.r[:2]
+        ch, sh = np.cosh(LAM * dt), np.sinh(LAM * dt)
+        self.c[:2] = self.r[:2] + p * ch + self.v[:2] / LAM * sh
+        self.v[:2] = p * LAM * sh + self.v[:2] * ch
+        self.c[2], self.v[2] = self.k * self.c[0] + H, self.k * self.v[0]
+
+    def vz_at_touchdown(self, t_rem):
+        """The CoM's vertical velocity at the end of the step, predicted exactly (the planner's v_z input)."""
+        p_x = self.c[0] - self.r[0]
+        return self.k * (p_x * LAM * np.sinh(LAM * t_rem) + self.v[0] * np.cosh(LAM * t_rem))
+
+    def touchdown(self, target_xy):
+        r_new = np.array([target_xy[0], target_xy[1], self.k * target_xy[0]])
+        L2 = self.L() + np.cross(self.r - r_new, M * self.v)
+        self.transfer_errors.append(np.max(np.abs(L2 - self.L(r_new))))
+        self.r = r_new
+        self.stance = "right" if self.stance == "left" else "left"
+
+
+def walk_on_slope(slope_deg, full_transfer, n_steps=8, seed=7):
+    """Walk the slope sim with the Planner. The height difference to the next contact is the ground's at the
+    previous tick's target, as a controller gets it: the law is a contraction in it, converged by touchdown."""
+    from amlip_qp.alip import TerrainPrediction
+
+    k = np.tan(np.radians(slope_deg))
+    rng = np.random.default_rng(seed)
+    sim = PointMassOnSlope(k, [rng.uniform(-0.05, 0.05), rng.uniform(-0.12, -0.02)], [0.1, 0.1], "left")
+    planner = Planner("cassie", M, G)
+    cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, vx_mps=0.6, step_width_m=0.2)
+    t, records = 0.0, []
+    r_prev = sim.r - np.array([0.0, 0.2, 0.0])
+    target = sim.r[:2].copy()
+    for _ in range(n_steps):
+        planner.start_step(sim.stance, t, h0_of(sim, r_prev, planner.heading_next_rad))
+        c_start = sim.c.copy()
+        for i in range(N_TICK):
+            t_in = i * DT
+            est = StateEstimate(
+                stance=sim.stance, p_st_m=sim.c - sim.r, L_Nms=sim.L(), v_z_mps=sim.vz_at_touchdown(T - t_in),
+                t_in_step_s=t_in, com_m=sim.c.copy(),
+            )  # fmt: skip
+            dz = k * (target[0] - sim.r[0])
+            terrain = TerrainPrediction(dz_next_m=dz, dz_sw_m=dz) if full_transfer else None
+            out = planner.update(est, cmd, terrain)
+            target = out.swing_target_world_m[:2].copy()
+            sim.advance(DT)
+        t += T
+        records.append(dict(c_start=c_start, c_end=sim.c.copy(), L_des=out.L_des_Nms, L_end=sim.L()[:2]))
+        r_prev = sim.r.copy()
+        sim.touchdown(target)
+    return sim, records
+
+
+@pytest.mark.parametrize("slope_deg", [0.0, 10.0, -10.0, 15.0, -15.0])
+def test_full_transfer_placement_is_deadbeat_on_a_slope(slope_deg):
+    """docs/ALIP_SLOPES.md: on the slope LIP the sagittal pair is exactly the flat ALIP and the full transfer
+    (v_z and dz) makes the placement deadbeat; the v_z-only law of flat ground misses L_des every step."""
+    sim, rec = walk_on_slope(slope_deg, full_transfer=True)
+    assert max(sim.transfer_errors) < 1e-12
+    err_y = [abs(cur["L_end"][1] - prev["L_des"][1]) for prev, cur in zip(rec[1:-1], rec[2:])]
+    err_x = [abs(cur["L_end"][0] - prev["L_des"][0]) for prev, cur in zip(rec[1:-1], rec[2:])]
+    _, old = walk_on_slope(slope_deg, full_transfer=False)
+    old_y = [abs(cur["L_end"][1] - prev["L_des"][1]) for prev, cur in zip(old[1:-1], old[2:])]
+    v_mean = (rec[-1]["c_end"][0] - rec[-3]["c_end"][0]) / (2 * T)
+    L_ref = M * H * 0.6
+    print(
+        f"slope {slope_deg:+.0f} deg: sagittal |L_end - L_des| max {max(err_y):.1e} (v_z-only law {max(old_y):.2e}), "
+        f"lateral max {max(err_x):.2e} kg m^2/s, stride vx {v_mean:.4f} m/s"
+    )
+    assert max(err_y) < 1e-6 * L_ref  # deadbeat in the sagittal plane, every step from the second
+    assert v_mean == pytest.approx(0.6, abs=1e-3)
+    # The lateral pair drifts by -k L_z / (m H) on a slope (the notes): bounded, not deadbeat.
+    assert max(err_x) < 0.05 * L_ref
+    if slope_deg == 0.0:
+        assert max(err_x) < 1e-6 * L_ref and max(old_y) < 1e-6 * L_ref
+    else:
+        assert min(old_y[-4:]) > 1e-2 * L_ref  # the old law's error is large and persists

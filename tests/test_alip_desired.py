@@ -46,7 +46,7 @@ def test_composition_and_rotation_match_the_kernel():
             L_w = desired.desired_L_world(vx, vy, W, T, M, H, side, D, G)
             R = np.array([[np.cos(D), -np.sin(D)], [np.sin(D), np.cos(D)]])
             np.testing.assert_allclose(L_w, R @ L_h, atol=1e-12)
-            u = np.array([0.05, -0.02, 1.0, 2.0, 0.1, 0.0, vx, vy, D, sign, M, H, T, W, G])
+            u = np.array([0.05, -0.02, 1.0, 2.0, 0.1, 0.0, vx, vy, D, sign, M, H, T, W, G, 0.0])
             np.testing.assert_allclose(kernels.alip_plan(u)[4:6], L_w, atol=1e-11)
 
 

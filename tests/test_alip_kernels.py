@@ -11,15 +11,15 @@ M, H, G, T = 32.0, 0.8, 9.81, 0.35
 def _plan_input(**kw):
     base = dict(
         p_st_x=0.04, p_st_y=-0.09, L_x=2.0, L_y=18.0, t_rem=0.12, v_z=0.15, vx_des=0.7, vy_des=0.2,
-        heading_next=0.4, next_stance_sign=-1.0, m=M, H=H, T=T, W=0.22, g=G,
+        heading_next=0.4, next_stance_sign=-1.0, m=M, H=H, T=T, W=0.22, g=G, dz_next=0.0,
     )  # fmt: skip
     base.update(kw)
     return np.array([base[n] for n in kernels.ALIP_PLAN_INPUTS]), base
 
 
 def test_layout_sizes():
-    assert len(kernels.ALIP_PLAN_INPUTS) == 15 and len(kernels.ALIP_PLAN_OUTPUTS) == 8
-    assert len(kernels.SWING_REFERENCE_INPUTS) == 11 and kernels.SWING_REFERENCE_N_OUT == 27
+    assert len(kernels.ALIP_PLAN_INPUTS) == 16 and len(kernels.ALIP_PLAN_OUTPUTS) == 8
+    assert len(kernels.SWING_REFERENCE_INPUTS) == 15 and kernels.SWING_REFERENCE_N_OUT == 27
 
 
 def test_alip_plan_matches_hand_derived_values():
@@ -55,7 +55,8 @@ def test_alip_plan_zero_horizon_returns_the_current_state():
 
 def _ref_input(s, **kw):
     base = dict(s=s, T=T, H=H, z_cl=0.1, stance_yaw0=0.05, swing_yaw0=-0.08, x0=-0.2, y0=0.15,
-                p_sw_des_x=0.18, p_sw_des_y=-0.12, dD=0.3)  # fmt: skip
+                p_sw_des_x=0.18, p_sw_des_y=-0.12, dD=0.3, dz_sw0=0.0, dz_sw=0.0, slope_pitch0=0.0,
+                slope_pitch=0.0)  # fmt: skip
     base.update(kw)
     return np.array([base[n] for n in kernels.SWING_REFERENCE_INPUTS]), base
 
@@ -89,3 +90,102 @@ def test_swing_reference_derivatives_match_finite_differences_in_time():
         np.testing.assert_allclose(y[9:18], (yp[:9] - ym[:9]) / (2 * dt), atol=1e-6)
         np.testing.assert_allclose(y[18:], (yp[:9] - 2 * y[:9] + ym[:9]) / dt**2, atol=2e-3)
         np.testing.assert_allclose(y[18:], (yp[9:18] - ym[9:18]) / (2 * dt), atol=1e-5)
+
+
+def _old_flat_plan(u):
+    """ALIP_PLAN's foot placement as written before the height difference, operation for operation."""
+    b = dict(zip(kernels.ALIP_PLAN_INPUTS, (float(v) for v in u)))
+    m, H_, T_, g, vz = b["m"], b["H"], b["T"], b["g"], b["v_z"]
+    y = kernels.alip_plan(u)
+    l = np.sqrt(g / H_)
+    c, s = np.cosh(l * T_), np.sinh(l * T_)
+    L_hat_y, Lt_hat, p_hat_x, p_hat_y = float(y[1]), -float(y[0]), float(y[2]), float(y[3])
+    px = (float(y[5]) - c * (L_hat_y + m * vz * p_hat_x)) / (m * (H_ * l * s - vz * c))
+    py = (-float(y[4]) - c * (Lt_hat + m * vz * p_hat_y)) / (m * (H_ * l * s - vz * c))
+    return px, py
+
+
+def _old_flat_reference(u):
+    """SWING_REFERENCE's z and toe outputs as written before the ground inputs: (h, dh, ddh) of outputs 4, 7, 8."""
+    b = dict(zip(kernels.SWING_REFERENCE_INPUTS, (float(v) for v in u)))
+    s, T_, H_, z = b["s"], b["T"], b["H"], b["z_cl"]
+    swing = (4.0 * z * (s - 0.5) ** 2 + (H_ - z), 8.0 * z * (s - 0.5), 8.0 * z + 0.0 * s)
+    stance, toe = (H_ + 0.0 * s, 0.0 * s, 0.0 * s), (0.0 + 0.0 * s, 0.0 * s, 0.0 * s)
+    return [[stance[k], swing[k] / T_**k, toe[k] / T_**k] for k in range(3)]
+
+
+def test_flat_ground_inputs_give_the_old_numbers_bit_for_bit():
+    """dz_next = 0 and zero ground inputs: exactly the pre-terrain arithmetic, signs of zeros included."""
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        u, _ = _plan_input(
+            p_st_x=rng.uniform(-0.3, 0.3), L_y=rng.uniform(-20, 60), t_rem=rng.uniform(0, T),
+            v_z=rng.uniform(-0.3, 0.3), vx_des=rng.uniform(-1, 2), heading_next=rng.uniform(-3, 3),
+        )  # fmt: skip
+        y = kernels.alip_plan(u)
+        assert (float(y[6]), float(y[7])) == _old_flat_plan(u)
+        v, _ = _ref_input(rng.uniform(0, 1), z_cl=rng.uniform(0, 0.2))
+        h = kernels.swing_reference(v)
+        for k, (stance, swing, toe) in enumerate(_old_flat_reference(v)):
+            got = h[9 * k + np.array([4, 7, 8])]
+            assert list(got) == [stance, swing, toe]
+            assert list(np.signbit(got)) == list(np.signbit([stance, swing, toe]))
+
+
+@pytest.mark.parametrize("dz", [-0.15, 0.08, 0.2])
+def test_alip_plan_with_a_height_difference_is_deadbeat_with_the_exact_transfer(dz):
+    """Place the foot, transfer L by (r_1 - r_2) x m v with the contacts dz apart, flow a step: L = L_des."""
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        u, b = _plan_input(
+            t_rem=0.0, v_z=0.0, dz_next=dz, p_st_x=rng.uniform(-0.1, 0.2), p_st_y=rng.uniform(-0.15, 0.15),
+            L_x=rng.uniform(-5, 5), L_y=rng.uniform(5, 30),
+        )  # fmt: skip
+        y = kernels.alip_plan(u)
+        # A point mass at height H over the stance contact, L = p x m v with v_z = 0 at touchdown.
+        p_st = np.array([b["p_st_x"], b["p_st_y"], H])
+        v = np.array([b["L_y"], -b["L_x"], 0.0]) / (M * H)
+        p_sw = np.array([y[6], y[7], H - dz])  # the next contact dz higher
+        L2 = np.cross(p_sw, M * v)
+        np.testing.assert_allclose(L2[:2], np.cross(p_st, M * v)[:2] + np.cross(p_sw - p_st, M * v)[:2], atol=1e-12)
+        l = np.sqrt(G / H)
+        Ly_end = M * H * l * np.sinh(l * T) * p_sw[0] + np.cosh(l * T) * L2[1]
+        Lt_end = M * H * l * np.sinh(l * T) * p_sw[1] + np.cosh(l * T) * -L2[0]
+        np.testing.assert_allclose([-Lt_end, Ly_end], y[4:6], atol=1e-10)
+        # Without the height term the same placement misses L_des by m dz v cosh(lT).
+        y0 = kernels.alip_plan(_plan_input(**{**b, "dz_next": 0.0})[0])
+        assert abs(y0[6] - y[6]) > 0.3 * abs(dz) * abs(v[0]) * np.cosh(l * T) / (H * l * np.sinh(l * T))
+
+
+@pytest.mark.parametrize("dz0, dz1", [(0.0, 0.12), (-0.1, 0.1), (0.15, -0.05), (0.0, -0.2)])
+def test_swing_reference_ground_heights_and_pitches(dz0, dz1):
+    zcl = 0.08
+    base = dict(z_cl=zcl, dz_sw0=dz0, dz_sw=dz1, slope_pitch0=-0.2, slope_pitch=0.25)
+    y0 = kernels.swing_reference(_ref_input(0.0, **base)[0])
+    y1 = kernels.swing_reference(_ref_input(1.0, **base)[0])
+    # CoM over stance from H + dz0 to H; CoM over swing from H to H - dz1; toe from pitch0 to pitch.
+    np.testing.assert_allclose(y0[[4, 7, 8]], [H + dz0, H, -0.2], atol=1e-15)
+    np.testing.assert_allclose(y1[[4, 7, 8]], [H, H - dz1, 0.25], atol=1e-15)
+    np.testing.assert_allclose(y0[9 + np.array([4, 8])], 0.0, atol=1e-15)  # blends start and end at rest
+    np.testing.assert_allclose(y1[9 + np.array([4, 8])], 0.0, atol=1e-15)
+    assert y1[9 + 7] > 0.0 and y0[9 + 7] < 0.0  # the foot rises at lift-off and descends at touchdown
+    # The foot over the stance contact (CoM height minus CoM over swing) clears the higher end by z_cl.
+    ys = np.array([kernels.swing_reference(_ref_input(s, **base)[0]) for s in np.linspace(0, 1, 2001)])
+    foot = ys[:, 4] - ys[:, 7]
+    assert foot[0] == pytest.approx(dz0, abs=1e-15) and foot[-1] == pytest.approx(dz1, abs=1e-15)
+    apex = foot.max()
+    assert max(dz0, dz1) + zcl - 1e-9 <= apex <= max(dz0, dz1) + zcl + abs(dz1 - dz0) / 8 + 1e-9
+
+
+@pytest.mark.parametrize("ground", [dict(), dict(dz_sw0=-0.1, dz_sw=0.12, slope_pitch0=0.1, slope_pitch=-0.3)])
+def test_swing_reference_ground_derivatives_match_finite_differences(ground):
+    rng = np.random.default_rng(1)
+    dt = 1e-5
+    for s in rng.uniform(0.05, 0.95, size=5):
+        t = s * T
+        y = kernels.swing_reference(_ref_input(s, **ground)[0])
+        yp = kernels.swing_reference(_ref_input((t + dt) / T, **ground)[0])
+        ym = kernels.swing_reference(_ref_input((t - dt) / T, **ground)[0])
+        np.testing.assert_allclose(y[9:18], (yp[:9] - ym[:9]) / (2 * dt), atol=1e-6)
+        np.testing.assert_allclose(y[18:], (yp[9:18] - ym[9:18]) / (2 * dt), atol=1e-5)
+        assert np.max(np.abs(y[9 + np.array([4, 8])])) > (0.05 if ground else -1.0)  # the ground terms move

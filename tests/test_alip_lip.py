@@ -167,3 +167,37 @@ def test_input_error_is_a_value_error():
 def test_non_numeric_input_is_an_input_error(bad):
     with pytest.raises(InputError, match="p_m must be a real number"):
         lip.flow(bad, 1.0, 0.3, 32.0, 0.8)
+
+
+def test_transfer_with_height_equals_exact_cross_product_on_any_ground():
+    """transfer_3d and the generic pairs with the contacts' height difference are (r_1 - r_2) x m v."""
+    rng = np.random.default_rng(12)
+    for _ in range(20):
+        p_st, v, L_c = _random_state(rng)
+        p_sw = np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), p_st[2] + rng.uniform(-0.2, 0.2)])
+        L1 = L_c + np.cross(p_st, M * v)
+        L2_exact = L_c + np.cross(p_sw, M * v)  # about the new contact
+        np.testing.assert_allclose(lip.transfer_3d(L1, p_st, p_sw, v, M), L2_exact[:2], atol=1e-11)
+        dz = p_st[2] - p_sw[2]  # r_2z - r_1z
+        Ly2 = lip.transfer(L1[1], p_st[0], p_sw[0], v[2], M, dz, v[0])
+        Lt2 = lip.transfer(-L1[0], p_st[1], p_sw[1], v[2], M, dz, v[1])
+        np.testing.assert_allclose([-Lt2, Ly2], L2_exact[:2], atol=1e-11)
+        # The flat-ground form misses the height term m dz v.
+        assert abs(lip.transfer(L1[1], p_st[0], p_sw[0], v[2], M) - L2_exact[1]) == pytest.approx(
+            abs(M * dz * v[0]), abs=1e-9
+        )
+
+
+@pytest.mark.parametrize("dz", [-0.2, 0.15])
+def test_height_foot_placement_is_deadbeat_on_the_ideal_lip(dz):
+    """With L = m H v at touchdown (a point mass on a plane of intercept H), the dz law is deadbeat."""
+    rng = np.random.default_rng(13)
+    for _ in range(10):
+        p, L, L_des, v_z = rng.uniform(-0.2, 0.2), rng.uniform(-15, 15), rng.uniform(-15, 15), rng.uniform(-0.3, 0.3)
+        p_hat, L_hat = lip.predict_end_of_step(p, L, rng.uniform(0.0, T), M, H, G)
+        p_sw = lip.foot_placement_vz(L_des, L_hat, p_hat, v_z, T, M, H, G, dz_m=dz)
+        L_plus = lip.transfer(L_hat, p_hat, p_sw, v_z, M, dz, L_hat / (M * H))
+        assert lip.flow(p_sw, L_plus, T, M, H, G)[1] == pytest.approx(L_des, abs=1e-9)
+        assert lip.foot_placement_vz(L_des, L_hat, p_hat, v_z, T, M, H, G) != pytest.approx(p_sw, abs=1e-3)
+    with pytest.raises(InputError, match="dz_m=1.0 m must be smaller in size than H_m"):
+        lip.foot_placement_vz(1.0, 1.0, 0.0, 0.0, T, M, H, G, dz_m=1.0)

@@ -68,3 +68,25 @@ def test_state_estimate_converts_other_inputs_to_float64():
         est(com_m=np.zeros(4))
     with pytest.raises(InputError, match=r"NaN or inf in \['L_Nms'\]"):
         est(L_Nms=np.array([0.0, np.nan, 0.0]))
+
+
+def test_terrain_prediction_defaults_to_flat_ground_and_is_validated():
+    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.alip.messages import FLAT_GROUND
+
+    flat = TerrainPrediction()
+    assert flat == FLAT_GROUND
+    assert (flat.dz_next_m, flat.dz_sw_m, flat.dz_sw0_m, flat.slope_pitch_rad, flat.slope_pitch0_rad) == (0.0,) * 5
+    t = TerrainPrediction(dz_next_m=np.float32(0.1), dz_sw_m=1)
+    assert type(t.dz_next_m) is float and t.dz_sw_m == 1.0
+    with pytest.raises(AttributeError):
+        t.dz_sw_m = 0.0  # type: ignore[misc]
+    for kw, match in [
+        (dict(dz_next_m=np.nan), "dz_next_m must be a finite number"),
+        (dict(dz_sw_m="up"), "dz_sw_m must be a finite number"),
+        (dict(dz_sw0_m=True), "dz_sw0_m must be a finite number"),
+        (dict(slope_pitch_rad=1.6), r"slope_pitch_rad must be within \(-pi/2, pi/2\)"),
+        (dict(slope_pitch0_rad=-2.0), r"slope_pitch0_rad must be within"),
+    ]:
+        with pytest.raises(InputError, match=match):
+            TerrainPrediction(**kw)

@@ -65,7 +65,7 @@ def test_injected_reference_fn_is_used():
 
     outputs.reference_outputs("cassie", 0.2, T, H, ZCL, H0_CASSIE, TARGET, 0.1, reference_fn=fn)
     assert len(calls) == 1
-    np.testing.assert_allclose(calls[0], [0.2, T, H, ZCL, 0.04, -0.06, -0.21, 0.13, 0.17, -0.11, 0.1])
+    np.testing.assert_allclose(calls[0], [0.2, T, H, ZCL, 0.04, -0.06, -0.21, 0.13, 0.17, -0.11, 0.1, 0, 0, 0, 0])
 
 
 @pytest.mark.parametrize(
@@ -89,3 +89,24 @@ def test_bad_input_raises_input_error(kwargs, match):
     args.update(kwargs)
     with pytest.raises(InputError, match=match):
         outputs.reference_outputs(**args)
+
+
+def test_ground_inputs_reach_the_references_and_are_checked():
+    ground = dict(dz_sw0_m=-0.06, dz_sw_m=0.1, slope_pitch0_rad=0.05, slope_pitch_rad=-0.2)
+    h0, _, _ = outputs.reference_outputs("cassie", 0.0, T, H, ZCL, H0_CASSIE, TARGET, 0.2, **ground)
+    h1, _, _ = outputs.reference_outputs("cassie", 1.0, T, H, ZCL, H0_CASSIE, TARGET, 0.2, **ground)
+    np.testing.assert_allclose(h0[[4, 7, 8]], [H - 0.06, H, 0.05], atol=1e-15)
+    np.testing.assert_allclose(h1[[4, 7, 8]], [H, H - 0.1, -0.2], atol=1e-15)
+    r1, _, _ = outputs.reference_outputs("rabbit", 1.0, T, H, ZCL, H0_CASSIE[[0, 4, 5, 7]], TARGET, **ground)
+    np.testing.assert_allclose(r1[[1, 3]], [H, H - 0.1], atol=1e-15)
+    with pytest.raises(InputError, match="swing foot path too high"):
+        outputs.reference_outputs("cassie", 0.5, T, H, ZCL, H0_CASSIE, TARGET, dz_sw_m=H - ZCL)
+    with pytest.raises(InputError, match="slope_pitch_rad=2.0 rad must be within"):
+        outputs.reference_outputs("cassie", 0.5, T, H, ZCL, H0_CASSIE, TARGET, slope_pitch_rad=2.0)
+    with pytest.raises(InputError, match="dz_sw0_m must be finite"):
+        outputs.reference_outputs("cassie", 0.5, T, H, ZCL, H0_CASSIE, TARGET, dz_sw0_m=np.nan)
+
+
+def test_late_descent_is_a_constant_rate_continuation():
+    assert outputs.late_descent(0.8, 0.4, 0.05) == (pytest.approx(0.82), 0.4, 0.0)
+    assert outputs.late_descent(0.8, 0.4, 0.0) == (0.8, 0.4, 0.0)

@@ -260,3 +260,81 @@ def test_kernels_with_the_wrong_output_size_are_input_errors():
         started(plan_fn=lambda u: np.zeros(7)).update(est(), cmd())
     with pytest.raises(InputError, match="reference_fn returned 20 values"):
         started(reference_fn=lambda u: np.zeros(20)).update(est(), cmd())
+
+
+def _same_bits(a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return np.array_equal(a, b) and np.array_equal(np.signbit(a), np.signbit(b))
+
+
+@pytest.mark.parametrize("robot, h0", [("cassie", H0), ("rabbit", np.array([0.02, 0.9, -0.15, 0.88]))])
+def test_no_terrain_and_flat_terrain_give_the_same_bits(robot, h0):
+    from amlip_qp.alip import TerrainPrediction
+
+    for t_in in (0.0, 0.13, T, T + 0.05):
+        a = started(robot, h0).update(est(t_in_step_s=t_in), cmd())
+        b = started(robot, h0).update(est(t_in_step_s=t_in), cmd(), TerrainPrediction())
+        for f in PlannerOutput.__slots__:
+            assert _same_bits(getattr(a, f), getattr(b, f)), f
+
+
+def test_terrain_reaches_the_kernels_and_the_swing_target():
+    from amlip_qp.alip import TerrainPrediction
+
+    seen = {}
+
+    def plan_fn(u):
+        seen["plan"] = np.array(u)
+        return kernels.alip_plan(u)
+
+    def reference_fn(u):
+        seen["ref"] = np.array(u)
+        return kernels.swing_reference(u)
+
+    terrain = TerrainPrediction(dz_next_m=0.09, dz_sw_m=0.1, dz_sw0_m=-0.05, slope_pitch_rad=-0.2, slope_pitch0_rad=0.1)
+    p = started(plan_fn=plan_fn, reference_fn=reference_fn)
+    out = p.update(est(), cmd(), terrain)
+    assert dict(zip(kernels.ALIP_PLAN_INPUTS, seen["plan"]))["dz_next"] == 0.09
+    r = dict(zip(kernels.SWING_REFERENCE_INPUTS, seen["ref"]))
+    assert (r["dz_sw0"], r["dz_sw"], r["slope_pitch0"], r["slope_pitch"]) == (-0.05, 0.1, 0.1, -0.2)
+    flat = started().update(est(), cmd())
+    stance_z = 0.0  # est(): com z = H, p_st z = H
+    assert out.swing_target_world_m[2] == pytest.approx(stance_z + 0.1)
+    # Stepping up: the placement with the height transfer differs from the flat one (the v_z law is unchanged).
+    assert not np.allclose(out.p_sw_des_world_m, flat.p_sw_des_world_m, atol=1e-4)
+    rabbit = Planner("rabbit", 32.0, G)
+    rabbit.start_step("left", 0.0, np.array([0.02, 0.9, -0.15, 0.88]))
+    h_end = rabbit.update(est(t_in_step_s=T), cmd(), terrain).h_d
+    assert h_end[3] == pytest.approx(H - 0.1)  # CoM over swing ends at H - dz_sw
+
+
+def test_late_descent_continues_the_swing_foot_down():
+    base = started().update(est(t_in_step_s=T), cmd())
+    i = 7  # com_z_over_swing
+    landing = base.dh_d[i]
+    assert landing > 0.0  # the foot descends at touchdown
+    late = started(late_descent="landing").update(est(t_in_step_s=T + 0.04), cmd())
+    assert late.h_d[i] == pytest.approx(base.h_d[i] + 0.04 * landing, abs=1e-12)
+    assert late.dh_d[i] == pytest.approx(landing) and late.ddh_d[i] == 0.0
+    fixed = started(late_descent=0.4).update(est(t_in_step_s=T + 0.05), cmd())
+    assert fixed.h_d[i] == pytest.approx(base.h_d[i] + 0.02, abs=1e-12) and fixed.dh_d[i] == 0.4
+    others = [k for k in range(9) if k != i]
+    np.testing.assert_array_equal(fixed.h_d[others], base.h_d[others])
+    held = started().update(est(t_in_step_s=T + 0.05), cmd())  # default: hold
+    assert held.h_d[i] == base.h_d[i]
+    on_time = started(late_descent=0.4).update(est(t_in_step_s=0.1), cmd())
+    assert _same_bits(on_time.h_d, started().update(est(t_in_step_s=0.1), cmd()).h_d)
+
+
+def test_bad_terrain_raises_input_error():
+    from amlip_qp.alip import TerrainPrediction
+
+    with pytest.raises(InputError, match="terrain must be a TerrainPrediction or None, got dict"):
+        started().update(est(), cmd(), {"dz_next_m": 0.1})
+    with pytest.raises(InputError, match=r"terrain.dz_next_m=0.95 m must be smaller in size than H"):
+        started().update(est(), cmd(), TerrainPrediction(dz_next_m=0.95))
+    with pytest.raises(InputError, match="swing foot path too high"):
+        started().update(est(), cmd(), TerrainPrediction(dz_sw_m=0.85))
+    for bad in ("up", -0.1, 0.0, True):
+        with pytest.raises(InputError, match="late_descent"):
+            Planner("cassie", M, late_descent=bad)

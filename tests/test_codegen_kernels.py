@@ -48,24 +48,24 @@ def test_output_is_a_shared_read_only_array(fast):
 
 @needs_cc
 def test_accepts_sequences_and_integer_arrays(fast):
-    u = [0.0, 0.0, 0.0, 10.0, 0.1, 0.0, 1.0, 0.0, 0.0, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81]
+    u = [0.0, 0.0, 0.0, 10.0, 0.1, 0.0, 1.0, 0.0, 0.0, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81, 0.0]
     np.testing.assert_allclose(fast.alip_plan(u), kernels.alip_plan(np.array(u)), rtol=1e-12, atol=1e-12)
-    v = np.array([0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0])
+    v = np.array([0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0])
     np.testing.assert_allclose(fast.swing_reference(v), kernels.swing_reference(v.astype(float)), atol=1e-12)
 
 
 @needs_cc
 @pytest.mark.parametrize(
-    "bad", [np.zeros(14), np.zeros(16), np.zeros((15, 1)), np.zeros((1, 15)), 3.0, "abc", [[1, 2]]]
+    "bad", [np.zeros(15), np.zeros(17), np.zeros((16, 1)), np.zeros((1, 16)), 3.0, "abc", [[1, 2]]]
 )
 def test_wrong_shape_raises_input_error(fast, bad):
-    with pytest.raises(InputError, match=r"alip_plan|15"):
+    with pytest.raises(InputError, match=r"alip_plan|16"):
         fast.alip_plan(bad)
 
 
 @needs_cc
 def test_wrong_shape_message_says_what_to_pass(fast):
-    with pytest.raises(InputError, match=r"expects a 1-D array of 11 inputs .*shape \(3,\).*shape \(11,\)"):
+    with pytest.raises(InputError, match=r"expects a 1-D array of 15 inputs .*shape \(3,\).*shape \(15,\)"):
         fast.swing_reference(np.zeros(3))
 
 

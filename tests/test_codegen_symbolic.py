@@ -10,7 +10,7 @@ from amlip_qp.alip import kernels
 from amlip_qp.codegen import symbolic
 
 
-@pytest.mark.parametrize("name, n_in, n_out", [("alip_plan", 15, 8), ("swing_reference", 11, 27)])
+@pytest.mark.parametrize("name, n_in, n_out", [("alip_plan", 16, 8), ("swing_reference", 15, 27)])
 def test_function_signature_is_dense(name, n_in, n_out):
     f = symbolic.function(name)
     assert isinstance(f, ca.Function)
@@ -39,10 +39,11 @@ def test_sx_functions_match_numpy_reference():
         u = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.2, 0.2), rng.uniform(-20, 20), rng.uniform(-30, 90),
                       rng.uniform(0, 0.4), rng.uniform(-0.3, 0.3), rng.uniform(-1, 3), rng.uniform(-0.5, 0.5),
                       rng.uniform(-np.pi, np.pi), rng.choice([-1.0, 1.0]), 33.0, rng.uniform(0.6, 1.0),
-                      rng.uniform(0.25, 0.45), rng.uniform(0, 0.35), 9.81])  # fmt: skip
+                      rng.uniform(0.25, 0.45), rng.uniform(0, 0.35), 9.81, rng.uniform(-0.2, 0.2)])  # fmt: skip
         y = symbolic.function("alip_plan")(u).full().ravel()
         np.testing.assert_allclose(y, kernels.alip_plan(u), rtol=1e-12, atol=1e-12)
         v = np.concatenate([[rng.uniform(0, 1), rng.uniform(0.25, 0.5), rng.uniform(0.6, 1.0), rng.uniform(0.05, 0.2)],
-                            rng.uniform(-0.5, 0.5, 7)])  # fmt: skip
+                            rng.uniform(-0.5, 0.5, 7),
+                            rng.uniform(-0.15, 0.15, 2), rng.uniform(-0.5, 0.5, 2)])  # fmt: skip
         h = symbolic.function("swing_reference")(v).full().ravel()
         np.testing.assert_allclose(h, kernels.swing_reference(v), rtol=1e-12, atol=1e-12)

@@ -252,3 +252,29 @@ def test_swing_force_box_follows_the_ramp(robot):
     assert np.allclose(P.ub[fz_sw], 0.75 * fmax)
     fz_st = L.normal_index(L.sl_f_st)
     assert np.all(P.lb[fz_st] == builder.config.min_normal_force_N) and np.all(P.ub[fz_st] == fmax)
+
+
+@pytest.mark.parametrize(("pitch_deg", "heading_deg"), [(-15.0, 0.0), (20.0, 30.0)])
+def test_tilted_stance_pyramid_is_the_cone_about_the_ground_normal(pitch_deg, heading_deg):
+    robot = load_robot("cassie")
+    builder = WholeBodyQP(robot)
+    L, mu, fric, P = builder.layout, builder.config.friction_mu, builder.constraint("friction"), builder.problem
+    flat = P.C[fric.rows].copy()
+    fric.tilt_stance_rows(P, 0.0, 0.0)
+    assert np.array_equal(P.C[fric.rows], flat)
+    a, D = -math.radians(pitch_deg), math.radians(heading_deg)
+    t1 = np.array([math.cos(a) * math.cos(D), math.cos(a) * math.sin(D), math.sin(a)])
+    n = np.cross(t1, [-math.sin(D), math.cos(D), 0.0])
+    assert n[2] > 0.0 and np.isclose(np.linalg.norm(n), 1.0)
+    fric.tilt_stance_rows(P, math.radians(pitch_deg), D)
+    stance_rows = slice(fric.rows.start, fric.swing_rows.start)
+    assert np.array_equal(P.C[fric.swing_rows], flat[fric.swing_rows.start - fric.rows.start :])
+    for ratio, inside in ((0.95 * mu, True), (1.05 * mu, False)):
+        # every stance point pushes along the normal with a tangential part up or down the slope
+        x = np.zeros(L.n)
+        x[L.sl_f_st] = np.tile(100.0 * (n + ratio * t1), L.n_points)
+        assert np.all(P.C[stance_rows] @ x <= 1e-9) == inside
+    # a vertical force on a slope steeper than the pyramid's angle slips
+    x = np.zeros(L.n)
+    x[L.sl_f_st] = np.tile([0.0, 0.0, 100.0], L.n_points)
+    assert np.all(P.C[stance_rows] @ x <= 0.0) == (math.tan(abs(a)) <= mu)

@@ -29,6 +29,7 @@ GUIDES = (
     "docs/ARCHITECTURE.md",
     "docs/TUNING.md",
     "docs/EQUATIONS.md",
+    "docs/ALIP_SLOPES.md",
     "docs/SUMMARY_SCHEMA.md",
     "CONTRIBUTING.md",
     "amlip_qp/models/README.md",

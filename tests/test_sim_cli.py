@@ -302,3 +302,32 @@ def test_real_trackers_are_wired(name):
 
     res = factory.run_scenario(Scenario("tiny", "rabbit", 0.01), name)
     assert res.tracker == name and res.log["t"].size == 20
+
+
+def test_clearance_option_reaches_the_planner_command_and_is_bounded():
+    from amlip_qp.exceptions import InputError
+    from amlip_qp.sim.cli import scenario_from_args
+
+    parser = cli.build_parser()
+    sc = scenario_from_args(parser.parse_args(["walk", "--vx", "0.5"]))
+    assert sc.setting.clearance_m is None and sc.command(1.0).clearance_m == 0.10  # Cassie's gait
+    sc = scenario_from_args(parser.parse_args(["walk", "--scenario", "cassie-1mps", "--clearance", "0.2"]))
+    assert sc.setting.clearance_m == 0.2 and sc.command(5.0).clearance_m == 0.2
+    assert sc.command(5.0).vx_mps == 1.0  # the rest of the scenario is kept
+    with pytest.raises(InputError, match="below the CoM height"):
+        scenario_from_args(parser.parse_args(["walk", "--clearance", "0.8"]))
+    with pytest.raises(SystemExit) as info:
+        parser.parse_args(["walk", "--clearance", "-0.1"])
+    assert info.value.code == 2
+
+
+
+def test_compare_takes_the_terrain_aware_and_clearance_settings():
+    from amlip_qp.sim.cli import setting_from_args
+    from amlip_qp.sim.run_types import PlantSetting
+
+    parser = cli.build_parser()
+    args = parser.parse_args(["compare", "--terrain", "slope:10", "--terrain-aware", "--clearance", "0.15"])
+    setting = setting_from_args(args, PlantSetting())
+    assert (setting.terrain, setting.terrain_aware, setting.clearance_m) == ("slope:10", True, 0.15)
+    assert setting_from_args(parser.parse_args(["compare"]), PlantSetting()) == PlantSetting()

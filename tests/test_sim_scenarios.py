@@ -135,10 +135,10 @@ def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_
     from dataclasses import replace
 
     from amlip_qp.sim.run_types import PlantSetting
-    from amlip_qp.sim.scenarios import CLOSED_CHAIN_EKF, MISMATCHES, ideal_scenarios
+    from amlip_qp.sim.scenarios import CLOSED_CHAIN_EKF, MISMATCHES, TERRAIN_SCENARIOS, ideal_scenarios
 
     ideal = ideal_scenarios()
-    assert ideal == [n for n, s in SCENARIOS.items() if "-cc-ekf" not in n]
+    assert ideal == [n for n, s in SCENARIOS.items() if "-cc-ekf" not in n and n not in TERRAIN_SCENARIOS]
     assert CLOSED_CHAIN_EKF == PlantSetting("cassie-closed-chain", "robot", "ekf")
     for name in ideal:
         twin = SCENARIOS.get(f"{name}-cc-ekf")
@@ -174,3 +174,25 @@ def test_a_speed_profile_is_np_interp_of_its_knots_exactly():
     for t in (0.0, 0.5, 1.0, 2.2, 3.0, 3.0 + 1e-12, 7.0, 1e9):
         assert prof(t) == float(np.interp(t, prof.times_s, prof.speeds_mps))
     assert math.copysign(1.0, SpeedProfile((0.0,), (-0.0,))(5.0)) == -1.0  # the held value, sign and all
+
+
+def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():
+    from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS
+    from amlip_qp.sim.terrain import parse_terrain
+
+    slopes = [n for n in TERRAIN_SCENARIOS if n.startswith("cassie-slope-")]
+    assert len(slopes) == 10  # 10 and 15 deg up and down, 22 deg up; each blind and terrain-aware
+    for name, sc in TERRAIN_SCENARIOS.items():
+        spec = parse_terrain(sc.setting.terrain)
+        assert not spec.is_flat and sc.robot == "cassie"
+        assert sc.setting.terrain_aware == name.endswith("-aware") or name == "cassie-stairs-10cm"
+        if name in slopes:
+            deg = float(spec.text.split(":")[1])
+            assert (deg > 0) == ("-up" in name) and abs(deg) == float(name.split("-")[2])
+            assert sc.duration_s == 15.0 and sc.vx.final_mps == 0.5
+    assert TERRAIN_SCENARIOS["cassie-stairs-10cm"].setting.terrain_aware
+    assert TERRAIN_SCENARIOS["cassie-stairs-10cm"].vx.final_mps == 0.4
+    rough = TERRAIN_SCENARIOS["cassie-rough-4cm"]
+    assert (rough.duration_s, rough.vx.final_mps, rough.setting.terrain_aware) == (20.0, 0.75, False)
+    waves = TERRAIN_SCENARIOS["cassie-waves-30cm"]
+    assert waves.command(10.0).clearance_m == 0.2 and waves.vx.final_mps == 0.75 and not waves.setting.terrain_aware

@@ -11,8 +11,10 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.phase`: the gait phase ``s``;
 - :mod:`~amlip_qp.alip.clock`: :class:`StepClock`, the stance side, step start and phase of the current step;
 - :mod:`~amlip_qp.alip.outputs`: the reference outputs ``h_d(s)`` and their names;
-- :mod:`~amlip_qp.alip.messages`: :class:`Command`, :class:`StateEstimate`, :class:`PlannerOutput` (planner I/O);
+- :mod:`~amlip_qp.alip.messages`: :class:`Command`, :class:`StateEstimate`, :class:`TerrainPrediction`,
+  :class:`PlannerOutput` (planner I/O);
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
+- :mod:`~amlip_qp.alip.footholds`: :class:`FootholdPlane`, the ground plane from the last footholds (blind mode).
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 """
 
@@ -29,6 +31,7 @@ from amlip_qp.alip.desired import (
     other_side,
     stance_sign,
 )
+from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
 from amlip_qp.alip.formulas import GRAVITY_MPS2
 from amlip_qp.alip.heading import heading_to_world, hip_yaw_targets, rotation, world_to_heading, yaw_of
 from amlip_qp.alip.kalman import AngularMomentumFilter, MomentumFilter1D
@@ -43,7 +46,7 @@ from amlip_qp.alip.lip import (
     transfer_3d,
     vz_limit,
 )
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 from amlip_qp.alip.outputs import CASSIE_OUTPUTS, RABBIT_OUTPUTS, output_names, reference_outputs
 from amlip_qp.alip.phase import step_phase, step_phase_clipped, time_remaining
 from amlip_qp.alip.planner import Planner
@@ -55,6 +58,8 @@ __all__ = [
     "RABBIT_OUTPUTS",
     "AngularMomentumFilter",
     "Command",
+    "FootholdPlane",
+    "GroundPlane",
     "Lx_from_lateral_speed",
     "Lx_from_step_width",
     "Ly_from_forward_speed",
@@ -63,6 +68,7 @@ __all__ = [
     "PlannerOutput",
     "StateEstimate",
     "StepClock",
+    "TerrainPrediction",
     "alip_plan",
     "desired_L_heading",
     "desired_L_world",

@@ -55,30 +55,46 @@ def flow(p_m, L, tau_s, mass_kg, H_m, g_mps2=GRAVITY_MPS2):
     return c * p_m + s / (mass_kg * H_m * l) * L, mass_kg * H_m * l * s * p_m + c * L
 
 
-def transfer(L_minus, p_st_m, p_sw_m, v_z_mps, mass_kg):
+def transfer(L_minus, p_st_m, p_sw_m, v_z_mps, mass_kg, dz_m=0.0, v_mps=0.0):
     """Momentum about the new contact after touchdown (notes, eq. AM_transfer).
 
-    ``L(T+) = L(T-) + m v_z (p_st(T-) - p_sw(T-))`` for the generic pair on flat
-    ground; ``p_st`` and ``p_sw`` are the CoM offsets from the old and new
-    contacts just before touchdown, ``v_z`` the CoM vertical velocity.
+    The pair component of ``L_2 = L_1 + (r_1 - r_2) x m v_c``::
+
+        L(T+) = L(T-) + m v_z (p_st(T-) - p_sw(T-)) - m dz v
+
+    ``p_st`` and ``p_sw`` are the CoM offsets from the old and new contacts
+    just before touchdown along the pair's axis, ``v_z`` the CoM vertical
+    velocity, ``dz_m`` the new contact's height minus the old one's and
+    ``v_mps`` the CoM's horizontal velocity along the pair's axis (sagittal:
+    ``v_x``; lateral pair ``Lt = -L_x``: ``v_y``). On flat ground
+    (``dz = 0``) the last term vanishes (docs/ALIP_SLOPES.md).
     """
-    return L_minus + mass_kg * v_z_mps * (p_st_m - p_sw_m)
+    return L_minus + mass_kg * v_z_mps * (p_st_m - p_sw_m) - mass_kg * dz_m * v_mps
 
 
-def foot_placement(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps=0.0, g_mps2=GRAVITY_MPS2):
+def foot_placement(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps=0.0, g_mps2=GRAVITY_MPS2, dz_m=0.0):
     """Deadbeat foot placement in ``L`` at the end of the *next* step.
 
     ``L_hat`` and ``p_hat_m`` are the predicted ``L(T-)`` and ``p_st(T-)`` of the
-    current step, ``v_z_mps`` the predicted CoM vertical velocity at touchdown.
+    current step, ``v_z_mps`` the predicted CoM vertical velocity at touchdown
+    and ``dz_m`` the next contact's height minus the stance contact's (m).
     Returns ``p_sw->CoM`` at touchdown, in m::
 
-        [L_des - cosh(lT) (L_hat + m v_z p_hat)] / [m (H l sinh(lT) - v_z cosh(lT))]
+        [L_des - cosh(lT) (L_hat + m v_z p_hat - dz L_hat / H)] / [m (H l sinh(lT) - v_z cosh(lT))]
+
+    The ``dz`` term is the height part of the transfer ``(r_1 - r_2) x m v_c``
+    with the horizontal CoM velocity at touchdown taken as ``L_hat / (m H)``,
+    exact for a point mass on any plane of intercept ``H`` over the contact
+    (docs/ALIP_SLOPES.md); it is subtracted last, so ``dz = 0`` gives the
+    flat-ground numbers bit for bit.
     """
-    xp = backend(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps, g_mps2)
+    xp = backend(L_des, L_hat, p_hat_m, T_s, mass_kg, H_m, v_z_mps, g_mps2, dz_m)
     l = omega(H_m, g_mps2)
     c = xp.cosh(l * T_s)
     s = xp.sinh(l * T_s)
-    return (L_des - c * (L_hat + mass_kg * v_z_mps * p_hat_m)) / (mass_kg * (H_m * l * s - v_z_mps * c))
+    return (L_des - c * (L_hat + mass_kg * v_z_mps * p_hat_m - dz_m * L_hat / H_m)) / (
+        mass_kg * (H_m * l * s - v_z_mps * c)
+    )
 
 
 def L_from_velocity(v_mps, mass_kg, H_m):
@@ -164,6 +180,76 @@ def clearance_parabola(s, H_m, z_cl_m):
     by ``z_cl`` when the CoM stays at ``H``. Returns ``(y, dy/ds, d2y/ds2)`` in m.
     """
     return 4.0 * z_cl_m * (s - 0.5) ** 2 + (H_m - z_cl_m), 8.0 * z_cl_m * (s - 0.5), 8.0 * z_cl_m + 0.0 * s
+
+
+def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
+    """Swing ``p^z_sw->CoM`` reference when the swing foot moves from height
+    ``dz0_m`` to ``dz1_m`` over the stance contact (m), with the CoM over the
+    stance at ``H + dz0 w(s)`` (:func:`stance_height`, ``w`` from 1 to 0).
+
+    The foot's height over the stance contact is
+    ``dz0 + (dz1 - dz0) s + (z_cl + |dz1 - dz0| / 2) 4 s (1 - s)``: its apex is
+    at least ``z_cl`` above the higher of the two ends (by at most
+    ``|dz1 - dz0| / 8`` more). The reference is the CoM height minus that::
+
+        4 z_cl (s - 1/2)^2 + (H - z_cl) - [dz0 b(s) + (dz1 - dz0) s + |dz1 - dz0| / 2 * 4 s (1 - s)]
+
+    with ``b = (1 - cos(pi s)) / 2``. It starts at ``H`` and ends at ``H - dz1``;
+    with ``dz0 = dz1 = 0`` it is :func:`clearance_parabola` bit for bit (the
+    bracket is an exact 0 subtracted last). Returns ``(y, dy/ds, d2y/ds2)`` in m.
+    """
+    xp = backend(s, H_m, z_cl_m, dz0_m, dz1_m)
+    y, dy, ddy = clearance_parabola(s, H_m, z_cl_m)
+    c = xp.cos(np.pi * s)
+    sn = xp.sin(np.pi * s)
+    rise = dz1_m - dz0_m
+    lift = 0.5 * abs(rise)
+    q = dz0_m * (0.5 * (1.0 - c)) + rise * s + lift * (4.0 * s * (1.0 - s))
+    dq = dz0_m * (0.5 * np.pi * sn) + rise + lift * (4.0 - 8.0 * s)
+    ddq = dz0_m * (0.5 * np.pi**2 * c) - 8.0 * lift
+    return y - q, dy - dq, ddy - ddq
+
+
+def stance_height(s, H_m, dz0_m):
+    """CoM over the stance contact ``H + dz0 (1 + cos(pi s)) / 2`` (m): from
+    ``H + dz0`` at the step start, where ``dz0`` (m) is the previous stance
+    contact's height minus the current one's (the CoM has not moved at
+    touchdown), to ``H`` at s=1, with zero velocity at both ends. ``dz0 = 0``
+    is the constant ``H`` bit for bit. Returns ``(y, dy/ds, d2y/ds2)``.
+    """
+    xp = backend(s, H_m, dz0_m)
+    c = xp.cos(np.pi * s)
+    sn = xp.sin(np.pi * s)
+    y, dy, ddy = constant(s, H_m)
+    # The derivatives -dz0 k sin(pi s) and -dz0 k' cos(pi s) are written as differences
+    # of two products with non-negative factors, so dz0 = 0 gives +0.0 (not -0.0) also
+    # where CasADi drops the constant's 0 and the generated C returns the term itself.
+    k1, k2 = 0.5 * np.pi, 0.5 * np.pi**2
+    return (
+        y + dz0_m * (0.5 * (1.0 + c)),
+        dy + (dz0_m * (k1 * (1.0 - sn)) - dz0_m * k1),
+        ddy + (dz0_m * (k2 * (1.0 - c)) - dz0_m * k2),
+    )
+
+
+def ground_pitch_blend(s, pitch0_rad, pitch1_rad):
+    """Swing toe pitch from the ground pitch at lift-off to the one at the target (rad).
+
+    ``pitch0 (1 + cos(pi s)) / 2 + pitch1 (1 - cos(pi s)) / 2`` with both in the
+    toe output's convention (rotation about the heading's y axis, positive =
+    forward end down): the blade leaves and lands flat. Both 0 give exact
+    zeros, the flat-ground constant. Returns ``(y, dy/ds, d2y/ds2)``.
+    """
+    xp = backend(s, pitch0_rad, pitch1_rad)
+    c = xp.cos(np.pi * s)
+    sn = xp.sin(np.pi * s)
+    h = 0.5 * np.pi * sn
+    hh = 0.5 * np.pi**2 * c
+    return (
+        pitch0_rad * (0.5 * (1.0 + c)) + pitch1_rad * (0.5 * (1.0 - c)),
+        pitch0_rad * (-h) + pitch1_rad * h,
+        pitch0_rad * (-hh) + pitch1_rad * hh,
+    )
 
 
 def constant(s, value):

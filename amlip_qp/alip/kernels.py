@@ -7,7 +7,7 @@ either numpy scalars or CasADi symbols: ``alip_plan_terms`` and
 scalar expressions. :func:`alip_plan` and :func:`swing_reference` are the
 numpy reference on 1-D float arrays.
 
-``ALIP_PLAN`` (inputs ``u``, 15):
+``ALIP_PLAN`` (inputs ``u``, 16):
 
 =====  ==================  =====================================================
 index  name                meaning
@@ -24,6 +24,8 @@ index  name                meaning
 12     T                   step duration, s
 13     W                   step width for walking in place, m
 14     g                   gravity magnitude, m/s^2
+15     dz_next             next contact height minus the stance contact's, m
+                           (0 on flat ground; docs/ALIP_SLOPES.md)
 =====  ==================  =====================================================
 
 ``ALIP_PLAN`` outputs (8): ``L_hat_x, L_hat_y`` (predicted ``L(T-)``, world),
@@ -31,11 +33,25 @@ index  name                meaning
 (desired ``L`` at the end of the next step, world), ``p_sw_des_x, p_sw_des_y``
 (desired CoM minus swing contact at touchdown, world axes, m).
 
-``SWING_REFERENCE`` (inputs ``u``, 11): ``s`` (phase), ``T`` (s), ``H`` (m),
+``SWING_REFERENCE`` (inputs ``u``, 15): ``s`` (phase), ``T`` (s), ``H`` (m),
 ``z_cl`` (m), ``stance_yaw0``, ``swing_yaw0`` (hip yaws at the step start, rad),
 ``x0``, ``y0`` (CoM minus swing contact at the step start, heading frame, m),
 ``p_sw_des_x``, ``p_sw_des_y`` (target at touchdown, heading frame, m),
-``dD`` (turn of this step, rad).
+``dD`` (turn of this step, rad), then the ground (all 0 on flat ground,
+docs/ALIP_SLOPES.md): ``dz_sw0`` (ground height where the swing foot lifted
+off, the previous stance contact, minus the stance contact, m), ``dz_sw``
+(ground height at the swing target minus the stance contact, m),
+``slope_pitch0``, ``slope_pitch`` (ground pitch along the heading at lift-off
+and at the target, rad, the toe output's convention: rotation about the
+heading's y axis, positive = ground descending ahead, so an uphill slope of
+``a`` is ``-a``).
+
+With the ground inputs, ``com_z_over_stance`` goes from ``H + dz_sw0`` to
+``H``, ``com_z_over_swing`` from ``H`` to ``H - dz_sw`` with the foot's apex
+at least ``z_cl`` above the higher end, and ``swing_toe_pitch`` from
+``slope_pitch0`` to ``slope_pitch`` (:func:`~amlip_qp.alip.formulas.swing_height`,
+:func:`~amlip_qp.alip.formulas.stance_height`,
+:func:`~amlip_qp.alip.formulas.ground_pitch_blend`).
 
 ``SWING_REFERENCE`` outputs (27): ``h_d`` (9), ``dh_d/dt`` (9), ``d2h_d/dt2`` (9)
 in Cassie's output order (``amlip_qp.alip.outputs.CASSIE_OUTPUTS``). Rabbit's
@@ -52,12 +68,13 @@ from amlip_qp.alip import formulas as F
 
 ALIP_PLAN_INPUTS = (
     "p_st_x", "p_st_y", "L_x", "L_y", "t_rem", "v_z", "vx_des", "vy_des",
-    "heading_next", "next_stance_sign", "m", "H", "T", "W", "g",
+    "heading_next", "next_stance_sign", "m", "H", "T", "W", "g", "dz_next",
 )  # fmt: skip
 ALIP_PLAN_OUTPUTS = ("L_hat_x", "L_hat_y", "p_hat_x", "p_hat_y", "L_des_x", "L_des_y", "p_sw_des_x", "p_sw_des_y")
 
 SWING_REFERENCE_INPUTS = (
     "s", "T", "H", "z_cl", "stance_yaw0", "swing_yaw0", "x0", "y0", "p_sw_des_x", "p_sw_des_y", "dD",
+    "dz_sw0", "dz_sw", "slope_pitch0", "slope_pitch",
 )  # fmt: skip
 N_CASSIE_OUTPUTS = 9
 SWING_REFERENCE_N_OUT = 3 * N_CASSIE_OUTPUTS
@@ -69,42 +86,43 @@ RABBIT_FROM_CASSIE = (0, 4, 5, 7)
 
 def alip_plan_terms(u: Sequence) -> list:
     """Predict ``L(T-)``, choose ``L_des`` and place the foot (layout in the module doc)."""
-    p_x, p_y, L_x, L_y, t_rem, v_z, vx_des, vy_des, D_next, sign, m, H, T, W, g = u
+    p_x, p_y, L_x, L_y, t_rem, v_z, vx_des, vy_des, D_next, sign, m, H, T, W, g, dz = u
     # Prediction to the end of the current step, on the pairs (p_x, L_y) and (p_y, -L_x).
     p_hat_x, L_hat_y = F.flow(p_x, L_y, t_rem, m, H, g)
     p_hat_y, Lt_hat = F.flow(p_y, -L_x, t_rem, m, H, g)
     # Desired momentum at the end of the next step, decided in the next heading frame.
     L_des_x, L_des_y = F.desired_L_world(vx_des, vy_des, W, T, m, H, sign, D_next, g)
-    # Foot placement, deadbeat at the end of the next step, with the v_z transfer.
-    p_sw_x = F.foot_placement(L_des_y, L_hat_y, p_hat_x, T, m, H, v_z, g)
-    p_sw_y = F.foot_placement(-L_des_x, Lt_hat, p_hat_y, T, m, H, v_z, g)
+    # Foot placement, deadbeat at the end of the next step, with the transfer to
+    # the next contact (v_z and the height difference dz).
+    p_sw_x = F.foot_placement(L_des_y, L_hat_y, p_hat_x, T, m, H, v_z, g, dz)
+    p_sw_y = F.foot_placement(-L_des_x, Lt_hat, p_hat_y, T, m, H, v_z, g, dz)
     return [-Lt_hat, L_hat_y, p_hat_x, p_hat_y, L_des_x, L_des_y, p_sw_x, p_sw_y]
 
 
 def swing_reference_terms(u: Sequence) -> list:
     """Cassie's ``h_d(s)`` and its first two time derivatives (layout in the module doc)."""
-    s, T, H, z_cl, st_yaw0, sw_yaw0, x0, y0, x_des, y_des, dD = u
+    s, T, H, z_cl, st_yaw0, sw_yaw0, x0, y0, x_des, y_des, dD, dz0, dz1, pitch0, pitch1 = u
     st_yaw1, sw_yaw1 = F.hip_yaw_split(dD)
     shapes = [
         F.constant(s, 0.0),  # torso pitch
         F.constant(s, 0.0),  # torso roll
         F.line(s, st_yaw0, st_yaw1),  # stance hip yaw
         F.line(s, sw_yaw0, sw_yaw1),  # swing hip yaw
-        F.constant(s, H),  # CoM z over stance
+        F.stance_height(s, H, dz0),  # CoM z over stance
         F.cosine_blend(s, x0, x_des),  # CoM x over swing
         F.cosine_blend(s, y0, y_des),  # CoM y over swing
-        F.clearance_parabola(s, H, z_cl),  # CoM z over swing
-        F.constant(s, 0.0),  # swing toe pitch
+        F.swing_height(s, H, z_cl, dz0, dz1),  # CoM z over swing
+        F.ground_pitch_blend(s, pitch0, pitch1),  # swing toe pitch
     ]
     derivs = [F.to_time_derivatives(y, dy_ds, d2y_ds2, T) for y, dy_ds, d2y_ds2 in shapes]
     return [d[0] for d in derivs] + [d[1] for d in derivs] + [d[2] for d in derivs]
 
 
 def alip_plan(u: np.ndarray) -> np.ndarray:
-    """numpy reference of ``ALIP_PLAN``: 15 inputs -> 8 outputs (no validation)."""
+    """numpy reference of ``ALIP_PLAN``: 16 inputs -> 8 outputs (no validation)."""
     return np.array([float(v) for v in alip_plan_terms([float(v) for v in u])])
 
 
 def swing_reference(u: np.ndarray) -> np.ndarray:
-    """numpy reference of ``SWING_REFERENCE``: 11 inputs -> 27 outputs (no validation)."""
+    """numpy reference of ``SWING_REFERENCE``: 15 inputs -> 27 outputs (no validation)."""
     return np.array([float(v) for v in swing_reference_terms([float(v) for v in u])])

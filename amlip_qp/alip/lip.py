@@ -72,20 +72,25 @@ def predict_end_of_step(p_m, L_Nms, t_remaining_s, mass_kg, H_m, g_mps2=GRAVITY_
     return F.flow(p_m, L_Nms, t_remaining_s, mass_kg, H_m, g_mps2)
 
 
-def transfer(L_minus_Nms, p_st_m, p_sw_m, v_z_mps, mass_kg):
-    """Pair momentum about the new contact just after touchdown (flat ground).
+def transfer(L_minus_Nms, p_st_m, p_sw_m, v_z_mps, mass_kg, dz_m=0.0, v_mps=0.0):
+    """Pair momentum about the new contact just after touchdown.
 
-    ``L(T+) = L(T-) + m v_z (p_st(T-) - p_sw(T-))`` where ``p_st`` and ``p_sw``
-    (m) are the CoM offsets from the old and the new contact along the pair's
-    axis, ``v_z_mps`` the CoM vertical velocity (m/s) and ``L_minus_Nms`` the pair
-    momentum about the old contact (kg m^2/s). Returns ``L(T+)`` in kg m^2/s.
+    ``L(T+) = L(T-) + m v_z (p_st(T-) - p_sw(T-)) - m dz v`` where ``p_st`` and
+    ``p_sw`` (m) are the CoM offsets from the old and the new contact along the
+    pair's axis, ``v_z_mps`` the CoM vertical velocity (m/s), ``L_minus_Nms`` the
+    pair momentum about the old contact (kg m^2/s), ``dz_m`` the new contact's
+    height minus the old one's (m; 0 on flat ground) and ``v_mps`` the CoM's
+    horizontal velocity along the pair's axis (m/s; ``v_y`` for the lateral pair
+    ``Lt = -L_x``). Returns ``L(T+)`` in kg m^2/s.
     """
     C.finite("L_minus_Nms", L_minus_Nms)
     C.finite("p_st_m", p_st_m)
     C.finite("p_sw_m", p_sw_m)
     C.finite("v_z_mps", v_z_mps)
+    C.finite("dz_m", dz_m)
+    C.finite("v_mps", v_mps)
     C.positive("mass_kg", mass_kg, "kg")
-    return F.transfer(L_minus_Nms, p_st_m, p_sw_m, v_z_mps, mass_kg)
+    return F.transfer(L_minus_Nms, p_st_m, p_sw_m, v_z_mps, mass_kg, dz_m, v_mps)
 
 
 def transfer_3d(L_minus_world_Nms, p_st_world_m, p_sw_world_m, v_com_world_mps, mass_kg) -> np.ndarray:
@@ -95,24 +100,25 @@ def transfer_3d(L_minus_world_Nms, p_st_world_m, p_sw_world_m, v_com_world_mps, 
         L_minus_world_Nms: (3,) angular momentum about the old (stance) contact, world axes, kg m^2/s.
         p_st_world_m: (3,) CoM minus old contact, world axes, m.
         p_sw_world_m: (3,) CoM minus new contact, world axes, m.
-        v_com_world_mps: (3,) CoM velocity, world axes, m/s (only ``v_z`` enters on flat ground).
+        v_com_world_mps: (3,) CoM velocity, world axes, m/s.
         mass_kg: total mass, kg.
 
     Returns:
         ``np.array([L_x, L_y])`` about the new contact, kg m^2/s.
 
     It applies the generic :func:`transfer` to the sagittal pair ``(p_x, L_y)``
-    and to the lateral pair ``(p_y, Lt = -L_x)``. That equals the exact
-    ``L_2 = L_1 + (r_1 - r_2) x m v_c`` when both contacts are at the same
-    height (flat ground, ``p_st_z == p_sw_z``); the z-component is not returned.
+    and to the lateral pair ``(p_y, Lt = -L_x)`` with the contacts' height
+    difference ``dz = r_2z - r_1z = p_st_z - p_sw_z``. That is the exact
+    ``L_2 = L_1 + (r_1 - r_2) x m v_c`` (x and y components), on any ground.
     """
     L = C.vector("L_minus_world_Nms", L_minus_world_Nms, 3)
     p_st = C.vector("p_st_world_m", p_st_world_m, 3)
     p_sw = C.vector("p_sw_world_m", p_sw_world_m, 3)
     v = C.vector("v_com_world_mps", v_com_world_mps, 3)
     C.positive("mass_kg", mass_kg, "kg")
-    L_y = F.transfer(L[1], p_st[0], p_sw[0], v[2], mass_kg)
-    Lt = F.transfer(-L[0], p_st[1], p_sw[1], v[2], mass_kg)
+    dz = p_st[2] - p_sw[2]
+    L_y = F.transfer(L[1], p_st[0], p_sw[0], v[2], mass_kg, dz, v[0])
+    Lt = F.transfer(-L[0], p_st[1], p_sw[1], v[2], mass_kg, dz, v[1])
     return np.array([-Lt, L_y])
 
 
@@ -143,26 +149,33 @@ def vz_limit(T_s, H_m, g_mps2=GRAVITY_MPS2):
     return H_m * l * np.tanh(l * T_s)
 
 
-def foot_placement_vz(L_des_Nms, L_hat_Nms, p_hat_m, v_z_mps, T_s, mass_kg, H_m, g_mps2=GRAVITY_MPS2):
-    """Deadbeat foot placement with the ``v_z`` correction at touchdown.
+def foot_placement_vz(L_des_Nms, L_hat_Nms, p_hat_m, v_z_mps, T_s, mass_kg, H_m, g_mps2=GRAVITY_MPS2, dz_m=0.0):
+    """Deadbeat foot placement with the full momentum transfer at touchdown.
 
-    ``p_sw^des = [L_des - cosh(lT)(L_hat + m v_z p_hat)] / [m (H l sinh(lT) - v_z cosh(lT))]``
-    in m (notes, "Foot placement"; the paper's typeset denominator is wrong).
-    ``p_hat_m`` is the predicted ``p_st(T-)`` (m), ``v_z_mps`` the predicted CoM
-    vertical velocity at touchdown (m/s), the other arguments as in
-    :func:`foot_placement`. Raises InputError when ``v_z >= H l tanh(lT)``
-    (:func:`vz_limit`), where the law has no solution.
+    ``p_sw^des = [L_des - cosh(lT)(L_hat + m v_z p_hat - dz L_hat / H)] / [m (H l sinh(lT) - v_z cosh(lT))]``
+    in m (notes, "Foot placement"; the paper's typeset denominator is wrong;
+    the ``dz`` term: docs/ALIP_SLOPES.md). ``p_hat_m`` is the predicted
+    ``p_st(T-)`` (m), ``v_z_mps`` the predicted CoM vertical velocity at
+    touchdown (m/s), ``dz_m`` the next contact's height minus the stance
+    contact's (m), the other arguments as in :func:`foot_placement`. Raises
+    InputError when ``v_z >= H l tanh(lT)`` (:func:`vz_limit`), where the law
+    has no solution, and when ``|dz| >= H``.
     """
     C.finite("L_des_Nms", L_des_Nms)
     C.finite("L_hat_Nms", L_hat_Nms)
     C.finite("p_hat_m", p_hat_m)
     C.finite("v_z_mps", v_z_mps)
+    C.finite("dz_m", dz_m)
     C.positive("T_s (step duration)", T_s, "s")
     _model(mass_kg, H_m, g_mps2)
+    if np.any(np.abs(np.asarray(dz_m, dtype=float)) >= H_m):
+        raise InputError(
+            f"dz_m={dz_m!r} m must be smaller in size than H_m={H_m!r} m (the CoM height over the contact)"
+        )
     limit = vz_limit(T_s, H_m, g_mps2)
     if np.any(np.asarray(v_z_mps, dtype=float) >= limit):
         raise InputError(
             f"v_z_mps={v_z_mps!r} m/s is at or above H l tanh(lT) = {limit:.4g} m/s, where the v_z-corrected "
             "foot placement has no solution; pass a smaller predicted vertical velocity"
         )
-    return F.foot_placement(L_des_Nms, L_hat_Nms, p_hat_m, T_s, mass_kg, H_m, v_z_mps, g_mps2)
+    return F.foot_placement(L_des_Nms, L_hat_Nms, p_hat_m, T_s, mass_kg, H_m, v_z_mps, g_mps2, dz_m)

@@ -1,10 +1,17 @@
 """What a walking controller and the ALIP planner exchange every control tick.
 
-:class:`Command` (what the controller asks for) and :class:`StateEstimate`
-(the controller's estimate) go into :meth:`Planner.update
-<amlip_qp.alip.planner.Planner.update>`; :class:`PlannerOutput` comes out.
-All are frozen, keyword-only dataclasses in SI units, validated on creation
-(bad values raise :class:`~amlip_qp.exceptions.InputError`).
+:class:`Command` (what the controller asks for), :class:`StateEstimate`
+(the controller's estimate) and, off flat ground, :class:`TerrainPrediction`
+(the ground heights and pitches the controller expects) go into
+:meth:`Planner.update <amlip_qp.alip.planner.Planner.update>`;
+:class:`PlannerOutput` comes out. All are frozen, keyword-only dataclasses in
+SI units, validated on creation (bad values raise
+:class:`~amlip_qp.exceptions.InputError`).
+
+The terrain is its own message, not part of the state estimate: it comes from
+another source (the footholds of :mod:`amlip_qp.alip.footholds` when blind, a
+height function when terrain-aware), and its default, all zeros, is flat
+ground with today's numbers bit for bit.
 """
 
 from __future__ import annotations
@@ -149,6 +156,59 @@ class StateEstimate:
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
+class TerrainPrediction:
+    """The ground the planner should plan for at one tick (docs/ALIP_SLOPES.md). SI units.
+
+    Heights are world z differences from the current stance contact; pitches
+    are the ground's rotation about the heading frame's y axis (the
+    convention of the torso and toe pitch outputs: positive = ground
+    descending ahead, so an uphill slope of ``a`` rad has pitch ``-a``).
+    All default to 0: flat ground, and bit for bit the numbers of a planner
+    called without a terrain.
+
+    Attributes:
+        dz_next_m: height of the next contact (where the swing foot will land)
+            minus the stance contact, m; the placement law's momentum transfer.
+        dz_sw_m: ground height at the swing target minus the stance contact, m;
+            the end of the swing foot's height reference. Normally equal to
+            ``dz_next_m``.
+        dz_sw0_m: ground height where the swing foot lifted off (the previous
+            stance contact) minus the stance contact, m; the start of the swing
+            foot's path and of the CoM height blend (``H + dz_sw0_m`` to ``H``).
+        slope_pitch_rad: ground pitch along the heading at the swing target, rad;
+            the swing toe pitch reference ends there (the blade lands flat).
+        slope_pitch0_rad: ground pitch along the heading where the swing foot
+            lifted off, rad; the toe pitch reference starts there.
+
+    Non-finite values and pitches outside ``(-pi/2, pi/2)`` raise InputError;
+    the heights are checked against ``H`` and the clearance by the planner.
+    """
+
+    dz_next_m: float = 0.0
+    dz_sw_m: float = 0.0
+    dz_sw0_m: float = 0.0
+    slope_pitch_rad: float = 0.0
+    slope_pitch0_rad: float = 0.0
+
+    def __post_init__(self):
+        for name in ("dz_next_m", "dz_sw_m", "dz_sw0_m", "slope_pitch_rad", "slope_pitch0_rad"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+                raise InputError(f"TerrainPrediction.{name} must be a finite number, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        for name in ("slope_pitch_rad", "slope_pitch0_rad"):
+            if not abs(getattr(self, name)) < 0.5 * math.pi:
+                raise InputError(
+                    f"TerrainPrediction.{name} must be within (-pi/2, pi/2) rad, got {getattr(self, name)!r}; "
+                    "pass the ground's pitch in radians"
+                )
+
+
+#: Flat ground: the terrain a planner assumes when it is given none.
+FLAT_GROUND = TerrainPrediction()
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
 class PlannerOutput:
     """The planner's answer at one tick (SI units).
 
@@ -164,7 +224,7 @@ class PlannerOutput:
         swing_target_world_m: (3,) where the swing contact should land, world, m:
             ``x, y = r_st + p_hat - p_sw_des`` (= predicted CoM at ``T-`` minus
             ``p_sw_des``, with ``r_st = com - p_st`` the stance contact), ``z`` = the
-            stance contact's height (flat ground).
+            stance contact's height plus :attr:`TerrainPrediction.dz_sw_m`.
         h_d, dh_d, ddh_d: reference outputs and their first and second time
             derivatives, in the robot's output order
             (:attr:`Planner.output_names <amlip_qp.alip.planner.Planner.output_names>`).

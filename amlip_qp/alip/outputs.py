@@ -69,10 +69,46 @@ def check_clearance(z_cl_m, H_m) -> None:
         )
 
 
+#: Largest ground pitch the references accept, rad (the terrain's slopes stay below 45 degrees).
+MAX_GROUND_PITCH_RAD = 0.5 * np.pi - 1e-6
+
+
+def check_ground(ground, H_m, z_cl_m) -> None:
+    """Raise InputError unless the swing foot's path stays below the CoM and the pitches are sane.
+
+    ``ground = (dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)`` (m, m, rad,
+    rad). The foot's apex over the stance contact is at most
+    ``max(dz0, dz1) + z_cl + |dz1 - dz0| / 8`` (:func:`amlip_qp.alip.formulas.swing_height`)
+    and must stay below the CoM at ``H + min(dz0, 0)``; pitches must be in
+    ``(-pi/2, pi/2)``.
+    """
+    dz0, dz1, pitch0, pitch1 = ground
+    for name, v in zip(("dz_sw0_m", "dz_sw_m", "slope_pitch0_rad", "slope_pitch_rad"), ground):
+        C.finite(name, v)
+    apex = max(dz0, dz1) + z_cl_m + 0.125 * abs(dz1 - dz0)
+    if not apex < H_m + min(dz0, 0.0):
+        raise InputError(
+            f"swing foot path too high: dz_sw0_m={dz0!r}, dz_sw_m={dz1!r} m with clearance {z_cl_m!r} m reach "
+            f"{apex:.3g} m over the stance contact, not below the CoM (H = {H_m!r} m); pass smaller height differences"
+        )
+    for name, v in (("slope_pitch0_rad", pitch0), ("slope_pitch_rad", pitch1)):
+        if not abs(v) <= MAX_GROUND_PITCH_RAD:
+            raise InputError(f"{name}={v!r} rad must be within (-pi/2, pi/2); pass the ground's pitch in radians")
+
+
 def pack_swing_reference_input(
-    robot: str, s, T_s, H_m, z_cl_m, h0_start, p_sw_des_heading_m, turn_rad, out: np.ndarray | None = None
+    robot: str,
+    s,
+    T_s,
+    H_m,
+    z_cl_m,
+    h0_start,
+    p_sw_des_heading_m,
+    turn_rad,
+    out: np.ndarray | None = None,
+    ground: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
 ) -> np.ndarray:
-    """Fill the dense SWING_REFERENCE input vector (11,) without validation.
+    """Fill the dense SWING_REFERENCE input vector (15,) without validation.
 
     Args:
         robot: ``"cassie"`` or ``"rabbit"`` (already checked).
@@ -81,20 +117,37 @@ def pack_swing_reference_input(
         p_sw_des_heading_m: (2,) target ``p_sw->CoM`` at touchdown in the heading frame
             ``D_k`` (x, y), m; for Rabbit only x is used.
         turn_rad: ``dD = D_{k+1} - D_k``, rad (0 for Rabbit).
-        out: optional (11,) float array to fill in place (no allocation).
+        out: optional (15,) float array to fill in place (no allocation).
+        ground: ``(dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)``, the
+            ground at lift-off and at the target relative to the stance contact
+            (layout in :mod:`amlip_qp.alip.kernels`; zeros on flat ground).
+            Rabbit has no toe: its pitches are not used.
     """
     u = np.empty(len(kernels.SWING_REFERENCE_INPUTS)) if out is None else out
-    h0, p = h0_start, p_sw_des_heading_m
+    h0, p, (dz0, dz1, pitch0, pitch1) = h0_start, p_sw_des_heading_m, ground
     # One slice assignment per call (a control-rate hot path), in the layout of the kernels module doc.
     if robot == "cassie":
-        u[:] = (s, T_s, H_m, z_cl_m, h0[2], h0[3], h0[5], h0[6], p[0], p[1], turn_rad)
+        u[:] = (s, T_s, H_m, z_cl_m, h0[2], h0[3], h0[5], h0[6], p[0], p[1], turn_rad, dz0, dz1, pitch0, pitch1)
     else:
-        u[:] = (s, T_s, H_m, z_cl_m, 0.0, 0.0, h0[2], 0.0, p[0], 0.0, 0.0)
+        u[:] = (s, T_s, H_m, z_cl_m, 0.0, 0.0, h0[2], 0.0, p[0], 0.0, 0.0, dz0, dz1, 0.0, 0.0)
     return u
 
 
 def reference_outputs(
-    robot: str, s, T_s, H_m, z_cl_m, h0_start, p_sw_des_heading_m, turn_rad=0.0, reference_fn=None
+    robot: str,
+    s,
+    T_s,
+    H_m,
+    z_cl_m,
+    h0_start,
+    p_sw_des_heading_m,
+    turn_rad=0.0,
+    reference_fn=None,
+    *,
+    dz_sw0_m=0.0,
+    dz_sw_m=0.0,
+    slope_pitch0_rad=0.0,
+    slope_pitch_rad=0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``h_d(s)``, ``dh_d/dt`` and ``d^2h_d/dt^2`` of ``robot`` in its output order.
 
@@ -108,8 +161,16 @@ def reference_outputs(
         p_sw_des_heading_m: (2,) desired CoM minus swing contact at touchdown in the
             current step's heading frame, m (Rabbit: only x is used).
         turn_rad: turn of this step ``D_{k+1} - D_k``, rad (split +/- half to the hip yaws; Cassie only).
-        reference_fn: the SWING_REFERENCE implementation (11 -> 27); default
+        reference_fn: the SWING_REFERENCE implementation (15 -> 27); default
             :func:`kernels.swing_reference`.
+        dz_sw0_m: ground height where the swing foot lifted off (the previous
+            stance contact) minus the stance contact, m.
+        dz_sw_m: ground height at the swing target minus the stance contact, m.
+        slope_pitch0_rad, slope_pitch_rad: ground pitch along the heading at
+            lift-off and at the target, rad (rotation about the heading's y
+            axis, positive = ground descending ahead; Cassie's toe only).
+            All four ground values are 0 on flat ground; see
+            :func:`check_ground` for their limits.
 
     Returns:
         Three float arrays of the robot's output count: values (rad or m), first
@@ -124,9 +185,25 @@ def reference_outputs(
     h0 = C.vector("h0_start", h0_start, len(names))
     target = C.vector("p_sw_des_heading_m", p_sw_des_heading_m, 2)
     C.finite("turn_rad", turn_rad)
-    u = pack_swing_reference_input(robot, s, T_s, H_m, z_cl_m, h0, target, turn_rad)
+    ground = (dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)
+    check_ground(ground, H_m, z_cl_m)
+    u = pack_swing_reference_input(robot, s, T_s, H_m, z_cl_m, h0, target, turn_rad, ground=ground)
     y = np.asarray((reference_fn or kernels.swing_reference)(u), dtype=float).reshape(-1)
     return split_reference(robot, y)
+
+
+def late_descent(h_end, rate_mps, tau_s) -> tuple[float, float, float]:
+    """``com_z_over_swing`` after a late touchdown: keep descending until contact.
+
+    Past the end of the step (``tau_s`` s after ``T``, phase held at 1) the swing
+    foot keeps going down at ``rate_mps`` (m/s, > 0 descends: the CoM-minus-foot
+    height grows) while the CoM holds its height. Returns the value, the first
+    and the second time derivative ``(h_end + rate tau, rate, 0)`` (m, m/s, m/s^2),
+    ``h_end`` being the reference at s = 1. Pass the reference's own ``dh/dt`` at
+    s = 1 as the rate for a velocity-continuous continuation (the planner's
+    ``late_descent="landing"``).
+    """
+    return h_end + rate_mps * tau_s, rate_mps, 0.0
 
 
 def split_reference(robot: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -13,8 +13,11 @@ Per step ``k`` (stance leg ``st``, heading ``D_k``) the planner
    the headings stay on the commanded integral instead of advancing by a
    fixed amount per step (a 90 degree turn command turns 90 degrees);
 3. places the swing foot, deadbeat in ``L`` at the end of the next step, with the
-   ``v_z`` correction of the momentum transfer at touchdown;
-4. evaluates the reference outputs ``h_d(s)``, ``dh_d/dt``, ``d^2h_d/dt^2``.
+   momentum transfer at touchdown to the next contact: its ``v_z`` correction
+   and, off flat ground, the height difference ``dz_next`` (docs/ALIP_SLOPES.md);
+4. evaluates the reference outputs ``h_d(s)``, ``dh_d/dt``, ``d^2h_d/dt^2``
+   (off flat ground with the swing foot's start and end heights and the ground
+   pitches for the toe).
 
 Steps 1-3 are the dense kernel ``ALIP_PLAN`` and step 4 is ``SWING_REFERENCE``
 (:mod:`amlip_qp.alip.kernels`). Both are injectable (``plan_fn``,
@@ -25,7 +28,22 @@ Use::
 
     planner = Planner("cassie", mass_kg=31.0)
     planner.start_step("left", t_s, h0)          # at every touchdown
-    out = planner.update(estimate, command)       # every control tick
+    out = planner.update(estimate, command)       # every control tick (flat ground)
+    out = planner.update(estimate, command, TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1))
+
+Terrain: :class:`~amlip_qp.alip.messages.TerrainPrediction` (optional third
+argument of :meth:`Planner.update`; ``None`` is flat ground and gives today's
+numbers bit for bit) carries the ground heights relative to the stance
+contact and the ground pitches. ``H`` stays the CoM height over the stance
+contact. Where they come from is the controller's choice: the last footholds
+(:class:`amlip_qp.alip.footholds.FootholdPlane`, blind) or a height function
+(terrain-aware).
+
+Late touchdown: the phase is held at 1 after ``T``. By default every
+reference holds its end value; with ``late_descent`` the swing foot keeps
+descending (``com_z_over_swing`` grows at a constant rate,
+:func:`amlip_qp.alip.outputs.late_descent`) until the controller calls
+:meth:`Planner.start_step` at contact.
 
 ``h0`` (the measured outputs at the step start) must express
 ``com_x_over_swing`` / ``com_y_over_swing`` in the new step's heading frame,
@@ -55,10 +73,10 @@ from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
+from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 from amlip_qp.exceptions import InputError
 
-__all__ = ["VZ_CLAMP_FRACTION", "Command", "Planner", "PlannerOutput", "StateEstimate"]
+__all__ = ["VZ_CLAMP_FRACTION", "Command", "Planner", "PlannerOutput", "StateEstimate", "TerrainPrediction"]
 
 #: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
 #: of ``H l tanh(lT)``, where the law's denominator vanishes (see
@@ -68,6 +86,7 @@ __all__ = ["VZ_CLAMP_FRACTION", "Command", "Planner", "PlannerOutput", "StateEst
 VZ_CLAMP_FRACTION = 0.5
 
 _SPEED_REFERENCES = ("mean", "end_of_step")
+_FLAT_GROUND = (0.0, 0.0, 0.0, 0.0)
 
 
 class Planner:
@@ -77,9 +96,9 @@ class Planner:
         robot: ``"cassie"`` (3-D, 9 outputs) or ``"rabbit"`` (planar, 4 outputs).
         mass_kg: total robot mass, kg (> 0).
         g: gravity magnitude, m/s^2 (> 0).
-        plan_fn: ``ALIP_PLAN`` implementation, 15 floats -> 8 floats (default
+        plan_fn: ``ALIP_PLAN`` implementation, 16 floats -> 8 floats (default
             :func:`kernels.alip_plan`).
-        reference_fn: ``SWING_REFERENCE`` implementation, 11 floats -> 27 floats
+        reference_fn: ``SWING_REFERENCE`` implementation, 15 floats -> 27 floats
             (default :func:`kernels.swing_reference`).
         heading_rad: heading of the first step, rad.
         speed_reference: ``"mean"`` (default) if ``Command.vx_mps``/``vy_mps`` are
@@ -90,6 +109,11 @@ class Planner:
             walking controller passes its own, which reads the phase from it);
             a new one by default. The planner starts its steps
             (:meth:`start_step`) and resets it (:meth:`reset`).
+        late_descent: after ``T`` (a late touchdown, phase held at 1):
+            ``None`` (default) holds the references at their end values;
+            ``"landing"`` keeps the swing foot descending at the reference's
+            own vertical velocity at s = 1 (``d com_z_over_swing/dt``, velocity
+            continuous); a number > 0 descends at that constant rate, m/s.
     """
 
     def __init__(
@@ -104,6 +128,7 @@ class Planner:
         speed_reference: str = "mean",
         vz_correction: bool = True,
         clock: StepClock | None = None,
+        late_descent: str | float | None = None,
     ):
         self.robot = O.check_robot(robot)
         C.positive("mass_kg", mass_kg, "kg")
@@ -111,11 +136,19 @@ class Planner:
         if speed_reference not in _SPEED_REFERENCES:
             raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
         if plan_fn is not None and not callable(plan_fn):
-            raise InputError(f"plan_fn must be callable (15 floats -> 8 floats), got {plan_fn!r}")
+            raise InputError(f"plan_fn must be callable (16 floats -> 8 floats), got {plan_fn!r}")
         if clock is not None and not isinstance(clock, StepClock):
             raise InputError(f"clock must be a StepClock, got {type(clock).__name__}")
         if reference_fn is not None and not callable(reference_fn):
-            raise InputError(f"reference_fn must be callable (11 floats -> 27 floats), got {reference_fn!r}")
+            raise InputError(f"reference_fn must be callable (15 floats -> 27 floats), got {reference_fn!r}")
+        if late_descent is not None and late_descent != "landing":
+            if isinstance(late_descent, (bool, str)) or not isinstance(late_descent, (int, float)):
+                raise InputError(f"late_descent must be None, 'landing' or a rate in m/s, got {late_descent!r}")
+            C.positive("late_descent (descent rate)", late_descent, "m/s")
+        #: The late-descent setting (see the class doc).
+        self.late_descent = late_descent
+        self._descent_landing = late_descent == "landing"
+        self._descent_rate_mps = 0.0 if late_descent is None or self._descent_landing else float(late_descent)
         self.mass_kg = float(mass_kg)
         self.g = float(g)
         self.plan_fn = plan_fn or kernels.alip_plan
@@ -130,6 +163,7 @@ class Planner:
         self._u_plan = np.zeros(len(kernels.ALIP_PLAN_INPUTS))
         self._u_ref = np.zeros(len(kernels.SWING_REFERENCE_INPUTS))
         self._h0 = np.zeros(len(self.output_names))
+        self._i_swing_z = self.output_names.index("com_z_over_swing")
         self.reset(heading_rad)
 
     def reset(self, heading_rad: float = 0.0) -> None:
@@ -218,13 +252,18 @@ class Planner:
 
     # --- per tick ------------------------------------------------------------
 
-    def update(self, estimate: StateEstimate, command: Command) -> PlannerOutput:
+    def update(
+        self, estimate: StateEstimate, command: Command, terrain: TerrainPrediction | None = None
+    ) -> PlannerOutput:
         """Plan the foot placement and evaluate ``h_d`` for one control tick.
 
         Args:
             estimate: the current :class:`StateEstimate` (its ``stance`` must match
                 the last :meth:`start_step`).
             command: the current :class:`Command`.
+            terrain: the ground heights and pitches relative to the stance contact
+                (:class:`TerrainPrediction`); ``None`` is flat ground (the same
+                numbers as all zeros). Rabbit uses its heights, not its pitches.
 
         Returns:
             A :class:`PlannerOutput`.
@@ -245,6 +284,20 @@ class Planner:
             )
         T = command.step_time_s
         H = command.com_height_m
+        if terrain is None:
+            dz_next = dz_sw = 0.0
+            ground = _FLAT_GROUND
+        else:
+            if not isinstance(terrain, TerrainPrediction):
+                raise InputError(f"terrain must be a TerrainPrediction or None, got {type(terrain).__name__}")
+            dz_next, dz_sw = terrain.dz_next_m, terrain.dz_sw_m
+            ground = (terrain.dz_sw0_m, dz_sw, terrain.slope_pitch0_rad, terrain.slope_pitch_rad)
+            if not abs(dz_next) < H:
+                raise InputError(
+                    f"terrain.dz_next_m={dz_next!r} m must be smaller in size than H = {H!r} m (the CoM height over "
+                    "the stance contact); check the terrain prediction"
+                )
+            O.check_ground(ground, H, command.clearance_m)
         m = self.mass_kg
         g = self.g
         # Inlined hot-path versions of phase.step_phase_clipped / phase.time_remaining,
@@ -293,7 +346,9 @@ class Planner:
         # The dense ALIP_PLAN layout (kernels module doc); the next stance leg is the other one.
         sign = 1.0 if stance == "right" else -1.0
         u = self._u_plan
-        u[:] = (p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g)
+        u[:] = (
+            p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g, dz_next,
+        )  # fmt: skip
         # The kernels may return a shared buffer: copy once, hand out views.
         y = np.array(self.plan_fn(u), dtype=float).reshape(-1)
         if y.size != len(kernels.ALIP_PLAN_OUTPUTS):
@@ -307,7 +362,7 @@ class Planner:
         p_sw_h = np.array(world_to_heading_xy(px_w, py_w, math.cos(self._heading), math.sin(self._heading)))
         turn = heading_next - self._heading
         ur = O.pack_swing_reference_input(
-            self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref
+            self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref, ground=ground
         )
         yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
         if yr.size != kernels.SWING_REFERENCE_N_OUT:
@@ -315,9 +370,13 @@ class Planner:
                 f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}"
             )
         h_d, dh_d, ddh_d = O.split_reference(self.robot, yr)
+        if self.late_descent is not None and t_in > T:
+            i = self._i_swing_z
+            rate = float(dh_d[i]) if self._descent_landing else self._descent_rate_mps
+            h_d[i], dh_d[i], ddh_d[i] = O.late_descent(h_d[i], rate, t_in - T)
 
         c0, c1, c2 = estimate.com_m.tolist()
-        target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2])
+        target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2 + dz_sw])
         return PlannerOutput(
             s=s,
             t_remaining_s=t_rem,

@@ -38,8 +38,8 @@ from amlip_qp.codegen.kernels import Kernels
 PATHS = ("c-fast", "casadi-function", "numpy")
 
 #: Representative Cassie mid-step inputs (layouts in :mod:`amlip_qp.alip.kernels`).
-ALIP_PLAN_INPUT = np.array([-0.05, 0.08, -3.0, 8.0, 0.2, 0.0, 0.5, 0.0, 0.1, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81])
-SWING_REFERENCE_INPUT = np.array([0.4, 0.35, 0.9, 0.1, 0.02, -0.01, -0.2, 0.25, 0.15, 0.2, 0.05])
+ALIP_PLAN_INPUT = np.array([-0.05, 0.08, -3.0, 8.0, 0.2, 0.0, 0.5, 0.0, 0.1, 1.0, 33.0, 0.9, 0.35, 0.2, 9.81, 0.0])
+SWING_REFERENCE_INPUT = np.array([0.4, 0.35, 0.9, 0.1, 0.02, -0.01, -0.2, 0.25, 0.15, 0.2, 0.05, 0.0, 0.0, 0.0, 0.0])
 
 
 def _stats(samples_ns: np.ndarray, divide: int = 1) -> dict[str, float]:

@@ -5,8 +5,8 @@ Use::
     from amlip_qp.codegen import load_kernels
 
     kernels = load_kernels()          # compiles on first use, then cached
-    y = kernels.alip_plan(u15)        # 15 inputs -> 8 outputs
-    h = kernels.swing_reference(u11)  # 11 inputs -> 27 outputs
+    y = kernels.alip_plan(u16)        # 16 inputs -> 8 outputs
+    h = kernels.swing_reference(u15)  # 15 inputs -> 27 outputs
     kernels.backend                   # "c" (compiled) or "casadi" (fallback)
 
 Layouts and units are those of :mod:`amlip_qp.alip.kernels`. The library is
@@ -117,8 +117,8 @@ class Kernels:
     """Both planner kernels, compiled (backend ``"c"``) or on CasADi (``"casadi"``).
 
     Attributes:
-        alip_plan: :class:`FastFunction` ``u[15] -> y[8]``.
-        swing_reference: :class:`FastFunction` ``u[11] -> y[27]``.
+        alip_plan: :class:`FastFunction` ``u[16] -> y[8]``.
+        swing_reference: :class:`FastFunction` ``u[15] -> y[27]``.
         backend: ``"c"`` or ``"casadi"``.
         library_path: the compiled library, or ``None`` on the fallback.
         fallback_reason: why the fallback is used, or ``None``.

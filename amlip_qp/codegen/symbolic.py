@@ -8,9 +8,9 @@ generated C and the numpy reference share one source of truth.
 Each kernel is a ``casadi.Function`` with one dense input ``u`` (column
 vector) and one dense output ``y``:
 
-- ``alip_plan``: ``u[15] -> y[8]`` (layout: ``kernels.ALIP_PLAN_INPUTS`` /
+- ``alip_plan``: ``u[16] -> y[8]`` (layout: ``kernels.ALIP_PLAN_INPUTS`` /
   ``kernels.ALIP_PLAN_OUTPUTS``; SI units, see :mod:`amlip_qp.alip.kernels`).
-- ``swing_reference``: ``u[11] -> y[27]`` (layout:
+- ``swing_reference``: ``u[15] -> y[27]`` (layout:
   ``kernels.SWING_REFERENCE_INPUTS``; ``h_d``, ``dh_d/dt``, ``d2h_d/dt2``).
 
 Physical parameters (mass, CoM height, step time, width, gravity, clearance)

@@ -34,6 +34,10 @@ class TrackingTarget:
         ddh_d: Their second time derivatives (m/s^2 or rad/s^2).
         swing_contact_weight: 0 while the swing foot is in the air, rising to 1
             when it touches down: trackers use it to ramp contact forces in.
+        stance_ground_pitch_rad: The ground's pitch under the stance foot along
+            the heading, rad (positive = descending ahead), for a tracker that
+            orients its friction cone on it; ``None`` (flat-ground controller):
+            the cone is about the world's vertical.
     """
 
     stance: str
@@ -43,6 +47,7 @@ class TrackingTarget:
     dh_d: np.ndarray
     ddh_d: np.ndarray
     swing_contact_weight: float = 0.0
+    stance_ground_pitch_rad: float | None = None
 
 
 @dataclass

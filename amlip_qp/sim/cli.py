@@ -168,6 +168,8 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
         estimator=base.estimator if args.estimator is None else args.estimator,
         modifiers=replace(base.modifiers, **mods) if mods else base.modifiers,
         terrain=terrain,
+        terrain_aware=base.terrain_aware or args.terrain_aware,
+        clearance_m=base.clearance_m if args.clearance is None else args.clearance,
     )
     if args.noise and setting.sensors != "ideal":
         raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")

@@ -180,6 +180,12 @@ def build_simulation(
 
         imu_pos = robot.profile.imu_pos_in_base_m if robot.profile else (0.0, 0.0, 0.0)
         options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu_pos)
+    if setting.terrain_aware:
+        from amlip_qp.sim.terrain import ground_height_function
+
+        options["terrain_height_fn"] = ground_height_function(the_plant, terrain)
+    elif not terrain.is_flat:
+        options["ground_mode"] = "blind"
     controller = WalkingController(
         robot,
         trk,

@@ -87,6 +87,10 @@ class PlantSetting:
         modifiers: Model mismatch applied to the plant (mass scale, payload,
             spring scale, friction, actuator delay); the defaults change nothing.
         terrain: The ``--terrain`` spec (:func:`amlip_qp.sim.terrain.parse_terrain`), ``"flat"``: the plant's floor.
+        terrain_aware: The controller is given the terrain's height function
+            (``--terrain-aware``); ``False``: blind, it feels the ground by contact only.
+        clearance_m: Swing clearance ``z_cl`` of every step, m (``--clearance``);
+            ``None``: the scenario's gait's.
     """
 
     plant: str | None = None
@@ -94,6 +98,13 @@ class PlantSetting:
     estimator: str = "truth"
     modifiers: PlantModifiers = field(default_factory=PlantModifiers)
     terrain: str = "flat"
+    terrain_aware: bool = False
+    clearance_m: float | None = None
+
+    def __post_init__(self):
+        c = self.clearance_m
+        if c is not None and not (isinstance(c, (int, float)) and math.isfinite(c) and c >= 0.0):
+            raise InputError(f"the swing clearance must be a finite height >= 0 m, got {c!r}")
 
     def describe(self) -> dict:
         """The setting as plain data for a summary (modifiers: only the non-default ones)."""
@@ -103,6 +114,8 @@ class PlantSetting:
             "estimator": self.estimator,
             "modifiers": self.modifiers.describe(),
             "terrain": self.terrain,
+            "terrain_aware": self.terrain_aware,
+            "clearance_m": self.clearance_m,
         }
 
 

@@ -143,10 +143,11 @@ class Scenario:
 
     def _command(self, vx_mps: float, turn_rate_radps: float) -> Command:
         g = self.gait_settings
+        clearance = self.setting.clearance_m
         return Command(
             step_time_s=g.step_time_s,
             com_height_m=g.com_height_m,
-            clearance_m=g.clearance_m,
+            clearance_m=g.clearance_m if clearance is None else clearance,
             vx_mps=vx_mps,
             vy_mps=self.vy_mps,
             turn_rate_radps=turn_rate_radps,
@@ -271,6 +272,61 @@ SCENARIOS.update(
 )
 
 
+def _terrain(
+    name: str, terrain: str, vx_mps: float, duration_s: float, text: str, aware: bool = False, clearance_m=None
+) -> Scenario:
+    mode = "terrain-aware" if aware else "blind"
+    return Scenario(
+        name,
+        "cassie",
+        duration_s,
+        vx=_ramp(vx_mps, 1.0),
+        setting=PlantSetting(terrain=terrain, terrain_aware=aware, clearance_m=clearance_m),
+        description=f"Cassie walks {text} at {vx_mps:g} m/s ({mode})",
+    )
+
+
+def _slopes() -> list[Scenario]:
+    out = []
+    for deg in (10, 15, 22):
+        for way, sign in (("up", 1), ("down", -1)):
+            if deg == 22 and way == "down":
+                continue  # the issue asks for the 22 degree slope up only
+            for aware in (False, True):
+                name = f"cassie-slope-{deg}-{way}" + ("-aware" if aware else "")
+                out.append(_terrain(name, f"slope:{sign * deg}", 0.5, 15.0, f"{way} a {deg} degree slope", aware))
+    return out
+
+
+#: The terrain scenarios of issue #13 (section 3): slopes (both modes), stairs
+#: (terrain-aware), rough ground and waves (blind). Slopes, stairs and waves
+#: start 1 m ahead of the robot (:data:`amlip_qp.sim.terrain.START_X_M`).
+TERRAIN_SCENARIOS: dict[str, Scenario] = {
+    s.name: s
+    for s in (
+        *_slopes(),
+        _terrain(
+            "cassie-stairs-10cm",
+            "stairs:0.1:0.3",
+            0.4,
+            14.0,
+            "up 4 stairs of 10 cm rise and 30 cm run, across a 1 m landing and down 4 stairs",
+            aware=True,
+        ),
+        _terrain("cassie-rough-4cm", "rough:0.04", 0.75, 20.0, "on rough ground of +-4 cm"),
+        _terrain(
+            "cassie-waves-30cm",
+            "waves:0.3:4",
+            0.75,
+            15.0,
+            "over 30 cm high waves of 4 m wavelength with 20 cm swing clearance",
+            clearance_m=0.2,
+        ),
+    )
+}
+SCENARIOS.update(TERRAIN_SCENARIOS)
+
+
 def ideal_scenarios() -> list[str]:
     """The names of the scenarios on each robot's own model with ideal sensors and the true base state."""
     return [name for name, s in SCENARIOS.items() if s.setting == PlantSetting()]
@@ -305,6 +361,11 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
         lateral += [f"push FY ({p.force_N[1]:g} N at {p.t_s:g} s)" for p in scenario.pushes if p.force_N[1] != 0.0]
         if lateral:
             raise InputError(f"{profile.name} is planar: {', '.join(lateral)} must be 0")
+    clearance, gait = scenario.setting.clearance_m, scenario.gait_settings
+    if clearance is not None and not clearance < gait.com_height_m:
+        raise InputError(
+            f"--clearance {clearance:g} m must be below the CoM height {gait.com_height_m:g} m of {profile.name}'s gait"
+        )
     profile.bounds.check(
         profile.name,
         vx_mps=scenario.vx.speeds_mps,

@@ -36,6 +36,7 @@ extern "C" {
 /* Add prefix to internal symbols */
 #define casadi_f0 CASADI_PREFIX(f0)
 #define casadi_f1 CASADI_PREFIX(f1)
+#define casadi_fabs CASADI_PREFIX(fabs)
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
 #define casadi_s2 CASADI_PREFIX(s2)
@@ -59,6 +60,15 @@ extern "C" {
 
 casadi_real casadi_sq(casadi_real x) { return x*x;}
 
+casadi_real casadi_fabs(casadi_real x) {
+/* Pre-c99 compatibility */
+#if __STDC_VERSION__ < 199901L
+  return x>0 ? x : -x;
+#else
+  return fabs(x);
+#endif
+}
+
 /* Configuration this file was compiled with */
 CASADI_SYMBOL_EXPORT void amlip_kernels_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
@@ -68,12 +78,12 @@ CASADI_SYMBOL_EXPORT void amlip_kernels_casadi_version(int* major, int* minor, i
 CASADI_SYMBOL_EXPORT int amlip_kernels_casadi_int_size(void) { return (int) sizeof(casadi_int); }
 CASADI_SYMBOL_EXPORT int amlip_kernels_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
-static const casadi_int casadi_s0[3] = {15, 1, 1};
+static const casadi_int casadi_s0[3] = {16, 1, 1};
 static const casadi_int casadi_s1[3] = {8, 1, 1};
-static const casadi_int casadi_s2[3] = {11, 1, 1};
+static const casadi_int casadi_s2[3] = {15, 1, 1};
 static const casadi_int casadi_s3[3] = {27, 1, 1};
 
-/* alip_plan:(u[15])->(y[8]) */
+/* alip_plan:(u[16])->(y[8]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14;
@@ -147,19 +157,26 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=arg[0]? arg[0][5] : 0;
   a08=(a00*a06);
   a11=(a08*a11);
-  a07=(a07+a11);
-  a07=(a04*a07);
-  a10=(a10-a07);
-  a01=(a01*a03);
-  a01=(a01*a13);
+  a11=(a07+a11);
+  a02=arg[0]? arg[0][15] : 0;
+  a07=(a02*a07);
+  a07=(a07/a01);
+  a11=(a11-a07);
+  a11=(a04*a11);
+  a10=(a10-a11);
+  a03=(a01*a03);
+  a03=(a03*a13);
   a06=(a06*a04);
-  a01=(a01-a06);
-  a00=(a00*a01);
+  a03=(a03-a06);
+  a00=(a00*a03);
   a10=(a10/a00);
   if (res[0]!=0) res[0][6]=a10;
   a08=(a08*a05);
-  a09=(a09+a08);
-  a04=(a04*a09);
+  a08=(a09+a08);
+  a02=(a02*a09);
+  a02=(a02/a01);
+  a08=(a08-a02);
+  a04=(a04*a08);
   a12=(a12-a04);
   a12=(a12/a00);
   if (res[0]!=0) res[0][7]=a12;
@@ -237,10 +254,11 @@ CASADI_SYMBOL_EXPORT int alip_plan_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* swing_reference:(u[11])->(y[27]) */
+/* swing_reference:(u[15])->(y[27]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26;
   a00=0.;
   if (res[0]!=0) res[0][0]=a00;
   if (res[0]!=0) res[0][1]=a00;
@@ -256,43 +274,65 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=(a05+a08);
   if (res[0]!=0) res[0][2]=a05;
   a05=arg[0]? arg[0][5] : 0;
-  a03=(a03*a05);
-  a08=5.0000000000000000e-01;
-  a07=(a08*a07);
-  a09=(a02*a07);
-  a03=(a03+a09);
-  if (res[0]!=0) res[0][3]=a03;
-  a03=arg[0]? arg[0][2] : 0;
-  if (res[0]!=0) res[0][4]=a03;
-  a09=3.1415926535897931e+00;
-  a09=(a09*a02);
-  a10=cos(a09);
-  a11=(a01+a10);
-  a12=arg[0]? arg[0][6] : 0;
-  a13=(a11*a12);
-  a01=(a01-a10);
-  a14=arg[0]? arg[0][8] : 0;
-  a15=(a01*a14);
-  a13=(a13+a15);
-  a13=(a08*a13);
-  if (res[0]!=0) res[0][5]=a13;
-  a13=arg[0]? arg[0][7] : 0;
-  a11=(a11*a13);
-  a15=arg[0]? arg[0][9] : 0;
-  a01=(a01*a15);
-  a11=(a11+a01);
-  a11=(a08*a11);
-  if (res[0]!=0) res[0][6]=a11;
-  a11=4.;
-  a01=arg[0]? arg[0][3] : 0;
-  a11=(a11*a01);
-  a02=(a02-a08);
-  a08=casadi_sq(a02);
-  a11=(a11*a08);
-  a03=(a03-a01);
-  a11=(a11+a03);
-  if (res[0]!=0) res[0][7]=a11;
-  if (res[0]!=0) res[0][8]=a00;
+  a08=(a03*a05);
+  a09=5.0000000000000000e-01;
+  a07=(a09*a07);
+  a10=(a02*a07);
+  a08=(a08+a10);
+  if (res[0]!=0) res[0][3]=a08;
+  a08=arg[0]? arg[0][2] : 0;
+  a10=arg[0]? arg[0][11] : 0;
+  a11=3.1415926535897931e+00;
+  a11=(a11*a02);
+  a12=cos(a11);
+  a13=(a01+a12);
+  a14=(a09*a13);
+  a15=(a10*a14);
+  a15=(a08+a15);
+  if (res[0]!=0) res[0][4]=a15;
+  a15=arg[0]? arg[0][6] : 0;
+  a16=(a13*a15);
+  a17=(a01-a12);
+  a18=arg[0]? arg[0][8] : 0;
+  a19=(a17*a18);
+  a16=(a16+a19);
+  a16=(a09*a16);
+  if (res[0]!=0) res[0][5]=a16;
+  a16=arg[0]? arg[0][7] : 0;
+  a13=(a13*a16);
+  a19=arg[0]? arg[0][9] : 0;
+  a20=(a17*a19);
+  a13=(a13+a20);
+  a13=(a09*a13);
+  if (res[0]!=0) res[0][6]=a13;
+  a13=4.;
+  a20=arg[0]? arg[0][3] : 0;
+  a21=(a13*a20);
+  a22=(a02-a09);
+  a23=casadi_sq(a22);
+  a21=(a21*a23);
+  a08=(a08-a20);
+  a21=(a21+a08);
+  a08=(a09*a17);
+  a23=(a10*a08);
+  a24=arg[0]? arg[0][12] : 0;
+  a24=(a24-a10);
+  a25=(a24*a02);
+  a23=(a23+a25);
+  a25=casadi_fabs(a24);
+  a09=(a09*a25);
+  a26=(a13*a02);
+  a26=(a26*a03);
+  a26=(a09*a26);
+  a23=(a23+a26);
+  a21=(a21-a23);
+  if (res[0]!=0) res[0][7]=a21;
+  a21=arg[0]? arg[0][13] : 0;
+  a14=(a21*a14);
+  a23=arg[0]? arg[0][14] : 0;
+  a08=(a23*a08);
+  a14=(a14+a08);
+  if (res[0]!=0) res[0][8]=a14;
   if (res[0]!=0) res[0][9]=a00;
   if (res[0]!=0) res[0][10]=a00;
   a06=(a06-a04);
@@ -302,41 +342,71 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a07=(a07-a05);
   a07=(a07/a04);
   if (res[0]!=0) res[0][12]=a07;
-  if (res[0]!=0) res[0][13]=a00;
   a07=1.5707963267948966e+00;
-  a09=sin(a09);
-  a07=(a07*a09);
-  a14=(a14-a12);
-  a12=(a07*a14);
-  a12=(a12/a04);
-  if (res[0]!=0) res[0][14]=a12;
-  a15=(a15-a13);
-  a07=(a07*a15);
-  a07=(a07/a04);
-  if (res[0]!=0) res[0][15]=a07;
-  a07=8.;
-  a07=(a07*a01);
-  a02=(a07*a02);
-  a02=(a02/a04);
-  if (res[0]!=0) res[0][16]=a02;
-  if (res[0]!=0) res[0][17]=a00;
+  a11=sin(a11);
+  a01=(a01-a11);
+  a01=(a07*a01);
+  a01=(a10*a01);
+  a05=(a07*a10);
+  a01=(a01-a05);
+  a01=(a01/a04);
+  if (res[0]!=0) res[0][13]=a01;
+  a07=(a07*a11);
+  a18=(a18-a15);
+  a15=(a07*a18);
+  a15=(a15/a04);
+  if (res[0]!=0) res[0][14]=a15;
+  a19=(a19-a16);
+  a16=(a07*a19);
+  a16=(a16/a04);
+  if (res[0]!=0) res[0][15]=a16;
+  a16=8.;
+  a20=(a16*a20);
+  a22=(a20*a22);
+  a15=(a10*a07);
+  a15=(a15+a24);
+  a16=(a16*a02);
+  a16=(a13-a16);
+  a09=(a09*a16);
+  a15=(a15+a09);
+  a22=(a22-a15);
+  a22=(a22/a04);
+  if (res[0]!=0) res[0][16]=a22;
+  a22=(a23*a07);
+  a07=(a21*a07);
+  a22=(a22-a07);
+  a22=(a22/a04);
+  if (res[0]!=0) res[0][17]=a22;
   if (res[0]!=0) res[0][18]=a00;
   if (res[0]!=0) res[0][19]=a00;
   if (res[0]!=0) res[0][20]=a00;
   if (res[0]!=0) res[0][21]=a00;
-  if (res[0]!=0) res[0][22]=a00;
-  a02=4.9348022005446790e+00;
-  a02=(a02*a10);
-  a14=(a02*a14);
+  a00=4.9348022005446790e+00;
+  a17=(a00*a17);
+  a17=(a10*a17);
+  a22=(a00*a10);
+  a17=(a17-a22);
   a04=casadi_sq(a04);
-  a14=(a14/a04);
-  if (res[0]!=0) res[0][23]=a14;
-  a02=(a02*a15);
-  a02=(a02/a04);
-  if (res[0]!=0) res[0][24]=a02;
-  a07=(a07/a04);
-  if (res[0]!=0) res[0][25]=a07;
-  if (res[0]!=0) res[0][26]=a00;
+  a17=(a17/a04);
+  if (res[0]!=0) res[0][22]=a17;
+  a00=(a00*a12);
+  a18=(a00*a18);
+  a18=(a18/a04);
+  if (res[0]!=0) res[0][23]=a18;
+  a19=(a00*a19);
+  a19=(a19/a04);
+  if (res[0]!=0) res[0][24]=a19;
+  a10=(a10*a00);
+  a13=(a13*a25);
+  a10=(a10-a13);
+  a20=(a20-a10);
+  a20=(a20/a04);
+  if (res[0]!=0) res[0][25]=a20;
+  a23=(a23*a00);
+  a21=(a21*a00);
+  a23=(a23-a21);
+  a23=(a23/a04);
+  if (res[0]!=0) res[0][26]=a23;
   return 0;
 }
 

@@ -12,8 +12,14 @@ One :meth:`WalkingController.step` per control tick (2 kHz by default):
    measured outputs, with the other stance leg on the step clock it shares
    with the controller;
 3. the estimator computes ``p_st``, ``L`` (Kalman-filtered) and ``v_z``;
+   off flat ground the :class:`~amlip_qp.control.walking.ground.GroundPredictor`
+   gives the ground at the swing target (blind: from the footholds;
+   terrain-aware: from the terrain's height function);
 4. the planner (the code-generated kernels on the fast path) predicts ``L(T-)``,
-   places the foot and evaluates ``h_d(s)`` and its derivatives;
+   places the foot and evaluates ``h_d(s)`` and its derivatives (off flat
+   ground with the height difference to the next contact, the swing foot's
+   start and end heights and pitches, and a swing foot that keeps descending
+   after ``T`` until it touches down);
 5. the tracker (PBC or QP, same interface) computes joint torques;
 6. the torques are checked (never NaN: a damped fallback replaces them and the
    event is counted) and saturated at the motor limits.
@@ -39,6 +45,7 @@ from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
+from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
@@ -128,6 +135,15 @@ class WalkingController:
         base_estimator: Where the base pose and velocity come from
             (:func:`~amlip_qp.estimation.base_estimator.make_base_estimator`);
             default: the measurement's own base state (the simulator's truth).
+        ground_mode: The ground the steps are planned for
+            (:data:`~amlip_qp.control.walking.ground.GROUND_MODES`): ``"flat"``
+            (default: the flat-ground controller), ``"blind"`` (felt by the
+            footholds) or ``"aware"`` (from ``terrain_height_fn``). Off flat
+            ground the swing foot keeps descending after ``T`` until contact
+            (the planner's ``late_descent="landing"``) and the QP's stance
+            friction cone follows the ground.
+        terrain_height_fn: World ``(x, y)`` m -> ground height m, for ``"aware"``
+            (default mode then; given with another mode: InputError).
     """
 
     def __init__(
@@ -145,6 +161,8 @@ class WalkingController:
         output_backend: str = "c",
         command_shaping: CommandShaping | None = None,
         base_estimator: BaseStateEstimator | None = None,
+        ground_mode: str | None = None,
+        terrain_height_fn: HeightFunction | None = None,
     ):
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
@@ -180,6 +198,10 @@ class WalkingController:
         n_joints = len(robot.joint_names)
         self._n_base_q, self._n_base_v = robot.nq - n_joints, robot.nv - n_joints
         self._nan_tick_parts: tuple[Estimate, PlannerOutput, np.ndarray] | None = None
+        if ground_mode is None:
+            ground_mode = "flat" if terrain_height_fn is None else "aware"
+        #: The ground the steps are planned for (flat, blind or terrain-aware).
+        self.ground = GroundPredictor(ground_mode, terrain_height_fn)
         self.gait = GaitLogic(gait)
         plan_fn = reference_fn = None
         if planner_backend == "c":
@@ -191,7 +213,12 @@ class WalkingController:
         #: held by the planner, which starts its steps.
         self.clock = StepClock()
         self.planner = Planner(
-            output_layout(robot), robot.mass_kg, plan_fn=plan_fn, reference_fn=reference_fn, clock=self.clock
+            output_layout(robot),
+            robot.mass_kg,
+            plan_fn=plan_fn,
+            reference_fn=reference_fn,
+            clock=self.clock,
+            late_descent="landing" if self.ground.active else None,
         )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
@@ -231,6 +258,7 @@ class WalkingController:
         self.shaper.reset()
         self.steps.clear()
         self.fallback_ticks = 0
+        self.ground.reset()
         self.base_estimator.reset()
         self.safe_mode_ticks = 0
         self.estimator_divergences = 0
@@ -289,12 +317,14 @@ class WalkingController:
         estimator.observe(measurement)
         kin = self.kin
         touchdown = False
+        new_step = False  # a first step or a touchdown: the ground gets a new stance foothold
         clock = self.clock
         stance = clock.stance
         if stance is None:
             stance = self.initial_stance
             self._begin_step(stance, t)
             est = estimator.estimate(stance)
+            new_step = True
         else:
             # The estimate for the current stance serves the touchdown test (the
             # contact heights) and, without a touchdown, the planner; at a
@@ -310,22 +340,31 @@ class WalkingController:
                 self._record_step(t, est, stance, last_plan)
                 stance = swing
                 self._begin_step(stance, t)
-                touchdown = True
+                touchdown = new_step = True
                 est = estimator.estimate(stance, touchdown=True)
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
         command = self.corrector.apply(command)
         v_z = float(est.com_vel_mps[2])
-        plan = self.planner.update(
-            StateEstimate(
-                stance=stance,
-                p_st_m=est.p_st_m,
-                L_Nms=est.L_Nms,
-                v_z_mps=v_z,
-                t_in_step_s=clock.time_in_step(t),
-                com_m=est.com_m,
-            ),
-            command,
+        state = StateEstimate(
+            stance=stance,
+            p_st_m=est.p_st_m,
+            L_Nms=est.L_Nms,
+            v_z_mps=v_z,
+            t_in_step_s=clock.time_in_step(t),
+            com_m=est.com_m,
         )
+        ground = self.ground
+        if not ground.active:
+            plan = self.planner.update(state, command)
+        else:
+            if new_step:
+                ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
+                # the swing target of the new step is not known yet: plan once for it
+                plan = self.planner.update(state, command, ground.predict(est.stance_contact_m, self.planner.heading_rad))
+                target_xy = plan.swing_target_world_m
+            else:
+                target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
+            plan = self.planner.update(state, command, ground.predict(target_xy, self.planner.heading_rad))
         self._last_plan = plan
         target = TrackingTarget(
             stance=stance,
@@ -335,6 +374,7 @@ class WalkingController:
             dh_d=plan.dh_d,
             ddh_d=plan.ddh_d,
             swing_contact_weight=self._swing_contact_weight(plan.s),
+            stance_ground_pitch_rad=ground.stance_pitch_rad if ground.active else None,
         )
         result = self.tracker.compute(kin, target)
         tau = result.tau_Nm

@@ -275,6 +275,34 @@ class FrictionPyramid(Constraint):
     def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
         problem.u[self.swing_rows] = math.inf if inputs.swing_force_weight == 0.0 else 0.0
 
+    def tilt_stance_rows(self, problem: QPProblem, ground_pitch_rad: float, heading_rad: float) -> None:
+        """Turn the stance foot's pyramid about the ground's normal (3-D points only; constant rows).
+
+        The ground is inclined along the heading ``heading_rad`` (rad) by
+        ``ground_pitch_rad`` (rad, positive = descending ahead, the toe pitch
+        output's convention): its tangents are ``t1`` (up or down the slope
+        along the heading) and ``t2`` (across it, horizontal), its normal
+        ``n = t1 x t2``, and each point's rows become ``+-t_i . f - mu n . f <= 0``.
+        A pitch of 0 and a heading of 0 give the world-axes rows of :meth:`initialize`
+        up to the signs of zeros. Only the rows change; the compiled assembly
+        leaves them as they are (they are constant there).
+        """
+        L = self.layout
+        if L.point_dim != 3:
+            return
+        a = -ground_pitch_rad  # uphill angle along the heading, rad
+        ca_, sa, cD, sD = math.cos(a), math.sin(a), math.cos(heading_rad), math.sin(heading_rad)
+        t1 = np.array((ca_ * cD, ca_ * sD, sa))
+        t2 = np.array((-sD, cD, 0.0))
+        n = np.cross(t1, t2)
+        C, r = problem.C, self.rows.start
+        for p in range(L.n_points):
+            c0 = L.nv + 3 * p
+            for t in (t1, t2):
+                for sign in (1.0, -1.0):
+                    C[r, c0 : c0 + 3] = sign * t - self.mu * n
+                    r += 1
+
     def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         half = self.size // 2
         lifted = ca.if_else(sym.swing_force_weight == 0.0, math.inf, 0.0)

@@ -28,6 +28,7 @@ from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import CompiledBuild
+from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.control.wbc.config import QPConfig
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
 from amlip_qp.qp.problem import QPProblem
@@ -140,6 +141,24 @@ class QPTracker(Tracker):
         self.relaxed_solves = 0
         self._tau_prev = np.zeros(len(self._act_v))
         self._fail_streak = 0
+        friction = self.builder.constraint("friction")
+        assert isinstance(friction, FrictionPyramid)
+        self._friction = friction
+        # (ground pitch, heading) rad the stance pyramid is turned to; None: about the world's vertical
+        self._friction_ground: tuple[float, float] | None = None
+
+    def _orient_friction(self, target: TrackingTarget) -> None:
+        """Turn the stance friction pyramid to the target's stance ground (only when that changes)."""
+        pitch = target.stance_ground_pitch_rad
+        if pitch is None:
+            if self._friction_ground is not None:
+                self._friction.initialize(self.builder.problem)
+                self._friction_ground = None
+            return
+        key = (pitch, target.heading_rad)
+        if key != self._friction_ground:
+            self._friction.tilt_stance_rows(self.builder.problem, pitch, target.heading_rad)
+            self._friction_ground = key
 
     def reset(self) -> None:
         """New run: forget the warm start, the last torques and the counters."""
@@ -153,6 +172,9 @@ class QPTracker(Tracker):
         self.relaxed_solves = 0
         self._tau_prev[:] = 0.0
         self._fail_streak = 0
+        if self._friction_ground is not None:
+            self._friction.initialize(self.builder.problem)
+            self._friction_ground = None
 
     def _fallback(self, kin: RobotKinematics, reason: str, info: dict) -> TrackerResult:
         self.fallbacks += 1
@@ -172,6 +194,7 @@ class QPTracker(Tracker):
         if np.shape(target.h_d) != (self._n_outputs,):
             raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(target.h_d)}")
         t0 = time.perf_counter_ns()
+        self._orient_friction(target)
         try:
             problem = self.build_problem(kin, target)
             self.last_problem = problem

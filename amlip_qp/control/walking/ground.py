@@ -1,0 +1,160 @@
+"""The ground the walking controller plans each step for: flat, blind (felt footholds) or terrain-aware.
+
+The planner takes the ground as a :class:`~amlip_qp.alip.messages.TerrainPrediction`
+(heights relative to the stance contact, pitches along the heading;
+docs/ALIP_SLOPES.md). A :class:`GroundPredictor` makes one every tick, in one of
+the modes of :data:`GROUND_MODES`:
+
+- ``"flat"``: none (the planner's flat-ground numbers, bit for bit: the
+  controller of flat ground, unchanged);
+- ``"blind"``: no terrain perception, as on the Wave Field: the ground is
+  felt only where the feet touched down. A plane through the last footholds
+  (:class:`~amlip_qp.alip.footholds.FootholdPlane`, fitted at each touchdown)
+  gives the height of the next contact and the ground pitch;
+- ``"aware"``: the controller is handed a height function of the terrain,
+  world ``(x, y)`` m -> ground ``z`` m (in simulation, ray casts into the
+  plant's scene; the controller never sees the simulator), read at the swing
+  target (height, and pitch: the gentler of the grades half a blade behind and
+  ahead along the heading, so that a stair's edge reads as its tread) and under
+  the stance contact.
+
+In both terrain modes the height where the swing foot lifted off is the
+previous stance contact's, as measured (blind) or read (aware). The
+predictions are clipped to what the references accept (:data:`MAX_DZ_M`,
+:data:`MAX_PITCH_RAD`): a step or a glitch of the estimate must not stop
+the walk with an error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
+from amlip_qp.alip.messages import TerrainPrediction
+from amlip_qp.exceptions import InputError
+
+#: The ground modes of :class:`GroundPredictor` (module doc).
+GROUND_MODES: tuple[str, ...] = ("flat", "blind", "aware")
+
+#: Largest height difference a prediction may have (either sign), m: about a
+#: third of Cassie's CoM height, so that the swing path stays below the CoM.
+MAX_DZ_M = 0.25
+#: Largest ground pitch a prediction may have (either sign), rad (30 degrees).
+MAX_PITCH_RAD = math.radians(30.0)
+#: How far behind and ahead of a point (m, along the heading) an ``"aware"``
+#: prediction reads the ground's grades for its pitch (about half a foot blade).
+PITCH_HALF_BASE_M = 0.05
+
+HeightFunction = Callable[[float, float], float]
+
+
+def _clip(value: float, limit: float) -> float:
+    return limit if value > limit else -limit if value < -limit else value
+
+
+class GroundPredictor:
+    """Makes the planner's :class:`TerrainPrediction` (module doc).
+
+    Args:
+        mode: One of :data:`GROUND_MODES`.
+        height_fn: World ``(x, y)`` m -> ground height m; required by ``"aware"``, refused otherwise.
+    """
+
+    def __init__(self, mode: str = "flat", height_fn: HeightFunction | None = None):
+        if mode not in GROUND_MODES:
+            raise InputError(f"ground mode must be one of {', '.join(GROUND_MODES)}, got {mode!r}")
+        if (mode == "aware") != (height_fn is not None):
+            raise InputError(
+                "the 'aware' ground mode needs a terrain height function and the other modes take none; "
+                f"got mode {mode!r} with height_fn={height_fn!r}"
+            )
+        if height_fn is not None and not callable(height_fn):
+            raise InputError(f"height_fn must be callable (x_m, y_m) -> z_m, got {height_fn!r}")
+        self.mode = mode
+        self.height_fn = height_fn
+        #: The footholds (blind mode) and the plane fitted to them at the last touchdown.
+        self.footholds = FootholdPlane(max_slope_rad=MAX_PITCH_RAD, max_dz_m=MAX_DZ_M)
+        self._plane = GroundPlane(0.0, 0.0, 0.0, 0.0, 0)
+        self._heading = 0.0
+        self._stance_xy = (math.nan, math.nan)  # the stance contact, world m
+        self._stance_z = math.nan  # ground under it (aware) or its foothold (blind), m
+        self._liftoff_dz = 0.0  # ground where the swing foot lifted off minus the stance's, m
+        #: Ground pitch under the stance foot along the heading, rad (positive = descending ahead).
+        self.stance_pitch_rad = 0.0
+        self._liftoff_pitch = 0.0
+
+    @property
+    def active(self) -> bool:
+        """True unless the mode is ``"flat"`` (no prediction)."""
+        return self.mode != "flat"
+
+    def reset(self) -> None:
+        """Forget the footholds (a new run)."""
+        self.footholds.reset()
+        self._plane = GroundPlane(0.0, 0.0, 0.0, 0.0, 0)
+        self._stance_xy = (math.nan, math.nan)
+        self._stance_z = math.nan
+        self._liftoff_dz = 0.0
+        self.stance_pitch_rad = 0.0
+        self._liftoff_pitch = 0.0
+
+    def touchdown(self, stance_contact_m: np.ndarray, heading_rad: float) -> None:
+        """A new stance contact (world, m) on a step of heading ``heading_rad`` (rad): a foothold."""
+        x, y, z = (float(v) for v in stance_contact_m[:3])
+        if self.mode == "blind":
+            self.footholds.add(stance_contact_m, heading_rad)
+            self._plane = self.footholds.plane(heading_rad)
+        self._heading = heading_rad
+        if self.mode == "aware":
+            z = self._height(x, y)
+        previous = self._stance_z
+        self._liftoff_dz = 0.0 if math.isnan(previous) else _clip(previous - z, MAX_DZ_M)
+        self._liftoff_pitch = self.stance_pitch_rad
+        self._stance_xy, self._stance_z = (x, y), z
+        self.stance_pitch_rad = self._pitch_at(x, y, heading_rad)
+
+    def _height(self, x: float, y: float) -> float:
+        """The height function at ``(x, y)`` m; where it has no ground (NaN), the stance's (or 0 before any)."""
+        assert self.height_fn is not None
+        z = float(self.height_fn(x, y))
+        if math.isfinite(z):
+            return z
+        return self._stance_z if math.isfinite(self._stance_z) else 0.0
+
+    def _pitch_at(self, x: float, y: float, heading_rad: float) -> float:
+        """The ground pitch along the heading at world ``(x, y)`` m, rad (clipped)."""
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        if self.mode == "aware":
+            # The gentler of the two one-sided grades: the same on a smooth slope,
+            # the tread's (level) beside a stair's edge rather than the riser's.
+            d = PITCH_HALF_BASE_M
+            h = self._height(x, y)
+            back, front = h - self._height(x - d * c, y - d * s), self._height(x + d * c, y + d * s) - h
+            rise = back if abs(back) < abs(front) else front
+            return _clip(-math.atan2(rise, d), MAX_PITCH_RAD)
+        return self._plane.pitch_rad
+
+    def predict(self, target_xy_m: np.ndarray, heading_rad: float) -> TerrainPrediction:
+        """The ground for the planner with the swing target at world ``target_xy_m`` (m).
+
+        Call :meth:`touchdown` first (at the first step too); not in the ``"flat"`` mode.
+        """
+        x, y = float(target_xy_m[0]), float(target_xy_m[1])
+        if self.mode == "aware":
+            dz = self._height(x, y) - self._stance_z
+        else:
+            # the plane's grades (fitted at the touchdown) times the offset in the step's heading frame
+            c, s = math.cos(self._heading), math.sin(self._heading)
+            dx, dy = x - self._stance_xy[0], y - self._stance_xy[1]
+            dz = self._plane.grade_along * (c * dx + s * dy) + self._plane.grade_left * (-s * dx + c * dy)
+        dz = _clip(dz, MAX_DZ_M)
+        return TerrainPrediction(
+            dz_next_m=dz,
+            dz_sw_m=dz,
+            dz_sw0_m=self._liftoff_dz,
+            slope_pitch_rad=self._pitch_at(x, y, heading_rad),
+            slope_pitch0_rad=self._liftoff_pitch,
+        )

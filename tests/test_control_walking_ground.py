@@ -1,0 +1,103 @@
+"""The ground predictions of the walking controller: flat, blind (footholds) and terrain-aware."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.walking.ground import MAX_DZ_M, MAX_PITCH_RAD, GroundPredictor
+from amlip_qp.exceptions import InputError
+
+SLOPE_RAD = math.radians(10.0)
+
+
+def slope(x_m: float, y_m: float) -> float:
+    """A 10 degree slope up along +x from x = 1 m (flat before)."""
+    return max(x_m - 1.0, 0.0) * math.tan(SLOPE_RAD)
+
+
+def test_modes_and_their_height_function_are_checked():
+    assert not GroundPredictor().active
+    assert GroundPredictor("blind").active and GroundPredictor("aware", slope).active
+    with pytest.raises(InputError, match="ground mode"):
+        GroundPredictor("seeing")
+    with pytest.raises(InputError, match="height function"):
+        GroundPredictor("aware")
+    with pytest.raises(InputError, match="height function"):
+        GroundPredictor("blind", slope)
+
+
+def test_aware_prediction_reads_the_height_and_pitch_at_the_target():
+    g = GroundPredictor("aware", slope)
+    g.touchdown(np.array([2.0, 0.1, 7.0]), 0.0)  # the measured z is not used: the height function's is
+    assert g.stance_pitch_rad == pytest.approx(-SLOPE_RAD)  # uphill: negative pitch
+    p = g.predict(np.array([2.3, -0.1]), 0.0)
+    assert p.dz_next_m == p.dz_sw_m == pytest.approx(0.3 * math.tan(SLOPE_RAD))
+    assert p.slope_pitch_rad == pytest.approx(-SLOPE_RAD) and p.dz_sw0_m == 0.0
+    # walking the other way, the same slope descends ahead
+    assert g.predict(np.array([1.7, 0.0]), math.pi).slope_pitch_rad == pytest.approx(SLOPE_RAD)
+    g.touchdown(np.array([2.3, -0.1, 0.0]), math.pi)
+    assert g.stance_pitch_rad == pytest.approx(SLOPE_RAD)
+    p = g.predict(np.array([2.0, 0.1]), math.pi)
+    assert p.dz_sw0_m == pytest.approx(-0.3 * math.tan(SLOPE_RAD))  # lifted off below the stance
+    assert p.slope_pitch0_rad == pytest.approx(-SLOPE_RAD)
+
+
+def test_aware_prediction_is_clipped_and_survives_missing_ground():
+    wall = GroundPredictor("aware", lambda x, y: 0.0 if x < 1.0 else (5.0 if x < 3.0 else math.nan))
+    wall.touchdown(np.array([0.8, 0.0, 0.0]), 0.0)
+    p = wall.predict(np.array([1.2, 0.0]), 0.0)
+    assert p.dz_sw_m == MAX_DZ_M and abs(p.slope_pitch_rad) <= MAX_PITCH_RAD
+    p = wall.predict(np.array([4.0, 0.0]), 0.0)  # no ground there: the stance's height
+    assert p.dz_sw_m == 0.0 and p.slope_pitch_rad == 0.0
+
+
+def test_blind_prediction_learns_the_slope_from_the_footholds():
+    g = GroundPredictor("blind")
+    xs = [2.0, 2.3, 2.6, 2.9]
+    g.touchdown(np.array([xs[0], 0.1, slope(xs[0], 0.0)]), 0.0)
+    p = g.predict(np.array([2.3, -0.1]), 0.0)
+    assert p.dz_sw_m == 0.0 and p.slope_pitch_rad == 0.0  # one foothold: level
+    for i, x in enumerate(xs[1:]):
+        g.touchdown(np.array([x, 0.1 if i % 2 else -0.1, slope(x, 0.0)]), 0.0)
+    p = g.predict(np.array([3.2, 0.1]), 0.0)
+    assert p.slope_pitch_rad == pytest.approx(-SLOPE_RAD, abs=1e-9)
+    assert p.dz_next_m == pytest.approx(0.3 * math.tan(SLOPE_RAD), abs=1e-9)
+    assert p.dz_sw0_m == pytest.approx(-0.3 * math.tan(SLOPE_RAD), abs=1e-9)
+    assert g.stance_pitch_rad == pytest.approx(-SLOPE_RAD, abs=1e-9)
+    g.reset()
+    g.touchdown(np.array([xs[-1], 0.1, slope(xs[-1], 0.0)]), 0.0)
+    p = g.predict(np.array([3.2, 0.1]), 0.0)
+    assert p.slope_pitch_rad == 0.0 and p.dz_sw_m == 0.0 and p.dz_sw0_m == 0.0  # forgotten: level again
+
+
+def test_the_controller_plans_for_its_ground_mode():
+    from amlip_qp.control.walking.controller import WalkingController
+    from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.robots import RobotKinematics
+    from amlip_qp.sim.factory import load
+
+    robot = load("cassie")
+
+    def make(**kw):
+        kin = RobotKinematics(robot)
+        return WalkingController(robot, QPTracker(robot), kin, planner_backend="numpy", output_backend="python", **kw)
+
+    flat = make()
+    assert flat.ground.mode == "flat" and flat.planner.late_descent is None
+    aware = make(terrain_height_fn=slope)
+    assert aware.ground.mode == "aware" and aware.planner.late_descent == "landing"
+    assert make(ground_mode="blind").planner.late_descent == "landing"
+
+
+def test_aware_pitch_beside_a_stair_edge_is_the_treads():
+    def stairs(x_m: float, y_m: float) -> float:
+        return 0.1 * math.floor(x_m / 0.3) if x_m > 0.0 else 0.0
+
+    g = GroundPredictor("aware", stairs)
+    g.touchdown(np.array([0.15, 0.0, 0.0]), 0.0)
+    for x in (0.28, 0.32, 0.45):  # just before an edge, just after it, mid-tread
+        assert g.predict(np.array([x, 0.0]), 0.0).slope_pitch_rad == 0.0
+    assert g.predict(np.array([0.32, 0.0]), 0.0).dz_sw_m == pytest.approx(0.1)

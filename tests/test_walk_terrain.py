@@ -1,0 +1,51 @@
+"""Closed-loop acceptance on uneven ground (issue #13, section 3): the QP tracker on Cassie.
+
+Each test is one run of a named terrain scenario (:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS`,
+their durations and speeds are the issue's): slopes of 10 and 15 degrees up and down at 0.5 m/s
+for 15 s, blind and terrain-aware; stairs of 10 cm rise and 30 cm run up and down at 0.4 m/s
+(terrain-aware); rough ground of +-4 cm at 0.75 m/s for 20 s (blind); waves 30 cm high with a
+4 m wavelength at 0.75 m/s with 20 cm clearance (blind). "Without falling" also means the mean
+speed over the last 3 s, horizontal along the heading (the summary's ``mean_velocity``), is within
+0.15 m/s of the command. The 22 degree slope and the PBC tracker are reported
+(``examples/terrain_table.py``), not required.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+#: The scenarios the QP tracker must walk.
+REQUIRED = (
+    "cassie-slope-10-up",
+    "cassie-slope-10-up-aware",
+    "cassie-slope-10-down",
+    "cassie-slope-10-down-aware",
+    "cassie-slope-15-up",
+    "cassie-slope-15-up-aware",
+    "cassie-slope-15-down",
+    "cassie-slope-15-down-aware",
+    "cassie-stairs-10cm",
+    "cassie-rough-4cm",
+    "cassie-waves-30cm",
+)
+#: Largest |mean speed over the last 3 s - command|, m/s (the issue's).
+SPEED_TOLERANCE_MPS = 0.15
+
+
+@pytest.mark.parametrize("name", REQUIRED)
+def test_qp_walks_the_terrain_at_the_commanded_speed(name):
+    from amlip_qp.sim.factory import run_scenario
+    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.summary import summarize
+
+    scenario = SCENARIOS[name]
+    s = summarize(run_scenario(scenario, "qp"))
+    assert s["terrain"] == scenario.setting.terrain
+    assert not s["fell"], f"{name}: fell at {s['fall_time_s']} s"
+    assert s["sim_time_s"] == pytest.approx(scenario.duration_s)
+    vx, vy = s["mean_velocity"]
+    assert abs(vx - scenario.vx.final_mps) <= SPEED_TOLERANCE_MPS, f"{name}: mean speed {vx:.3f} m/s"
+    assert abs(vy) <= SPEED_TOLERANCE_MPS, f"{name}: lateral drift {vy:.3f} m/s"
+    assert s["fallback_ticks"] == 0
