@@ -122,6 +122,8 @@ class Simulation:
         self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
         self._scalar_pin_v = robot.state_map.scalar_pin_v
+        self._phase_starts: dict[int, float] = {}  # phase-triggered push index -> its start time, s
+        self._last_phase = math.nan  # the step phase of the previous push_force call
 
     # ----------------------------------------------------------- sensors
     def foot_contact(self) -> dict[str, bool]:
@@ -159,17 +161,33 @@ class Simulation:
         R = self.data.xmat[self._base_body].reshape(3, 3)
         return math.atan2(float(R[1, 0]), float(R[0, 0]))
 
-    def push_force(self, t_s: float) -> np.ndarray:
-        """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[t, t + duration)``.
+    def push_force(self, t_s: float, phase: float = math.nan) -> np.ndarray:
+        """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[start, start + duration)``.
 
+        A push's start is its ``t_s``; for a push with a step ``phase``, the
+        first tick at or after ``t_s`` where the controller's step phase
+        (``phase``, this tick's) reaches it. Call once per tick, in order: the
+        phase of the previous call is remembered to detect the crossing.
         Times are compared with a 1 ns tolerance so that MuJoCo's accumulated
         ``data.time`` (a sum of plant steps) does not shift a push by a tick.
         """
         f = np.zeros(3)
-        for p in self.pushes:
-            if p.t_s - _TIME_TOL_S <= t_s < p.t_s + p.duration_s - _TIME_TOL_S:
+        for i, p in enumerate(self.pushes):
+            start = p.t_s if p.phase is None else self._phase_push_start(i, p.t_s, p.phase, t_s, phase)
+            if start - _TIME_TOL_S <= t_s < start + p.duration_s - _TIME_TOL_S:
                 f += np.asarray(p.force_N, dtype=float)
+        self._last_phase = phase
         return f
+
+    def _phase_push_start(self, index: int, after_s: float, target: float, t_s: float, phase: float) -> float:
+        """Start time (s) of phase-triggered push ``index``, or ``inf`` while it waits for its phase."""
+        start = self._phase_starts.get(index)
+        if start is None:
+            prev = self._last_phase
+            # reached: the phase crossed the target from below, or a new step began at or past it
+            if t_s >= after_s - _TIME_TOL_S and phase >= target and not (prev >= target and phase >= prev):
+                self._phase_starts[index] = start = t_s
+        return math.inf if start is None else start
 
     # --------------------------------------------------------------- run
     def run(self, duration_s: float, progress: bool = False, on_tick: TickCallback | None = None) -> RunResult:
@@ -200,6 +218,7 @@ class Simulation:
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
         m, d, ctrl = self.model, self.data, self.controller
         ctrl.reset()
+        self._phase_starts, self._last_phase = {}, math.nan
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
@@ -266,7 +285,7 @@ class Simulation:
             if ctrl_filter is not None:  # e.g. an actuator delay
                 ctrl_now = ctrl_filter(ctrl_now)
             plant.apply_ctrl(d, ctrl_now)
-            push = self.push_force(t)
+            push = self.push_force(t, tick.phase)
             d.xfrc_applied[self._base_body, :3] = push
             # log
             est, plan = tick.estimate, tick.plan
