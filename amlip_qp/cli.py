@@ -111,7 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument("--cells", type=_positive_int, default=6, help="cells per sweep (default 6)")
-    b.add_argument("--duration", type=_positive_float, default=2.0, metavar="S", help="simulated s per cell (default 2)")
+    b.add_argument(
+        "--duration", type=_positive_float, default=2.0, metavar="S", help="simulated s per cell (default 2)"
+    )
     b.add_argument("--repeats", type=_positive_int, default=3, help="interleaved repeats of each (default 3)")
     b.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
     b.set_defaults(func=_handler("amlip_qp.sweep.bench:run_bench"))
@@ -341,7 +343,11 @@ def _add_sweep(sub) -> None:
     p.add_argument("--out", metavar="DIR", required=True, help="output folder (created; a finished sweep resumes)")
     where = p.add_mutually_exclusive_group()
     where.add_argument(
-        "--workers", type=_positive_int, default=None, metavar="N", help="local worker processes (default: one per core)"
+        "--workers",
+        type=_positive_int,
+        default=None,
+        metavar="N",
+        help="local worker processes (default: one per core)",
     )
     where.add_argument(
         "--ray",

@@ -85,7 +85,14 @@ RULES: dict[str, Rule] = {
     "amlip_qp.sim": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
     # the sweep runs walks: the harness, the walk parser of the CLI, the profiles
     "amlip_qp.sweep": Rule(
-        ("amlip_qp.sweep", "amlip_qp.sim", "amlip_qp.exceptions", "amlip_qp.output_paths", "amlip_qp.cli", "amlip_qp.profiles"),
+        (
+            "amlip_qp.sweep",
+            "amlip_qp.sim",
+            "amlip_qp.exceptions",
+            "amlip_qp.output_paths",
+            "amlip_qp.cli",
+            "amlip_qp.profiles",
+        ),
         ("amlip_qp.control", "amlip_qp.qp", "amlip_qp.codegen", "mujoco", "pinocchio"),
     ),
 }

@@ -17,7 +17,11 @@ def test_bisection_brackets_a_monotone_edge(edge):
 
 
 def test_bisection_known_steps_and_cap():
-    assert largest_surviving(lambda v: v < 20.0, 0.0, 60.0, 2) == (15.0, False, [(60.0, False), (30.0, False), (15.0, True)])
+    assert largest_surviving(lambda v: v < 20.0, 0.0, 60.0, 2) == (
+        15.0,
+        False,
+        [(60.0, False), (30.0, False), (15.0, True)],
+    )
     assert largest_surviving(lambda v: True, 10.0, 60.0, 5) == (60.0, True, [(60.0, True)])
     assert largest_surviving(lambda v: False, 0.0, 8.0, 3)[:2] == (0.0, False)
 

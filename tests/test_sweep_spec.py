@@ -50,7 +50,8 @@ def test_random_sampling_is_reproducible_inside_its_ranges_and_drops_duplicates(
 
 
 @pytest.mark.parametrize(
-    "text, expected", [("1", 1), ("-0.5", -0.5), ("1e-1", 0.1), ("true", True), ("qp", "qp"), ("slope:-15", "slope:-15")]
+    "text, expected",
+    [("1", 1), ("-0.5", -0.5), ("1e-1", 0.1), ("true", True), ("qp", "qp"), ("slope:-15", "slope:-15")],
 )
 def test_cli_values_are_typed(text, expected):
     value = parse_cli_value(text)

@@ -9,6 +9,7 @@ cluster, Ray schedules the tasks. Nothing here schedules by itself.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import socket
 import sys
@@ -61,9 +62,7 @@ def _host_port(address: str) -> tuple[str, int] | None:
     body = address.removeprefix("ray://")
     host, sep, port = body.rpartition(":")
     if not sep or not host or not port.isdigit():
-        raise InputError(
-            f"--ray expects HOST:PORT, ray://HOST:PORT or auto, got {address!r} (put SPEC before --ray)"
-        )
+        raise InputError(f"--ray expects HOST:PORT, ray://HOST:PORT or auto, got {address!r} (put SPEC before --ray)")
     return host.strip("[]"), int(port)
 
 
@@ -100,7 +99,7 @@ def connect_ray(address: str | None) -> tuple[Any, bool]:
         os.environ[wait_key] = str(int(RAY_CONNECT_TIMEOUT_S))
     try:
         with _silenced_fd2(address is not None):
-            ray.init(address=address, include_dashboard=False, log_to_driver=False, logging_level="ERROR")
+            ray.init(address=address, include_dashboard=False, log_to_driver=False, logging_level=logging.ERROR)
     except (ConnectionError, RuntimeError, ValueError) as exc:
         raise InputError(f"--ray {address or ''}: cannot connect to Ray: {str(exc).splitlines()[0]}") from None
     finally:

@@ -27,7 +27,9 @@ def largest_surviving(
         InputError: ``low >= high``, a non-finite bound, or ``iterations < 0``.
     """
     if not (math.isfinite(low) and math.isfinite(high) and low < high) or iterations < 0:
-        raise InputError(f"a bisection needs finite low < high and iterations >= 0, got {low!r}, {high!r}, {iterations!r}")
+        raise InputError(
+            f"a bisection needs finite low < high and iterations >= 0, got {low!r}, {high!r}, {iterations!r}"
+        )
     trials: list[tuple[float, bool]] = []
 
     def attempt(value: float) -> bool:

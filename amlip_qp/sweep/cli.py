@@ -14,7 +14,8 @@ import time
 from typing import Any
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sweep import backends, spec as spec_mod
+from amlip_qp.sweep import backends
+from amlip_qp.sweep import spec as spec_mod
 from amlip_qp.sweep.cells import Cell
 from amlip_qp.sweep.results import SweepFolder, metric_ranges
 from amlip_qp.sweep.run_cell import DEFAULT_METRICS, METRICS, check_plants, parameter_names, walk_run
@@ -75,7 +76,9 @@ def check_cells(spec: spec_mod.SweepSpec, cells: list[Cell]) -> None:
         raise InputError(f"unknown parameter {unknown[0]!r}; known: {', '.join(known)}")
     runs = []
     for cell in cells:
-        ends = [{}] if spec.bisect is None else [{spec.bisect.parameter: v} for v in (spec.bisect.low, spec.bisect.high)]
+        ends = (
+            [{}] if spec.bisect is None else [{spec.bisect.parameter: v} for v in (spec.bisect.low, spec.bisect.high)]
+        )
         for extra in ends:
             try:
                 runs.append(walk_run({**cell.params, **extra}, cell.seed))
@@ -111,7 +114,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         _run(todo, records, folder, ray, workers, args.no_progress)
         wall = time.perf_counter() - t0
     finally:
-        if started:
+        if started and ray is not None:
             ray.shutdown()
     done = [records[c.id] for c in cells]
     table = folder.write_table(done, list(spec.parameters), metrics)
@@ -123,7 +126,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         "workers": workers,
         "wall_time_s": wall,
         "cells_per_s": len(todo) / wall if todo and wall > 0 else None,
-        "cell_wall_s_total": sum(r.get("wall_s", 0.0) for r in done if r["id"] in {t["id"] for t in todo}),
+        "cell_wall_s_total": sum(records[t["id"]].get("wall_s", 0.0) for t in todo),
         "parameters": list(spec.parameters),
         "metrics": list(metrics),
         "metric_ranges": metric_ranges(done, metrics),

@@ -24,7 +24,7 @@ FACET = "tracker"
 POLAR = ("push_direction_deg", "push_phase")
 
 
-def _edges(centres: Sequence[float], default_half: float) -> np.ndarray:
+def _edges(centres: Sequence[float] | np.ndarray, default_half: float) -> np.ndarray:
     """Cell edges around sorted ``centres`` (midpoints; the ends mirrored)."""
     c = np.asarray(centres, dtype=float)
     if c.size == 1:

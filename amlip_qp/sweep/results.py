@@ -117,7 +117,13 @@ class SweepFolder:
         """``results.csv`` (and ``results.parquet`` with pyarrow) of ``records`` in cell order; the CSV path."""
         columns = ["cell", "id", *parameters, "seed", *metrics]
         rows = [
-            [r["index"], r["id"], *(r["params"].get(p) for p in parameters), r["seed"], *(r["metrics"].get(m) for m in metrics)]
+            [
+                r["index"],
+                r["id"],
+                *(r["params"].get(p) for p in parameters),
+                r["seed"],
+                *(r["metrics"].get(m) for m in metrics),
+            ]
             for r in sorted(records, key=lambda r: r["index"])
         ]
         buf = io.StringIO()

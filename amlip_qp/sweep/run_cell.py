@@ -133,17 +133,17 @@ def make_push(params: Mapping[str, Any]):
     for name, value in p.items():
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
             raise InputError(f"{name} must be a number, got {value!r}")
-    impulse, duration = float(p["push_impulse_Ns"]), float(p["push_duration_s"])  # type: ignore[arg-type]
+    impulse, duration = float(p["push_impulse_Ns"]), float(p["push_duration_s"])
     if not (math.isfinite(impulse) and impulse >= 0 and duration > 0):
         raise InputError(f"a push needs push_impulse_Ns >= 0 and push_duration_s > 0, got {impulse!r}, {duration!r}")
     if impulse == 0.0:
         return None
-    angle = math.radians(float(p["push_direction_deg"]))  # type: ignore[arg-type]
+    angle = math.radians(float(p["push_direction_deg"]))
     force = impulse / duration
     # exact zeros where the direction is along an axis (cos 90 deg is 6e-17, not 0: a planar robot refuses any FY)
     fx, fy = (0.0 if abs(c) < 1e-12 else force * c for c in (math.cos(angle), math.sin(angle)))
     phase = p["push_phase"]
-    return Push(float(p["push_time_s"]), (fx, fy, 0.0), duration, None if phase is None else float(phase))  # type: ignore[arg-type]
+    return Push(float(p["push_time_s"]), (fx, fy, 0.0), duration, None if phase is None else float(phase))
 
 
 def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:

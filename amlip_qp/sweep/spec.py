@@ -267,7 +267,11 @@ def cells_of(spec: SweepSpec) -> list[Cell]:
     """The spec's cells in order (grid product, or random samples without duplicates)."""
     names = list(spec.parameters)
     fixed = tuple(spec.fixed.items())
-    bis = None if spec.bisect is None else (spec.bisect.parameter, spec.bisect.low, spec.bisect.high, spec.bisect.iterations)
+    bis = (
+        None
+        if spec.bisect is None
+        else (spec.bisect.parameter, spec.bisect.low, spec.bisect.high, spec.bisect.iterations)
+    )
     if spec.sampling == "grid":
         axes = [v.points() if isinstance(v, Range) else v for v in spec.parameters.values()]
         combos = list(itertools.product(*axes))
