@@ -55,7 +55,7 @@ def run_local(tasks: Sequence[Task], workers: int, on_record: OnRecord) -> None:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _host_port(address: str) -> tuple[str, int] | None:
+def ray_host_port(address: str) -> tuple[str, int] | None:
     """``(host, port)`` of ``HOST:PORT`` or ``ray://HOST:PORT``; ``None`` for ``auto``."""
     if address == "auto":
         return None
@@ -82,7 +82,7 @@ def connect_ray(address: str | None) -> tuple[Any, bool]:
     if ray.is_initialized():
         return ray, False
     if address is not None:
-        hp = _host_port(address)
+        hp = ray_host_port(address)
         if hp is not None:
             try:
                 socket.create_connection(hp, timeout=RAY_CONNECT_TIMEOUT_S).close()
