@@ -63,23 +63,6 @@ def test_push_force_only_inside_its_window():
     assert np.allclose(sim.data.xfrc_applied, 0.0)
 
 
-def test_phase_push_starts_when_the_step_phase_reaches_it():
-    """After its time, a phase push waits for the phase to cross its value (or a new step at or past it)."""
-    sim = _sim("rabbit", pushes=[Push(0.010, (7.0, 0.0, 0.0), 0.002, phase=0.5)])
-    ticks = [(0.000, 0.40), (0.005, 0.52), (0.010, 0.60), (0.0105, 0.90), (0.011, 0.10), (0.0115, 0.49)]
-    for t, s in ticks:  # 0.52 is crossed before 10 ms; at 10 ms the phase is already past 0.5: wait
-        assert np.allclose(sim.push_force(t, s), 0.0)
-    assert np.allclose(sim.push_force(0.012, 0.51), [7.0, 0.0, 0.0])  # crossed: starts here for 2 ms
-    assert np.allclose(sim.push_force(0.0135, 0.8), [7.0, 0.0, 0.0])
-    assert np.allclose(sim.push_force(0.014, 0.9), 0.0)  # 0.012 + 0.002: over, and never again
-    assert np.allclose(sim.push_force(0.020, 0.1), 0.0) and np.allclose(sim.push_force(0.021, 0.6), 0.0)
-    at_step = _sim("rabbit", pushes=[Push(0.005, (1.0, 0.0, 0.0), 0.01, phase=0.0)])
-    assert np.allclose(at_step.push_force(0.0, 0.0), 0.0) and np.allclose(at_step.push_force(0.005, 0.3), 0.0)
-    assert np.allclose(at_step.push_force(0.006, 0.0), [1.0, 0.0, 0.0])  # phase 0: the next step's first tick
-    safe = _sim("rabbit", pushes=[Push(0.0, (1.0, 0.0, 0.0), 0.01, phase=0.2)])
-    assert np.allclose(safe.push_force(0.0, float("nan")), 0.0)  # no phase (safe mode): no start
-
-
 def test_push_changes_base_motion_on_the_base():
     quiet = _sim("cassie", duration=0.03).run(0.03)
     pushed = _sim("cassie", duration=0.03, pushes=[Push(0.0, (300.0, 0.0, 0.0), 0.03)]).run(0.03)

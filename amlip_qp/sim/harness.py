@@ -26,11 +26,9 @@ from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
+from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
-
-#: Tolerance of the push-window time comparisons, s.
-_TIME_TOL_S = 1e-9
 
 #: MuJoCo warnings that mean the simulation diverged (it then resets the state).
 _DIVERGENCE_WARNINGS = (
@@ -85,6 +83,7 @@ class Simulation:
         self.controller = controller
         self.command_fn = command_fn
         self.pushes = tuple(pushes)
+        self.push_schedule = PushSchedule(self.pushes)
         self.noise = noise
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InputError(f"seed must be a non-negative integer, got {seed!r}")
@@ -122,8 +121,6 @@ class Simulation:
         self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
         self._scalar_pin_v = robot.state_map.scalar_pin_v
-        self._phase_starts: dict[int, float] = {}  # phase-triggered push index -> its start time, s
-        self._last_phase = math.nan  # the step phase of the previous push_force call
 
     # ----------------------------------------------------------- sensors
     def foot_contact(self) -> dict[str, bool]:
@@ -162,32 +159,8 @@ class Simulation:
         return math.atan2(float(R[1, 0]), float(R[0, 0]))
 
     def push_force(self, t_s: float, phase: float = math.nan) -> np.ndarray:
-        """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[start, start + duration)``.
-
-        A push's start is its ``t_s``; for a push with a step ``phase``, the
-        first tick at or after ``t_s`` where the controller's step phase
-        (``phase``, this tick's) reaches it. Call once per tick, in order: the
-        phase of the previous call is remembered to detect the crossing.
-        Times are compared with a 1 ns tolerance so that MuJoCo's accumulated
-        ``data.time`` (a sum of plant steps) does not shift a push by a tick.
-        """
-        f = np.zeros(3)
-        for i, p in enumerate(self.pushes):
-            start = p.t_s if p.phase is None else self._phase_push_start(i, p.t_s, p.phase, t_s, phase)
-            if start - _TIME_TOL_S <= t_s < start + p.duration_s - _TIME_TOL_S:
-                f += np.asarray(p.force_N, dtype=float)
-        self._last_phase = phase
-        return f
-
-    def _phase_push_start(self, index: int, after_s: float, target: float, t_s: float, phase: float) -> float:
-        """Start time (s) of phase-triggered push ``index``, or ``inf`` while it waits for its phase."""
-        start = self._phase_starts.get(index)
-        if start is None:
-            prev = self._last_phase
-            # reached: the phase crossed the target from below, or a new step began at or past it
-            if t_s >= after_s - _TIME_TOL_S and phase >= target and not (prev >= target and phase >= prev):
-                self._phase_starts[index] = start = t_s
-        return math.inf if start is None else start
+        """World force on the base at time ``t_s`` (N) and step phase ``phase`` (see :mod:`~amlip_qp.sim.pushes`)."""
+        return self.push_schedule.force(t_s, phase)
 
     # --------------------------------------------------------------- run
     def run(self, duration_s: float, progress: bool = False, on_tick: TickCallback | None = None) -> RunResult:
@@ -218,7 +191,7 @@ class Simulation:
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
         m, d, ctrl = self.model, self.data, self.controller
         ctrl.reset()
-        self._phase_starts, self._last_phase = {}, math.nan
+        self.push_schedule.reset()
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
