@@ -78,7 +78,8 @@ def draw(folder: Path, figure: Path) -> None:
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="ratio")
     fig.suptitle(
         f"Cassie at 1 m/s, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
-        f"{summary['workers']} worker(s), {summary['backend']}",
+        f"{summary['ran']} cells in {summary['wall_time_s'] / 60:.1f} min on {summary['workers']} worker(s), "
+        f"{summary['backend']}",
         fontsize=9,
     )
     fig.tight_layout()
