@@ -120,8 +120,21 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--trackers", default="qp,pbc", metavar="NAMES", help="comma-separated trackers (default qp,pbc)")
     b.set_defaults(func=_handler("amlip_qp.sim.bench_harness:run_bench"))
 
+    b = bench.add_parser(
+        "sweep", help="sweep throughput: cells per second with 1 and with 2 worker processes, interleaved"
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--cells", type=_positive_int, default=6, help="cells per sweep (default 6)")
+    b.add_argument(
+        "--duration", type=_positive_float, default=2.0, metavar="S", help="simulated s per cell (default 2)"
+    )
+    b.add_argument("--repeats", type=_positive_int, default=3, help="interleaved repeats of each (default 3)")
+    b.add_argument("--tracker", choices=_TRACKERS, default="qp", help="tracker (default qp)")
+    b.set_defaults(func=_handler("amlip_qp.sweep.bench:run_bench"))
+
     _add_walk(sub)
     _add_compare(sub)
+    _add_sweep(sub)
     return parser
 
 
@@ -340,6 +353,56 @@ def _add_compare(sub) -> None:
     )
     p.add_argument("--no-plot", action="store_true", help="do not write the figure")
     p.set_defaults(func=_handler("amlip_qp.sim.cli:run_compare"))
+
+
+def _add_sweep(sub) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="run many walks over a grid or a random sample of walk options (a robustness map)",
+        description="Run one deterministic walk per cell of a grid (or random sample) of walk options and "
+        "push parameters, locally on a process pool or on Ray; write results.csv, summary.json and figures to "
+        "--out. Finished cells in --out are skipped (resume). Exit status: 0 done, 2 bad input (nothing written).",
+    )
+    p.add_argument("spec", nargs="?", metavar="SPEC", default=None, help="a TOML sweep spec (see examples/sweeps/)")
+    p.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2",
+        help="sweep a walk option (e.g. tracker=pbc,qp, vx=0.5,1.0) or push parameter; repeatable",
+    )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=V", help="hold a parameter in every cell; repeatable"
+    )
+    p.add_argument("--duration", type=_positive_float, metavar="S", default=None, help="simulated time per walk, s")
+    p.add_argument("--metrics", metavar="M1,M2", default=None, help="the metric columns (default: the spec's)")
+    p.add_argument(
+        "--bisect",
+        metavar="NAME=LOW:HIGH:N",
+        default=None,
+        help="per cell, the largest value of NAME survived, by N bisection steps (e.g. push_impulse_Ns=0:60:5)",
+    )
+    p.add_argument("--out", metavar="DIR", required=True, help="output folder (created; a finished sweep resumes)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=_positive_int,
+        default=None,
+        metavar="N",
+        help="local worker processes (default: one per core)",
+    )
+    where.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run the cells as Ray tasks: on the cluster at ADDRESS (HOST:PORT, ray://HOST:PORT, auto), "
+        "or on a new local one without ADDRESS (needs the 'ray' extra)",
+    )
+    p.add_argument("--no-figures", action="store_true", help="do not draw the figures")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.set_defaults(func=_handler("amlip_qp.sweep.cli:run_sweep"))
 
 
 def parse_push_spec(text: str) -> tuple[float, tuple[float, float, float], float]:

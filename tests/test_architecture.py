@@ -81,8 +81,20 @@ RULES: dict[str, Rule] = {
         + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc"),
         ("mujoco",),
     ),
-    # the MuJoCo harness sits on top
-    "amlip_qp.sim": Rule(("amlip_qp",)),
+    # the MuJoCo harness sits on top (and never imports the sweep that runs it)
+    "amlip_qp.sim": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
+    # the sweep runs walks: the harness, the walk parser of the CLI, the profiles
+    "amlip_qp.sweep": Rule(
+        (
+            "amlip_qp.sweep",
+            "amlip_qp.sim",
+            "amlip_qp.exceptions",
+            "amlip_qp.output_paths",
+            "amlip_qp.cli",
+            "amlip_qp.profiles",
+        ),
+        ("amlip_qp.control", "amlip_qp.qp", "amlip_qp.codegen", "mujoco", "pinocchio"),
+    ),
 }
 
 
@@ -146,6 +158,19 @@ def test_every_package_and_top_level_module_has_a_rule():
 def test_layers_import_only_what_the_contract_allows(unit):
     offenders = _offenders(unit, _units()[unit])
     assert not offenders, f"{unit} breaks the layer contract (docs/ARCHITECTURE.md): {offenders}"
+
+
+def test_nothing_imports_the_sweep_but_itself():
+    """The sweep is a leaf: the CLI runs its handler by name; no other module imports it."""
+    offenders = [
+        f"{f.relative_to(PKG.parent)} imports {name}"
+        for unit, files in _units().items()
+        if not _matches(unit, ("amlip_qp.sweep",))
+        for f in files
+        for name in _imports(f)
+        if _matches(name, ("amlip_qp.sweep",))
+    ]
+    assert not offenders
 
 
 def test_the_check_catches_violations(tmp_path, monkeypatch):

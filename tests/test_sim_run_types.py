@@ -11,7 +11,10 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.sim.run_types import Push, quat_mul_small_rotation
 
 
-@pytest.mark.parametrize("bad", [dict(t_s=-1.0), dict(duration_s=0.0), dict(force_N=(float("nan"), 0.0, 0.0))])
+@pytest.mark.parametrize(
+    "bad",
+    [dict(t_s=-1.0), dict(duration_s=0.0), dict(force_N=(float("nan"), 0.0, 0.0)), dict(phase=1.0), dict(phase=-0.1)],
+)
 def test_push_validation(bad):
     kw = dict(t_s=0.0, force_N=(1.0, 0.0, 0.0), duration_s=0.1)
     kw.update(bad)

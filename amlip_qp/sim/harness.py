@@ -34,11 +34,9 @@ from amlip_qp.sim.run_log import (
     unpack_log,
     vector_groups,
 )
+from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
-
-#: Tolerance of the push-window time comparisons, s.
-_TIME_TOL_S = 1e-9
 
 #: MuJoCo warnings that mean the simulation diverged (it then resets the state).
 _DIVERGENCE_WARNINGS = (
@@ -97,6 +95,7 @@ class Simulation:
         self.controller = controller
         self.command_fn = command_fn
         self.pushes = tuple(pushes)
+        self.push_schedule = PushSchedule(self.pushes)
         self.noise = noise
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InputError(f"seed must be a non-negative integer, got {seed!r}")
@@ -160,17 +159,9 @@ class Simulation:
         return self.sensors.measure(self.data, q, v, base_known=self.true_base)
 
     # ------------------------------------------------------------ pushes
-    def push_force(self, t_s: float) -> np.ndarray:
-        """World force on the base at time ``t_s`` (N): the sum of the pushes active on ``[t, t + duration)``.
-
-        Times are compared with a 1 ns tolerance so that MuJoCo's accumulated
-        ``data.time`` (a sum of plant steps) does not shift a push by a tick.
-        """
-        f = np.zeros(3)
-        for p in self.pushes:
-            if p.t_s - _TIME_TOL_S <= t_s < p.t_s + p.duration_s - _TIME_TOL_S:
-                f += np.asarray(p.force_N, dtype=float)
-        return f
+    def push_force(self, t_s: float, phase: float = math.nan) -> np.ndarray:
+        """World force on the base at time ``t_s`` (N) and step phase ``phase`` (see :mod:`~amlip_qp.sim.pushes`)."""
+        return self.push_schedule.force(t_s, phase)
 
     # --------------------------------------------------------------- run
     def run(
@@ -217,6 +208,7 @@ class Simulation:
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
         m, d, ctrl = self.model, self.data, self.controller
         ctrl.reset()
+        self.push_schedule.reset()
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
@@ -280,7 +272,7 @@ class Simulation:
             if ctrl_filter is not None:  # e.g. an actuator delay
                 ctrl_now = ctrl_filter(ctrl_now)
             apply_ctrl(d, ctrl_now)
-            push = push_force(t)
+            push = push_force(t, tick.phase)
             xfrc_b[:] = push
             # log
             est, plan = tick.estimate, tick.plan

@@ -36,11 +36,15 @@ class Push:
         t_s: Start time, s.
         force_N: World-frame force (fx, fy, fz), N.
         duration_s: How long it lasts, s.
+        phase: ``None``: the push starts at ``t_s``. A number in [0, 1): the push starts at the
+            first control tick at or after ``t_s`` where the controller's step phase reaches
+            ``phase`` (crosses it from below, or a new step starts at or past it).
     """
 
     t_s: float
     force_N: tuple[float, float, float]
     duration_s: float
+    phase: float | None = None
 
     def __post_init__(self):
         vals = (self.t_s, *self.force_N, self.duration_s)
@@ -48,6 +52,8 @@ class Push:
             raise InputError(f"a push needs finite t, (fx, fy, fz) and duration, got {self!r}")
         if self.t_s < 0 or self.duration_s <= 0:
             raise InputError(f"a push needs t >= 0 s and duration > 0 s, got t={self.t_s}, duration={self.duration_s}")
+        if self.phase is not None and not 0.0 <= self.phase < 1.0:
+            raise InputError(f"a push's step phase must be in [0, 1), got {self.phase!r}")
 
     @property
     def impulse_Ns(self) -> float:

@@ -1,0 +1,146 @@
+"""Where the cells run: a local process pool (``--workers N``) or Ray tasks (``--ray [ADDRESS]``).
+
+Both hand each cell's task to :func:`amlip_qp.sweep.run_cell.run_cell` and
+report the records as they finish (in any order; the table is sorted by cell
+afterwards). The pool is :class:`concurrent.futures.ProcessPoolExecutor`; on a
+cluster, Ray schedules the tasks. Nothing here schedules by itself.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import socket
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from typing import Any
+
+from amlip_qp.exceptions import InputError
+
+#: Seconds to wait for a Ray cluster's address to answer before refusing it.
+RAY_CONNECT_TIMEOUT_S = 3.0
+
+Task = dict[str, Any]
+OnRecord = Callable[[dict[str, Any]], None]
+
+
+def default_workers() -> int:
+    """One worker per core this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_local(tasks: Sequence[Task], workers: int, on_record: OnRecord) -> None:
+    """Run ``tasks`` on a pool of ``workers`` processes; ``on_record`` gets each record as it finishes.
+
+    On an error or an interrupt the tasks not yet started are cancelled (the
+    finished ones have been reported).
+    """
+    from amlip_qp.sweep.run_cell import run_cell
+
+    if not tasks:
+        return
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)))
+    try:
+        pending = {pool.submit(run_cell, t) for t in tasks}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                on_record(fut.result())
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def ray_host_port(address: str) -> tuple[str, int] | None:
+    """``(host, port)`` of ``HOST:PORT`` or ``ray://HOST:PORT``; ``None`` for ``auto``."""
+    if address == "auto":
+        return None
+    body = address.removeprefix("ray://")
+    host, sep, port = body.rpartition(":")
+    if not sep or not host or not port.isdigit():
+        raise InputError(f"--ray expects HOST:PORT, ray://HOST:PORT or auto, got {address!r} (put SPEC before --ray)")
+    return host.strip("[]"), int(port)
+
+
+def connect_ray(address: str | None) -> tuple[Any, bool]:
+    """Connect to Ray (``None``: a Ray session already started in this process, else a new local one).
+
+    Returns ``(ray module, whether this call started the session)``.
+
+    Raises:
+        InputError: Ray is not installed, or the address does not answer within
+            :data:`RAY_CONNECT_TIMEOUT_S` seconds, or Ray refuses to connect.
+    """
+    try:
+        import ray
+    except ImportError:
+        raise InputError("--ray needs Ray: pip install 'amlip_qp[ray]'") from None
+    if ray.is_initialized():
+        return ray, False
+    if address is not None:
+        hp = ray_host_port(address)
+        if hp is not None:
+            try:
+                socket.create_connection(hp, timeout=RAY_CONNECT_TIMEOUT_S).close()
+            except OSError as exc:
+                raise InputError(
+                    f"--ray {address}: the Ray cluster does not answer ({exc.strerror or exc}); "
+                    "start it with 'ray start --head' or check the address"
+                ) from None
+    # Connecting to a cluster: give up after a few seconds (Ray's retries wait about 1 s each), and keep
+    # Ray's per-retry messages (its C++ core writes them to file descriptor 2) off stderr.
+    wait_key = "RAY_gcs_server_port_wait_time_s"
+    saved = os.environ.get(wait_key)
+    if address is not None and saved is None:
+        os.environ[wait_key] = str(int(RAY_CONNECT_TIMEOUT_S))
+    try:
+        with _silenced_fd2(address is not None):
+            ray.init(address=address, include_dashboard=False, log_to_driver=False, logging_level=logging.ERROR)
+    except (ConnectionError, RuntimeError, ValueError) as exc:
+        raise InputError(f"--ray {address or ''}: cannot connect to Ray: {str(exc).splitlines()[0]}") from None
+    finally:
+        if saved is None:
+            os.environ.pop(wait_key, None)
+    return ray, True
+
+
+@contextlib.contextmanager
+def _silenced_fd2(silence: bool) -> Iterator[None]:
+    """Point file descriptor 2 (stderr, also for C++ code) at /dev/null while active (if ``silence``)."""
+    if not silence:
+        yield
+        return
+    sys.stderr.flush()
+    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def ray_cpus(ray: Any) -> int:
+    """CPUs of the connected Ray cluster (one task each)."""
+    return int(ray.cluster_resources().get("CPU", 1))
+
+
+def run_ray(ray: Any, tasks: Sequence[Task], on_record: OnRecord) -> None:
+    """Run ``tasks`` as Ray tasks (one CPU each) on the connected cluster; ``on_record`` as in :func:`run_local`."""
+    from amlip_qp.sweep.run_cell import run_cell
+
+    remote = ray.remote(num_cpus=1, max_retries=0)(run_cell)
+    pending = [remote.remote(t) for t in tasks]
+    try:
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            for ref in done:
+                on_record(ray.get(ref))
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)

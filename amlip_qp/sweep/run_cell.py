@@ -1,0 +1,232 @@
+"""A sweep cell -> one deterministic walk -> its metrics.
+
+A cell's parameters are ``walk`` options by their argparse names (``vx``,
+``tracker``, ``plant_mass_scale``, ``terrain``, ...; ``--turn-rate`` is
+``turn_rate``), parsed with the ``walk`` subcommand of
+:func:`amlip_qp.cli.build_parser` and turned into a scenario by
+:func:`amlip_qp.sim.cli.scenario_from_args` (which applies
+:func:`~amlip_qp.sim.cli.setting_from_args`), so every ``walk`` option is
+sweepable, including options added later. A flag (``noise``) takes ``true`` or
+``false``. The push parameters (:data:`PUSH_DEFAULTS`) add one push on the
+base: ``push_impulse_Ns`` (0: no push), ``push_direction_deg`` (in the
+horizontal plane from +x, forward, towards +y, left), ``push_phase`` (the step
+phase it starts at, after ``push_time_s``; none: at ``push_time_s``),
+``push_duration_s`` and ``push_time_s``. Force = impulse / duration.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from amlip_qp.exceptions import InputError
+
+#: Push parameters and their defaults (``None``: no phase trigger, the push starts at ``push_time_s``).
+PUSH_DEFAULTS: dict[str, float | None] = {
+    "push_impulse_Ns": 0.0,
+    "push_direction_deg": 0.0,
+    "push_phase": None,
+    "push_duration_s": 0.2,
+    "push_time_s": 2.0,
+}
+#: ``walk`` options that are not part of a walk's outcome (outputs, the progress bar, the handler).
+NOT_PARAMETERS = ("command", "func", "json", "log", "plot", "video", "video_fps", "no_progress")
+
+#: Metric name -> how it is read from the JSON summary (:func:`amlip_qp.sim.summary.summarize`).
+_METRIC_READERS: dict[str, Any] = {
+    "survived": lambda s: not s["fell"],
+    "fell": lambda s: s["fell"],
+    "fall_time_s": lambda s: s["fall_time_s"],
+    "sim_time_s": lambda s: s["sim_time_s"],
+    "steps": lambda s: s["steps"],
+    "mean_vx_mps": lambda s: s["mean_velocity"][0],
+    "mean_vy_mps": lambda s: s["mean_velocity"][1],
+    "velocity_error_rms": lambda s: s["velocity_error_rms"],
+    "foot_placement_error_rms_m": lambda s: s["foot_placement_error_rms_m"],
+    "L_end_of_step_error_rms": lambda s: s["L_end_of_step_error_rms"],
+    "heading_change_deg": lambda s: s["heading_change_deg"],
+    "fallback_ticks": lambda s: s["fallback_ticks"],
+    "tracker_failed_ticks": lambda s: s["tracker_failed_ticks"],
+    "safe_mode_ticks": lambda s: s["safe_mode_ticks"],
+    "estimator_divergences": lambda s: s["estimator_divergences"],
+    "base_velocity_error_rms_mps": lambda s: s["base_velocity_error_rms_mps"],
+    "yaw_estimate_error_deg": lambda s: s["yaw_estimate_error_deg"],
+    # wall-clock measures: they depend on the machine and its load, so they differ from run to run
+    "realtime_factor": lambda s: s["realtime_factor"],
+    "tick_time_median_us": lambda s: s["tick_time_us"]["median"],
+}
+#: Every metric a walk cell can report (see ``docs``: the summary schema for their definitions).
+METRICS: tuple[str, ...] = tuple(_METRIC_READERS)
+#: The metrics kept when a spec names none (all reproducible: no wall-clock measure).
+DEFAULT_METRICS: tuple[str, ...] = (
+    "survived",
+    "fall_time_s",
+    "steps",
+    "mean_vx_mps",
+    "velocity_error_rms",
+    "foot_placement_error_rms_m",
+)
+
+
+def walk_defaults() -> dict[str, Any]:
+    """The sweepable ``walk`` options and their defaults (argparse destination names)."""
+    from amlip_qp.cli import build_parser
+
+    options = vars(build_parser().parse_args(["walk"]))
+    return {k: v for k, v in options.items() if k not in NOT_PARAMETERS}
+
+
+def parameter_names() -> tuple[str, ...]:
+    """Every sweepable parameter: the ``walk`` options, then the push parameters."""
+    return (*walk_defaults(), *PUSH_DEFAULTS)
+
+
+def walk_argv(params: Mapping[str, Any]) -> list[str]:
+    """The ``walk`` arguments of ``params`` (the push parameters left out): ``--name=value``, a flag for ``true``."""
+    argv = []
+    for name, value in params.items():
+        if name in PUSH_DEFAULTS:
+            continue
+        option = "--" + name.replace("_", "-")
+        if isinstance(value, bool):
+            if value:
+                argv.append(option)
+        else:
+            argv.append(f"{option}={value}")
+    return argv
+
+
+def _parse_walk(argv: list[str]):
+    """``argv`` parsed by the ``walk`` subparser; its one-line error as an :class:`InputError`."""
+    from amlip_qp.cli import build_parser
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            return build_parser().parse_args(["walk", *argv])
+    except SystemExit:
+        lines = err.getvalue().strip().splitlines() or ["invalid walk options"]
+        message = lines[-1].split(" error: ", 1)[-1].split(" (see '")[0]
+        raise InputError(f"walk {' '.join(argv)}: {message}") from None
+
+
+@dataclass(frozen=True)
+class WalkRun:
+    """What one walk of a cell needs: the scenario, the tracker, the seed, and Gaussian noise on or off."""
+
+    scenario: Any  # amlip_qp.sim.scenarios.Scenario (imported lazily: this module stays light)
+    tracker: str
+    seed: int
+    noise: bool
+
+
+def make_push(params: Mapping[str, Any]):
+    """The push of ``params`` (:data:`PUSH_DEFAULTS` for the missing ones), or ``None`` for a zero impulse."""
+    from amlip_qp.sim.run_types import Push
+
+    p = {**PUSH_DEFAULTS, **{k: v for k, v in params.items() if k in PUSH_DEFAULTS}}
+    for name, value in p.items():
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            raise InputError(f"{name} must be a number, got {value!r}")
+    impulse, duration = float(p["push_impulse_Ns"]), float(p["push_duration_s"])
+    if not (math.isfinite(impulse) and impulse >= 0 and duration > 0):
+        raise InputError(f"a push needs push_impulse_Ns >= 0 and push_duration_s > 0, got {impulse!r}, {duration!r}")
+    if impulse == 0.0:
+        return None
+    angle = math.radians(float(p["push_direction_deg"]))
+    force = impulse / duration
+    # exact zeros where the direction is along an axis (cos 90 deg is 6e-17, not 0: a planar robot refuses any FY)
+    fx, fy = (0.0 if abs(c) < 1e-12 else force * c for c in (math.cos(angle), math.sin(angle)))
+    phase = p["push_phase"]
+    return Push(float(p["push_time_s"]), (fx, fy, 0.0), duration, None if phase is None else float(phase))
+
+
+def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
+    """The walk of a cell with these parameters and seed (``seed`` is used unless the cell sets ``seed``).
+
+    Raises:
+        InputError: An unknown or malformed option or value, a command outside the
+            robot's bounds, or a phase push that may not start before the walk ends.
+    """
+    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.sim.scenarios import check_scenario
+
+    unknown = [n for n in params if n not in walk_defaults() and n not in PUSH_DEFAULTS]
+    if unknown:
+        raise InputError(f"unknown parameter {unknown[0]!r}; known: {', '.join(parameter_names())}")
+    argv = walk_argv(params)
+    if "seed" not in params:
+        argv.append(f"--seed={seed}")
+    args = _parse_walk(argv)
+    try:
+        scenario = scenario_from_args(args)
+        push = make_push(params)
+        if push is not None:
+            scenario = scenario.with_(pushes=(*scenario.pushes, push))
+            check_scenario(scenario)
+            if push.phase is not None:
+                latest_end = push.t_s + 2.0 * scenario.gait_settings.step_time_s + push.duration_s
+                if scenario.duration_s < latest_end:
+                    raise InputError(
+                        f"a push at step phase {push.phase:g} after {push.t_s:g} s may start up to one step late: "
+                        f"give a duration of at least {latest_end:g} s, got {scenario.duration_s:g} s"
+                    )
+    except InputError as exc:
+        raise InputError(f"walk {' '.join(argv)}: {exc}") from None
+    return WalkRun(scenario, args.tracker, int(args.seed), bool(args.noise))
+
+
+def check_plants(runs: list[WalkRun]) -> None:
+    """Load each distinct plant setting once (with its modifiers), so a bad plant fails before any walk."""
+    from amlip_qp.sim.cli import check_plant
+
+    seen = set()
+    for run in runs:
+        key = (run.scenario.robot, run.scenario.setting)
+        if key not in seen:
+            seen.add(key)
+            check_plant(run.scenario)
+
+
+def walk(run: WalkRun) -> dict[str, Any]:
+    """Simulate one walk; every metric of :data:`METRICS` (JSON values: NaN as ``None``)."""
+    from amlip_qp.sim import factory, summary
+    from amlip_qp.sim.run_types import SensorNoise
+
+    sc = run.scenario
+    sim = factory.build_simulation(sc, run.tracker, seed=run.seed, noise=SensorNoise() if run.noise else None)
+    result = sim.run(sc.duration_s)
+    result.info["scenario"] = sc.name
+    result.info["modifiers"] = sc.setting.modifiers.describe()
+    summ = summary.to_jsonable(summary.summarize(result))
+    return {name: read(summ) for name, read in _METRIC_READERS.items()}
+
+
+def run_cell(task: dict[str, Any]) -> dict[str, Any]:
+    """Run one cell (in a worker process or a Ray task) and return its record.
+
+    ``task``: ``{"index", "id", "seed", "params", "bisect"}`` with ``bisect``
+    ``None`` or ``{"parameter", "low", "high", "iterations"}``. The record is
+    the task with ``metrics`` and ``wall_s`` added; with a bisection the metrics
+    are ``max_<parameter>``, ``max_<parameter>_capped`` and ``bisect_walks``.
+    """
+    from amlip_qp.sweep.bisect import largest_surviving
+
+    t0 = time.perf_counter()
+    params, seed, bis = task["params"], task["seed"], task["bisect"]
+    if bis is None:
+        metrics = walk(walk_run(params, seed))
+    else:
+        name = bis["parameter"]
+
+        def survives(value: float) -> bool:
+            return bool(walk(walk_run({**params, name: value}, seed))["survived"])
+
+        value, capped, trials = largest_surviving(survives, bis["low"], bis["high"], bis["iterations"])
+        metrics = {f"max_{name}": value, f"max_{name}_capped": capped, "bisect_walks": len(trials)}
+    return {**task, "metrics": metrics, "wall_s": time.perf_counter() - t0}

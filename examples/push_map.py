@@ -1,0 +1,112 @@
+"""The push map: the largest push survived over direction x phase of the step, per tracker, and their ratio.
+
+Runs the shipped spec (``examples/sweeps/push_map.toml``: Cassie at 1 m/s,
+0.2 s pushes, 8 directions x 5 phases, bisection of the impulse, both
+trackers) with ``amlip-qp sweep`` into ``--out``, or reads a finished sweep
+folder (``--from``), and draws one polar heat map per tracker (the largest
+impulse survived, N s; direction from forward, drawn up, towards left; phase
+as the radius) and one of their ratio (QP / PBC)::
+
+    python examples/push_map.py --out out/push_map              # run the sweep (resumes), then draw
+    python examples/push_map.py --from out/push_map --figure docs/media/push_map.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.colors import TwoSlopeNorm
+
+from amlip_qp.cli import main as amlip_qp_main
+from amlip_qp.sweep.figures import grid_values, polar_map
+
+SPEC = Path(__file__).resolve().parent / "sweeps" / "push_map.toml"
+VALUE = "max_push_impulse_Ns"
+
+
+def read_records(folder: Path) -> list[dict]:
+    """The rows of ``folder/results.csv`` as records ``{"params": ..., "metrics": ...}`` (numbers parsed)."""
+    with open(folder / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    out = []
+    for r in rows:
+        params = {
+            "tracker": r["tracker"],
+            "push_direction_deg": float(r["push_direction_deg"]),
+            "push_phase": float(r["push_phase"]),
+        }
+        out.append({"params": params, "metrics": {VALUE: float(r[VALUE]) if r[VALUE] else float("nan")}})
+    return out
+
+
+def draw(folder: Path, figure: Path) -> None:
+    """One polar map per tracker in the sweep, and the QP / PBC ratio when both are there."""
+    records = read_records(folder)
+    trackers = list(dict.fromkeys(r["params"]["tracker"] for r in records))
+    summary = json.loads((folder / "summary.json").read_text())
+    spec = json.loads((folder / "spec.json").read_text())
+    high = spec["bisect"]["high"]
+    maps = {t: grid_values(records, "push_direction_deg", "push_phase", VALUE, {"tracker": t}) for t in trackers}
+    panels = len(trackers) + (1 if {"pbc", "qp"} <= set(trackers) else 0)
+    fig = plt.figure(figsize=(4.4 * panels, 4.6))
+    for i, t in enumerate(trackers):
+        ds, ps, z = maps[t]
+        ax = fig.add_subplot(1, panels, i + 1, projection="polar")
+        mesh = polar_map(ax, ds, ps, z, cmap="viridis", vmin=0.0, vmax=high)
+        capped = int(np.sum(z >= high))
+        ax.set_title(f"{t.upper()}: largest impulse survived\n({capped} of {z.size} cells >= {high:g} N s)", fontsize=9)
+        fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="N s")
+    if panels > len(trackers):
+        ds, ps, zq = maps["qp"]
+        _, _, zp = maps["pbc"]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(zp > 0, zq / zp, np.nan)
+        ax = fig.add_subplot(1, panels, panels, projection="polar")
+        finite = ratio[np.isfinite(ratio)]
+        top = max(2.0, float(np.max(finite))) if finite.size else 2.0
+        mesh = polar_map(ax, ds, ps, ratio, cmap="RdBu", norm=TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=top))
+        ax.set_title("QP / PBC (blue: QP survives more)", fontsize=9)
+        fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="ratio")
+    fig.suptitle(
+        f"Cassie at 1 m/s, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
+        f"{summary['ran']} cells in {summary['wall_time_s'] / 60:.1f} min on {summary['workers']} worker(s), "
+        f"{summary['backend']}",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    figure.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(figure, dpi=130)
+    print(f"wrote {figure}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", type=Path, help="run the shipped spec into this folder (a finished sweep resumes)")
+    where.add_argument("--from", dest="source", type=Path, help="draw from this finished sweep folder")
+    parser.add_argument("--spec", type=Path, default=SPEC, help=f"the sweep spec (default {SPEC.name})")
+    parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    parser.add_argument("--figure", type=Path, default=None, help="figure path (default: FOLDER/push_map.png)")
+    args = parser.parse_args(argv)
+    folder = args.source
+    if args.out is not None:
+        folder = args.out
+        extra = ["--workers", str(args.workers)] if args.workers else []
+        code = amlip_qp_main(["sweep", str(args.spec), "--out", str(folder), *extra])
+        if code != 0:
+            return code
+    draw(folder, args.figure or folder / "push_map.png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
