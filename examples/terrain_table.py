@@ -44,7 +44,10 @@ def main(argv=None) -> int:
     jobs.sort(key=lambda j: -TERRAIN_SCENARIOS[j[0]].duration_s)  # longest first
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = dict(zip(jobs, pool.map(_run, jobs)))
-    print("| scenario | terrain | tracker | mode | fell | speed, last 3 s m/s | command m/s | foot placement error RMS m |")
+    print(
+        "| scenario | terrain | tracker | mode | fell | speed, last 3 s m/s | command m/s"
+        " | foot placement error RMS m |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name in names:
         sc = TERRAIN_SCENARIOS[name]

@@ -321,7 +321,6 @@ def test_clearance_option_reaches_the_planner_command_and_is_bounded():
     assert info.value.code == 2
 
 
-
 def test_compare_takes_the_terrain_aware_and_clearance_settings():
     from amlip_qp.sim.cli import setting_from_args
     from amlip_qp.sim.run_types import PlantSetting

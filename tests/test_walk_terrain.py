@@ -41,7 +41,7 @@ def test_qp_walks_the_terrain_at_the_commanded_speed(name):
     from amlip_qp.sim.summary import summarize
 
     scenario = SCENARIOS[name]
-    s = summarize(run_scenario(scenario, "qp"))
+    s = summarize(run_scenario(scenario, "qp", log="summary"))
     assert s["terrain"] == scenario.setting.terrain
     assert not s["fell"], f"{name}: fell at {s['fall_time_s']} s"
     assert s["sim_time_s"] == pytest.approx(scenario.duration_s)

@@ -222,8 +222,13 @@ def run_scenario(
     estimator: str | None = None,
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
+    log: str = "full",
 ) -> RunResult:
-    """Build and run ``scenario`` for its full duration (see :func:`build_simulation`)."""
+    """Build and run ``scenario`` for its full duration (see :func:`build_simulation`).
+
+    ``log``: ``"full"`` or ``"summary"`` (only what :func:`~amlip_qp.sim.summary.summarize` reads;
+    the same trajectory), see :meth:`Simulation.run`.
+    """
     sim = build_simulation(
         scenario,
         tracker,
@@ -235,7 +240,7 @@ def run_scenario(
         plant_edits=plant_edits,
         ctrl_filter=ctrl_filter,
     )
-    result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick)
+    result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick, log=log)
     result.info["scenario"] = scenario.name
     result.info["modifiers"] = scenario.setting.modifiers.describe()
     result.info["terrain"] = scenario.setting.terrain

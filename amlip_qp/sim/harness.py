@@ -26,6 +26,7 @@ from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
+from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_log import (
     LOG_MODES,
     SCALAR_KEYS,
@@ -34,7 +35,6 @@ from amlip_qp.sim.run_log import (
     unpack_log,
     vector_groups,
 )
-from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
 

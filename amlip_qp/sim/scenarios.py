@@ -280,7 +280,7 @@ def _terrain(
         name,
         "cassie",
         duration_s,
-        vx=_ramp(vx_mps, 1.0),
+        vx=_ramp(vx_mps, max(1.0, vx_mps / 0.5)),  # no faster than Cassie's 0.5 m/s^2 command shaping
         setting=PlantSetting(terrain=terrain, terrain_aware=aware, clearance_m=clearance_m),
         description=f"Cassie walks {text} at {vx_mps:g} m/s ({mode})",
     )

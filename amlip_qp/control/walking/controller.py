@@ -360,7 +360,9 @@ class WalkingController:
             if new_step:
                 ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
                 # the swing target of the new step is not known yet: plan once for it
-                plan = self.planner.update(state, command, ground.predict(est.stance_contact_m, self.planner.heading_rad))
+                plan = self.planner.update(
+                    state, command, ground.predict(est.stance_contact_m, self.planner.heading_rad)
+                )
                 target_xy = plan.swing_target_world_m
             else:
                 target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
