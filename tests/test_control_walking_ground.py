@@ -101,3 +101,29 @@ def test_aware_pitch_beside_a_stair_edge_is_the_treads():
     for x in (0.28, 0.32, 0.45):  # just before an edge, just after it, mid-tread
         assert g.predict(np.array([x, 0.0]), 0.0).slope_pitch_rad == 0.0
     assert g.predict(np.array([0.32, 0.0]), 0.0).dz_sw_m == pytest.approx(0.1)
+
+
+def test_a_clearance_too_high_for_the_step_is_lowered_to_keep_the_swing_apex_below_the_com():
+    from amlip_qp.alip.messages import Command, TerrainPrediction
+    from amlip_qp.alip.outputs import check_ground
+    from amlip_qp.control.walking.ground import APEX_MARGIN_M, fit_clearance
+
+    cmd = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.7)
+    up = TerrainPrediction(dz_next_m=0.2, dz_sw_m=0.2)
+    fitted = fit_clearance(up, cmd)
+    # apex = 0.2 + z_cl + 0.2 / 8 must stay APEX_MARGIN_M below the CoM at 0.8 m
+    assert fitted.clearance_m == pytest.approx(0.8 - 0.2 - 0.025 - APEX_MARGIN_M)
+    ground = (up.dz_sw0_m, up.dz_sw_m, 0.0, 0.0)
+    check_ground(ground, 0.8, fitted.clearance_m)  # the planner accepts it ...
+    with pytest.raises(InputError, match="swing foot path too high"):
+        check_ground(ground, 0.8, cmd.clearance_m)  # ... and would have refused the given one
+    assert (fitted.vx_mps, fitted.com_height_m) == (cmd.vx_mps, cmd.com_height_m)
+    # a clearance that fits is the same object (flat ground and the named scenarios); never below 0 m
+    assert (
+        fit_clearance(TerrainPrediction(), Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.1)).clearance_m
+        == 0.1
+    )
+    small = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.1)
+    assert fit_clearance(up, small) is small
+    deep = TerrainPrediction(dz_next_m=0.25, dz_sw_m=0.25, dz_sw0_m=-0.7)
+    assert fit_clearance(deep, small).clearance_m == 0.0

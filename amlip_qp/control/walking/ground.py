@@ -29,11 +29,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
 from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
-from amlip_qp.alip.messages import TerrainPrediction
+from amlip_qp.alip.messages import Command, TerrainPrediction
 from amlip_qp.exceptions import InputError
 
 #: The ground modes of :class:`GroundPredictor` (module doc).
@@ -48,7 +49,29 @@ MAX_PITCH_RAD = math.radians(30.0)
 #: prediction reads the ground's grades for its pitch (about half a foot blade).
 PITCH_HALF_BASE_M = 0.05
 
+#: The swing foot's apex stays at least this far below the CoM, m, when
+#: :func:`fit_clearance` lowers a clearance that would lift it too high.
+APEX_MARGIN_M = 0.05
+
 HeightFunction = Callable[[float, float], float]
+
+
+def fit_clearance(prediction: TerrainPrediction, command: Command) -> Command:
+    """``command``, or a copy with a smaller clearance if the swing path over ``prediction`` would reach the CoM.
+
+    The swing foot's apex over the stance contact is at most
+    ``max(dz0, dz1) + z_cl + |dz1 - dz0| / 8`` and the references need it below
+    the CoM at ``H + min(dz0, 0)`` (:func:`amlip_qp.alip.outputs.check_ground`).
+    A large ``--clearance`` over a large step would otherwise stop the walk with
+    an error mid-run; here that step's clearance is lowered instead, to keep the
+    apex :data:`APEX_MARGIN_M` below the CoM (never below 0 m). The same object
+    comes back when the clearance fits (every run of the named scenarios).
+    """
+    dz0, dz1 = prediction.dz_sw0_m, prediction.dz_sw_m
+    room = command.com_height_m + min(dz0, 0.0) - max(dz0, dz1) - 0.125 * abs(dz1 - dz0) - APEX_MARGIN_M
+    if command.clearance_m <= room:
+        return command
+    return replace(command, clearance_m=max(room, 0.0))
 
 
 def _clip(value: float, limit: float) -> float:
