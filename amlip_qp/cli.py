@@ -181,9 +181,11 @@ def _add_plant_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--terrain-aware",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help="give the controller the terrain's height function (swing target height and the placement law's "
-        "height difference from it); default: blind, the ground is felt by contact",
+        "height difference from it); --no-terrain-aware: blind, the ground is felt by contact (default: the "
+        "scenario's, else blind)",
     )
     p.add_argument(
         "--clearance",

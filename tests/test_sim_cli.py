@@ -330,3 +330,12 @@ def test_compare_takes_the_terrain_aware_and_clearance_settings():
     setting = setting_from_args(args, PlantSetting())
     assert (setting.terrain, setting.terrain_aware, setting.clearance_m) == ("slope:10", True, 0.15)
     assert setting_from_args(parser.parse_args(["compare"]), PlantSetting()) == PlantSetting()
+
+
+def test_no_terrain_aware_turns_an_aware_scenario_blind_and_the_default_keeps_it():
+    from amlip_qp.sim.cli import scenario_from_args
+
+    parser = cli.build_parser()
+    stairs = ["walk", "--scenario", "cassie-stairs-10cm"]
+    assert scenario_from_args(parser.parse_args(stairs)).setting.terrain_aware
+    assert not scenario_from_args(parser.parse_args([*stairs, "--no-terrain-aware"])).setting.terrain_aware

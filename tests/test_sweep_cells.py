@@ -23,3 +23,13 @@ def test_id_and_seed_depend_on_the_values_not_on_order_or_index():
 
 def test_a_swept_seed_is_the_walk_seed():
     assert [Cell(i, (("seed", s),)).seed for i, s in enumerate((0, 5, 12))] == [0, 5, 12]
+
+
+def test_a_swept_seed_that_is_not_a_non_negative_integer_is_an_input_error():
+    import pytest
+
+    from amlip_qp.exceptions import InputError
+
+    for bad in ("a", 1.5, -1, True):
+        with pytest.raises(InputError, match="seed must be a non-negative integer"):
+            _ = Cell(0, (("seed", bad), ("tracker", "qp"))).seed

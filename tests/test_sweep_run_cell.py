@@ -77,3 +77,9 @@ def test_run_cell_bisects_the_named_parameter(monkeypatch):
     m = record["metrics"]
     assert m == {"max_push_impulse_Ns": 22.5, "max_push_impulse_Ns_capped": False, "bisect_walks": 5}
     assert record["params"] == task["params"] and record["wall_s"] >= 0.0
+
+
+def test_a_false_on_off_option_is_passed_as_its_no_form():
+    assert rc.walk_argv({"terrain_aware": False}) == ["--no-terrain-aware"]
+    assert rc.walk_argv({"terrain_aware": True}) == ["--terrain-aware"]
+    assert rc.walk_argv({"noise": False}) == []  # a plain flag: false is its absence

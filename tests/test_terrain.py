@@ -285,3 +285,30 @@ def test_the_qp_controller_stands_on_a_ramp_it_starts_on(tmp_path):
     base = res.log["base_pos"]
     base_above_ground = base[:, 2] - np.array([spec.height_m(x, y) for x, y in base[:, :2]])
     assert base_above_ground.min() > 0.8
+
+
+def test_a_gray_and_alpha_png_reads_its_gray_level_not_the_alpha(tmp_path):
+    from amlip_qp.sim.terrain_grids import read_gray_png
+
+    gray = np.array([[0, 64], [128, 255]], dtype=np.uint8)
+    path = tmp_path / "la.png"
+    iio.imwrite(path, np.stack([gray, np.full_like(gray, 255)], axis=-1))  # opaque gray + alpha
+    assert np.allclose(read_gray_png(str(path)), gray / 255.0)
+
+
+def test_ray_casts_skip_robot_geoms_that_share_the_terrain_group():
+    from amlip_qp.sim.terrain import TERRAIN_GEOM_GROUP
+
+    spec = parse_terrain("waves:0.3:4")
+
+    def robot_in_terrain_group(s: mujoco.MjSpec) -> None:  # as a model with its visuals in group 2 would be
+        for geom in s.geoms:
+            if not geom.name.startswith("amlip-terrain") and geom.parent.name != "world":
+                geom.group = TERRAIN_GEOM_GROUP
+
+    plant = load_plant("cassie", factory.load("cassie"), edits=[terrain_edit(spec), robot_in_terrain_group])
+    moving = plant.model.body_weldid[plant.model.geom_bodyid] != 0
+    assert np.any(moving & (plant.model.geom_group == TERRAIN_GEOM_GROUP))
+    ground = ground_height_function(plant, spec)
+    for x in (0.0, 0.05, 1.7, 3.2):  # under the standing robot, and ahead on the waves
+        assert ground(x, 0.0) == pytest.approx(spec.height_m(x, 0.0), abs=1e-6)

@@ -204,9 +204,6 @@ class TerrainPrediction:
                 )
 
 
-#: Flat ground: the terrain a planner assumes when it is given none.
-FLAT_GROUND = TerrainPrediction()
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class PlannerOutput:

@@ -168,7 +168,7 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
         estimator=base.estimator if args.estimator is None else args.estimator,
         modifiers=replace(base.modifiers, **mods) if mods else base.modifiers,
         terrain=terrain,
-        terrain_aware=base.terrain_aware or args.terrain_aware,
+        terrain_aware=base.terrain_aware if args.terrain_aware is None else args.terrain_aware,
         clearance_m=base.clearance_m if args.clearance is None else args.clearance,
     )
     if args.noise and setting.sensors != "ideal":
@@ -214,7 +214,6 @@ def run_walk(args: argparse.Namespace) -> int:
             recorder.close()
     result.info["scenario"] = scenario.name
     result.info["modifiers"] = scenario.setting.modifiers.describe()
-    result.info["terrain"] = scenario.setting.terrain
     summ = summary.summarize(result)
     if args.json is not None:
         _write_text("--json", args.json, summary.dumps(summ))

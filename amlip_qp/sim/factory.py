@@ -207,6 +207,7 @@ def build_simulation(
         estimator=estimator,
         ctrl_filter=ctrl_filter,
         ground_height_m=None if terrain.is_flat else terrain.height_m,
+        terrain=setting.terrain,
     )
 
 
@@ -243,5 +244,4 @@ def run_scenario(
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick, log=log)
     result.info["scenario"] = scenario.name
     result.info["modifiers"] = scenario.setting.modifiers.describe()
-    result.info["terrain"] = scenario.setting.terrain
     return result

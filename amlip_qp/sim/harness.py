@@ -71,6 +71,7 @@ class Simulation:
         ground_height_m: World (x, y) m -> ground height m (the terrain's); the fall
             check then takes the base height above the ground under the base.
             ``None``: above z = 0 (flat ground).
+        terrain: The terrain's spec text (``--terrain``), reported in the result's ``info``.
     """
 
     def __init__(
@@ -90,6 +91,7 @@ class Simulation:
         sensor_settings: SensorSettings | None = None,
         ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
         ground_height_m: Callable[[float, float], float] | None = None,
+        terrain: str = "flat",
     ):
         self.robot = robot
         self.controller = controller
@@ -130,6 +132,7 @@ class Simulation:
         self.true_base = self.estimator == "truth"
         self.ctrl_filter = ctrl_filter
         self.ground_height_m = ground_height_m
+        self.terrain = str(terrain)
         self._base_q, self._base_v = base_indices(robot)
         self._base_size = (np.zeros(robot.nq)[self._base_q].size, np.zeros(robot.nv)[self._base_v].size)
         self._scalar_pin_q = robot.state_map.scalar_pin_q
@@ -355,6 +358,7 @@ class Simulation:
                 "plant": self.plant.name,
                 "sensors": self.sensors.model,
                 "estimator": self.estimator,
+                "terrain": self.terrain,
                 "log": log,
             },
         )

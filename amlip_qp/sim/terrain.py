@@ -133,7 +133,7 @@ class TerrainSpec:
         return 0.0
 
     def height_m(self, x_m: float, y_m: float) -> float:
-        """The ground height at world (x, y), m: what MuJoCo's geometry gives (ray casts agree to < 1 mm)."""
+        """The ground height at world (x, y), m: what MuJoCo's geometry gives (ray casts agree to 1e-7 m)."""
         if self.kind == "flat":
             return 0.0
         inside = abs(y_m) <= G.HALF_WIDTH_M
@@ -371,7 +371,8 @@ def ground_height_function(plant: Plant, terrain: TerrainSpec) -> Callable[[floa
     in_group = static & (model.geom_group == TERRAIN_GEOM_GROUP)
     down = np.array([0.0, 0.0, -1.0])
     pnt = np.array([0.0, 0.0, _RAY_TOP_M])
-    if np.any(in_group):
+    robot_in_group = np.any(~static & (model.geom_group == TERRAIN_GEOM_GROUP))
+    if np.any(in_group) and not robot_in_group:  # one ray into the group: only terrain there
         mask = np.zeros(6, dtype=np.uint8)
         mask[TERRAIN_GEOM_GROUP] = 1
         hit = np.zeros(1, dtype=np.int32)
@@ -388,9 +389,10 @@ def ground_height_function(plant: Plant, terrain: TerrainSpec) -> Callable[[floa
             return _RAY_TOP_M - best if best >= 0.0 else math.nan
 
         return by_group
-    if not terrain.is_flat:
+    if not terrain.is_flat and not np.any(in_group):
         raise InputError(f"plant {plant.name} has no terrain geoms: load it with the edit of --terrain {terrain.text}")
-    ids = [int(g) for g in np.flatnonzero(static)]
+    # a plant whose own (moving) geoms share the terrain's group: cast into the static geoms one by one
+    ids = [int(g) for g in np.flatnonzero(in_group if np.any(in_group) else static)]
 
     hfield = mujoco.mjtGeom.mjGEOM_HFIELD
 
@@ -401,8 +403,10 @@ def ground_height_function(plant: Plant, terrain: TerrainSpec) -> Callable[[floa
         return mujoco.mju_rayGeom(pos, mat, size, pnt, down, model.geom_type[g])
 
     def by_geom(x_m: float, y_m: float) -> float:
-        pnt[0], pnt[1] = x_m, y_m
-        hits = [d for d in (one(g) for g in ids) if d >= 0.0]
+        hits = []
+        for dy in (0.0, _ROW_NUDGE_M):  # the height-field row miss, as in by_group
+            pnt[0], pnt[1] = x_m, y_m + dy
+            hits += [d for d in (one(g) for g in ids) if d >= 0.0]
         return _RAY_TOP_M - min(hits) if hits else math.nan
 
     return by_geom

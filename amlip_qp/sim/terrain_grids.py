@@ -183,7 +183,9 @@ def read_gray_png(path: str) -> np.ndarray:
     else:
         raise InputError(f"height map {path} has pixels of type {img.dtype}; give an 8- or 16-bit PNG")
     if gray.ndim == 3:
-        gray = gray[..., :3].mean(axis=2)
+        if gray.shape[-1] in (2, 4):  # gray + alpha, RGB + alpha: the alpha channel is no height
+            gray = gray[..., :-1]
+        gray = gray.mean(axis=2)
     if gray.ndim != 2 or min(gray.shape) < 2:
         raise InputError(f"height map {path} must be an image of at least 2 x 2 pixels, got shape {img.shape}")
     return gray

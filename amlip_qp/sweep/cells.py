@@ -15,6 +15,8 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from amlip_qp.exceptions import InputError
+
 #: Hex digits of the cell id (48 bits: a collision in a million cells has odds below 1e-3).
 ID_HEX_DIGITS = 12
 
@@ -68,7 +70,10 @@ class Cell(Mapping[str, Any]):
         """The walk's seed: the ``seed`` parameter if set, else a 31-bit hash of the cell."""
         params = self.params
         if "seed" in params:
-            return int(params["seed"])
+            seed = params["seed"]
+            if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+                raise InputError(f"seed must be a non-negative integer, got {seed!r}")
+            return seed
         return int(hashlib.sha256(("seed:" + self._identity()).encode()).hexdigest()[:8], 16) & 0x7FFFFFFF
 
     def task(self) -> dict[str, Any]:

@@ -17,6 +17,7 @@ phase it starts at, after ``push_time_s``; none: at ``push_time_s``),
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import math
 import time
@@ -73,8 +74,9 @@ DEFAULT_METRICS: tuple[str, ...] = (
 )
 
 
+@functools.cache
 def walk_defaults() -> dict[str, Any]:
-    """The sweepable ``walk`` options and their defaults (argparse destination names)."""
+    """The sweepable ``walk`` options and their defaults (argparse destination names; built once, do not modify)."""
     from amlip_qp.cli import build_parser
 
     options = vars(build_parser().parse_args(["walk"]))
@@ -96,6 +98,8 @@ def walk_argv(params: Mapping[str, Any]) -> list[str]:
         if isinstance(value, bool):
             if value:
                 argv.append(option)
+            elif walk_defaults().get(name, False) is None:  # an on/off option (--x / --no-x) left to the scenario
+                argv.append("--no-" + option[2:])
         else:
             argv.append(f"{option}={value}")
     return argv
