@@ -204,7 +204,6 @@ class TerrainPrediction:
                 )
 
 
-
 @dataclass(frozen=True, kw_only=True, slots=True)
 class PlannerOutput:
     """The planner's answer at one tick (SI units).
