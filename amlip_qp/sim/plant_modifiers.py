@@ -185,7 +185,7 @@ def parse_payload(text: str) -> tuple[float, tuple[float, float, float]]:
     return mods.payload_kg, mods.payload_pos_m
 
 
-def _is_static(body: mujoco.MjsBody) -> bool:
+def is_static_body(body: mujoco.MjsBody) -> bool:
     """Whether a body is the world or welded to it (no joint up to the world, not mocap)."""
     while body.name != "world":
         if body.joints or body.mocap:
@@ -318,7 +318,7 @@ class FrictionEdit:
     mu: float
 
     def __call__(self, spec: mujoco.MjSpec) -> None:
-        ground = [g for g in spec.geoms if _is_static(g.parent)]
+        ground = [g for g in spec.geoms if is_static_body(g.parent)]
         if not ground:
             raise MJCFError("the plant has no geom on the world body (a floor) to set --friction on; add a floor")
         for geom in spec.geoms:

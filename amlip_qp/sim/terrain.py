@@ -31,6 +31,7 @@ import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.sim import terrain_grids as G
+from amlip_qp.sim.plant_modifiers import is_static_body
 from amlip_qp.sim.terrain_lift import keyframe_lifts
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -235,15 +236,6 @@ def parse_terrain(text: str) -> TerrainSpec:
 
 
 # ------------------------------------------------------------------ the plant
-def _is_static(body: mujoco.MjsBody) -> bool:
-    """The world body or a body welded to it."""
-    while body.name != "world":
-        if body.joints or body.mocap:
-            return False
-        body = body.parent
-    return True
-
-
 #: The floor's attributes every terrain geom copies (so contacts with the terrain are contacts with the floor).
 _CONTACT_ATTRS = (
     "contype",
@@ -275,7 +267,7 @@ class TerrainEdit:
             return
         lift = keyframe_lifts(spec, floor, t.height_m)
         for g in spec.geoms:
-            if _is_static(g.parent):
+            if is_static_body(g.parent):
                 g.group = TERRAIN_GEOM_GROUP
         floor.pos = [floor.pos[0], floor.pos[1], t.floor_z_m]
         world = spec.worldbody
