@@ -14,6 +14,7 @@ from amlip_qp.sim.robustness import (
     CompareSettings,
     compare_ranges,
     highest_steady_speed,
+    largest_surviving,
     max_survived_impulse,
     nominal_scenario,
     push_scenario,
@@ -96,3 +97,27 @@ def test_nominal_scenario_is_the_profiles_or_the_given_one_capped():
     assert uncapped.duration_s == get_scenario("rabbit-0.5mps").duration_s
     with pytest.raises(InputError, match="at most one --scenario per robot"):
         nominal_scenario("cassie", ["cassie-1mps", "cassie-push"], QUICK)
+
+
+# ------------------------------------------------ the bisection (the sweep's and compare's)
+@pytest.mark.parametrize("edge", [0.7, 17.3, 41.9999, 59.5])
+def test_bisection_brackets_a_monotone_edge(edge):
+    value, capped, trials = largest_surviving(lambda v: v <= edge, 0.0, 60.0, 6)
+    assert not capped and value <= edge < value + 60.0 / 2**6
+    assert trials[0] == (60.0, False) and len(trials) == 7
+    assert all(ok == (v <= edge) for v, ok in trials)
+
+
+def test_bisection_known_steps_and_cap():
+    assert largest_surviving(lambda v: v < 20.0, 0.0, 60.0, 2) == (
+        15.0,
+        False,
+        [(60.0, False), (30.0, False), (15.0, True)],
+    )
+    assert largest_surviving(lambda v: True, 10.0, 60.0, 5) == (60.0, True, [(60.0, True)])
+    assert largest_surviving(lambda v: False, 0.0, 8.0, 3)[:2] == (0.0, False)
+
+
+def test_bisection_refuses_an_empty_interval():
+    with pytest.raises(InputError):
+        largest_surviving(lambda v: True, 5.0, 5.0, 3)

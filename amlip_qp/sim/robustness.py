@@ -96,28 +96,59 @@ def highest_steady_speed(
     return float(np.max(c_mean[ok])) if np.any(ok) else 0.0
 
 
-def max_survived_impulse(
-    survives: Callable[[float], bool], max_impulse_Ns: float, iterations: int
-) -> tuple[float, bool]:
-    """Largest impulse (N s) that ``survives``, by bisection on ``[0, max_impulse_Ns]``.
+def largest_surviving(
+    survives: Callable[[float], bool], low: float, high: float, iterations: int
+) -> tuple[float, bool, list[tuple[float, bool]]]:
+    """The largest value in ``[low, high]`` that ``survives``, by bisection.
 
-    The upper end is tried first: if it survives the answer is
-    ``(max_impulse_Ns, True)`` (at least that much). Otherwise ``iterations``
-    bisection steps keep ``lo`` surviving and ``hi`` failing; returns
-    ``(lo, False)``. ``survives(0)`` is assumed true (it is the unpushed walk).
+    ``high`` is tried first: if it survives the answer is ``high`` and capped
+    (at least that much). Otherwise ``iterations`` halvings keep ``lo``
+    surviving and ``hi`` failing, and the answer is ``lo`` (the true edge lies
+    in ``[lo, lo + (high - low) / 2**iterations)`` for a monotone outcome).
+    ``survives(low)`` is assumed true and not run (for a push impulse, ``low = 0``
+    is the unpushed walk).
+
+    Returns:
+        ``(value, capped, trials)`` with ``trials`` the ``(value, survived)`` pairs in the order run.
+
+    Raises:
+        InputError: ``low >= high``, a non-finite bound, or ``iterations < 0``.
     """
-    if not (max_impulse_Ns > 0 and math.isfinite(max_impulse_Ns)) or iterations < 0:
-        raise InputError(f"need max_impulse_Ns > 0 and iterations >= 0, got {max_impulse_Ns!r}, {iterations!r}")
-    if survives(max_impulse_Ns):
-        return float(max_impulse_Ns), True
-    lo, hi = 0.0, float(max_impulse_Ns)
+    if not (math.isfinite(low) and math.isfinite(high) and low < high) or iterations < 0:
+        raise InputError(
+            f"a bisection needs finite low < high and iterations >= 0, got {low!r}, {high!r}, {iterations!r}"
+        )
+    trials: list[tuple[float, bool]] = []
+
+    def attempt(value: float) -> bool:
+        ok = bool(survives(value))
+        trials.append((value, ok))
+        return ok
+
+    if attempt(float(high)):
+        return float(high), True, trials
+    lo, hi = float(low), float(high)
     for _ in range(iterations):
         mid = 0.5 * (lo + hi)
-        if survives(mid):
+        if attempt(mid):
             lo = mid
         else:
             hi = mid
-    return lo, False
+    return lo, False, trials
+
+
+def max_survived_impulse(
+    survives: Callable[[float], bool], max_impulse_Ns: float, iterations: int
+) -> tuple[float, bool]:
+    """Largest impulse (N s) that ``survives``, by bisection on ``[0, max_impulse_Ns]`` (:func:`largest_surviving`).
+
+    Returns ``(max_impulse_Ns, True)`` if the upper end survives (at least that
+    much), else ``(lo, False)``. ``survives(0)`` is assumed true (it is the unpushed walk).
+    """
+    if not (max_impulse_Ns > 0 and math.isfinite(max_impulse_Ns)) or iterations < 0:
+        raise InputError(f"need max_impulse_Ns > 0 and iterations >= 0, got {max_impulse_Ns!r}, {iterations!r}")
+    value, capped, _ = largest_surviving(survives, 0.0, float(max_impulse_Ns), iterations)
+    return value, capped
 
 
 # ------------------------------------------------------------ scenarios

@@ -219,7 +219,7 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
     the task with ``metrics`` and ``wall_s`` added; with a bisection the metrics
     are ``max_<parameter>``, ``max_<parameter>_capped`` and ``bisect_walks``.
     """
-    from amlip_qp.sweep.bisect import largest_surviving
+    from amlip_qp.sim.robustness import largest_surviving
 
     t0 = time.perf_counter()
     params, seed, bis = task["params"], task["seed"], task["bisect"]

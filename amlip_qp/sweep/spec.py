@@ -79,7 +79,7 @@ class Range:
 
 @dataclass(frozen=True)
 class Bisect:
-    """The bisection of one parameter per cell (:func:`amlip_qp.sweep.bisect.largest_surviving`)."""
+    """The bisection of one parameter per cell (:func:`amlip_qp.sim.robustness.largest_surviving`)."""
 
     parameter: str
     low: float
