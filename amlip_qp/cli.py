@@ -363,7 +363,9 @@ def _add_sweep(sub) -> None:
         help="run many walks over a grid or a random sample of walk options (a robustness map)",
         description="Run one deterministic walk per cell of a grid (or random sample) of walk options and "
         "push parameters, locally on a process pool or on Ray; write results.csv, summary.json and figures to "
-        "--out. Finished cells in --out are skipped (resume). Exit status: 0 done, 2 bad input (nothing written).",
+        "--out. Finished cells in --out are skipped (resume); a cell whose walk raises is recorded in the "
+        "error column and run again next time. Exit status: 0 done, 1 some cell failed, 2 bad input (nothing "
+        "written).",
     )
     p.add_argument("spec", nargs="?", metavar="SPEC", default=None, help="a TOML sweep spec (see examples/sweeps/)")
     p.add_argument(

@@ -14,6 +14,7 @@ import pytest
 
 from amlip_qp.cli import main
 from amlip_qp.sweep import backends
+from amlip_qp.sweep import run_cell as rc
 
 SWEEP = [
     "sweep", "--grid", "tracker=pbc,qp", "--grid", "vx=0.3,0.6", "--set", "robot=rabbit",
@@ -52,8 +53,9 @@ def test_the_table_is_the_same_on_every_backend_and_worker_count(sweeps):
     rows = _rows(sweeps["w1"])
     assert list(rows[0]) == [
         "cell", "id", "tracker", "vx", "seed", "survived", "fall_time_s", "steps", "mean_vx_mps",
-        "velocity_error_rms", "foot_placement_error_rms_m",
+        "velocity_error_rms", "foot_placement_error_rms_m", "error",
     ]  # fmt: skip
+    assert all(r["error"] == "" for r in rows)
     assert [(r["cell"], r["tracker"], r["vx"]) for r in rows] == [
         ("0", "pbc", "0.3"), ("1", "pbc", "0.6"), ("2", "qp", "0.3"), ("3", "qp", "0.6")
     ]  # fmt: skip
@@ -151,3 +153,35 @@ def test_a_folder_of_another_sweep_or_files_is_refused(tmp_path, capsys):
     assert main([*SWEEP, "--out", str(existing)]) == 2
     assert "holds the sweep of another spec" in capsys.readouterr().err
     assert sorted(p.name for p in existing.iterdir()) == ["spec.json"]
+
+
+def test_a_failing_cell_is_recorded_the_others_finish_and_a_rerun_retries_it(tmp_path, capsys, monkeypatch):
+    """A stand-in walk (no simulation) that raises for one cell; the cells run in this process."""
+    broken = {"on": True}
+
+    def fake_walk(run):
+        if broken["on"] and run.tracker == "qp" and run.scenario.vx(0.5) == 0.6:
+            raise RuntimeError("the QP solver failed\ndetails")
+        return dict.fromkeys(rc.METRICS, 0.0) | {"survived": True, "fell": False, "steps": 3}
+
+    def serial(tasks, workers, on_record):
+        for task in tasks:
+            on_record(rc.run_cell(task))
+
+    monkeypatch.setattr(rc, "walk", fake_walk)
+    monkeypatch.setattr(backends, "run_local", serial)
+    out = tmp_path / "out"
+    assert main([*SWEEP, "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and "1 of 4 cells failed (first: cell 3: RuntimeError: the QP solver failed)" in lines[0]
+    rows = _rows(out)
+    assert [r["error"] for r in rows] == ["", "", "", "RuntimeError: the QP solver failed"]
+    assert rows[3]["survived"] == "" and all(r["survived"] == "true" for r in rows[:3])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["failed"] == 1 and summary["failed_cells"][0]["cell"] == 3
+    broken["on"] = False
+    assert main([*SWEEP, "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["ran"], summary["resumed"], summary["failed"]) == (1, 3, 0)
+    assert [r["error"] for r in _rows(out)] == [""] * 4

@@ -33,7 +33,7 @@ def test_records_round_trip_and_the_table_is_in_cell_order(tmp_path):
     assert not [p for p in (tmp_path / "out" / "cells").iterdir() if p.name.startswith(".")]  # no temporary left
     folder.write_table(saved, ["vx"], ["survived", "mean_vx_mps"])
     text = (tmp_path / "out" / "results.csv").read_text()
-    assert text == "cell,id,vx,seed,survived,mean_vx_mps\n0,c0,0.5,5,true,0.45\n1,c1,1.0,6,false,\n"
+    assert text == "cell,id,vx,seed,survived,mean_vx_mps,error\n0,c0,0.5,5,true,0.45,\n1,c1,1.0,6,false,,\n"
     assert metric_ranges(saved, ["survived", "mean_vx_mps"]) == {
         "survived": {"min": 0.0, "max": 1.0, "mean": 0.5},
         "mean_vx_mps": {"min": 0.45, "max": 0.45, "mean": 0.45},
@@ -42,6 +42,18 @@ def test_records_round_trip_and_the_table_is_in_cell_order(tmp_path):
     assert folder.finished("c1") is None
     assert json.loads((tmp_path / "out" / "spec.json").read_text()) == {"parameters": {"vx": [0.5, 1.0]}}
     SweepFolder(tmp_path / "out", {"parameters": {"vx": [0.5, 1.0]}}).check()  # the same spec: resume
+
+
+def test_a_failed_cell_is_in_the_table_and_runs_again(tmp_path):
+    folder = SweepFolder(tmp_path / "out", {"parameters": {"vx": [0.5, 1.0]}})
+    folder.prepare()
+    failed = {**_record(1, 1.0, False), "metrics": {}, "error": "QPSolverError: the QP is infeasible"}
+    saved = [folder.save(_record(0, 0.5, True)), folder.save(failed)]
+    assert folder.finished("c0") == saved[0] and folder.finished("c1") is None  # retried on resume
+    folder.write_table(saved, ["vx"], ["survived", "mean_vx_mps"])
+    lines = (tmp_path / "out" / "results.csv").read_text().splitlines()
+    assert lines[2] == "1,c1,1.0,6,,,QPSolverError: the QP is infeasible"
+    assert metric_ranges(saved, ["survived"]) == {"survived": {"min": 1.0, "max": 1.0, "mean": 1.0}}
 
 
 def test_a_file_is_not_an_output_folder(tmp_path):

@@ -76,7 +76,20 @@ def test_run_cell_bisects_the_named_parameter(monkeypatch):
     record = rc.run_cell(task)
     m = record["metrics"]
     assert m == {"max_push_impulse_Ns": 22.5, "max_push_impulse_Ns_capped": False, "bisect_walks": 5}
-    assert record["params"] == task["params"] and record["wall_s"] >= 0.0
+    assert record["params"] == task["params"] and record["wall_s"] >= 0.0 and record["error"] is None
+
+
+def test_a_cell_whose_walk_raises_is_recorded_not_raised(monkeypatch):
+    def failing_walk(run):
+        raise FloatingPointError("the plant diverged\nsecond line")
+
+    monkeypatch.setattr(rc, "walk", failing_walk)
+    task = {"index": 3, "id": "y", "seed": 2, "params": {"robot": "cassie", "duration": 1.0}, "bisect": None}
+    record = rc.run_cell(task)
+    assert record["metrics"] == {} and record["error"] == "FloatingPointError: the plant diverged"
+    assert {k: record[k] for k in task} == task
+    assert rc.error_text(RuntimeError("x" * 400)) == "RuntimeError: " + "x" * 283 + "..."
+    assert len(rc.error_text(RuntimeError("x" * 400))) == 300 and rc.error_text(ValueError()) == "ValueError"
 
 
 def test_a_false_on_off_option_is_passed_as_its_no_form():

@@ -92,7 +92,11 @@ def _describe(cell: Cell) -> str:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    """``amlip-qp sweep``: run the cells not yet in ``--out``; write the table, summary and figures."""
+    """``amlip-qp sweep``: run the cells not yet in ``--out``; write the table, summary and figures.
+
+    Returns 0, or 1 when a cell failed (its walk raised; recorded in the table's ``error``
+    column and retried by the next run).
+    """
     spec = build_spec(args)
     metrics = metric_columns(spec)
     cells = spec_mod.cells_of(spec)
@@ -117,11 +121,14 @@ def run_sweep(args: argparse.Namespace) -> int:
         if started and ray is not None:
             ray.shutdown()
     done = [records[c.id] for c in cells]
+    failed = [r for r in done if r.get("error")]
     table = folder.write_table(done, list(spec.parameters), metrics)
     summary = {
         "cells": len(cells),
         "ran": len(todo),
         "resumed": len(cells) - len(todo),
+        "failed": len(failed),
+        "failed_cells": [{"cell": r["index"], "id": r["id"], "error": r["error"]} for r in failed],
         "backend": backend,
         "workers": workers,
         "wall_time_s": wall,
@@ -141,6 +148,13 @@ def run_sweep(args: argparse.Namespace) -> int:
         f"{len(cells)} cells ({len(todo)} run, {len(cells) - len(todo)} already done) in {wall:.1f} s "
         f"on {backend} with {workers} worker(s): {table}\n"
     )
+    if failed:
+        first = failed[0]
+        sys.stderr.write(
+            f"amlip-qp sweep: {len(failed)} of {len(cells)} cells failed (first: cell {first['index']}: "
+            f"{first['error']}); see the error column of {table}; run the same command again to retry them\n"
+        )
+        return 1
     return 0
 
 

@@ -8,8 +8,9 @@ Layout of ``DIR``:
   skipping the cells already there;
 - ``results.csv`` (and ``results.parquet`` when pyarrow imports): one row per
   cell in cell order, the columns ``cell``, ``id``, one per swept parameter,
-  ``seed``, one per metric; floats as their shortest round-trip text, so the
-  same cells give the same bytes;
+  ``seed``, one per metric, then ``error`` (empty, or what a failed cell's walk
+  raised: its metrics are then empty); floats as their shortest round-trip
+  text, so the same cells give the same bytes;
 - ``summary.json``: counts, wall time, the backend, per-metric ranges.
 """
 
@@ -100,12 +101,14 @@ class SweepFolder:
             write_atomic(spec_path, (json.dumps(self.spec, indent=2, sort_keys=True) + "\n").encode())
 
     def finished(self, cell_id: str) -> dict[str, Any] | None:
-        """The record of a finished cell, or ``None`` (missing or unreadable: it runs again)."""
+        """The record of a finished cell, or ``None`` (missing, unreadable or failed: it runs again)."""
         try:
             record = json.loads((self.cells / f"{cell_id}.json").read_text())
         except (OSError, ValueError):
             return None
-        return record if isinstance(record, dict) and record.get("id") == cell_id else None
+        if not isinstance(record, dict) or record.get("id") != cell_id or record.get("error"):
+            return None
+        return record
 
     def save(self, record: dict[str, Any]) -> dict[str, Any]:
         """Write a cell's record atomically; return it as read back (JSON values, NaN as ``None``)."""
@@ -115,7 +118,7 @@ class SweepFolder:
 
     def write_table(self, records: Sequence[dict[str, Any]], parameters: Sequence[str], metrics: Sequence[str]) -> str:
         """``results.csv`` (and ``results.parquet`` with pyarrow) of ``records`` in cell order; the CSV path."""
-        columns = ["cell", "id", *parameters, "seed", *metrics]
+        columns = ["cell", "id", *parameters, "seed", *metrics, "error"]
         rows = [
             [
                 r["index"],
@@ -123,6 +126,7 @@ class SweepFolder:
                 *(r["params"].get(p) for p in parameters),
                 r["seed"],
                 *(r["metrics"].get(m) for m in metrics),
+                r.get("error"),
             ]
             for r in sorted(records, key=lambda r: r["index"])
         ]

@@ -216,21 +216,38 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
 
     ``task``: ``{"index", "id", "seed", "params", "bisect"}`` with ``bisect``
     ``None`` or ``{"parameter", "low", "high", "iterations"}``. The record is
-    the task with ``metrics`` and ``wall_s`` added; with a bisection the metrics
-    are ``max_<parameter>``, ``max_<parameter>_capped`` and ``bisect_walks``.
+    the task with ``metrics``, ``error`` and ``wall_s`` added; with a bisection
+    the metrics are ``max_<parameter>``, ``max_<parameter>_capped`` and
+    ``bisect_walks``. A cell whose walk raises does not stop the sweep: its
+    record has no metrics and ``error`` says what was raised (one line,
+    :func:`error_text`); ``error`` is ``None`` otherwise.
     """
+    t0 = time.perf_counter()
+    try:
+        metrics, error = cell_metrics(task), None
+    except Exception as exc:  # any failure of one cell is recorded, not fatal to the sweep
+        metrics, error = {}, error_text(exc)
+    return {**task, "metrics": metrics, "error": error, "wall_s": time.perf_counter() - t0}
+
+
+def cell_metrics(task: dict[str, Any]) -> dict[str, Any]:
+    """The metrics of one cell (see :func:`run_cell`); raises whatever its walks raise."""
     from amlip_qp.sim.robustness import largest_surviving
 
-    t0 = time.perf_counter()
     params, seed, bis = task["params"], task["seed"], task["bisect"]
     if bis is None:
-        metrics = walk(walk_run(params, seed))
-    else:
-        name = bis["parameter"]
+        return walk(walk_run(params, seed))
+    name = bis["parameter"]
 
-        def survives(value: float) -> bool:
-            return bool(walk(walk_run({**params, name: value}, seed))["survived"])
+    def survives(value: float) -> bool:
+        return bool(walk(walk_run({**params, name: value}, seed))["survived"])
 
-        value, capped, trials = largest_surviving(survives, bis["low"], bis["high"], bis["iterations"])
-        metrics = {f"max_{name}": value, f"max_{name}_capped": capped, "bisect_walks": len(trials)}
-    return {**task, "metrics": metrics, "wall_s": time.perf_counter() - t0}
+    value, capped, trials = largest_surviving(survives, bis["low"], bis["high"], bis["iterations"])
+    return {f"max_{name}": value, f"max_{name}_capped": capped, "bisect_walks": len(trials)}
+
+
+def error_text(exc: BaseException) -> str:
+    """``"TypeName: first line of the message"`` (at most 300 characters): a failed cell's ``error``."""
+    lines = str(exc).strip().splitlines()
+    text = f"{type(exc).__name__}: {lines[0]}" if lines else type(exc).__name__
+    return text if len(text) <= 300 else text[:297] + "..."
