@@ -5,13 +5,15 @@ feet touched down. :class:`FootholdPlane` keeps the last ``capacity``
 footholds (world ``x, y, z`` of the stance contact at each touchdown, m) and
 fits the local ground plane ``z = a + g_u u + g_w w`` by least squares in the
 heading frame (``u`` along the heading, ``w`` to its left). From the plane it
-gives the ground's pitch and roll along the heading and the height difference
-to a target point, which the planner takes as a
+gives the ground's pitch and roll along the heading and its rise to a target
+point, from which the walking controller's ground predictor
+(:mod:`amlip_qp.control.walking.ground`, blind mode) makes the planner's
 :class:`~amlip_qp.alip.messages.TerrainPrediction` (docs/ALIP_SLOPES.md):
 
     plane = FootholdPlane()
     plane.add(stance_contact_world_m, heading_rad)   # at every touchdown
-    terrain = plane.predict(stance_contact_world_m, target_xy_world_m, heading_rad)
+    ground = plane.plane(heading_rad)
+    dz_m = ground.rise_m(*(target_xy_world_m - stance_contact_world_m[:2]), heading_rad)
 
 Guards against nonsense:
 
@@ -23,8 +25,7 @@ Guards against nonsense:
 - the slope is capped at ``max_slope_rad`` (the gradient is scaled down);
 - a heading change larger than ``reset_turn_rad`` since the oldest kept
   foothold forgets all but the newest (the old footholds describe ground
-  behind a corner);
-- the predicted height difference is capped at ``max_dz_m``.
+  behind a corner).
 
 Conventions (those of :class:`~amlip_qp.alip.messages.TerrainPrediction`):
 pitch is the ground's rotation about the heading frame's y axis, positive =
@@ -41,7 +42,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from amlip_qp.alip import _checks as C
-from amlip_qp.alip.messages import TerrainPrediction
 from amlip_qp.exceptions import InputError
 
 
@@ -63,6 +63,12 @@ class GroundPlane:
     roll_rad: float
     n_footholds: int
 
+    def rise_m(self, dx_m: float, dy_m: float, heading_rad: float) -> float:
+        """The plane's rise (m) over the world horizontal offset ``(dx_m, dy_m)`` (m), with the
+        grades taken in the heading frame ``heading_rad`` (rad; the one the plane was fitted in)."""
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        return self.grade_along * (c * dx_m + s * dy_m) + self.grade_left * (-s * dx_m + c * dy_m)
+
 
 def _wrap(angle_rad: float) -> float:
     """An angle in (-pi, pi], rad."""
@@ -79,7 +85,6 @@ class FootholdPlane:
             that forgets all but the newest.
         min_spread_m: smallest spread (m, > 0) of the footholds along a direction
             (their largest minus smallest coordinate) to fit a slope along it.
-        max_dz_m: cap on the predicted height difference to a target, m (> 0).
     """
 
     def __init__(
@@ -88,7 +93,6 @@ class FootholdPlane:
         max_slope_rad: float = math.radians(30.0),
         reset_turn_rad: float = math.radians(45.0),
         min_spread_m: float = 0.05,
-        max_dz_m: float = 0.3,
     ):
         if isinstance(capacity, bool) or not isinstance(capacity, int) or capacity < 2:
             raise InputError(f"capacity must be an integer >= 2 (footholds to keep), got {capacity!r}")
@@ -97,12 +101,10 @@ class FootholdPlane:
             raise InputError(f"max_slope_rad must be < pi/2 rad, got {max_slope_rad!r}")
         C.positive("reset_turn_rad", reset_turn_rad, "rad")
         C.positive("min_spread_m", min_spread_m, "m")
-        C.positive("max_dz_m", max_dz_m, "m")
         self.capacity = capacity
         self.max_slope_rad = float(max_slope_rad)
         self.reset_turn_rad = float(reset_turn_rad)
         self.min_spread_m = float(min_spread_m)
-        self.max_dz_m = float(max_dz_m)
         self._points: deque[np.ndarray] = deque(maxlen=capacity)
         self._headings: deque[float] = deque(maxlen=capacity)
 
@@ -151,38 +153,3 @@ class FootholdPlane:
         if norm > cap:
             ga, gl = ga * cap / norm, gl * cap / norm
         return GroundPlane(ga, gl, -math.atan(ga), math.atan(gl), n)
-
-    def height_difference(self, stance_world_m, target_xy_world_m, heading_rad: float) -> float:
-        """Predicted ground height at ``target_xy_world_m`` (world x, y, m) minus the stance
-        contact's (world xyz, m): the plane's grade times the horizontal offset, capped at
-        ``+-max_dz_m``. Flat (0) with fewer than two footholds."""
-        st = C.vector("stance_world_m", stance_world_m, 3)
-        tg = C.vector("target_xy_world_m", target_xy_world_m, 2)
-        g = self.plane(heading_rad)
-        c, s = math.cos(heading_rad), math.sin(heading_rad)
-        dx, dy = float(tg[0] - st[0]), float(tg[1] - st[1])
-        dz = g.grade_along * (c * dx + s * dy) + g.grade_left * (-s * dx + c * dy)
-        return min(max(dz, -self.max_dz_m), self.max_dz_m)
-
-    def predict(self, stance_world_m, target_xy_world_m, heading_rad: float, liftoff_world_m=None) -> TerrainPrediction:
-        """The planner's :class:`TerrainPrediction` from the footholds (blind mode).
-
-        Args:
-            stance_world_m: the current stance contact, world xyz, m.
-            target_xy_world_m: where the swing foot is planned to land (world x, y, m),
-                e.g. the previous tick's ``PlannerOutput.swing_target_world_m[:2]``.
-            heading_rad: the heading of the step, rad.
-            liftoff_world_m: where the swing foot lifted off (world xyz, m), for
-                ``dz_sw0_m``; ``None`` gives 0.
-
-        The target's height and pitch tilt the swing reference (``dz_sw_m``,
-        ``slope_pitch_rad``) and the step (``dz_next_m``); the lift-off pitch is
-        the same plane's.
-        """
-        dz = self.height_difference(stance_world_m, target_xy_world_m, heading_rad)
-        pitch = self.plane(heading_rad).pitch_rad
-        dz0 = 0.0
-        if liftoff_world_m is not None:
-            lift = C.vector("liftoff_world_m", liftoff_world_m, 3)
-            dz0 = min(max(float(lift[2] - stance_world_m[2]), -self.max_dz_m), self.max_dz_m)
-        return TerrainPrediction(dz_next_m=dz, dz_sw_m=dz, dz_sw0_m=dz0, slope_pitch_rad=pitch, slope_pitch0_rad=pitch)

@@ -99,7 +99,7 @@ class GroundPredictor:
         self.mode = mode
         self.height_fn = height_fn
         #: The footholds (blind mode) and the plane fitted to them at the last touchdown.
-        self.footholds = FootholdPlane(max_slope_rad=MAX_PITCH_RAD, max_dz_m=MAX_DZ_M)
+        self.footholds = FootholdPlane(max_slope_rad=MAX_PITCH_RAD)
         self._plane = GroundPlane(0.0, 0.0, 0.0, 0.0, 0)
         self._heading = 0.0
         self._stance_xy = (math.nan, math.nan)  # the stance contact, world m
@@ -170,9 +170,7 @@ class GroundPredictor:
             dz = self._height(x, y) - self._stance_z
         else:
             # the plane's grades (fitted at the touchdown) times the offset in the step's heading frame
-            c, s = math.cos(self._heading), math.sin(self._heading)
-            dx, dy = x - self._stance_xy[0], y - self._stance_xy[1]
-            dz = self._plane.grade_along * (c * dx + s * dy) + self._plane.grade_left * (-s * dx + c * dy)
+            dz = self._plane.rise_m(x - self._stance_xy[0], y - self._stance_xy[1], self._heading)
         dz = _clip(dz, MAX_DZ_M)
         return TerrainPrediction(
             dz_next_m=dz,
