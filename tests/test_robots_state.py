@@ -134,3 +134,40 @@ def test_norm_is_numpys_bit_for_bit():
     for _ in range(200):
         x = rng.normal(size=4) * 10.0 ** rng.uniform(-5, 5)
         assert _norm(x) == np.linalg.norm(x)
+
+
+def test_state_reader_is_mj_to_pin_bit_for_bit(robot):
+    """The per-tick reader equals mj_to_pin exactly, unnormalized quaternions and a plant's own layout included."""
+    from amlip_qp.robots.state import StateReader
+
+    rng = np.random.default_rng(11)
+    smap = robot.state_map
+    nq, nv = robot.mj_model.nq, robot.nv
+    # a plant with 5 more coordinates of each kind, holding the model's in shuffled places
+    qsrc, vsrc = rng.permutation(nq + 5)[:nq], rng.permutation(nv + 5)[:nv]
+    readers = ((StateReader(smap), None, None), (StateReader(smap, qsrc, vsrc), qsrc, vsrc))
+    for _ in range(50):
+        qpos, qvel = random_mj_state(robot, rng)
+        if robot.is_floating:
+            qpos[3:7] *= rng.uniform(0.5, 2.0)  # as after an integration step: not exactly unit
+        for reader, qs, vs in readers:
+            if qs is None:
+                big_q, big_v = qpos, qvel
+            else:
+                big_q, big_v = rng.normal(size=nq + 5), rng.normal(size=nv + 5)
+                big_q[qs], big_v[vs] = qpos, qvel
+            q, v = reader(big_q, big_v)
+            q_ref, v_ref = mj_to_pin(robot, qpos, qvel)
+            assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+    reader = readers[0][0]
+    bad = robot.qpos_stand.copy()
+    bad[2] = np.nan
+    with pytest.raises(InputError, match=r"qpos contains NaN or inf at indices \[2\]"):
+        reader(bad, np.zeros(nv))
+    with pytest.raises(InputError, match=rf"qvel contains NaN or inf at indices \[{nv - 1}\]"):
+        reader(robot.qpos_stand, np.r_[np.zeros(nv - 1), np.inf])
+    if robot.is_floating:
+        bad = robot.qpos_stand.copy()
+        bad[3:7] = 0.0
+        with pytest.raises(InputError, match="zero quaternion"):
+            reader(bad, np.zeros(nv))

@@ -206,6 +206,12 @@ class Plant:
             and np.array_equal(qsrc, np.arange(model.nq))
             and np.array_equal(vsrc, np.arange(model.nv))
         )
+        # the state as the controller's (q, v): one gather per array (a base not floated by a free joint: own path)
+        self._reader: S.StateReader | None = None
+        if self._same_layout:
+            self._reader = S.StateReader(robot.state_map)
+        elif self.free_base or not robot.is_floating:
+            self._reader = S.StateReader(robot.state_map, qsrc, vsrc)
         # contact forces: plant geom -> body, and body -> the sides whose foot it is
         self._geom_body: list[int] = model.geom_bodyid.tolist()
         self._sides_of_body: dict[int, tuple[str, ...]] = {}
@@ -246,10 +252,8 @@ class Plant:
 
     def read_state(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """The plant's state as the controller's Pinocchio ``(q, v)`` (new arrays; ``data`` is only read)."""
-        if self._same_layout:
-            return S.mj_to_pin(self.robot.state_map, data.qpos, data.qvel)
-        if self.free_base or not self.robot.is_floating:
-            return S.mj_to_pin(self.robot.state_map, data.qpos[self._qsrc], data.qvel[self._vsrc])
+        if self._reader is not None:
+            return self._reader(data.qpos, data.qvel)
         return self._read_body_base(data)
 
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
