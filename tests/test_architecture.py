@@ -41,7 +41,7 @@ RULES: dict[str, Rule] = {
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
     "amlip_qp.profiles": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
     # the command line stays light: handlers are imported by name when a subcommand runs
-    "amlip_qp.cli": Rule(("amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
+    "amlip_qp.cli": Rule(("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
     "amlip_qp.alip": Rule(

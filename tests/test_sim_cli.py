@@ -6,7 +6,6 @@ walking quality is the trackers' own tests' business.
 
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
@@ -104,13 +103,6 @@ def test_bad_input_in_a_subprocess_has_no_traceback():
     assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr
 
 
-def test_parse_push_spec():
-    assert cli.parse_push_spec("6:100,0,-5.5:0.2") == (6.0, (100.0, 0.0, -5.5), 0.2)
-    for bad in ("6:100,0:0.2", "6:100,0,0", "6:100,0,0:0.2:1", "6:nan,0,0:0.2", "x:1,0,0:1", "6:1,0,0:-1"):
-        with pytest.raises(argparse.ArgumentTypeError):
-            cli.parse_push_spec(bad)
-
-
 def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
     log, plot, summary_path = tmp_path / "run.npz", tmp_path / "run.png", tmp_path / "s.json"
     argv = ["walk", "--robot", "rabbit", "--duration", "0.05", "--vx", "0.3", "--push", "0.01:20,0,0:0.02"]
@@ -168,8 +160,6 @@ def test_walk_with_the_robot_sensors_records_the_setting(capsys, stand_in):
     assert (a["plant"], a["sensors"], a["estimator"]) == ("cassie", "robot", "truth")
     assert a["base_velocity_error_rms_mps"] == 0.0 and a["yaw_estimate_error_deg"] == 0.0
     assert a["output_tracking_rms"] == b["output_tracking_rms"]  # deterministic for a seed
-    assert cli._SENSORS == __import__("amlip_qp.sim.sensors", fromlist=["x"]).SENSOR_MODELS
-    assert cli._ESTIMATORS == factory.ESTIMATORS
 
 
 def test_walk_reports_a_fall_with_exit_1(capsys, stand_in):

@@ -1,0 +1,132 @@
+"""The ``amlip-qp`` command line.
+
+The parser is built here (``codegen`` and ``bench`` here; ``walk``,
+``compare`` and ``sweep`` in :mod:`~amlip_qp.cli.subcommands`; the parser
+class and the value types in :mod:`~amlip_qp.cli.parsing`). Each
+subcommand's work lives in the module it names, imported only when the
+subcommand runs (so ``amlip-qp --help`` stays fast).
+
+Exit codes: 0 success, 1 a run-time failure (the walker fell, a check found
+stale files, ...), 2 bad usage or bad input. Errors print one readable line
+to stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from amlip_qp.cli.parsing import Parser, handler, positive_float, positive_int
+from amlip_qp.cli.subcommands import TRACKERS, add_compare, add_sweep, add_walk
+from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
+
+PROG = "amlip-qp"
+
+#: Errors that mean "the user asked for something invalid": exit status 2.
+_USAGE_ERRORS = (InputError, UnknownRobotError, ModelFileError, MJCFError)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the full argument parser (all subcommands)."""
+    parser = Parser(
+        prog=PROG,
+        description="ALIP angular-momentum foot placement with PBC and whole-body QP tracking.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    sub.required = True
+
+    # codegen ---------------------------------------------------------------
+    p = sub.add_parser("codegen", help="regenerate the CasADi C code in amlip_qp/codegen/generated/ of a checkout")
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="regenerate in memory and fail if the generated C differs (names stale files)",
+    )
+    p.add_argument(
+        "--out", metavar="DIR", default=None, help="output folder (default: amlip_qp/codegen/generated/ of a checkout)"
+    )
+    p.set_defaults(func=handler("amlip_qp.codegen.cli:run_codegen"))
+
+    # bench -----------------------------------------------------------------
+    p = sub.add_parser("bench", help="benchmarks (timings are machine dependent)")
+    bench = p.add_subparsers(dest="bench_target", metavar="TARGET", parser_class=Parser)
+    bench.required = True
+    b = bench.add_parser("codegen", help="generated C fast path vs CasADi Function vs numpy")
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--calls", type=positive_int, default=20000, help="timed calls per path (default 20000)")
+    b.set_defaults(func=handler("amlip_qp.codegen.cli:run_bench"))
+    b = bench.add_parser(
+        "qp", help="replay recorded Cassie tracker QPs: warm ProxQP vs re-initialised vs qpsolvers backends"
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--ticks", type=positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
+    b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
+    b.set_defaults(func=handler("amlip_qp.sim.bench_qp:run_bench"))
+    b = bench.add_parser(
+        "ekf", help="the invariant EKF's cost inside the closed loop, against the rest of the QP tracker's tick"
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument(
+        "--scenario",
+        default="cassie-1mps-cc-ekf",
+        help="a scenario with the EKF estimator to walk (default cassie-1mps-cc-ekf)",
+    )
+    b.add_argument("--duration", type=positive_float, default=4.0, metavar="S", help="simulated time, s (default 4)")
+    b.set_defaults(func=handler("amlip_qp.sim.bench_ekf:run_bench"))
+    b = bench.add_parser(
+        "harness",
+        help="where a closed-loop tick goes: controller, MuJoCo and the harness's own time, per tracker and log mode",
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--scenario", default="cassie-1mps", help="scenario to walk (default cassie-1mps)")
+    b.add_argument(
+        "--duration", type=positive_float, default=3.0, metavar="S", help="simulated time per walk, s (default 3)"
+    )
+    b.add_argument(
+        "--repeats", type=positive_int, default=3, help="walks per tracker and log mode, interleaved (default 3)"
+    )
+    b.add_argument("--trackers", default="qp,pbc", metavar="NAMES", help="comma-separated trackers (default qp,pbc)")
+    b.set_defaults(func=handler("amlip_qp.sim.bench_harness:run_bench"))
+
+    b = bench.add_parser(
+        "sweep", help="sweep throughput: cells per second with 1 and with 2 worker processes, interleaved"
+    )
+    b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
+    b.add_argument("--cells", type=positive_int, default=6, help="cells per sweep (default 6)")
+    b.add_argument("--duration", type=positive_float, default=2.0, metavar="S", help="simulated s per cell (default 2)")
+    b.add_argument("--repeats", type=positive_int, default=3, help="interleaved repeats of each (default 3)")
+    b.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
+    b.set_defaults(func=handler("amlip_qp.sweep.bench:run_bench"))
+
+    add_walk(sub)
+    add_compare(sub)
+    add_sweep(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``amlip-qp`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except _USAGE_ERRORS as exc:
+        sys.stderr.write(f"{PROG}: error: {exc}\n")
+        return 2
+    except AmlipError as exc:
+        sys.stderr.write(f"{PROG}: error: {exc}\n")
+        return 1
+    except OSError as exc:  # an output that failed after the early checks (disk full, folder removed, ...)
+        where = f"{exc.filename}: " if exc.filename else ""
+        sys.stderr.write(
+            f"{PROG}: error: {where}{exc.strerror or exc}; check the path, its folder and the free space\n"
+        )
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{PROG}: interrupted\n")
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
