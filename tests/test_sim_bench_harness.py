@@ -19,8 +19,10 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         assert row["realtime_factor"] > 0.0
     assert r["same_summary"] == {"pbc": True}  # both modes walk the same trajectory
     assert r["qp_meets_realtime_goal"] is None  # no QP walk timed
+    assert r["harness_meets_goal"] == {k: row["harness_us_per_tick"] <= 62.5 for k, row in r["runs"].items()}
     text = bench_harness.format_report(r)
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
+    assert "harness <= 62.5 µs per tick" in text
 
 
 def test_bad_trackers_and_counts_are_refused_before_simulating():
