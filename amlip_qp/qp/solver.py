@@ -23,6 +23,7 @@ from amlip_qp.qp._proxsuite import proxqp
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
+_sum = np.add.reduce
 
 
 @dataclass
@@ -128,23 +129,27 @@ class ProxQPSolver:
 
     def solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
-        dims = (problem.n, problem.n_eq, problem.n_in)
+        H, A, C = problem.H, problem.A, problem.C
+        dims = (H.shape[0], A.shape[0], C.shape[0])
         t0 = time.perf_counter_ns()
-        args = (problem.H, problem.g, problem.A, problem.b, problem.C, problem.l, problem.u, problem.lb, problem.ub)
-        if self._qp is None or dims != self._dims or not self.warm_start:
-            self._qp = self._new_qp(problem)
-            self._qp.init(*args, **self._mu)
+        args = (H, problem.g, A, problem.b, C, problem.l, problem.u, problem.lb, problem.ub)
+        qp = self._qp
+        if qp is None or dims != self._dims or not self.warm_start:
+            qp = self._qp = self._new_qp(problem)
+            qp.init(*args, **self._mu)
             self._dims = dims
             self.n_init += 1
         else:
-            self._qp.update(*args, update_preconditioner=self.update_preconditioner, **self._mu)
-        self._qp.solve()
+            qp.update(*args, update_preconditioner=self.update_preconditioner, **self._mu)
+        qp.solve()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
-        info = self._qp.results.info
+        results = qp.results
+        info = results.info
         status = info.status
-        x = self._qp.results.x
-        # A sum of finite numbers is finite (NaN and inf propagate).
-        if status not in _OK or not math.isfinite(x.sum()):
+        x = results.x
+        # A sum of finite numbers is finite (NaN and inf propagate); the ufunc
+        # reduction skips ndarray.sum()'s Python wrapper.
+        if status not in _OK or not math.isfinite(_sum(x)):
             name = getattr(status, "name", str(status))
             # Do not warm-start the next tick from a failed iterate.
             self.reset()
