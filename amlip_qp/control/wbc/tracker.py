@@ -34,6 +34,8 @@ from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver, QPSolution
 
+_sum = np.add.reduce  # ndarray.sum() without its Python wrapper
+
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -191,8 +193,9 @@ class QPTracker(Tracker):
         info: dict = {}
         if target.stance not in self.robot.foot_sides:
             raise InputError(f"target.stance must be one of {tuple(self.robot.foot_sides)}, got {target.stance!r}")
-        if np.shape(target.h_d) != (self._n_outputs,):
-            raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(target.h_d)}")
+        h_d = target.h_d
+        if (h_d.shape if isinstance(h_d, np.ndarray) else np.shape(h_d)) != (self._n_outputs,):
+            raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(h_d)}")
         t0 = time.perf_counter_ns()
         self._orient_friction(target)
         try:
@@ -246,7 +249,7 @@ class QPTracker(Tracker):
         # The solver rejects a non-finite x, so the forces are finite; the torques
         # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
-        if not math.isfinite(tau.sum()):
+        if not math.isfinite(_sum(tau)):
             return self._fallback(kin, "non-finite torques", info)
         self.last_solution = sol.x
         if self.record:
