@@ -98,12 +98,13 @@ class TickInputs:
         self.output_task = output_task
         self.feedback = PelvisYawFeedback.for_outputs(tuple(names), config.hip_yaw_feedback)
         d, k = layout.point_dim, layout.n_points
-        #: Per side, the force frames and their rows of ``Jf`` as the stance (first) and as the swing foot.
+        self.Jf = np.zeros((2 * layout.n_force, robot.nv))
+        #: Per side, its force frames and the views of their rows of ``Jf`` as the stance (first) and as the swing foot.
         self._points = {
             side: (
-                robot.force_frame_ids[side],
-                [slice(d * p, d * (p + 1)) for p in range(k)],
-                [slice(d * (k + p), d * (k + p + 1)) for p in range(k)],
+                tuple(robot.force_frame_ids[side]),
+                tuple(self.Jf[d * p : d * (p + 1)] for p in range(k)),
+                tuple(self.Jf[d * (k + p) : d * (k + p + 1)] for p in range(k)),
             )
             for side in robot.foot_sides
         }
@@ -112,7 +113,6 @@ class TickInputs:
         self.v: np.ndarray = np.zeros(robot.nv)
         self.mass_upper: np.ndarray = np.zeros((robot.nv, robot.nv))
         self.hp = np.zeros(robot.nv)
-        self.Jf = np.zeros((2 * layout.n_force, robot.nv))
         self.point_jacobians: list[np.ndarray] = []
         self.point_positions: list[np.ndarray] = []
         self.point_drifts: list[np.ndarray] = []
@@ -132,17 +132,19 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
     swing = other_side(stance)
     inputs.stance, inputs.swing = stance, swing
     inputs.q, inputs.v = kin.state()
-    np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=inputs.hp)
+    kin.require_dynamics()
+    np.subtract(kin.data.nle, kin.passive_forces(), out=inputs.hp)  # h - taup
     inputs.mass_upper = kin.data.M
     # Force-point Jacobians on the layout's axes: the stance foot's rows, then the swing foot's.
-    Jf, axes = inputs.Jf, inputs.layout.axes_index
-    fids, rows, _ = inputs._points[stance]
-    jacs = [kin.frame_jacobian(f) for f in fids]
-    for J, r in zip(jacs, rows):
-        Jf[r] = J[axes]
+    axes = inputs.layout.axes_index
+    jac = kin.frame_jacobian
+    fids, st_rows, _ = inputs._points[stance]
+    jacs = [jac(f) for f in fids]
+    for J, row in zip(jacs, st_rows):
+        row[...] = J[axes]
     sw_fids, _, sw_rows = inputs._points[swing]
-    for f, r in zip(sw_fids, sw_rows):
-        Jf[r] = kin.frame_jacobian(f)[axes]
+    for f, row in zip(sw_fids, sw_rows):
+        row[...] = jac(f)[axes]
     inputs.point_jacobians = jacs
     inputs.point_positions = [kin.frame_translation_view(f) for f in fids]
     inputs.point_drifts = [kin.frame_jdot_v(f) for f in fids]
