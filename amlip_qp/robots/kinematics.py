@@ -171,7 +171,8 @@ class RobotKinematics:
         self.positions_only = positions_only
 
     def _ready(self) -> None:
-        self.state()
+        if self.q is None or self.v is None:  # state()'s test, without its call (a dozen getters a tick)
+            self.state()
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` of the last update: :attr:`q`, :attr:`v` themselves (read-only); InputError before any."""
