@@ -100,9 +100,9 @@ class QPProblem:
             for name, shape, want in zip(("H", "g", "A", "b", "C", "l", "u", "lb", "ub"), got, expected):
                 if shape != want:
                     raise QPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
-        # Fast path, once per control tick: NaN and inf propagate through a sum
-        # (ufunc reductions: ndarray.sum() and .all() add a Python wrapper each).
-        if not math.isfinite(_sum(H, None) + _sum(g) + _sum(A, None) + _sum(b) + _sum(C, None)):
+        # Fast path, once per control tick: NaN and inf propagate through a sum (ufunc
+        # reductions without ndarray.sum()'s wrapper; short vectors as Python floats, cheaper still).
+        if not math.isfinite(_sum(H, None) + _sum(A, None) + _sum(C, None) + sum(g.tolist()) + sum(b.tolist())):
             for name in ("H", "g", "A", "b", "C"):
                 if not np.all(np.isfinite(getattr(self, name))):
                     raise QPError(

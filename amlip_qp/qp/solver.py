@@ -23,7 +23,6 @@ from amlip_qp.qp._proxsuite import proxqp
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
-_sum = np.add.reduce
 
 
 @dataclass
@@ -147,9 +146,9 @@ class ProxQPSolver:
         info = results.info
         status = info.status
         x = results.x
-        # A sum of finite numbers is finite (NaN and inf propagate); the ufunc
-        # reduction skips ndarray.sum()'s Python wrapper.
-        if status not in _OK or not math.isfinite(_sum(x)):
+        # A sum of finite numbers is finite (NaN and inf propagate); a sum of
+        # Python floats is cheaper than a numpy reduction at this size.
+        if status not in _OK or not math.isfinite(sum(x.tolist())):
             name = getattr(status, "name", str(status))
             # Do not warm-start the next tick from a failed iterate.
             self.reset()

@@ -34,8 +34,6 @@ from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver, QPSolution
 
-_sum = np.add.reduce  # ndarray.sum() without its Python wrapper
-
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -249,7 +247,7 @@ class QPTracker(Tracker):
         # The solver rejects a non-finite x, so the forces are finite; the torques
         # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
-        if not math.isfinite(_sum(tau)):
+        if not math.isfinite(sum(tau.tolist())):  # Python floats: cheaper than a numpy reduction here
             return self._fallback(kin, "non-finite torques", info)
         self.last_solution = sol.x
         if self.record:
