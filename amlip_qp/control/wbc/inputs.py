@@ -172,23 +172,48 @@ def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
     return out
 
 
-def pack_inputs(inputs: TickInputs, small: dict, u: np.ndarray) -> None:
-    """Write ``inputs`` into the packed small input ``u`` (slices ``small`` of :func:`packed_layout`)."""
-    u[small["q"]] = inputs.q
-    u[small["v"]] = inputs.v
-    c = small["contact"].start
-    if inputs.layout.n_points == 2:
-        u[c : c + 3] = inputs.point_positions[0]
-        u[c + 3 : c + 6] = inputs.point_positions[1]
-        u[c + 6 : c + 9] = inputs.point_drifts[0]
-        u[c + 9 : c + 12] = inputs.point_drifts[1]
-    else:
-        u[small["contact"]] = inputs.point_drifts[0][inputs.layout.axes_index]
-    rr = u[small["r"]]
-    rr[:] = inputs.output_residual
-    if inputs.feedback is not None:
-        rr[inputs.feedback.swing_index] -= inputs.residual_shift
-    u[small["w"]] = inputs.swing_force_weight
+class PackedInput:
+    """The generated build's packed small input :attr:`array` (slices :attr:`slices`
+    of :func:`packed_layout`), with views of its parts made once (a tick's copies
+    then cost no slicing).
+
+    Args:
+        nq: Configuration size.
+        layout: The QP's :class:`~amlip_qp.control.wbc.layout.VariableLayout`.
+        n_outputs: Number of outputs of the output task.
+    """
+
+    def __init__(self, nq: int, layout: VariableLayout, n_outputs: int):
+        self.slices = small = packed_layout(nq, layout, n_outputs)
+        self.array = u = np.zeros(small["size"])
+        self._q, self._v, self._r = u[small["q"]], u[small["v"]], u[small["r"]]
+        self._w = small["w"].start
+        c = small["contact"].start
+        if layout.n_points == 2:
+            # stance toe and heel positions, then their drifts
+            self._contact: tuple[np.ndarray, ...] = tuple(u[c + 3 * i : c + 3 * (i + 1)] for i in range(4))
+        else:
+            self._contact = (u[small["contact"]],)
+        self._axes = layout.axes_index
+
+    def pack(self, inputs: TickInputs) -> None:
+        """Write ``inputs`` into :attr:`array`."""
+        self._q[...] = inputs.q
+        self._v[...] = inputs.v
+        contact = self._contact
+        if len(contact) == 4:
+            (p0, p1), (d0, d1) = inputs.point_positions, inputs.point_drifts
+            contact[0][...] = p0
+            contact[1][...] = p1
+            contact[2][...] = d0
+            contact[3][...] = d1
+        else:
+            contact[0][...] = inputs.point_drifts[0][self._axes]
+        rr = self._r
+        rr[...] = inputs.output_residual
+        if inputs.feedback is not None:
+            rr[inputs.feedback.swing_index] -= inputs.residual_shift
+        self.array[self._w] = inputs.swing_force_weight
 
 
 @dataclass
