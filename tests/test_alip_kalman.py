@@ -141,7 +141,6 @@ def test_non_numbers_are_input_errors_and_a_bad_plane_leaves_both_untouched():
         kalman.AngularMomentumFilter(32.0, L0_Nms=(1.0,))
 
 
-
 def test_two_plane_step_is_the_per_plane_steps_bit_for_bit_whatever_the_number_type():
     """Python floats (the per-tick fast path), numpy scalars and ints (the checked path) give the
     per-plane steps exactly; finite inputs whose sum overflows are not taken for bad ones."""

@@ -61,7 +61,9 @@ def test_validate_names_bad_shape_and_crossed_bounds():
         p.validate()
 
 
-@pytest.mark.parametrize(("field", "index", "value"), [("H", (1, 2), np.inf), ("A", (1, 0), np.nan), ("C", (3, 7), -np.inf)])
+@pytest.mark.parametrize(
+    ("field", "index", "value"), [("H", (1, 2), np.inf), ("A", (1, 0), np.nan), ("C", (3, 7), -np.inf)]
+)
 def test_validate_names_non_finite_matrix_entry(field, index, value):
     p = random_problem(6)
     p.validate()
