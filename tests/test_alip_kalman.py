@@ -139,3 +139,23 @@ def test_non_numbers_are_input_errors_and_a_bad_plane_leaves_both_untouched():
     assert (f.x.L, f.x.P, f.y.L, f.y.P) == before
     with pytest.raises(InputError):
         kalman.AngularMomentumFilter(32.0, L0_Nms=(1.0,))
+
+
+def test_two_plane_step_is_the_per_plane_steps_bit_for_bit_whatever_the_number_type():
+    """Python floats (the per-tick fast path), numpy scalars and ints (the checked path) give the
+    per-plane steps exactly; finite inputs whose sum overflows are not taken for bad ones."""
+    rng = np.random.default_rng(4)
+    floats, scalars = kalman.AngularMomentumFilter(M), kalman.AngularMomentumFilter(M)
+    x, y = kalman.MomentumFilter1D(M, -1.0), kalman.MomentumFilter1D(M, 1.0)
+    for i in range(300):
+        px, py, lx, ly = (float(a) for a in rng.normal(0.0, [0.2, 0.1, 5.0, 5.0]))
+        if i % 3 == 0:
+            ly = float(round(ly))  # also stepped as an int below
+        expected = (x.step(py, lx, DT), y.step(px, ly, DT))
+        assert floats.step(px, py, lx, ly, DT) == expected
+        other = (np.float64(px), np.float64(py), np.float64(lx), int(ly) if i % 3 == 0 else np.float64(ly))
+        assert scalars.step(*other, DT) == expected
+    huge = kalman.AngularMomentumFilter(M)
+    x, y = kalman.MomentumFilter1D(M, -1.0), kalman.MomentumFilter1D(M, 1.0)
+    L = huge.step(0.0, 0.0, 1e308, 1e308, DT)  # the five add up to inf
+    assert np.isfinite(L).all() and L == (x.step(0.0, 1e308, DT), y.step(0.0, 1e308, DT))

@@ -8,7 +8,7 @@ import pytest
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
-from amlip_qp.control.wbc.inputs import SymbolicInputs, pack_inputs, packed_layout
+from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs
 from amlip_qp.robots import load_robot
 from wbc_cases import FIELDS, build_and_solve, kin_at, solve, target_for
 
@@ -67,9 +67,9 @@ def _symbolic_block(builder, c):
     sym = SymbolicInputs.create(inp.stance, builder.robot.nq, L, builder.output_task.size)
     parts = {k: v for k, v in c.symbolic(sym, builder.dynamics.symbolic(sym)).items() if v is not None}
     fn = ca.Function("f", list(sym.arguments), [ca.densify(v) for v in parts.values()])
-    small = packed_layout(builder.robot.nq, L, builder.output_task.size)
-    u = np.zeros(small["size"])
-    pack_inputs(inp, small, u)
+    packed = PackedInput(builder.robot.nq, L, builder.output_task.size)
+    packed.pack(inp)
+    u = packed.array
     values = fn(inp.mass_upper, inp.hp, inp.Jf.T, inp.output_jacobian.T, u)
     values = values if isinstance(values, (list, tuple)) else [values]
     return {k: np.asarray(v) for k, v in zip(parts, values)}

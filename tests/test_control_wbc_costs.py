@@ -7,7 +7,7 @@ import pytest
 from amlip_qp.control.wbc import costs as W
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
-from amlip_qp.control.wbc.inputs import SymbolicInputs, pack_inputs, packed_layout
+from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs
 from amlip_qp.robots import load_robot
 from wbc_cases import corrected_target, kin_at, target_for
 
@@ -169,9 +169,9 @@ def _symbolic_rows(builder, cost):
         list(sym.arguments),
         [ca.densify(ca.vertcat(*(E for E, _ in rows))), ca.densify(ca.vertcat(*(e for _, e in rows)))],
     )
-    small = packed_layout(builder.robot.nq, L, builder.output_task.size)
-    u = np.zeros(small["size"])
-    pack_inputs(inp, small, u)
+    packed = PackedInput(builder.robot.nq, L, builder.output_task.size)
+    packed.pack(inp)
+    u = packed.array
     E, e = fn(inp.mass_upper, inp.hp, inp.Jf.T, inp.output_jacobian.T, u)
     return np.asarray(E), np.asarray(e).ravel()
 

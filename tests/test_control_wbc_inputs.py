@@ -11,11 +11,10 @@ from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.config import CASSIE_CONFIG, RABBIT_CONFIG
 from amlip_qp.control.wbc.inputs import (
+    PackedInput,
     PelvisYawFeedback,
     SymbolicInputs,
     gather_inputs,
-    pack_inputs,
-    packed_layout,
     swing_force_weight,
 )
 from amlip_qp.exceptions import InputError
@@ -122,9 +121,10 @@ def test_packed_input_holds_what_the_generated_build_reads(robot):
     builder = WholeBodyQP(robot, config)
     kin = kin_at(robot, seed=5)
     inp = gather_inputs(kin, target_for(kin, "right", phase=0.01), builder.inputs)
-    small = packed_layout(robot.nq, builder.layout, builder.output_task.size)
-    u = np.full(small["size"], np.nan)
-    pack_inputs(inp, small, u)
+    packed = PackedInput(robot.nq, builder.layout, builder.output_task.size)
+    small, u = packed.slices, packed.array
+    u[:] = np.nan
+    packed.pack(inp)
     assert np.all(np.isfinite(u)), "every slot is written"
     assert np.array_equal(u[small["q"]], kin.q) and np.array_equal(u[small["v"]], kin.v)
     con = u[small["contact"]]

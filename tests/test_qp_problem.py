@@ -61,6 +61,26 @@ def test_validate_names_bad_shape_and_crossed_bounds():
         p.validate()
 
 
+@pytest.mark.parametrize(
+    ("field", "index", "value"), [("H", (1, 2), np.inf), ("A", (1, 0), np.nan), ("C", (3, 7), -np.inf)]
+)
+def test_validate_names_non_finite_matrix_entry(field, index, value):
+    p = random_problem(6)
+    p.validate()
+    getattr(p, field)[index] = value
+    with pytest.raises(QPError, match=f"{field} contains NaN or inf"):
+        p.validate()
+
+
+def test_validate_accepts_infinite_bounds_and_names_nan_bound():
+    p = random_problem(7)
+    p.l[0], p.ub[2] = -np.inf, np.inf
+    p.validate()
+    p.ub[2] = np.nan
+    with pytest.raises(QPError, match="bound ub contains NaN"):
+        p.validate()
+
+
 def test_qpsolvers_conversion_drops_infinite_rows_and_solves():
     p = random_problem(4)
     qp = p.to_qpsolvers()

@@ -474,6 +474,8 @@ def _fresh_reads(kin, fid):
         "vcom": d.vcom[0].copy(),
         "acom": d.acom[0].copy(),
         "hg": d.hg.vector.copy(),
+        "jacobian": pin.getFrameJacobian(kin.model, d, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED),
+        "drift": pin.getFrameClassicalAcceleration(kin.model, d, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).linear,
     }
 
 
@@ -491,8 +493,14 @@ def test_getters_follow_every_update_exactly(robot):
         np.testing.assert_array_equal(kin.frame_position(fid), fresh["position"])
         np.testing.assert_array_equal(kin.frame_rotation(fid), fresh["rotation"])
         np.testing.assert_array_equal(kin.com(), fresh["com"])
+        # the per-update caches: the translational rows are those of the 6-row Jacobian, both refreshed
+        np.testing.assert_array_equal(kin.frame_jacobian(fid), fresh["jacobian"][:3])
+        np.testing.assert_array_equal(kin.frame_jacobian6(fid), fresh["jacobian"])
         if kin.positions_only:
+            assert not kin.frame_jdot_v(fid).any()
             continue
+        np.testing.assert_array_equal(kin.frame_jdot_v(fid), fresh["drift"])
+        np.testing.assert_array_equal(kin.frame_jdot_v6(fid)[:3], fresh["drift"])
         np.testing.assert_array_equal(kin.com_velocity(), fresh["vcom"])
         np.testing.assert_array_equal(kin.com_jdot_v(), fresh["acom"])
         lin, ang = kin.centroidal_momentum()

@@ -144,6 +144,10 @@ class MomentumFilter1D:
         if not (_finite(p_m) and _finite(dT_s) and _finite(L_meas_Nms) and dT_s > 0.0):
             self.predict(p_m, dT_s)
             return self.correct(L_meas_Nms)
+        return self._advance(p_m, L_meas_Nms, dT_s)
+
+    def _advance(self, p_m: float, L_meas_Nms: float, dT_s: float) -> float:
+        """:meth:`step`'s arithmetic on checked inputs (finite, ``dT_s > 0``)."""
         L = self.L + self._mg * p_m * dT_s
         P = self.P + self._q * dT_s
         k = P / (P + self._r)
@@ -188,6 +192,13 @@ class AngularMomentumFilter:
         ``p_st_x_m``, ``p_st_y_m``: CoM minus stance contact (m, world axes);
         ``L_*_meas_Nms``: measured momentum about the stance contact; ``dT_s``: tick (s).
         """
+        # The per-tick path: five Python floats with a finite sum are five finite numbers (NaN and inf propagate).
+        if (
+            type(p_st_x_m) is float and type(p_st_y_m) is float and type(L_x_meas_Nms) is float
+            and type(L_y_meas_Nms) is float and type(dT_s) is float and dT_s > 0.0
+            and math.isfinite(p_st_x_m + p_st_y_m + L_x_meas_Nms + L_y_meas_Nms + dT_s)
+        ):  # fmt: skip
+            return self.x._advance(p_st_y_m, L_x_meas_Nms, dT_s), self.y._advance(p_st_x_m, L_y_meas_Nms, dT_s)
         args = (p_st_x_m, p_st_y_m, L_x_meas_Nms, L_y_meas_Nms, dT_s)
         if not (all(_finite(a) for a in args) and dT_s > 0.0):
             # Check both planes before stepping either (no half-updated state).

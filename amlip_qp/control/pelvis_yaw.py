@@ -52,9 +52,11 @@ class PelvisYawFeedback:
         (rad/s): ``(-k e_psi, -k (psidot + dh_d[stance_hip_yaw]))``."""
         i_st = self.stance_index
         k = self.gain
-        R = kin.base_rotation()
+        _, v = kin.state()  # InputError before the first update
+        base = kin.robot.base_frame_id
+        R = kin.frame_rotation_view(base)
         psi = math.atan2(R[1, 0], R[0, 0])
-        psi_dot = float(kin.base_angular_jacobian()[2] @ kin.v)
+        psi_dot = float(kin.frame_jacobian6(base)[5] @ v)  # the angular row about world z
         e = psi - (target.heading_rad - float(target.h_d[i_st]))
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
         return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))

@@ -20,6 +20,7 @@ import numpy as np
 from amlip_qp.exceptions import QPError
 
 _sum = np.add.reduce
+_all = np.logical_and.reduce
 
 
 @dataclass
@@ -91,26 +92,24 @@ class QPProblem:
 
     def validate(self) -> None:
         """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
-        n, n_eq, n_in = self.n, self.n_eq, self.n_in
-        got = (self.H.shape, self.g.shape, self.A.shape, self.b.shape, self.C.shape,
-               self.l.shape, self.u.shape, self.lb.shape, self.ub.shape)  # fmt: skip
+        H, g, A, b, C, l, u, lb, ub = self.H, self.g, self.A, self.b, self.C, self.l, self.u, self.lb, self.ub
+        n, n_eq, n_in = H.shape[0], A.shape[0], C.shape[0]
+        got = (H.shape, g.shape, A.shape, b.shape, C.shape, l.shape, u.shape, lb.shape, ub.shape)
         expected = ((n, n), (n,), (n_eq, n), (n_eq,), (n_in, n), (n_in,), (n_in,), (n,), (n,))
         if got != expected:
             for name, shape, want in zip(("H", "g", "A", "b", "C", "l", "u", "lb", "ub"), got, expected):
                 if shape != want:
                     raise QPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
-        # Fast path, once per control tick: NaN and inf propagate through a sum.
-        total = 0.0
-        for arr in (self.H, self.g, self.A, self.b, self.C):
-            total += _sum(arr, axis=None)  # ndarray.sum() without its Python wrapper
-        if not math.isfinite(total):
+        # Fast path, once per control tick: NaN and inf propagate through a sum (ufunc
+        # reductions without ndarray.sum()'s wrapper; short vectors as Python floats, cheaper still).
+        if not math.isfinite(_sum(H, None) + _sum(A, None) + _sum(C, None) + sum(g.tolist()) + sum(b.tolist())):
             for name in ("H", "g", "A", "b", "C"):
                 if not np.all(np.isfinite(getattr(self, name))):
                     raise QPError(
                         f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self
                     )
         # Bounds may be +-inf, but never NaN; a crossed pair is infeasible by construction.
-        if not ((self.l <= self.u).all() and (self.lb <= self.ub).all()):
+        if not (_all(l <= u) and _all(lb <= ub)):
             for name in ("l", "u", "lb", "ub"):
                 if np.any(np.isnan(getattr(self, name))):
                     raise QPError(f"QP bound {name} contains NaN", problem=self)

@@ -128,23 +128,27 @@ class ProxQPSolver:
 
     def solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
-        dims = (problem.n, problem.n_eq, problem.n_in)
+        H, A, C = problem.H, problem.A, problem.C
+        dims = (H.shape[0], A.shape[0], C.shape[0])
         t0 = time.perf_counter_ns()
-        args = (problem.H, problem.g, problem.A, problem.b, problem.C, problem.l, problem.u, problem.lb, problem.ub)
-        if self._qp is None or dims != self._dims or not self.warm_start:
-            self._qp = self._new_qp(problem)
-            self._qp.init(*args, **self._mu)
+        args = (H, problem.g, A, problem.b, C, problem.l, problem.u, problem.lb, problem.ub)
+        qp = self._qp
+        if qp is None or dims != self._dims or not self.warm_start:
+            qp = self._qp = self._new_qp(problem)
+            qp.init(*args, **self._mu)
             self._dims = dims
             self.n_init += 1
         else:
-            self._qp.update(*args, update_preconditioner=self.update_preconditioner, **self._mu)
-        self._qp.solve()
+            qp.update(*args, update_preconditioner=self.update_preconditioner, **self._mu)
+        qp.solve()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
-        info = self._qp.results.info
+        results = qp.results
+        info = results.info
         status = info.status
-        x = self._qp.results.x
-        # A sum of finite numbers is finite (NaN and inf propagate).
-        if status not in _OK or not math.isfinite(x.sum()):
+        x = results.x
+        # A sum of finite numbers is finite (NaN and inf propagate); a sum of
+        # Python floats is cheaper than a numpy reduction at this size.
+        if status not in _OK or not math.isfinite(sum(x.tolist())):
             name = getattr(status, "name", str(status))
             # Do not warm-start the next tick from a failed iterate.
             self.reset()

@@ -64,6 +64,8 @@ class RobotKinematics:
         # Per-update caches (cleared by _invalidate), filled on first use.
         self._jac: dict[int, np.ndarray] = {}
         self._acc: dict[int, np.ndarray] = {}
+        self._jac3: dict[int, np.ndarray] = {}  # translational rows of _jac (views)
+        self._acc3: dict[int, np.ndarray] = {}  # linear part of _acc (views)
         self._bind_views()
         self._output_map: Any = None  # an OutputMap or a drop-in (see output_map)
         self._out_cache: tuple | None = None
@@ -161,13 +163,16 @@ class RobotKinematics:
         """Drop the per-update caches (both update kinds)."""
         self._jac.clear()
         self._acc.clear()
+        self._jac3.clear()
+        self._acc3.clear()
         self._out_cache = None
         self._M = None
         self._taup = None
         self.positions_only = positions_only
 
     def _ready(self) -> None:
-        self.state()
+        if self.q is None or self.v is None:  # state()'s test, without its call (a dozen getters a tick)
+            self.state()
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` of the last update: :attr:`q`, :attr:`v` themselves (read-only); InputError before any."""
@@ -241,12 +246,24 @@ class RobotKinematics:
         return acc
 
     def frame_jacobian(self, frame_id: int) -> np.ndarray:
-        """World-aligned translational Jacobian (3 x nv) of a frame's origin."""
-        return self.frame_jacobian6(frame_id)[:3]
+        """World-aligned translational Jacobian (3 x nv) of a frame's origin.
+
+        Cached until the next update (treat as read-only).
+        """
+        jac = self._jac3.get(frame_id)
+        if jac is None:
+            jac = self._jac3[frame_id] = self.frame_jacobian6(frame_id)[:3]
+        return jac
 
     def frame_jdot_v(self, frame_id: int) -> np.ndarray:
-        """``Jdot v`` (m/s^2) of a frame's origin, world axes, shape (3,)."""
-        return self.frame_jdot_v6(frame_id)[:3]
+        """``Jdot v`` (m/s^2) of a frame's origin, world axes, shape (3,).
+
+        Cached until the next update (treat as read-only).
+        """
+        acc = self._acc3.get(frame_id)
+        if acc is None:
+            acc = self._acc3[frame_id] = self.frame_jdot_v6(frame_id)[:3]
+        return acc
 
     # ---------------------------------------------------------- contacts
     def contact_position(self, side: str) -> np.ndarray:

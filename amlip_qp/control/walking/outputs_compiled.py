@@ -175,7 +175,21 @@ class CompiledOutputMap:
                 raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} output {i} has the wrong size")
             self._buffer.set_res(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
         self._cassie = self.layout == "cassie"
-        self._v = slice(self._p.size - nv, self._p.size)
+        self._base = robot.base_frame_id
+        # Per stance side: the frames of the packed input (stance contact, swing contact[, swing toe, heel]).
+        self._frames = {
+            stance: (robot.contact_frame_ids[stance], robot.contact_frame_ids[swing])
+            + (tuple(robot.force_frame_ids[swing]) if self._cassie else ())
+            for stance, swing in zip(robot.foot_sides, robot.foot_sides[::-1])
+        }
+        # Views of the inputs each primitive is copied into (``view[...] = x`` is the cheapest copy).
+        JT, p = self._JT, self._p
+        self._in_base = (JT[0:3], JT[3:6], p[0:9].reshape(3, 3), p[9:12], p[12:15], p[15:18])
+        n_frames = len(self._frames[robot.foot_sides[0]])
+        self._in_frames = tuple((JT[6 + 3 * i : 9 + 3 * i], p[18 + 6 * i : 21 + 6 * i], p[21 + 6 * i : 24 + 6 * i])
+                                for i in range(n_frames))  # fmt: skip
+        self._at = 18 + 6 * n_frames
+        self._in_v = p[p.size - nv :]
 
     @property
     def size(self) -> int:
@@ -185,31 +199,26 @@ class CompiledOutputMap:
     def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
         swing = self._ref.checked_swing(stance, heading_rad)
-        robot = self.robot
-        jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
-        JT, p = self._JT, self._p
-        base = robot.base_frame_id
-        JT[0:3] = jac(base)[3:]
-        JT[3:6] = kin.com_jacobian()
-        p[0:9] = kin.frame_rotation_view(base).reshape(-1)
-        p[9:12] = acc(base)[3:]
-        p[12:15] = kin.com_view
-        p[15:18] = kin.com_jdot_v()
-        frames = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
-        if self._cassie:
-            frames += list(robot.force_frame_ids[swing])
-        at = 18
-        for i, fid in enumerate(frames):
-            JT[6 + 3 * i : 9 + 3 * i] = jac(fid)[:3]
-            p[at : at + 3] = kin.frame_translation_view(fid)
-            p[at + 3 : at + 6] = acc(fid)[:3]
-            at += 6
         q, v = kin.state()
+        jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
+        base = self._base
+        Jw, Jc, R, alpha, com, com_drift = self._in_base
+        Jw[...] = jac(base)[3:]
+        Jc[...] = kin.com_jacobian()
+        R[...] = kin.frame_rotation_view(base)  # row-major into the packed input
+        alpha[...] = acc(base)[3:]
+        com[...] = kin.com_view
+        com_drift[...] = kin.com_jdot_v()
+        for fid, (J_in, pos_in, drift_in) in zip(self._frames[stance], self._in_frames):
+            J_in[...] = jac(fid)[:3]
+            pos_in[...] = kin.frame_translation_view(fid)
+            drift_in[...] = acc(fid)[:3]
+        p, at = self._p, self._at
         if self._cassie:
             p[at] = q[self._yaw_q[stance]]
             p[at + 1] = q[self._yaw_q[swing]]
         p[at + 2] = heading_rad
-        p[self._v] = v
+        self._in_v[...] = v
         self._eval()
         J = self._J.copy()
         if self._cassie:

@@ -44,6 +44,8 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.robots.outputs import OutputMap
 
+_sum = np.add.reduce
+
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -137,7 +139,9 @@ class WholeBodyQP:
         self._E = np.zeros((rows, n))
         self._e = np.zeros(rows)
         self._EtE = np.zeros((n, n))
-        self._normal = (L.normal_index(L.sl_f_st), L.normal_index(L.sl_f_sw))
+        # The normal components of each foot's points, as strided slices of x (views, no gather).
+        d = L.point_dim
+        self._normal = tuple(slice(foot.start + d - 1, foot.stop, d) for foot in (L.sl_f_st, L.sl_f_sw))
 
     # ------------------------------------------------------------------ info
     @property
@@ -198,7 +202,8 @@ class WholeBodyQP:
 
     def normal_force_totals(self, x: np.ndarray) -> tuple[float, float]:
         """Total normal (vertical) force of the stance and of the swing foot in a solution, N."""
-        return float(x[self._normal[0]].sum()), float(x[self._normal[1]].sum())
+        st, sw = self._normal
+        return float(_sum(x[st])), float(_sum(x[sw]))
 
     def rigid_forces(self, x: np.ndarray) -> np.ndarray:
         """The rigid-spring constraint forces ``lambda`` (N m) of a solution; shape (0,) when none is held rigid."""

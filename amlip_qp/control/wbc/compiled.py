@@ -37,7 +37,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.control.wbc.inputs import SymbolicInputs, dm, gather_inputs, pack_inputs, packed_layout
+from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs, dm, gather_inputs
 from amlip_qp.exceptions import CodegenError, InputError
 
 if TYPE_CHECKING:
@@ -167,12 +167,10 @@ class CompiledBuild:
         source, symbolic = generate_source(builder)
         fn = symbolic[B.robot.foot_sides[0]]
         L, P, inp = B.layout, B.problem, B.inputs
-        small = packed_layout(B.robot.nq, L, B.output_task.size)
-        self._small = small
+        self._packed = PackedInput(B.robot.nq, L, B.output_task.size)
         # Inputs: M (its upper triangle is read), the builder's hp and Jf, J^T of the outputs, the packed rest.
         self._Mu = np.zeros((L.nv, L.nv), order="F")
         self._JoT = np.zeros((B.output_task.size, L.nv))
-        self._u = np.zeros(small["size"])
         self._E = np.zeros((fn.size_out(fn.index_out("ET"))[1], L.n))
         self._EtE = np.zeros((L.n, L.n))
         n_tau = fn.size_out(fn.index_out("TT"))[1]  # the leading inequality rows with a varying C
@@ -188,7 +186,7 @@ class CompiledBuild:
         self.library_path, functions = runtime.compile_and_load(
             source, list(names.values()), SOURCE_FILE, LIBRARY_FILE, cache_dir
         )
-        bound = _bind(functions, [self._Mu, inp.hp, inp.Jf, self._JoT, self._u], list(outputs.values()))
+        bound = _bind(functions, [self._Mu, inp.hp, inp.Jf, self._JoT, self._packed.array], list(outputs.values()))
         self._buffers = {side: bound[name][0] for side, name in names.items()}
         self._eval = {side: bound[name][1] for side, name in names.items()}
 
@@ -197,9 +195,9 @@ class CompiledBuild:
         Same contract as :meth:`WholeBodyQP.build`."""
         B = self.builder
         inp = gather_inputs(kin, target, B.inputs)
-        np.copyto(self._Mu, inp.mass_upper)
-        np.copyto(self._JoT, inp.output_jacobian)
-        pack_inputs(inp, self._small, self._u)
+        self._Mu[...] = inp.mass_upper
+        self._JoT[...] = inp.output_jacobian
+        self._packed.pack(inp)
         self._eval[inp.stance]()
         E = self._E
         np.add(B.constant_cost.H0, np.matmul(E.T, E, out=self._EtE), out=B.problem.H)

@@ -98,12 +98,13 @@ class TickInputs:
         self.output_task = output_task
         self.feedback = PelvisYawFeedback.for_outputs(tuple(names), config.hip_yaw_feedback)
         d, k = layout.point_dim, layout.n_points
-        #: Per side, the force frames and their rows of ``Jf`` as the stance (first) and as the swing foot.
+        self.Jf = np.zeros((2 * layout.n_force, robot.nv))
+        #: Per side, its force frames and the views of their rows of ``Jf`` as the stance (first) and as the swing foot.
         self._points = {
             side: (
-                robot.force_frame_ids[side],
-                [slice(d * p, d * (p + 1)) for p in range(k)],
-                [slice(d * (k + p), d * (k + p + 1)) for p in range(k)],
+                tuple(robot.force_frame_ids[side]),
+                tuple(self.Jf[d * p : d * (p + 1)] for p in range(k)),
+                tuple(self.Jf[d * (k + p) : d * (k + p + 1)] for p in range(k)),
             )
             for side in robot.foot_sides
         }
@@ -112,7 +113,6 @@ class TickInputs:
         self.v: np.ndarray = np.zeros(robot.nv)
         self.mass_upper: np.ndarray = np.zeros((robot.nv, robot.nv))
         self.hp = np.zeros(robot.nv)
-        self.Jf = np.zeros((2 * layout.n_force, robot.nv))
         self.point_jacobians: list[np.ndarray] = []
         self.point_positions: list[np.ndarray] = []
         self.point_drifts: list[np.ndarray] = []
@@ -132,17 +132,19 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
     swing = other_side(stance)
     inputs.stance, inputs.swing = stance, swing
     inputs.q, inputs.v = kin.state()
-    np.subtract(kin.nonlinear_effects(), kin.passive_forces(), out=inputs.hp)
+    kin.require_dynamics()
+    np.subtract(kin.data.nle, kin.passive_forces(), out=inputs.hp)  # h - taup
     inputs.mass_upper = kin.data.M
     # Force-point Jacobians on the layout's axes: the stance foot's rows, then the swing foot's.
-    Jf, axes = inputs.Jf, inputs.layout.axes_index
-    fids, rows, _ = inputs._points[stance]
-    jacs = [kin.frame_jacobian(f) for f in fids]
-    for J, r in zip(jacs, rows):
-        Jf[r] = J[axes]
+    axes = inputs.layout.axes_index
+    jac = kin.frame_jacobian
+    fids, st_rows, _ = inputs._points[stance]
+    jacs = [jac(f) for f in fids]
+    for J, row in zip(jacs, st_rows):
+        row[...] = J[axes]
     sw_fids, _, sw_rows = inputs._points[swing]
-    for f, r in zip(sw_fids, sw_rows):
-        Jf[r] = kin.frame_jacobian(f)[axes]
+    for f, row in zip(sw_fids, sw_rows):
+        row[...] = jac(f)[axes]
     inputs.point_jacobians = jacs
     inputs.point_positions = [kin.frame_translation_view(f) for f in fids]
     inputs.point_drifts = [kin.frame_jdot_v(f) for f in fids]
@@ -170,23 +172,48 @@ def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
     return out
 
 
-def pack_inputs(inputs: TickInputs, small: dict, u: np.ndarray) -> None:
-    """Write ``inputs`` into the packed small input ``u`` (slices ``small`` of :func:`packed_layout`)."""
-    u[small["q"]] = inputs.q
-    u[small["v"]] = inputs.v
-    c = small["contact"].start
-    if inputs.layout.n_points == 2:
-        u[c : c + 3] = inputs.point_positions[0]
-        u[c + 3 : c + 6] = inputs.point_positions[1]
-        u[c + 6 : c + 9] = inputs.point_drifts[0]
-        u[c + 9 : c + 12] = inputs.point_drifts[1]
-    else:
-        u[small["contact"]] = inputs.point_drifts[0][inputs.layout.axes_index]
-    rr = u[small["r"]]
-    rr[:] = inputs.output_residual
-    if inputs.feedback is not None:
-        rr[inputs.feedback.swing_index] -= inputs.residual_shift
-    u[small["w"]] = inputs.swing_force_weight
+class PackedInput:
+    """The generated build's packed small input :attr:`array` (slices :attr:`slices`
+    of :func:`packed_layout`), with views of its parts made once (a tick's copies
+    then cost no slicing).
+
+    Args:
+        nq: Configuration size.
+        layout: The QP's :class:`~amlip_qp.control.wbc.layout.VariableLayout`.
+        n_outputs: Number of outputs of the output task.
+    """
+
+    def __init__(self, nq: int, layout: VariableLayout, n_outputs: int):
+        self.slices = small = packed_layout(nq, layout, n_outputs)
+        self.array = u = np.zeros(small["size"])
+        self._q, self._v, self._r = u[small["q"]], u[small["v"]], u[small["r"]]
+        self._w = small["w"].start
+        c = small["contact"].start
+        if layout.n_points == 2:
+            # stance toe and heel positions, then their drifts
+            self._contact: tuple[np.ndarray, ...] = tuple(u[c + 3 * i : c + 3 * (i + 1)] for i in range(4))
+        else:
+            self._contact = (u[small["contact"]],)
+        self._axes = layout.axes_index
+
+    def pack(self, inputs: TickInputs) -> None:
+        """Write ``inputs`` into :attr:`array`."""
+        self._q[...] = inputs.q
+        self._v[...] = inputs.v
+        contact = self._contact
+        if len(contact) == 4:
+            (p0, p1), (d0, d1) = inputs.point_positions, inputs.point_drifts
+            contact[0][...] = p0
+            contact[1][...] = p1
+            contact[2][...] = d0
+            contact[3][...] = d1
+        else:
+            contact[0][...] = inputs.point_drifts[0][self._axes]
+        rr = self._r
+        rr[...] = inputs.output_residual
+        if inputs.feedback is not None:
+            rr[inputs.feedback.swing_index] -= inputs.residual_shift
+        self.array[self._w] = inputs.swing_force_weight
 
 
 @dataclass

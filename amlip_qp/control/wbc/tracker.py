@@ -191,8 +191,9 @@ class QPTracker(Tracker):
         info: dict = {}
         if target.stance not in self.robot.foot_sides:
             raise InputError(f"target.stance must be one of {tuple(self.robot.foot_sides)}, got {target.stance!r}")
-        if np.shape(target.h_d) != (self._n_outputs,):
-            raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(target.h_d)}")
+        h_d = target.h_d
+        if (h_d.shape if isinstance(h_d, np.ndarray) else np.shape(h_d)) != (self._n_outputs,):
+            raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(h_d)}")
         t0 = time.perf_counter_ns()
         self._orient_friction(target)
         try:
@@ -246,7 +247,7 @@ class QPTracker(Tracker):
         # The solver rejects a non-finite x, so the forces are finite; the torques
         # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
-        if not math.isfinite(tau.sum()):
+        if not math.isfinite(sum(tau.tolist())):  # Python floats: cheaper than a numpy reduction here
             return self._fallback(kin, "non-finite torques", info)
         self.last_solution = sol.x
         if self.record:
