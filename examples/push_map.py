@@ -102,8 +102,10 @@ def main(argv: list[str] | None = None) -> int:
         folder = args.out
         extra = ["--workers", str(args.workers)] if args.workers else []
         code = amlip_qp_main(["sweep", str(args.spec), "--out", str(folder), *extra])
-        if code != 0:
+        if code not in (0, 1):  # 1: some cell failed; the map shows it as missing
             return code
+        draw(folder, args.figure or folder / "push_map.png")
+        return code
     draw(folder, args.figure or folder / "push_map.png")
     return 0
 

@@ -48,7 +48,7 @@ def test_two_footholds_give_only_the_pitch_along_the_heading():
     assert g.grade_along == pytest.approx(math.tan(math.radians(12.0)), abs=1e-12) and g.grade_left == 0.0
 
 
-def test_guards_walk_in_place_cap_reset_and_dz_cap():
+def test_guards_walk_in_place_slope_cap_and_reset():
     # Walking in place: no spread along the heading, so no pitch, however the feet differ in height.
     plane = FootholdPlane()
     for k in range(4):

@@ -30,3 +30,15 @@ def test_bench_interleaves_and_reports_the_median_ratio(monkeypatch, tmp_path, c
     assert calls == [1, 2, 1, 2, 1, 2]
     assert [r["ratio"] for r in result["repeats"]] == [1.9, 1.5, 2.0] and result["median_ratio"] == 1.9
     assert result["cores"] >= 1 and len(result["load_average_before"]) == 3
+
+
+def test_a_failed_bench_cell_stops_the_bench_with_its_error(monkeypatch, capsys):
+    from amlip_qp.sweep import backends
+
+    def failing(tasks, workers, on_record):
+        on_record({**tasks[0], "metrics": {}, "error": "RuntimeError: the QP solver failed"})
+
+    monkeypatch.setattr(backends, "run_local", failing)
+    assert main(["bench", "sweep", "--cells", "2", "--duration", "0.5", "--repeats", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "bench sweep: cell 0 failed: RuntimeError: the QP solver failed" in err and err.count("\n") == 1

@@ -351,7 +351,10 @@ class StateReader:
         )
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(q, v)`` (new arrays) of the MuJoCo arrays ``qpos``, ``qvel`` (read only; e.g. ``data.qpos``).
+        """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
+
+        Unlike :func:`mj_to_pin` it does not check the arrays' length or type: give it the
+        arrays of the layout it was built for.
 
         Raises:
             InputError: As :func:`mj_to_pin`: NaN/inf, or a zero quaternion.

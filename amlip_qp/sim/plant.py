@@ -198,9 +198,8 @@ class Plant:
         nu = len(ids)
         self._ctrl_prefix = bool(np.array_equal(ids, np.arange(nu)))
         self._nu = nu
-        self._qsrc, self._vsrc = qsrc, vsrc
         # The controller's own joint layout: qpos and qvel are read as they are.
-        self._same_layout = (self.free_base or not robot.is_floating) and (
+        same_layout = (self.free_base or not robot.is_floating) and (
             model.nq == ctrl_model.nq
             and model.nv == ctrl_model.nv
             and np.array_equal(qsrc, np.arange(model.nq))
@@ -208,7 +207,7 @@ class Plant:
         )
         # the state as the controller's (q, v): one gather per array (a base not floated by a free joint: own path)
         self._reader: S.StateReader | None = None
-        if self._same_layout:
+        if same_layout:
             self._reader = S.StateReader(robot.state_map)
         elif self.free_base or not robot.is_floating:
             self._reader = S.StateReader(robot.state_map, qsrc, vsrc)

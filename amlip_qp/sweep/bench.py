@@ -19,6 +19,7 @@ import sys
 import time
 from typing import Any
 
+from amlip_qp.exceptions import AmlipError
 from amlip_qp.output_paths import check_output_path, writing
 from amlip_qp.sweep import backends
 from amlip_qp.sweep.cells import Cell
@@ -35,8 +36,14 @@ def throughput(cells: list[Cell], workers: int) -> float:
     """Cells per second of one run of ``cells`` on a new pool of ``workers`` processes."""
     tasks = [c.task() for c in cells]
     t0 = time.perf_counter()
-    backends.run_local(tasks, workers, lambda record: None)
+    backends.run_local(tasks, workers, _require_success)
     return len(tasks) / (time.perf_counter() - t0)
+
+
+def _require_success(record: dict[str, Any]) -> None:
+    """A benchmark cell that failed makes the throughput meaningless: stop with its error."""
+    if record.get("error"):
+        raise AmlipError(f"bench sweep: cell {record['index']} failed: {record['error']}")
 
 
 def run_bench(args: argparse.Namespace) -> int:

@@ -11,7 +11,8 @@ Layout of ``DIR``:
   ``seed``, one per metric, then ``error`` (empty, or what a failed cell's walk
   raised: its metrics are then empty); floats as their shortest round-trip
   text, so the same cells give the same bytes;
-- ``summary.json``: counts, wall time, the backend, per-metric ranges.
+- ``summary.json``: counts (``failed`` and ``failed_cells`` among them), wall
+  time, the backend, per-metric ranges.
 """
 
 from __future__ import annotations
