@@ -27,6 +27,8 @@ import numpy as np
 from matplotlib.colors import TwoSlopeNorm
 
 from amlip_qp.cli import main as amlip_qp_main
+from amlip_qp.exceptions import InputError
+from amlip_qp.output_paths import check_output_path
 from amlip_qp.sweep.figures import grid_values, polar_map
 
 SPEC = Path(__file__).resolve().parent / "sweeps" / "push_map.toml"
@@ -46,6 +48,26 @@ def read_records(folder: Path) -> list[dict]:
         }
         out.append({"params": params, "metrics": {VALUE: float(r[VALUE]) if r[VALUE] else float("nan")}})
     return out
+
+
+def check_sweep_folder(folder: Path) -> str | None:
+    """What keeps ``folder`` from being drawn as a push map, or ``None``."""
+    missing = [name for name in ("results.csv", "summary.json", "spec.json") if not (folder / name).is_file()]
+    if missing:
+        return f"not a finished sweep folder (no {', '.join(missing)}); run the sweep first (--out)"
+    with open(folder / "results.csv", newline="") as fh:
+        columns = next(csv.reader(fh), [])
+    needed = ["tracker", "push_direction_deg", "push_phase", VALUE]
+    lacking = [c for c in needed if c not in columns]
+    if lacking:
+        return f"results.csv has no column {', '.join(lacking)}: not a push-map sweep (see {SPEC.name})"
+    return None
+
+
+def refuse(message: str) -> int:
+    """Bad input: one line on stderr, exit status 2 (as ``amlip-qp``), before any work."""
+    sys.stderr.write(f"push_map.py: error: {message}\n")
+    return 2
 
 
 def draw(folder: Path, figure: Path) -> None:
@@ -98,6 +120,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--figure", type=Path, default=None, help="figure path (default: FOLDER/push_map.png)")
     args = parser.parse_args(argv)
     folder = args.source
+    problem = check_sweep_folder(folder) if folder is not None else None
+    if problem:
+        return refuse(f"--from {folder}: {problem}")
+    try:  # the default figure of --out goes into the sweep's folder, which the sweep makes
+        figure = args.figure or (folder / "push_map.png" if folder else None)
+        check_output_path("--figure", None if figure is None else str(figure), create_folder=True)
+    except InputError as exc:
+        return refuse(str(exc))
     if args.out is not None:
         folder = args.out
         extra = ["--workers", str(args.workers)] if args.workers else []
