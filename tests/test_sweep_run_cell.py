@@ -96,3 +96,10 @@ def test_a_false_on_off_option_is_passed_as_its_no_form():
     assert rc.walk_argv({"terrain_aware": False}) == ["--no-terrain-aware"]
     assert rc.walk_argv({"terrain_aware": True}) == ["--terrain-aware"]
     assert rc.walk_argv({"noise": False}) == []  # a plain flag: false is its absence
+
+
+def test_a_crashed_cell_has_no_metrics_and_says_its_worker_died():
+    task = {"index": 3, "id": "c3", "seed": 7, "params": {"vx": 1.0}, "bisect": None}
+    rec = rc.crashed_record(task, deaths=2)
+    assert {k: rec[k] for k in task} == task
+    assert rec["metrics"] == {} and rec["error"].startswith("WorkerDied: the worker process died 2 times")

@@ -14,7 +14,8 @@ import os
 import socket
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from amlip_qp.exceptions import InputError
@@ -34,23 +35,59 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_local(tasks: Sequence[Task], workers: int, on_record: OnRecord) -> None:
+def run_local(
+    tasks: Sequence[Task], workers: int, on_record: OnRecord, fn: Callable[[Task], dict] | None = None
+) -> None:
     """Run ``tasks`` on a pool of ``workers`` processes; ``on_record`` gets each record as it finishes.
 
-    On an error or an interrupt the tasks not yet started are cancelled (the
-    finished ones have been reported).
-    """
-    from amlip_qp.sweep.run_cell import run_cell
+    At most ``workers`` tasks are in flight, so when a worker process dies (a
+    crash in native code, the out-of-memory killer) the cells it may have been
+    running are known. The pool is then replaced, and each of those cells runs
+    again alone: if its worker dies again it is recorded as failed
+    (:func:`~amlip_qp.sweep.run_cell.crashed_record`) and the sweep goes on.
+    On an error in ``on_record`` or an interrupt the tasks not yet started are
+    cancelled (the finished ones have been reported).
 
-    if not tasks:
-        return
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)))
+    Args:
+        tasks: The cells' tasks.
+        workers: Worker processes (>= 1).
+        on_record: Called with each record, in the parent process.
+        fn: The function a worker runs on a task (default
+            :func:`~amlip_qp.sweep.run_cell.run_cell`; picklable).
+    """
+    from amlip_qp.sweep.run_cell import crashed_record, run_cell
+
+    run = fn or run_cell
+    queue = list(range(len(tasks) - 1, -1, -1))  # task positions; pop() takes them in order
+    while queue:
+        lost = _run_pool(run, tasks, queue, min(workers, len(queue)), on_record)
+        for k in lost:  # alone now: a death is its own
+            if _run_pool(run, tasks, [k], 1, on_record):
+                on_record(crashed_record(tasks[k], deaths=2))
+
+
+def _run_pool(
+    run: Callable[[Task], dict], tasks: Sequence[Task], queue: list[int], n: int, on_record: OnRecord
+) -> list[int]:
+    """Run the tasks at the positions of ``queue`` (taken from its end) on one pool of ``n`` processes,
+    at most ``n`` in flight. Returns the positions in flight when a worker died (``[]`` if none did);
+    the tasks not yet started stay in ``queue``."""
+    pool = ProcessPoolExecutor(max_workers=n)
+    in_flight: dict[Future, int] = {}
     try:
-        pending = {pool.submit(run_cell, t) for t in tasks}
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+        while queue or in_flight:
+            while queue and len(in_flight) < n:
+                k = queue.pop()
+                in_flight[pool.submit(run, tasks[k])] = k
+            done, _ = wait(in_flight, return_when=FIRST_COMPLETED)
             for fut in done:
-                on_record(fut.result())
+                try:
+                    record = fut.result()
+                except BrokenProcessPool:
+                    return sorted(in_flight.values())
+                del in_flight[fut]
+                on_record(record)
+        return []
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
 
@@ -130,17 +167,30 @@ def ray_cpus(ray: Any) -> int:
     return int(ray.cluster_resources().get("CPU", 1))
 
 
-def run_ray(ray: Any, tasks: Sequence[Task], on_record: OnRecord) -> None:
-    """Run ``tasks`` as Ray tasks (one CPU each) on the connected cluster; ``on_record`` as in :func:`run_local`."""
-    from amlip_qp.sweep.run_cell import run_cell
+def run_ray(ray: Any, tasks: Sequence[Task], on_record: OnRecord, fn: Callable[[Task], dict] | None = None) -> None:
+    """Run ``tasks`` as Ray tasks (one CPU each) on the connected cluster; ``on_record`` and ``fn`` as in
+    :func:`run_local`.
 
-    remote = ray.remote(num_cpus=1, max_retries=0)(run_cell)
+    Each task runs in a worker of its own, so a dying worker takes only its own
+    cell with it: Ray runs that cell once more (``max_retries=1``, which retries
+    only system failures), and if its worker dies again the cell is recorded as
+    failed (:func:`~amlip_qp.sweep.run_cell.crashed_record`) and the sweep goes on.
+    """
+    from amlip_qp.sweep.run_cell import crashed_record, run_cell
+
+    died = (ray.exceptions.WorkerCrashedError, ray.exceptions.OutOfMemoryError)
+    remote = ray.remote(num_cpus=1, max_retries=1)(fn or run_cell)
     pending = [remote.remote(t) for t in tasks]
+    task_of = dict(zip(pending, tasks, strict=True))
     try:
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             for ref in done:
-                on_record(ray.get(ref))
+                try:
+                    record = ray.get(ref)
+                except died:
+                    record = crashed_record(task_of[ref], deaths=2)
+                on_record(record)
     finally:
         for ref in pending:
             ray.cancel(ref, force=True)

@@ -246,6 +246,13 @@ def cell_metrics(task: dict[str, Any]) -> dict[str, Any]:
     return {f"max_{name}": value, f"max_{name}_capped": capped, "bisect_walks": len(trials)}
 
 
+def crashed_record(task: dict[str, Any], *, deaths: int) -> dict[str, Any]:
+    """The record of a cell whose worker process died ``deaths`` times while running it
+    (a crash in native code, the out-of-memory killer): no metrics, the error says so."""
+    error = f"WorkerDied: the worker process died {deaths} times with this cell in flight (a crash or out of memory)"
+    return {**task, "metrics": {}, "error": error, "wall_s": 0.0}
+
+
 def error_text(exc: BaseException) -> str:
     """``"TypeName: first line of the message"`` (at most 300 characters): a failed cell's ``error``."""
     lines = str(exc).strip().splitlines()
