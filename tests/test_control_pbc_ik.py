@@ -41,7 +41,8 @@ def test_ik_evaluates_the_output_map_on_its_own_kinematics(robot):
     q, v = _perturbed_state(robot, 1)
     kin = RobotKinematics(robot)
     kin.update(q, v)
-    ik = IterativeIK(robot)
+    # no row exchange (h + 0.01 is out of reach from some of these states): every row of A is an output's
+    ik = IterativeIK(robot, IKSettings(knee_limit_swap=False))
     assert ik.kin is not kin and ik.kin.data is not kin.data
     heading = 0.3 if not robot.is_planar else 0.0
     for stance in ("left", "right"):
@@ -249,3 +250,53 @@ def test_unreachable_com_height_holds_the_stance_knee_straight_and_keeps_the_oth
     # a reachable target does not trigger it
     ok = IterativeIK(robot).solve(kin, stance, 0.0, h, np.zeros(n), np.zeros(n))
     assert not ok.knee_at_limit and ok.residual < 1e-6
+
+
+#: A right touchdown of the PBC on the closed-chain plant ramping to 2.1 m/s (t = 10.3445 s; the
+#: plant's state mapped to the controller's model, rounded to 1e-6): the new stance foot is far
+#: ahead and the springs are held at the spring model's deflections (``HELD``), so the CoM height
+#: of 0.8 m over the stance foot is out of reach by about 7 mm with the knee off its limit.
+FOLD_Q = [10.702951, -0.115186, 0.968636, 0.00377, 0.03558, -0.052107, 0.998, -0.057314, 0.008473,
+          -0.086403, -0.842082, -0.068922, 1.190809, -0.994688, -0.000893, 0.119845, 0.885494,
+          -1.020151, 0.009475, 1.232966, -1.927993]  # fmt: skip
+FOLD_V = [2.454716, 0.180246, 0.268322, 0.065925, -0.043806, -0.025825, -0.101981, 0.343629, -4.625136,
+          4.555202, 0.407349, -5.344723, 4.969958, 0.140139, -0.333119, -2.866441, 4.927423, -1.176374,
+          -1.866049, 3.368553]  # fmt: skip
+FOLD_H_D = [0.0, 0.0, 0.119845, 0.008473, 0.8, 0.426661, -0.123059, 0.8, 0.0]
+FOLD_DH_D = [0.0, 0.0, -0.399482, -0.028243, 0.0, 0.0, 0.0, -1.333333, 0.0]
+FOLD_DDH_D = [0.0, 0.0, 0.0, 0.0, 0.0, -39.356273, -2.729686, 8.888889, 0.0]
+FOLD_HELD = [0.0, -0.040134, 0.226893, 0.337928]
+
+
+def test_com_height_out_of_reach_short_of_the_knee_limit_holds_the_knee_at_its_estimate():
+    """The fold (FOLD_*): without any exchange the Newton iterates circle it, unconverged, and the
+    knee reference moves by tenths of a radian with the iteration count (ticks of +-195 N m in
+    the closed loop); with it the IK converges with the stance knee at its estimate, every
+    other output exact and the CoM height short of its reference."""
+    robot = load_robot("cassie")
+    kin = RobotKinematics(robot)
+    q_est = np.array(FOLD_Q)
+    kin.update(q_est, np.array(FOLD_V))
+    args = (kin, "right", 0.0, np.array(FOLD_H_D), np.array(FOLD_DH_D), np.array(FOLD_DDH_D))
+    iq = robot.state_map.joint_pin_q["right-knee"]
+    knees = []
+    for its in (8, 20, 50, 200):
+        stuck = IterativeIK(robot, IKSettings(knee_limit_swap=False)).solve(
+            *args, iterations=its, held_springs=np.array(FOLD_HELD)
+        )
+        assert stuck.ok and not stuck.knee_at_limit and stuck.residual > 1e-3
+        knees.append(stuck.q_r[iq])
+    assert max(knees) - min(knees) > 0.05  # no limit point: it wanders
+    # the exchange at the limit alone does not see it: the iterates never clamp there
+    old = IterativeIK(robot, IKSettings(knee_hold_short_of_limit=False)).solve(*args, held_springs=np.array(FOLD_HELD))
+    assert not old.knee_at_limit and old.residual > 1e-3
+    res = IterativeIK(robot).solve(*args, held_springs=np.array(FOLD_HELD))
+    assert res.ok and res.knee_at_limit and res.residual < 1e-6
+    assert res.q_r[iq] == pytest.approx(q_est[iq], abs=1e-9)
+    kin_r = RobotKinematics(robot)
+    kin_r.update_positions(res.q_r)
+    h_r, _, _ = kin_r.outputs("right", 0.0)
+    others = [i for i in range(len(FOLD_H_D)) if i != 4]
+    np.testing.assert_allclose(h_r[others], np.array(FOLD_H_D)[others], atol=1e-6)
+    assert h_r[4] < FOLD_H_D[4] - 0.005  # the CoM height gave way
+    assert np.all(np.isfinite(res.v_r)) and np.all(np.isfinite(res.a_r))

@@ -60,3 +60,21 @@ def test_rabbit_has_no_coupling_but_its_knees_count_too():
     rabbit = load_robot("rabbit")
     knees = KneeLimits(rabbit, IKSettings())
     assert len(knees.entries("left")) == len(knees.entries("right")) == 2
+
+
+def test_split_holds_a_knee_short_of_its_limit_at_its_estimate_when_its_output_is_out_of_reach(cassie):
+    """An output out of reach with the knee off its limit (a fold inside the range): with the
+    estimate given, the knee is exchanged for "knee = its estimate"; without it, as before, nothing."""
+    knees = KneeLimits(cassie, IKSettings(swap_threshold=1e-3))
+    row, iq, iv, limit, other = next(e for e in knees.entries("left") if e[0] == 4)  # com_z_over_stance
+    q = np.zeros(cassie.nq)
+    q[iq] = limit + 0.3 * (other - limit)  # off the limit
+    q_est = np.zeros(cassie.nq)
+    q_est[iq] = limit + 0.4 * (other - limit)
+    y, F, h_d = np.zeros(9), np.full(cassie.nv, 0.01), np.zeros(9)
+    y[row], h_d[row] = 0.79, 0.80  # 1 cm short
+    assert knees.split("left", q, F, y, h_d) == (None, [])
+    swap, back = knees.split("left", q, F, y, h_d, q_est)
+    assert back == [] and swap == [(row, iq, iv, pytest.approx(q_est[iq]), other)]
+    y[row] = 0.8  # reachable: nothing
+    assert knees.split("left", q, F, y, h_d, q_est) == (None, [])

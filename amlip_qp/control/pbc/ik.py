@@ -313,7 +313,8 @@ class IterativeIK:
                 lu = self._lu(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
                 if done and swap is None and knees is not None and knees.entries(stance) and not limit_handled:
-                    swap, back = knees.split(stance, q, F, y, h_d)
+                    q_est = kin.state()[0] if s.knee_hold_short_of_limit else None
+                    swap, back = knees.split(stance, q, F, y, h_d, q_est)
                     limit_handled = True
                     if swap is not None:
                         # out of iterations, a knee straight and its output out of reach: trade

@@ -39,6 +39,11 @@ class IKSettings:
             near-singular iterate). Without this the clamp breaks the rows
             through the knee (Cassie's coupling), the next step undoes it, and
             the iterates wander (``docs/TUNING.md``).
+        knee_hold_short_of_limit: With ``knee_limit_swap``: when the iterations
+            end unconverged with a knee's output out of reach but the knee off
+            its limit (the output's highest reachable value inside the range,
+            a fold the Newton iterates circle), exchange that output for "knee =
+            its estimate" and iterate on, as at the limit (:mod:`~amlip_qp.control.pbc.knee_limits`).
         swap_threshold: See ``knee_limit_swap``.
         knee_back_off_rad: See ``knee_limit_swap``, rad.
     """
@@ -50,6 +55,7 @@ class IKSettings:
     max_step_rad: float = 0.3
     fd_step_s: float = 1e-6
     knee_limit_swap: bool = True
+    knee_hold_short_of_limit: bool = True
     swap_threshold: float = 1e-3
     knee_back_off_rad: float = 0.2
 

@@ -14,6 +14,14 @@ decides, per clamped knee, between
 - **back off**: the output is reachable and the straight leg is only a bad
   (near-singular) iterate; the caller restarts from the knee moved off the limit.
 
+With :attr:`IKSettings.knee_hold_short_of_limit
+<amlip_qp.control.pbc.ik_settings.IKSettings.knee_hold_short_of_limit>`, a knee whose output is
+out of reach *short of* the limit is exchanged too, for "knee = its estimate". The
+output's highest reachable value can lie inside the range (a fold: the
+stance CoM height over a foot far ahead, with the stance springs held at the
+model's deflections), where the Newton iterates circle the fold, never clamp,
+and give a reference that jumps from tick to tick.
+
 A knee entry is the tuple ``(output row, knee q index, knee v index,
 straight-leg limit, other end of the range)``.
 """
@@ -77,10 +85,15 @@ class KneeLimits:
         """The knees that may be held at their limit with this stance (module doc), possibly none."""
         return tuple(self._knees[stance])
 
-    def split(self, stance: str, q, F, y, h_d) -> tuple[list[KneeEntry] | None, list[KneeEntry]]:
+    def split(self, stance: str, q, F, y, h_d, q_est=None) -> tuple[list[KneeEntry] | None, list[KneeEntry]]:
         """For an unconverged solve (max-norm residual ``F`` above the threshold): the knees
         clamped at their straight-leg limit, as ``(swap, back_off)`` (module doc); ``swap``
-        is ``None`` when empty."""
+        is ``None`` when empty.
+
+        With ``q_est`` (the estimated configuration, when the settings hold a knee short of
+        its limit) a knee off its limit whose output is out of reach is in ``swap`` as well,
+        its entry's held value (the fourth field) replaced by its estimate ``q_est[knee]``.
+        """
         thr = self.swap_threshold
         if float(np.max(np.abs(F))) <= thr:
             return None, []
@@ -88,14 +101,18 @@ class KneeLimits:
         back: list[KneeEntry] = []
         for sp in self._knees[stance]:
             row, iq = sp[0], sp[1]
+            out_of_reach = abs(y[row]) < abs(h_d[row]) - thr
             if abs(q[iq] - sp[3]) < 1e-9:
-                (swap if abs(y[row]) < abs(h_d[row]) - thr else back).append(sp)
+                (swap if out_of_reach else back).append(sp)
+            elif out_of_reach and q_est is not None:
+                swap.append((row, iq, sp[2], float(q_est[iq]), sp[4]))
         return (swap or None), back
 
 
 def swap_rows(swap: list[KneeEntry] | None, q, A, F) -> None:
     """Replace each exchanged output row of ``A`` (and of the residual ``F``, if given) by
-    ``q_knee - limit`` (the row of that knee)."""
+    ``q_knee - held`` (the row of that knee; ``held`` is the entry's fourth field: the
+    straight-leg limit, or the knee's estimate for a knee held short of it)."""
     if swap is None:
         return
     for row, iq, iv, limit, _ in swap:
