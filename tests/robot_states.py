@@ -1,7 +1,11 @@
-"""Shared test helpers: the robots under test and random MuJoCo states (not a test module)."""
+"""Shared test helpers: the robots under test, random states, MuJoCo's forward pass and finite
+differences (not a test module)."""
 
 import mujoco
 import numpy as np
+import pinocchio as pin
+
+from amlip_qp.robots import mj_to_pin
 
 #: Every bundled robot; the robots/ tests run on each.
 ROBOTS = ["rabbit", "cassie"]
@@ -22,3 +26,35 @@ def random_mj_state(robot, rng):
         else:
             qpos[qa] = rng.uniform(-1, 1)
     return qpos, rng.normal(size=m.nv)
+
+
+def random_states(robot, n, seed):
+    """``n`` random states: ``(qpos, qvel)`` (MuJoCo) and the same ``(q, v)`` (Pinocchio)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        qpos, qvel = random_mj_state(robot, rng)
+        q, v = mj_to_pin(robot, qpos, qvel)
+        yield qpos, qvel, q, v
+
+
+def mujoco_at(robot, qpos, qvel):
+    """MuJoCo's data after its forward pass (and the subtree velocities) at ``(qpos, qvel)``."""
+    m = robot.mj_model
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    mujoco.mj_forward(m, d)
+    mujoco.mj_subtreeVel(m, d)
+    return d
+
+
+def fd_along(robot, fun, q, direction, h=1e-6):
+    """d/dt fun(q(t)) at t=0 with q(t) = integrate(q, direction t) (central difference)."""
+    qp = pin.integrate(robot.pin_model, q, direction * h)
+    qm = pin.integrate(robot.pin_model, q, -direction * h)
+    return (fun(qp) - fun(qm)) / (2 * h)
+
+
+def fd_jacobian(robot, fun, q):
+    """The Jacobian of ``fun`` at ``q`` by central differences along each velocity direction."""
+    eye = np.eye(robot.nv)
+    return np.column_stack([fd_along(robot, fun, q, eye[k]) for k in range(robot.nv)])

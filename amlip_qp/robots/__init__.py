@@ -5,7 +5,9 @@
 - :mod:`.state`: MuJoCo ``(qpos, qvel)`` <-> Pinocchio ``(q, v)``.
 - :class:`RobotKinematics` (:mod:`.kinematics`): CoM, centroidal momentum,
   ``L`` about a contact, contact Jacobians, ``M``, ``h``, passive forces,
-  coupling constraints and the output map ``h_0`` (:mod:`.outputs`).
+  coupling constraints and the output map ``h_0`` (:mod:`.outputs`); the
+  model's part (Pinocchio's passes, frames, CoM, momentum, ``M``, ``h``) is
+  :class:`~amlip_qp.robots.model_kinematics.ModelKinematics` (:mod:`.model_kinematics`).
 """
 
 from amlip_qp.robots.kinematics import RobotKinematics

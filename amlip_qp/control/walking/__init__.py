@@ -2,6 +2,7 @@
 
 - :mod:`~amlip_qp.control.walking.controller`: :class:`WalkingController`, one call per control tick
   (its step clock is :class:`amlip_qp.alip.clock.StepClock`, shared with the planner);
+- :mod:`~amlip_qp.control.walking.records`: what it reports, per step and per tick;
 - :mod:`~amlip_qp.control.walking.estimator`: the state estimate (``p_st``, filtered ``L``, ``v_z``);
 - :mod:`~amlip_qp.control.walking.gait`: touchdown detection;
 - :mod:`~amlip_qp.control.walking.speed`: the per-step integral on the speed error;

@@ -9,7 +9,8 @@ control tick, solved by a persistent warm-started ProxQP.
 - :mod:`~amlip_qp.control.wbc.tasks`: the tasks (error, Jacobian, drift);
 - :mod:`~amlip_qp.control.wbc.spring_elimination`: rigid springs' forces eliminated, the torque map;
 - :mod:`~amlip_qp.control.wbc.inputs`: the per-tick inputs, gathered once;
-- :mod:`~amlip_qp.control.wbc.constraints`, :mod:`~amlip_qp.control.wbc.costs`: objects of one shape;
+- :mod:`~amlip_qp.control.wbc.constraints`, :mod:`~amlip_qp.control.wbc.costs`: objects of one shape
+  (the constraints' shape: :mod:`~amlip_qp.control.wbc.constraint_base`);
 - :mod:`~amlip_qp.control.wbc.builder`: :class:`WholeBodyQP`, the problem from those lists;
 - :mod:`~amlip_qp.control.wbc.compiled`: the same build as generated C;
 - :mod:`~amlip_qp.control.wbc.tracker`: :class:`QPTracker`, build, solve, fall back.
