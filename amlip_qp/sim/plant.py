@@ -35,7 +35,7 @@ import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.robots import state as S
+from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -206,11 +206,11 @@ class Plant:
             and np.array_equal(vsrc, np.arange(model.nv))
         )
         # the state as the controller's (q, v): one gather per array (a base not floated by a free joint: own path)
-        self._reader: S.StateReader | None = None
+        self._reader: StateReader | None = None
         if same_layout:
-            self._reader = S.StateReader(robot.state_map)
+            self._reader = StateReader(robot.state_map)
         elif self.free_base or not robot.is_floating:
-            self._reader = S.StateReader(robot.state_map, qsrc, vsrc)
+            self._reader = StateReader(robot.state_map, qsrc, vsrc)
         # contact forces: plant geom -> body, and body -> the sides whose foot it is
         self._geom_body: list[int] = model.geom_bodyid.tolist()
         self._sides_of_body: dict[int, tuple[str, ...]] = {}
