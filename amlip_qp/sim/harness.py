@@ -225,24 +225,30 @@ class Simulation:
         scalars: list[tuple] = []
         floating = self.robot.is_floating
         bq, bv = self._base_q, self._base_v
-        nbq, nbv = self._base_size
-        base_true = np.zeros((n_ticks, nbq + nbv))
-        base_est = np.zeros((n_ticks, nbq + nbv))
+        base_true: list[list[float]] = []  # the measured base state's (q, v) rows, as lists
+        n_base = sum(self._base_size)
+        base_est = np.zeros((n_ticks, n_base))
         tick_us = np.zeros(n_ticks)
         mujoco_us = np.zeros(n_ticks)
         total_us = np.zeros(n_ticks)
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
-        read_state, measure_state, push_force = plant.read_state, self.measure_state, self.push_force
+        read_state, measure_state, push_force = plant.list_reader(d), self.measure_state, self.push_force
+        write_ctrl = plant.ctrl_writer(d)
         ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, substeps, qpos = mujoco.mj_step, self.substeps, d.qpos
         xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
         xfrc_b = d.xfrc_applied[self._base_body, :3]
+        pushes = bool(self.pushes)
+        no_push = np.zeros(3)
+        if not pushes:
+            xfrc_b[:] = no_push  # and so it stays
         warn_number = d.warning.number
         warn_idx = [int(w) for w in _DIVERGENCE_WARNINGS]
-        warn0 = [int(warn_number[i]) for i in warn_idx]
-        concatenate, perf_ns = np.concatenate, time.perf_counter_ns
+        warn_all0 = warn_number.tolist()
+        warn0 = [warn_all0[i] for i in warn_idx]
+        array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
@@ -254,35 +260,41 @@ class Simulation:
 
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
-        sim_time = float(d.time)
+        sim_time = t_next = float(d.time)
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
-            t = float(d.time)
+            t = t_next
             cmd = command_fn(t)
-            q, v = read_state(d)
+            q_list, v_list = read_state()
             if floating:
-                concatenate((q[bq], v[bv]), out=base_true[k])
-            meas = measure_state(q, v)
+                base_true.append(q_list[bq] + v_list[bv])
+            meas = measure_state(array(q_list), array(v_list))
             t0 = perf_ns()
             tick = ctrl_step(meas, cmd)
-            tick_us[k] = (perf_ns() - t0) * 1e-3
+            t1 = perf_ns()
+            tick_us[k] = (t1 - t0) * 1e-3
             if floating:
                 q_est, v_est = kin_state()
                 concatenate((q_est[bq], v_est[bv]), out=base_est[k])
             tau = tick.tau_Nm
-            ctrl_now = ctrl_from_tau(tau)
-            if ctrl_filter is not None:  # e.g. an actuator delay
-                ctrl_now = ctrl_filter(ctrl_now)
-            apply_ctrl(d, ctrl_now)
-            push = push_force(t, tick.phase)
-            xfrc_b[:] = push
+            if ctrl_filter is None:
+                write_ctrl(tau)
+            else:  # e.g. an actuator delay
+                apply_ctrl(d, ctrl_filter(ctrl_from_tau(tau)))
+            if pushes:
+                push = push_force(t, tick.phase)
+                xfrc_b[:] = push
+            else:
+                push = no_push
             # log
             est, plan = tick.estimate, tick.plan
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
-            z = float(xpos_b[2])
-            if ground is not None:  # height above the ground under the base
-                z -= ground(float(xpos_b[0]), float(xpos_b[1]))
+            if ground is None:
+                z = xpos_b.item(2)
+            else:  # height above the ground under the base
+                x, y, z = xpos_b.tolist()
+                z -= ground(x, y)
             tilt = acos(max(-1.0, min(1.0, r22)))
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
@@ -304,18 +316,21 @@ class Simulation:
             else:
                 scalars.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
-            t_before = d.time
             t0 = perf_ns()
             for _ in range(substeps):
                 step(m, d)
-            mujoco_us[k] = (perf_ns() - t0) * 1e-3
+            t_end = perf_ns()
+            mujoco_us[k] = (t_end - t0) * 1e-3
+            t_next = d.time
             # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
             # counts a warning; that is a divergence, reported as a fall.
-            if d.time < t_before or any(warn_number[i] > w for i, w in zip(warn_idx, warn0)):
+            warn_all = warn_number.tolist()
+            if t_next < t or (warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0))):
                 fell, fall_time, sim_time = True, t, t
                 total_us[k] = (perf_ns() - t_tick) * 1e-3
                 break
-            sim_time = float(d.time)
+            warn_all0 = warn_all
+            sim_time = t_next
             if on_tick is not None:
                 on_tick(sim_time, d)
             if bar is not None and (k + 1) % 200 == 0:
@@ -339,7 +354,10 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating, full),
+            log=unpack_log(
+                scalars, scalar_keys, vectors[:n], vector_keys, array(base_true).reshape(-1, n_base),
+                base_est[:n], floating, full,
+            ),  # fmt: skip
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],
             mujoco_time_us=mujoco_us[:n],

@@ -255,6 +255,22 @@ class Plant:
             return self._reader(data.qpos, data.qvel)
         return self._read_body_base(data)
 
+    def list_reader(self, data: mujoco.MjData) -> Callable[[], tuple[list[float], list[float]]]:
+        """A function of no arguments giving :meth:`read_state` of ``data`` now, as Python lists.
+
+        ``data``'s arrays are bound once (MuJoCo keeps them across steps): the per-tick read of
+        the harness, which logs parts of the state as lists.
+        """
+        if self._reader is None:
+
+            def read_body_base() -> tuple[list[float], list[float]]:
+                q, v = self._read_body_base(data)
+                return q.tolist(), v.tolist()
+
+            return read_body_base
+        lists, qpos, qvel = self._reader.lists, data.qpos, data.qvel
+        return lambda: lists(qpos.tolist(), qvel.tolist())
+
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
         m, s, b = self.model, self._scratch, self.base_body_id
@@ -284,6 +300,24 @@ class Plant:
         ctrl = tau_Nm / self.gear
         np.maximum(ctrl, self._ctrl_lo, out=ctrl)
         return np.minimum(ctrl, self._ctrl_hi, out=ctrl)
+
+    def ctrl_writer(self, data: mujoco.MjData) -> Callable[[np.ndarray], None]:
+        """``f(tau_Nm)``: :meth:`write_ctrl` into ``data`` (bound once; the same numbers, fewer NumPy calls).
+
+        With the controller's actuators first in the plant's order, ``tau / gear`` and its clip
+        are computed in place in ``data.ctrl``.
+        """
+        if not self._ctrl_prefix:
+            return lambda tau_Nm: self.write_ctrl(data, tau_Nm)
+        out, gear, lo, hi = data.ctrl[: self._nu], self.gear, self._ctrl_lo, self._ctrl_hi
+        divide, maximum, minimum = np.divide, np.maximum, np.minimum
+
+        def write(tau_Nm: np.ndarray) -> None:
+            divide(tau_Nm, gear, out=out)
+            maximum(out, lo, out=out)
+            minimum(out, hi, out=out)
+
+        return write
 
     def apply_ctrl(self, data: mujoco.MjData, ctrl: np.ndarray) -> None:
         """Write controls in the controller's actuator order to the plant's actuators."""
