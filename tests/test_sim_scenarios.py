@@ -174,6 +174,15 @@ def test_a_speed_profile_is_np_interp_of_its_knots_exactly():
     for t in (0.0, 0.5, 1.0, 2.2, 3.0, 3.0 + 1e-12, 7.0, 1e9):
         assert prof(t) == float(np.interp(t, prof.times_s, prof.speeds_mps))
     assert math.copysign(1.0, SpeedProfile((0.0,), (-0.0,))(5.0)) == -1.0  # the held value, sign and all
+    assert math.copysign(1.0, prof(1.0)) == -1.0 and math.isnan(prof(math.nan))
+    assert math.isnan(np.interp(math.nan, prof.times_s, prof.speeds_mps))
+    rng = np.random.default_rng(4)
+    for n_knots in (1, 2, 3, 5):
+        for _ in range(20):
+            times = np.cumsum(rng.uniform(0.01, 3.0, n_knots)) - 0.01
+            prof = SpeedProfile(tuple(times.tolist()), tuple(rng.normal(0.0, 1.0, n_knots).tolist()))
+            for t in np.r_[rng.uniform(-1.0, times[-1] + 1.0, 300), times].tolist():
+                assert prof(t) == float(np.interp(t, prof.times_s, prof.speeds_mps))
 
 
 def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():

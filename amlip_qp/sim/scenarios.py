@@ -12,6 +12,7 @@ and ``cassie-1mps-cc-ekf`` also under each model mismatch of
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -35,8 +36,8 @@ class SpeedProfile:
 
     times_s: tuple[float, ...]
     speeds_mps: tuple[float, ...]
-    #: The knots as arrays, made once in ``__post_init__`` (``__call__`` runs every control tick).
-    _knots: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    #: The knots as tuples of floats, made once in ``__post_init__`` (``__call__`` runs every control tick).
+    _knots: tuple[tuple[float, ...], tuple[float, ...]] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         t = np.asarray(self.times_s, dtype=float)
@@ -47,7 +48,7 @@ class SpeedProfile:
             raise InputError("speed profile times and speeds must be finite numbers")
         if t[0] < 0 or np.any(np.diff(t) <= 0):
             raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
-        object.__setattr__(self, "_knots", (t, v))
+        object.__setattr__(self, "_knots", (tuple(t.tolist()), tuple(v.tolist())))
 
     @classmethod
     def parse(cls, text: str) -> SpeedProfile:
@@ -66,11 +67,29 @@ class SpeedProfile:
         return cls((0.0,), (float(speed_mps),))
 
     def __call__(self, t_s: float) -> float:
-        """Speed at time ``t_s``, m/s."""
+        """Speed at time ``t_s``, m/s: ``np.interp(t_s, times_s, speeds_mps)`` bit for bit (tested).
+
+        In plain Python (it runs every control tick): NumPy's search and its arithmetic,
+        ``slope * (t - t_j) + v_j``, in the same order.
+        """
         times, speeds = self._knots
-        if t_s > times[-1]:  # held after the last knot: np.interp's value there, without its call
-            return float(speeds[-1])
-        return float(np.interp(t_s, times, speeds))
+        if t_s >= times[-1]:  # held after the last knot (and at it)
+            return speeds[-1]
+        if t_s < times[0] or len(times) == 1:
+            return speeds[0]
+        if t_s != t_s:  # NaN
+            return t_s
+        j = bisect_right(times, t_s) - 1
+        t_j, v_j = times[j], speeds[j]
+        if t_j == t_s:
+            return v_j
+        slope = (speeds[j + 1] - v_j) / (times[j + 1] - t_j)
+        v = slope * (t_s - t_j) + v_j
+        if v != v:  # NaN one way (overflow): np.interp tries the other
+            v = slope * (t_s - times[j + 1]) + speeds[j + 1]
+            if v != v and v_j == speeds[j + 1]:
+                v = v_j
+        return v
 
     @property
     def final_mps(self) -> float:
@@ -157,10 +176,11 @@ class Scenario:
     def command_function(self) -> Callable[[float], Command]:
         """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
         last: list = [None, None]
+        vx_at, turn_rate_at, copysign = self.vx, self.turn_rate_at, math.copysign
 
         def command(t_s: float) -> Command:
-            vx, turn = self.vx(t_s), self.turn_rate_at(t_s)
-            key = (vx, turn, math.copysign(1.0, vx), math.copysign(1.0, turn))  # a zero's sign counts too
+            vx, turn = vx_at(t_s), turn_rate_at(t_s)
+            key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
                 last[0], last[1] = key, self._command(vx, turn)
             return last[1]
