@@ -151,15 +151,19 @@ class Simulation:
     def measure_state(self, q: np.ndarray, v: np.ndarray) -> Measurement:
         """The measurement of the true state ``(q, v)`` (modified in place): ``--noise``, then the sensors."""
         if self.noise is not None:
-            n, rng = self.noise, self.rng
-            q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
-            v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
-            if self.robot.is_floating:
-                q[:3] += rng.normal(0.0, n.base_pos_m, 3)
-                q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
-                v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
-                v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
+            self._add_noise(q, v)
         return self.sensors.measure(self.data, q, v, base_known=self.true_base)
+
+    def _add_noise(self, q: np.ndarray, v: np.ndarray) -> None:
+        """``--noise`` (not ``None``) on the state ``(q, v)``, in place."""
+        n, rng = self.noise, self.rng
+        q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
+        v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
+        if self.robot.is_floating:
+            q[:3] += rng.normal(0.0, n.base_pos_m, 3)
+            q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
+            v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
+            v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
 
     # ------------------------------------------------------------ pushes
     def push_force(self, t_s: float, phase: float = math.nan) -> np.ndarray:
@@ -233,7 +237,8 @@ class Simulation:
         total_us = np.zeros(n_ticks)
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
-        read_state, measure_state, push_force = plant.list_reader(d), self.measure_state, self.push_force
+        read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
+        add_noise = None if self.noise is None else self._add_noise
         write_ctrl = plant.ctrl_writer(d)
         ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
@@ -269,7 +274,10 @@ class Simulation:
             q_list, v_list = read_state()
             if floating:
                 base_true.append(q_list[bq] + v_list[bv])
-            meas = measure_state(array(q_list), array(v_list))
+            q, v = array(q_list), array(v_list)
+            if add_noise is not None:
+                add_noise(q, v)
+            meas = sense(t, q, v)
             t0 = perf_ns()
             tick = ctrl_step(meas, cmd)
             t1 = perf_ns()

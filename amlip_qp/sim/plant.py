@@ -212,10 +212,12 @@ class Plant:
         elif self.free_base or not robot.is_floating:
             self._reader = StateReader(robot.state_map, qsrc, vsrc)
         # contact forces: plant geom -> body, and body -> the sides whose foot it is
-        self._geom_body: list[int] = model.geom_bodyid.tolist()
-        self._sides_of_body: dict[int, tuple[str, ...]] = {}
+        sides_of_body: dict[int, tuple[str, ...]] = {}
         for side, body in self.foot_body_ids.items():
-            self._sides_of_body[body] = self._sides_of_body.get(body, ()) + (side,)
+            sides_of_body[body] = sides_of_body.get(body, ()) + (side,)
+        geom_body = model.geom_bodyid.tolist()
+        self._geom_sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
+        self._geom_world = [b == 0 for b in geom_body]
         self._force6 = np.zeros(6)
         if not self.free_base and robot.is_floating:
             smap = robot.state_map  # every hinge and slide joint of the controller's model
@@ -335,13 +337,13 @@ class Plant:
         normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
         if data.ncon == 0:
             return normal
-        m, geom_body, sides_of, force6 = self.model, self._geom_body, self._sides_of_body, self._force6
+        m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
+        contact_force = mujoco.mj_contactForce
         for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
-            b1, b2 = geom_body[g1], geom_body[g2]
-            sides = sides_of.get(b1, ()) if b2 == 0 else ()
-            if b1 == 0:
-                sides += sides_of.get(b2, ())
+            sides = geom_sides[g1] if world[g2] else ()
+            if world[g1]:
+                sides += geom_sides[g2]
             for side in sides:
-                mujoco.mj_contactForce(m, data, i, force6)
+                contact_force(m, data, i, force6)
                 normal[side] += abs(force6[0])
         return normal
