@@ -204,7 +204,7 @@ def test_the_list_reader_is_read_state_as_lists(cassie, tmp_path):
             plant.write_ctrl(d, rng.uniform(-50.0, 50.0, cassie.nu))
             mujoco.mj_step(plant.model, d)
             q, v = plant.read_state(d)
-            assert read() == (q.tolist(), v.tolist())
+            assert read() == (q.tolist(), v.tolist()) == read(d.qpos.tolist())
 
 
 def test_the_ctrl_writer_writes_what_write_ctrl_does(cassie, tmp_path):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from operator import itemgetter
 
 import numpy as np
 
@@ -21,9 +22,13 @@ from amlip_qp.robots.state import StateMap, mj_to_pin
 
 
 def _getter(indices: Sequence[int]) -> Callable[[Sequence[float]], list[float]]:
-    """``f(seq) -> [seq[i] for i in indices]``."""
+    """``f(seq) -> [seq[i] for i in indices]`` (one ``itemgetter`` call)."""
     idx = [int(i) for i in indices]
-    return lambda seq: [seq[i] for i in idx]
+    if len(idx) == 1:
+        i = idx[0]
+        return lambda seq: [seq[i]]
+    get = itemgetter(*idx)
+    return lambda seq: list(get(seq))
 
 
 class StateReader:

@@ -231,7 +231,7 @@ class Simulation:
         bq, bv = self._base_q, self._base_v
         base_true: list[list[float]] = []  # the measured base state's (q, v) rows, as lists
         n_base = sum(self._base_size)
-        base_est = np.zeros((n_ticks, n_base))
+        base_est: list[list[float]] = []  # the controller's base state's rows, as lists
         tick_us = np.zeros(n_ticks)
         mujoco_us = np.zeros(n_ticks)
         total_us = np.zeros(n_ticks)
@@ -266,12 +266,13 @@ class Simulation:
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
         sim_time = t_next = float(d.time)
+        qpos_list = qpos.tolist()
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
             t = t_next
             cmd = command_fn(t)
-            q_list, v_list = read_state()
+            q_list, v_list = read_state(qpos_list)
             if floating:
                 base_true.append(q_list[bq] + v_list[bv])
             q, v = array(q_list), array(v_list)
@@ -284,7 +285,7 @@ class Simulation:
             tick_us[k] = (t1 - t0) * 1e-3
             if floating:
                 q_est, v_est = kin_state()
-                concatenate((q_est[bq], v_est[bv]), out=base_est[k])
+                base_est.append(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
             if ctrl_filter is None:
                 write_ctrl(tau)
@@ -344,7 +345,8 @@ class Simulation:
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos.tolist())) and not np.all(np.isfinite(qpos))):
+            qpos_list = qpos.tolist()  # also the next tick's
+            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
                 total_us[k] = (perf_ns() - t_tick) * 1e-3
                 break
@@ -364,7 +366,7 @@ class Simulation:
             fall_time_s=fall_time,
             log=unpack_log(
                 scalars, scalar_keys, vectors[:n], vector_keys, array(base_true).reshape(-1, n_base),
-                base_est[:n], floating, full,
+                array(base_est).reshape(-1, n_base), floating, full,
             ),  # fmt: skip
             steps=list(ctrl.steps),
             tick_time_us=tick_us[:n],

@@ -257,21 +257,26 @@ class Plant:
             return self._reader(data.qpos, data.qvel)
         return self._read_body_base(data)
 
-    def list_reader(self, data: mujoco.MjData) -> Callable[[], tuple[list[float], list[float]]]:
-        """A function of no arguments giving :meth:`read_state` of ``data`` now, as Python lists.
+    def list_reader(self, data: mujoco.MjData) -> Callable[..., tuple[list[float], list[float]]]:
+        """``f(qpos_list=None)``: :meth:`read_state` of ``data`` now, as Python lists.
 
         ``data``'s arrays are bound once (MuJoCo keeps them across steps): the per-tick read of
-        the harness, which logs parts of the state as lists.
+        the harness, which logs parts of the state as lists. ``qpos_list``: ``data.qpos.tolist()``
+        if the caller has it already (``None``: read here).
         """
         if self._reader is None:
 
-            def read_body_base() -> tuple[list[float], list[float]]:
+            def read_body_base(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
                 q, v = self._read_body_base(data)
                 return q.tolist(), v.tolist()
 
             return read_body_base
         lists, qpos, qvel = self._reader.lists, data.qpos, data.qvel
-        return lambda: lists(qpos.tolist(), qvel.tolist())
+
+        def read(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
+            return lists(qpos.tolist() if qpos_list is None else qpos_list, qvel.tolist())
+
+        return read
 
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
@@ -335,8 +340,6 @@ class Plant:
     def foot_normal_forces_N(self, data: mujoco.MjData, out: dict[str, float] | None = None) -> dict[str, float]:
         """Side -> normal force of the floor (world body) on that foot's body, N (summed over contacts)."""
         normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
-        if data.ncon == 0:
-            return normal
         m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
         contact_force = mujoco.mj_contactForce
         for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
