@@ -230,3 +230,21 @@ def test_the_ctrl_writer_writes_what_write_ctrl_does(cassie, tmp_path):
         if np.all(np.isfinite(plant.ctrl_range)):  # the bundled model's limits: big torques sit on them
             ctrl, (lo, hi) = d1.ctrl[plant.actuator_ids], plant.ctrl_range.T
             assert np.any(ctrl == lo) and np.any(ctrl == hi) and not np.any((ctrl < lo) | (ctrl > hi))
+
+
+def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
+    """Landing, standing and kicking: every switch is the full sum's, at thresholds around the forces."""
+    plant = load_plant("cassie", cassie)
+    data = plant.new_data("stand")
+    data.qpos[2] += 0.05  # dropped from 5 cm: no contact, then a landing
+    rng = np.random.default_rng(9)
+    seen = set()
+    for k in range(600):
+        plant.write_ctrl(data, rng.uniform(-60.0, 60.0, cassie.nu) if k > 300 else np.zeros(cassie.nu))
+        mujoco.mj_step(plant.model, data)
+        forces = plant.foot_normal_forces_N(data)
+        for threshold in (0.0, 5.0, 20.0, 100.0, *forces.values()):
+            got = plant.foot_contact_switches(data, threshold)
+            assert got == {side: f > threshold for side, f in forces.items()}
+            seen.add(tuple(got.values()))
+    assert {(False, False), (True, True)} <= seen and len(seen) >= 3

@@ -232,9 +232,9 @@ class Simulation:
         base_true: list[list[float]] = []  # the measured base state's (q, v) rows, as lists
         n_base = sum(self._base_size)
         base_est: list[list[float]] = []  # the controller's base state's rows, as lists
-        tick_us = np.zeros(n_ticks)
-        mujoco_us = np.zeros(n_ticks)
-        total_us = np.zeros(n_ticks)
+        tick_ns: list[int] = []  # wall times per tick, ns: the controller, MuJoCo, the whole tick
+        mujoco_ns: list[int] = []
+        total_ns: list[int] = []
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
@@ -282,7 +282,7 @@ class Simulation:
             t0 = perf_ns()
             tick = ctrl_step(meas, cmd)
             t1 = perf_ns()
-            tick_us[k] = (t1 - t0) * 1e-3
+            tick_ns.append(t1 - t0)
             if floating:
                 q_est, v_est = kin_state()
                 base_est.append(q_est.tolist()[bq] + v_est.tolist()[bv])
@@ -329,14 +329,14 @@ class Simulation:
             for _ in range(substeps):
                 step(m, d)
             t_end = perf_ns()
-            mujoco_us[k] = (t_end - t0) * 1e-3
+            mujoco_ns.append(t_end - t0)
             t_next = d.time
             # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
             # counts a warning; that is a divergence, reported as a fall.
             warn_all = warn_number.tolist()
             if t_next < t or (warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0))):
                 fell, fall_time, sim_time = True, t, t
-                total_us[k] = (perf_ns() - t_tick) * 1e-3
+                total_ns.append(perf_ns() - t_tick)
                 break
             warn_all0 = warn_all
             sim_time = t_next
@@ -348,14 +348,15 @@ class Simulation:
             qpos_list = qpos.tolist()  # also the next tick's
             if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
-                total_us[k] = (perf_ns() - t_tick) * 1e-3
+                total_ns.append(perf_ns() - t_tick)
                 break
-            total_us[k] = (perf_ns() - t_tick) * 1e-3
+            total_ns.append(perf_ns() - t_tick)
         wall = time.perf_counter() - wall0
         n = k + 1
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
+        tick_us, mujoco_us = np.array(tick_ns, dtype=float) * 1e-3, np.array(mujoco_ns, dtype=float) * 1e-3
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -369,9 +370,9 @@ class Simulation:
                 array(base_est).reshape(-1, n_base), floating, full,
             ),  # fmt: skip
             steps=list(ctrl.steps),
-            tick_time_us=tick_us[:n],
-            mujoco_time_us=mujoco_us[:n],
-            harness_time_us=total_us[:n] - tick_us[:n] - mujoco_us[:n],
+            tick_time_us=tick_us,
+            mujoco_time_us=mujoco_us,
+            harness_time_us=np.array(total_ns, dtype=float) * 1e-3 - tick_us - mujoco_us,
             fallback_ticks=ctrl.fallback_ticks,
             safe_mode_ticks=ctrl.safe_mode_ticks,
             estimator_divergences=ctrl.estimator_divergences,

@@ -250,16 +250,15 @@ class PlantSensors:
         if self.model != "ideal" or not base_known:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)
         sensordata, imu_idx, threshold = data.sensordata, self._imu_idx, self.contact_threshold_N
-        sides, forces_N = tuple(self.plant.foot_body_ids), self.plant.foot_normal_forces_N
+        switches = self.plant.foot_contact_switches
 
         def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
             x = sensordata[imu_idx]
-            forces = forces_N(data, dict.fromkeys(sides, 0.0))
             return Measurement(
                 t_s=t_s,
                 q=q,
                 v=v,
-                foot_contact={side: f > threshold for side, f in forces.items()},
+                foot_contact=switches(data, threshold),
                 imu=ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:]),
                 base_known=True,
             )
