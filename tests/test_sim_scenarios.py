@@ -169,6 +169,23 @@ def test_the_command_function_of_a_run_gives_the_scenarios_commands():
     assert made[0] is not made[-1]
 
 
+@pytest.mark.parametrize(
+    "changes",
+    [{}, {"turn_angle_rad": math.inf}, {"turn_rate_radps": 0.0}, {"turn_rate_radps": -0.4, "turn_start_s": 6.0}],
+)
+def test_the_command_holds_from_the_last_knot_or_the_turns_end(changes):
+    sc = get_scenario("cassie-turn-90").with_(**changes)
+    hold = sc.hold_from_s()
+    times = [k * 0.0005 for k in range(0, 30000, 5)]
+    held = [sc.command(t) for t in times if t >= hold]
+    assert held and all(c == held[0] for c in held)
+    assert sc.command(hold - 0.01) != held[0]  # it does change just before
+    command = sc.command_function()
+    made = [command(t) for t in times]
+    assert made == [sc.command(t) for t in times]
+    assert all(c is made[-1] for c, t in zip(made, times) if t >= hold)
+
+
 def test_a_speed_profile_is_np_interp_of_its_knots_exactly():
     prof = SpeedProfile((0.0, 1.0, 3.0), (0.0, -0.0, 1.1))
     for t in (0.0, 0.5, 1.0, 2.2, 3.0, 3.0 + 1e-12, 7.0, 1e9):

@@ -174,18 +174,37 @@ class Scenario:
         )
 
     def command_function(self) -> Callable[[float], Command]:
-        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
+        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
+
+        From :meth:`hold_from_s` on, the command is the one made first there, without looking again.
+        """
         last: list = [None, None]
+        held: list = [None]
+        hold_from = self.hold_from_s()
         vx_at, turn_rate_at, copysign = self.vx, self.turn_rate_at, math.copysign
 
         def command(t_s: float) -> Command:
+            if t_s >= hold_from and held[0] is not None:
+                return held[0]
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
                 last[0], last[1] = key, self._command(vx, turn)
+            if t_s >= hold_from:
+                held[0] = last[1]
             return last[1]
 
         return command
+
+    def hold_from_s(self) -> float:
+        """The time from which the command no longer changes, s: the speed profile's last knot or the turn's end."""
+        if self.turn_rate_radps == 0.0:
+            turn_hold = -math.inf
+        elif math.isinf(self.turn_angle_rad):
+            turn_hold = self.turn_start_s
+        else:  # turn_rate_at's end time
+            turn_hold = self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
+        return max(self.vx.times_s[-1], turn_hold)
 
     def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""
