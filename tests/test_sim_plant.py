@@ -196,7 +196,10 @@ def test_contact_forces_are_mujocos_summed_per_foot_and_controls_are_clipped(cas
 
 def test_the_list_reader_is_read_state_as_lists(cassie, tmp_path):
     """Bound once, it follows the data (a free-joint plant and a slide-and-ball one)."""
-    for plant in (load_plant("cassie", cassie), load_plant(write_plant(slide_ball_spec(), tmp_path / "sb.xml"), cassie)):
+    for plant in (
+        load_plant("cassie", cassie),
+        load_plant(write_plant(slide_ball_spec(), tmp_path / "sb.xml"), cassie),
+    ):
         d = plant.new_data("stand")
         read = plant.list_reader(d)
         rng = np.random.default_rng(5)

@@ -215,7 +215,8 @@ def _same_measurement(a, b) -> bool:
         and a.foot_contact == b.foot_contact
         and a.base_known == b.base_known
         and all(
-            getattr(a.imu, f).tobytes() == getattr(b.imu, f).tobytes() for f in ("quat_xyzw", "gyro_radps", "accel_mps2")
+            getattr(a.imu, f).tobytes() == getattr(b.imu, f).tobytes()
+            for f in ("quat_xyzw", "gyro_radps", "accel_mps2")
         )
     )
 

@@ -357,6 +357,7 @@ class Simulation:
             bar.update(n - bar.n)
             bar.close()
         tick_us, mujoco_us = np.array(tick_ns, dtype=float) * 1e-3, np.array(mujoco_ns, dtype=float) * 1e-3
+        base_rows = array(base_true).reshape(-1, n_base), array(base_est).reshape(-1, n_base)
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -365,10 +366,7 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=unpack_log(
-                scalars, scalar_keys, vectors[:n], vector_keys, array(base_true).reshape(-1, n_base),
-                array(base_est).reshape(-1, n_base), floating, full,
-            ),  # fmt: skip
+            log=unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, *base_rows, floating, full),
             steps=list(ctrl.steps),
             tick_time_us=tick_us,
             mujoco_time_us=mujoco_us,

@@ -240,7 +240,6 @@ class PlantSensors:
             v[self._base_v] = np.nan
         return Measurement(t_s=t, q=q, v=v, foot_contact=contact, imu=imu, base_known=bool(base_known))
 
-
     def bind(self, data: mujoco.MjData, base_known: bool) -> Callable[[float, np.ndarray, np.ndarray], Measurement]:
         """``f(t_s, q, v)``: :meth:`measure` of ``data`` at its time ``t_s``, with ``data``'s arrays bound once.
 
