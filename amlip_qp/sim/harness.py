@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from array import array
 from collections.abc import Callable
 
 import mujoco
@@ -28,10 +29,12 @@ from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_log import (
+    BLOCK_ROWS,
     LOG_MODES,
     SCALAR_KEYS,
     SCALAR_KEYS_FULL,
     VECTOR_GROUPS_FULL,
+    RowBlocks,
     unpack_log,
     vector_groups,
 )
@@ -221,20 +224,21 @@ class Simulation:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         full = log == "full"
         n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars go to a list of tuples, the vectors
-        # to one preallocated row each, written by one np.concatenate.
+        # One row per tick: the Python scalars and the base states go to row blocks (lists of
+        # rows turned into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row
+        # each, written by one np.concatenate.
         scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
         vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
         vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
-        scalars: list[tuple] = []
+        scalars = RowBlocks(len(scalar_keys))
         floating = self.robot.is_floating
         bq, bv = self._base_q, self._base_v
-        base_true: list[list[float]] = []  # the measured base state's (q, v) rows, as lists
-        n_base = sum(self._base_size)
-        base_est: list[list[float]] = []  # the controller's base state's rows, as lists
-        tick_ns: list[int] = []  # wall times per tick, ns: the controller, MuJoCo, the whole tick
-        mujoco_ns: list[int] = []
-        total_ns: list[int] = []
+        base_true = RowBlocks(sum(self._base_size))  # the measured base state's (q, v)
+        base_est = RowBlocks(sum(self._base_size))  # the controller's
+        scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
+        tick_ns = array("q")  # wall times per tick, ns: the controller, MuJoCo, the whole tick
+        mujoco_ns = array("q")
+        total_ns = array("q")
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
@@ -253,7 +257,7 @@ class Simulation:
         warn_idx = [int(w) for w in _DIVERGENCE_WARNINGS]
         warn_all0 = warn_number.tolist()
         warn0 = [warn_all0[i] for i in warn_idx]
-        array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
+        np_array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
@@ -274,8 +278,8 @@ class Simulation:
             cmd = command_fn(t)
             q_list, v_list = read_state(qpos_list)
             if floating:
-                base_true.append(q_list[bq] + v_list[bv])
-            q, v = array(q_list), array(v_list)
+                true_rows.append(q_list[bq] + v_list[bv])
+            q, v = np_array(q_list), np_array(v_list)
             if add_noise is not None:
                 add_noise(q, v)
             meas = sense(t, q, v)
@@ -285,7 +289,7 @@ class Simulation:
             tick_ns.append(t1 - t0)
             if floating:
                 q_est, v_est = kin_state()
-                base_est.append(q_est.tolist()[bq] + v_est.tolist()[bv])
+                est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
             if ctrl_filter is None:
                 write_ctrl(tau)
@@ -307,7 +311,7 @@ class Simulation:
             tilt = acos(max(-1.0, min(1.0, r22)))
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
-                scalars.append(
+                scalar_rows.append(
                     (
                         t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
                         tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
@@ -323,7 +327,7 @@ class Simulation:
                     out=vectors[k],
                 )  # fmt: skip
             else:
-                scalars.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
+                scalar_rows.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
             t0 = perf_ns()
             for _ in range(substeps):
@@ -351,13 +355,17 @@ class Simulation:
                 total_ns.append(perf_ns() - t_tick)
                 break
             total_ns.append(perf_ns() - t_tick)
+            if k % BLOCK_ROWS == BLOCK_ROWS - 1:
+                scalars.flush()
+                base_true.flush()
+                base_est.flush()
         wall = time.perf_counter() - wall0
         n = k + 1
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
         tick_us, mujoco_us = np.array(tick_ns, dtype=float) * 1e-3, np.array(mujoco_ns, dtype=float) * 1e-3
-        base_rows = array(base_true).reshape(-1, n_base), array(base_est).reshape(-1, n_base)
+        base_rows = base_true.array(), base_est.array()
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -366,7 +374,7 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, *base_rows, floating, full),
+            log=unpack_log(scalars.array(), scalar_keys, vectors[:n], vector_keys, *base_rows, floating, full),
             steps=list(ctrl.steps),
             tick_time_us=tick_us,
             mujoco_time_us=mujoco_us,
