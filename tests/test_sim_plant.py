@@ -240,6 +240,7 @@ def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
     plant = load_plant("cassie", cassie)
     data = plant.new_data("stand")
     data.qpos[2] += 0.05  # dropped from 5 cm: no contact, then a landing
+    contacts = data.contact
     rng = np.random.default_rng(9)
     seen = set()
     for k in range(600):
@@ -249,5 +250,6 @@ def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
         for threshold in (0.0, 5.0, 20.0, 100.0, *forces.values()):
             got = plant.foot_contact_switches(data, threshold)
             assert got == {side: f > threshold for side, f in forces.items()}
+            assert plant.foot_contact_switches(data, threshold, contacts) == got  # kept from the start
             seen.add(tuple(got.values()))
     assert {(False, False), (True, True)} <= seen and len(seen) >= 3

@@ -351,18 +351,19 @@ class Plant:
                 normal[side] += abs(force6[0])
         return normal
 
-    def foot_contact_switches(self, data: mujoco.MjData, threshold_N: float) -> dict[str, bool]:
+    def foot_contact_switches(self, data: mujoco.MjData, threshold_N: float, contacts=None) -> dict[str, bool]:
         """Side -> ``foot_normal_forces_N(data)[side] > threshold_N``: the same switches, cheaper (tested).
 
         A side's sum stops once it is above the threshold: the terms are magnitudes, and a
         rounded sum of non-negative numbers never decreases, so the switch is already known.
         (A NaN force, which only a diverged simulation gives, would switch the full sum off.)
+        ``contacts``: ``data.contact`` if the caller keeps it (it follows the data's contacts).
         """
         normal = dict.fromkeys(self.foot_body_ids, 0.0)
         on = dict.fromkeys(self.foot_body_ids, False)
         m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
         contact_force = mujoco.mj_contactForce
-        for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
+        for i, (g1, g2) in enumerate((data.contact if contacts is None else contacts).geom.tolist()):
             sides = geom_sides[g1] if world[g2] else ()
             if world[g1]:
                 sides += geom_sides[g2]
