@@ -192,3 +192,64 @@ def test_contact_forces_are_mujocos_summed_per_foot_and_controls_are_clipped(cas
     assert got == expected and min(got.values()) > 10.0  # both feet on the floor
     tau = np.array([1e4, -1e4, np.nan, 0.5, -0.5, 3.0, -3.0, 1e-3, 0.0, 2.0])
     assert np.array_equal(plant.ctrl_from_tau(tau), np.clip(tau / plant.gear, *plant.ctrl_range.T), equal_nan=True)
+
+
+def test_the_list_reader_is_read_state_as_lists(cassie, tmp_path):
+    """Bound once, it follows the data (a free-joint plant and a slide-and-ball one)."""
+    for plant in (
+        load_plant("cassie", cassie),
+        load_plant(write_plant(slide_ball_spec(), tmp_path / "sb.xml"), cassie),
+    ):
+        d = plant.new_data("stand")
+        read = plant.list_reader(d)
+        rng = np.random.default_rng(5)
+        for _ in range(20):
+            plant.write_ctrl(d, rng.uniform(-50.0, 50.0, cassie.nu))
+            mujoco.mj_step(plant.model, d)
+            q, v = plant.read_state(d)
+            assert read() == (q.tolist(), v.tolist()) == read(d.qpos.tolist())
+
+
+def test_the_ctrl_writer_writes_what_write_ctrl_does(cassie, tmp_path):
+    """Bit for bit, clipped (NaN kept), in the plant's order or not."""
+    spec = mujoco.MjSpec.from_file(str(CASSIE_XML))
+    names = [a.name for a in spec.actuators]
+    for a in list(spec.actuators):
+        spec.delete(a)
+    for n in reversed(names):
+        spec.add_actuator(name=n, target=n, trntype=mujoco.mjtTrn.mjTRN_JOINT, gear=[10, 0, 0, 0, 0, 0])
+    reversed_plant = load_plant(write_plant(spec, tmp_path / "reversed.xml"), cassie)
+    rng = np.random.default_rng(2)
+    for plant in (load_plant("cassie", cassie), reversed_plant):
+        d0, d1 = plant.new_data("stand"), plant.new_data("stand")
+        write = plant.ctrl_writer(d1)
+        for scale in (1.0, 100.0, 1e4):
+            tau = rng.normal(0.0, scale, cassie.nu)
+            tau[3] = np.nan
+            plant.write_ctrl(d0, tau)
+            write(tau)
+            assert d0.ctrl.tobytes() == d1.ctrl.tobytes()
+        assert np.isnan(d1.ctrl[plant.actuator_ids[3]])
+        if np.all(np.isfinite(plant.ctrl_range)):  # the bundled model's limits: big torques sit on them
+            ctrl, (lo, hi) = d1.ctrl[plant.actuator_ids], plant.ctrl_range.T
+            assert np.any(ctrl == lo) and np.any(ctrl == hi) and not np.any((ctrl < lo) | (ctrl > hi))
+
+
+def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
+    """Landing, standing and kicking: every switch is the full sum's, at thresholds around the forces."""
+    plant = load_plant("cassie", cassie)
+    data = plant.new_data("stand")
+    data.qpos[2] += 0.05  # dropped from 5 cm: no contact, then a landing
+    contacts = data.contact
+    rng = np.random.default_rng(9)
+    seen = set()
+    for k in range(600):
+        plant.write_ctrl(data, rng.uniform(-60.0, 60.0, cassie.nu) if k > 300 else np.zeros(cassie.nu))
+        mujoco.mj_step(plant.model, data)
+        forces = plant.foot_normal_forces_N(data)
+        for threshold in (0.0, 5.0, 20.0, 100.0, *forces.values()):
+            got = plant.foot_contact_switches(data, threshold)
+            assert got == {side: f > threshold for side, f in forces.items()}
+            assert plant.foot_contact_switches(data, threshold, contacts) == got  # kept from the start
+            seen.add(tuple(got.values()))
+    assert {(False, False), (True, True)} <= seen and len(seen) >= 3

@@ -49,3 +49,20 @@ def test_world_base_rotates_the_body_velocity_and_gives_the_yaw():
     assert np.allclose(out["base_vel_true"][0], [math.cos(yaw), math.sin(yaw), 0.0])
     assert math.isclose(out["base_yaw_true"][0], yaw, abs_tol=1e-12)
     assert np.array_equal(out["base_pos_true"][0], [1.0, 2.0, 3.0])
+
+
+def test_row_blocks_keep_every_row_in_order_across_flushes():
+    from amlip_qp.sim.run_log import RowBlocks
+
+    rng = np.random.default_rng(0)
+    rows = rng.normal(size=(25, 3)).tolist()
+    blocks = RowBlocks(3)
+    assert blocks.array().shape == (0, 3)
+    for k, row in enumerate(rows):
+        blocks.rows.append(tuple(row) if k % 2 else row)
+        if k % 7 == 6:
+            blocks.flush()
+            assert not blocks.rows
+    got = blocks.array()
+    assert got.dtype == np.float64 and got.tobytes() == np.array(rows).tobytes()
+    assert blocks.array().tobytes() == got.tobytes()  # again: the same rows

@@ -4,27 +4,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES
 from amlip_qp.sim.scenarios import SCENARIOS, Scenario, SpeedProfile, get_scenario
-
-
-def test_speed_profile_parse_and_interpolate():
-    p = SpeedProfile.parse("0:0,5:2.1")
-    assert p.times_s == (0.0, 5.0) and p.speeds_mps == (0.0, 2.1)
-    assert p(2.5) == pytest.approx(1.05)
-    assert p(100.0) == pytest.approx(2.1) and p.final_mps == 2.1
-    assert SpeedProfile.parse(" 1:0.5 ")(0.0) == 0.5  # held before the first knot too
-    assert SpeedProfile.constant(0.7)(3.0) == 0.7
-
-
-@pytest.mark.parametrize("text", ["", "0", "0:0,x:1", "0:0:1", "5:0,1:1", "0:0,0:1", "-1:0", "0:nan", "0:inf,1:0"])
-def test_speed_profile_rejects_bad_text(text):
-    with pytest.raises(InputError):
-        SpeedProfile.parse(text)
 
 
 def test_named_scenarios_are_valid_and_known():
@@ -169,11 +153,21 @@ def test_the_command_function_of_a_run_gives_the_scenarios_commands():
     assert made[0] is not made[-1]
 
 
-def test_a_speed_profile_is_np_interp_of_its_knots_exactly():
-    prof = SpeedProfile((0.0, 1.0, 3.0), (0.0, -0.0, 1.1))
-    for t in (0.0, 0.5, 1.0, 2.2, 3.0, 3.0 + 1e-12, 7.0, 1e9):
-        assert prof(t) == float(np.interp(t, prof.times_s, prof.speeds_mps))
-    assert math.copysign(1.0, SpeedProfile((0.0,), (-0.0,))(5.0)) == -1.0  # the held value, sign and all
+@pytest.mark.parametrize(
+    "changes",
+    [{}, {"turn_angle_rad": math.inf}, {"turn_rate_radps": 0.0}, {"turn_rate_radps": -0.4, "turn_start_s": 6.0}],
+)
+def test_the_command_holds_from_the_last_knot_or_the_turns_end(changes):
+    sc = get_scenario("cassie-turn-90").with_(**changes)
+    hold = sc.hold_from_s()
+    times = [k * 0.0005 for k in range(0, 30000, 5)]
+    held = [sc.command(t) for t in times if t >= hold]
+    assert held and all(c == held[0] for c in held)
+    assert sc.command(hold - 0.01) != held[0]  # it does change just before
+    command = sc.command_function()
+    made = [command(t) for t in times]
+    assert made == [sc.command(t) for t in times]
+    assert all(c is made[-1] for c, t in zip(made, times) if t >= hold)
 
 
 def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from array import array
 from collections.abc import Callable
 
 import mujoco
@@ -28,10 +29,12 @@ from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.pushes import PushSchedule
 from amlip_qp.sim.run_log import (
+    BLOCK_ROWS,
     LOG_MODES,
     SCALAR_KEYS,
     SCALAR_KEYS_FULL,
     VECTOR_GROUPS_FULL,
+    RowBlocks,
     unpack_log,
     vector_groups,
 )
@@ -151,15 +154,19 @@ class Simulation:
     def measure_state(self, q: np.ndarray, v: np.ndarray) -> Measurement:
         """The measurement of the true state ``(q, v)`` (modified in place): ``--noise``, then the sensors."""
         if self.noise is not None:
-            n, rng = self.noise, self.rng
-            q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
-            v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
-            if self.robot.is_floating:
-                q[:3] += rng.normal(0.0, n.base_pos_m, 3)
-                q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
-                v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
-                v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
+            self._add_noise(q, v)
         return self.sensors.measure(self.data, q, v, base_known=self.true_base)
+
+    def _add_noise(self, q: np.ndarray, v: np.ndarray) -> None:
+        """``--noise`` (not ``None``) on the state ``(q, v)``, in place."""
+        n, rng = self.noise, self.rng
+        q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
+        v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
+        if self.robot.is_floating:
+            q[:3] += rng.normal(0.0, n.base_pos_m, 3)
+            q[3:7] = quat_mul_small_rotation(q[3:7], rng.normal(0.0, n.base_rot_rad, 3))
+            v[:3] += rng.normal(0.0, n.base_lin_vel_mps, 3)
+            v[3:6] += rng.normal(0.0, n.base_ang_vel_radps, 3)
 
     # ------------------------------------------------------------ pushes
     def push_force(self, t_s: float, phase: float = math.nan) -> np.ndarray:
@@ -217,32 +224,40 @@ class Simulation:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         full = log == "full"
         n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars go to a list of tuples, the vectors
-        # to one preallocated row each, written by one np.concatenate.
+        # One row per tick: the Python scalars and the base states go to row blocks (lists of
+        # rows turned into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row
+        # each, written by one np.concatenate.
         scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
         vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
         vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
-        scalars: list[tuple] = []
+        scalars = RowBlocks(len(scalar_keys))
         floating = self.robot.is_floating
         bq, bv = self._base_q, self._base_v
-        nbq, nbv = self._base_size
-        base_true = np.zeros((n_ticks, nbq + nbv))
-        base_est = np.zeros((n_ticks, nbq + nbv))
-        tick_us = np.zeros(n_ticks)
-        mujoco_us = np.zeros(n_ticks)
-        total_us = np.zeros(n_ticks)
+        base_true = RowBlocks(sum(self._base_size))  # the measured base state's (q, v)
+        base_est = RowBlocks(sum(self._base_size))  # the controller's
+        scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
+        tick_ns = array("q")  # wall times per tick, ns: the controller, MuJoCo, the whole tick
+        mujoco_ns = array("q")
+        total_ns = array("q")
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
-        read_state, measure_state, push_force = plant.read_state, self.measure_state, self.push_force
+        read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
+        add_noise = None if self.noise is None else self._add_noise
+        write_ctrl = plant.ctrl_writer(d)
         ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, substeps, qpos = mujoco.mj_step, self.substeps, d.qpos
         xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
         xfrc_b = d.xfrc_applied[self._base_body, :3]
+        pushes = bool(self.pushes)
+        no_push = np.zeros(3)
+        if not pushes:
+            xfrc_b[:] = no_push  # and so it stays
         warn_number = d.warning.number
         warn_idx = [int(w) for w in _DIVERGENCE_WARNINGS]
-        warn0 = [int(warn_number[i]) for i in warn_idx]
-        concatenate, perf_ns = np.concatenate, time.perf_counter_ns
+        warn_all0 = warn_number.tolist()
+        warn0 = [warn_all0[i] for i in warn_idx]
+        np_array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
@@ -254,39 +269,49 @@ class Simulation:
 
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
-        sim_time = float(d.time)
+        sim_time = t_next = float(d.time)
+        qpos_list = qpos.tolist()
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
-            t = float(d.time)
+            t = t_next
             cmd = command_fn(t)
-            q, v = read_state(d)
+            q_list, v_list = read_state(qpos_list)
             if floating:
-                concatenate((q[bq], v[bv]), out=base_true[k])
-            meas = measure_state(q, v)
+                true_rows.append(q_list[bq] + v_list[bv])
+            q, v = np_array(q_list), np_array(v_list)
+            if add_noise is not None:
+                add_noise(q, v)
+            meas = sense(t, q, v)
             t0 = perf_ns()
             tick = ctrl_step(meas, cmd)
-            tick_us[k] = (perf_ns() - t0) * 1e-3
+            t1 = perf_ns()
+            tick_ns.append(t1 - t0)
             if floating:
                 q_est, v_est = kin_state()
-                concatenate((q_est[bq], v_est[bv]), out=base_est[k])
+                est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
-            ctrl_now = ctrl_from_tau(tau)
-            if ctrl_filter is not None:  # e.g. an actuator delay
-                ctrl_now = ctrl_filter(ctrl_now)
-            apply_ctrl(d, ctrl_now)
-            push = push_force(t, tick.phase)
-            xfrc_b[:] = push
+            if ctrl_filter is None:
+                write_ctrl(tau)
+            else:  # e.g. an actuator delay
+                apply_ctrl(d, ctrl_filter(ctrl_from_tau(tau)))
+            if pushes:
+                push = push_force(t, tick.phase)
+                xfrc_b[:] = push
+            else:
+                push = no_push
             # log
             est, plan = tick.estimate, tick.plan
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
-            z = float(xpos_b[2])
-            if ground is not None:  # height above the ground under the base
-                z -= ground(float(xpos_b[0]), float(xpos_b[1]))
+            if ground is None:
+                z = xpos_b.item(2)
+            else:  # height above the ground under the base
+                x, y, z = xpos_b.tolist()
+                z -= ground(x, y)
             tilt = acos(max(-1.0, min(1.0, r22)))
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
-                scalars.append(
+                scalar_rows.append(
                     (
                         t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
                         tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
@@ -302,35 +327,45 @@ class Simulation:
                     out=vectors[k],
                 )  # fmt: skip
             else:
-                scalars.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
+                scalar_rows.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
-            t_before = d.time
             t0 = perf_ns()
             for _ in range(substeps):
                 step(m, d)
-            mujoco_us[k] = (perf_ns() - t0) * 1e-3
+            t_end = perf_ns()
+            mujoco_ns.append(t_end - t0)
+            t_next = d.time
             # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
             # counts a warning; that is a divergence, reported as a fall.
-            if d.time < t_before or any(warn_number[i] > w for i, w in zip(warn_idx, warn0)):
+            warn_all = warn_number.tolist()
+            if t_next < t or (warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0))):
                 fell, fall_time, sim_time = True, t, t
-                total_us[k] = (perf_ns() - t_tick) * 1e-3
+                total_ns.append(perf_ns() - t_tick)
                 break
-            sim_time = float(d.time)
+            warn_all0 = warn_all
+            sim_time = t_next
             if on_tick is not None:
                 on_tick(sim_time, d)
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos.tolist())) and not np.all(np.isfinite(qpos))):
+            qpos_list = qpos.tolist()  # also the next tick's
+            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
-                total_us[k] = (perf_ns() - t_tick) * 1e-3
+                total_ns.append(perf_ns() - t_tick)
                 break
-            total_us[k] = (perf_ns() - t_tick) * 1e-3
+            total_ns.append(perf_ns() - t_tick)
+            if k % BLOCK_ROWS == BLOCK_ROWS - 1:
+                scalars.flush()
+                base_true.flush()
+                base_est.flush()
         wall = time.perf_counter() - wall0
         n = k + 1
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
+        tick_us, mujoco_us = np.array(tick_ns, dtype=float) * 1e-3, np.array(mujoco_ns, dtype=float) * 1e-3
+        base_rows = base_true.array(), base_est.array()
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -339,11 +374,11 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=unpack_log(scalars, scalar_keys, vectors[:n], vector_keys, base_true[:n], base_est[:n], floating, full),
+            log=unpack_log(scalars.array(), scalar_keys, vectors[:n], vector_keys, *base_rows, floating, full),
             steps=list(ctrl.steps),
-            tick_time_us=tick_us[:n],
-            mujoco_time_us=mujoco_us[:n],
-            harness_time_us=total_us[:n] - tick_us[:n] - mujoco_us[:n],
+            tick_time_us=tick_us,
+            mujoco_time_us=mujoco_us,
+            harness_time_us=np.array(total_ns, dtype=float) * 1e-3 - tick_us - mujoco_us,
             fallback_ticks=ctrl.fallback_ticks,
             safe_mode_ticks=ctrl.safe_mode_ticks,
             estimator_divergences=ctrl.estimator_divergences,

@@ -35,7 +35,7 @@ import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.robots import state as S
+from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -206,16 +206,18 @@ class Plant:
             and np.array_equal(vsrc, np.arange(model.nv))
         )
         # the state as the controller's (q, v): one gather per array (a base not floated by a free joint: own path)
-        self._reader: S.StateReader | None = None
+        self._reader: StateReader | None = None
         if same_layout:
-            self._reader = S.StateReader(robot.state_map)
+            self._reader = StateReader(robot.state_map)
         elif self.free_base or not robot.is_floating:
-            self._reader = S.StateReader(robot.state_map, qsrc, vsrc)
+            self._reader = StateReader(robot.state_map, qsrc, vsrc)
         # contact forces: plant geom -> body, and body -> the sides whose foot it is
-        self._geom_body: list[int] = model.geom_bodyid.tolist()
-        self._sides_of_body: dict[int, tuple[str, ...]] = {}
+        sides_of_body: dict[int, tuple[str, ...]] = {}
         for side, body in self.foot_body_ids.items():
-            self._sides_of_body[body] = self._sides_of_body.get(body, ()) + (side,)
+            sides_of_body[body] = sides_of_body.get(body, ()) + (side,)
+        geom_body = model.geom_bodyid.tolist()
+        self._geom_sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
+        self._geom_world = [b == 0 for b in geom_body]
         self._force6 = np.zeros(6)
         if not self.free_base and robot.is_floating:
             smap = robot.state_map  # every hinge and slide joint of the controller's model
@@ -255,6 +257,27 @@ class Plant:
             return self._reader(data.qpos, data.qvel)
         return self._read_body_base(data)
 
+    def list_reader(self, data: mujoco.MjData) -> Callable[..., tuple[list[float], list[float]]]:
+        """``f(qpos_list=None)``: :meth:`read_state` of ``data`` now, as Python lists.
+
+        ``data``'s arrays are bound once (MuJoCo keeps them across steps): the per-tick read of
+        the harness, which logs parts of the state as lists. ``qpos_list``: ``data.qpos.tolist()``
+        if the caller has it already (``None``: read here).
+        """
+        if self._reader is None:
+
+            def read_body_base(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
+                q, v = self._read_body_base(data)
+                return q.tolist(), v.tolist()
+
+            return read_body_base
+        lists, qpos, qvel = self._reader.lists, data.qpos, data.qvel
+
+        def read(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
+            return lists(qpos.tolist() if qpos_list is None else qpos_list, qvel.tolist())
+
+        return read
+
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
         m, s, b = self.model, self._scratch, self.base_body_id
@@ -285,6 +308,24 @@ class Plant:
         np.maximum(ctrl, self._ctrl_lo, out=ctrl)
         return np.minimum(ctrl, self._ctrl_hi, out=ctrl)
 
+    def ctrl_writer(self, data: mujoco.MjData) -> Callable[[np.ndarray], None]:
+        """``f(tau_Nm)``: :meth:`write_ctrl` into ``data`` (bound once; the same numbers, fewer NumPy calls).
+
+        With the controller's actuators first in the plant's order, ``tau / gear`` and its clip
+        are computed in place in ``data.ctrl``.
+        """
+        if not self._ctrl_prefix:
+            return lambda tau_Nm: self.write_ctrl(data, tau_Nm)
+        out, gear, lo, hi = data.ctrl[: self._nu], self.gear, self._ctrl_lo, self._ctrl_hi
+        divide, maximum, minimum = np.divide, np.maximum, np.minimum
+
+        def write(tau_Nm: np.ndarray) -> None:
+            divide(tau_Nm, gear, out=out)
+            maximum(out, lo, out=out)
+            minimum(out, hi, out=out)
+
+        return write
+
     def apply_ctrl(self, data: mujoco.MjData, ctrl: np.ndarray) -> None:
         """Write controls in the controller's actuator order to the plant's actuators."""
         if self._ctrl_prefix:
@@ -299,15 +340,36 @@ class Plant:
     def foot_normal_forces_N(self, data: mujoco.MjData, out: dict[str, float] | None = None) -> dict[str, float]:
         """Side -> normal force of the floor (world body) on that foot's body, N (summed over contacts)."""
         normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
-        if data.ncon == 0:
-            return normal
-        m, geom_body, sides_of, force6 = self.model, self._geom_body, self._sides_of_body, self._force6
+        m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
+        contact_force = mujoco.mj_contactForce
         for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
-            b1, b2 = geom_body[g1], geom_body[g2]
-            sides = sides_of.get(b1, ()) if b2 == 0 else ()
-            if b1 == 0:
-                sides += sides_of.get(b2, ())
+            sides = geom_sides[g1] if world[g2] else ()
+            if world[g1]:
+                sides += geom_sides[g2]
             for side in sides:
-                mujoco.mj_contactForce(m, data, i, force6)
+                contact_force(m, data, i, force6)
                 normal[side] += abs(force6[0])
         return normal
+
+    def foot_contact_switches(self, data: mujoco.MjData, threshold_N: float, contacts=None) -> dict[str, bool]:
+        """Side -> ``foot_normal_forces_N(data)[side] > threshold_N``: the same switches, cheaper (tested).
+
+        A side's sum stops once it is above the threshold: the terms are magnitudes, and a
+        rounded sum of non-negative numbers never decreases, so the switch is already known.
+        (A NaN force, which only a diverged simulation gives, would switch the full sum off.)
+        ``contacts``: ``data.contact`` if the caller keeps it (it follows the data's contacts).
+        """
+        normal = dict.fromkeys(self.foot_body_ids, 0.0)
+        on = dict.fromkeys(self.foot_body_ids, False)
+        m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
+        contact_force = mujoco.mj_contactForce
+        for i, (g1, g2) in enumerate((data.contact if contacts is None else contacts).geom.tolist()):
+            sides = geom_sides[g1] if world[g2] else ()
+            if world[g1]:
+                sides += geom_sides[g2]
+            for side in sides:
+                if not on[side]:
+                    contact_force(m, data, i, force6)
+                    normal[side] += abs(force6[0])
+                    on[side] = normal[side] > threshold_N
+        return on

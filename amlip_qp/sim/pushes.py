@@ -27,6 +27,7 @@ class PushSchedule:
 
     def __init__(self, pushes: Sequence[Push]):
         self.pushes = tuple(pushes)
+        self._forces = tuple(np.asarray(p.force_N, dtype=float) for p in self.pushes)  # N, world
         self.reset()
 
     def reset(self) -> None:
@@ -45,7 +46,7 @@ class PushSchedule:
         for i, p in enumerate(self.pushes):
             start = p.t_s if p.phase is None else self._phase_start(i, p.t_s, p.phase, t_s, phase)
             if start - TIME_TOL_S <= t_s < start + p.duration_s - TIME_TOL_S:
-                f += np.asarray(p.force_N, dtype=float)
+                f += self._forces[i]
         self.last_phase = phase
         return f
 

@@ -39,6 +39,35 @@ VECTOR_GROUPS_FULL = (
 )
 
 
+class RowBlocks:
+    """Rows of ``width`` floats appended as Python sequences to :attr:`rows`, kept as float arrays.
+
+    The loop appends each tick's row to :attr:`rows` (a list append: the cheapest per tick)
+    and calls :meth:`flush` now and then (every :data:`BLOCK_ROWS` ticks), which turns the rows
+    so far into one array block and empties the list: the memory stays that of the floats.
+    """
+
+    def __init__(self, width: int):
+        self.width = int(width)
+        self.rows: list = []
+        self._blocks: list[np.ndarray] = []
+
+    def flush(self) -> None:
+        """Move the rows appended so far into an array block."""
+        if self.rows:
+            self._blocks.append(np.array(self.rows, dtype=float).reshape(-1, self.width))
+            self.rows.clear()
+
+    def array(self) -> np.ndarray:
+        """All rows, shape ``(n, width)``."""
+        self.flush()
+        return np.concatenate(self._blocks) if self._blocks else np.zeros((0, self.width))
+
+
+#: How many rows the loop appends between :meth:`RowBlocks.flush` calls.
+BLOCK_ROWS = 4096
+
+
 def vector_groups(n_out: int, nu: int) -> tuple[tuple[str, int], ...]:
     """The vector log entries the summary reads, in the order of the loop's rows, ``(key, width)``."""
     return (("com", 3), ("com_vel", 3), ("h", n_out), ("h_d", n_out), ("tau", nu))
@@ -47,9 +76,9 @@ def vector_groups(n_out: int, nu: int) -> tuple[tuple[str, int], ...]:
 def unpack_log(
     scalars, scalar_keys, vectors, vector_keys, base_true, base_est, floating, full
 ) -> dict[str, np.ndarray]:
-    """The log as name -> array (one row per tick) from the loop's scalar tuples and vector rows."""
+    """The log as name -> array (one row per tick) from the loop's scalar rows and vector rows."""
     n = vectors.shape[0]
-    table = np.array(scalars, dtype=float).reshape(n, len(scalar_keys))
+    table = np.asarray(scalars, dtype=float).reshape(n, len(scalar_keys))
     columns = {key: table[:, i].copy() for i, key in enumerate(scalar_keys)}
     col = 0
     for key, width in vector_keys:

@@ -14,68 +14,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-
-import numpy as np
+from functools import partial
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES, CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.plant_modifiers import PlantModifiers
 from amlip_qp.sim.run_types import PlantSetting, Push
-
-
-@dataclass(frozen=True)
-class SpeedProfile:
-    """Piecewise-linear forward speed over time, held constant after the last knot.
-
-    Attributes:
-        times_s: Knot times, s (strictly increasing, first >= 0).
-        speeds_mps: Speeds at the knots, m/s.
-    """
-
-    times_s: tuple[float, ...]
-    speeds_mps: tuple[float, ...]
-    #: The knots as arrays, made once in ``__post_init__`` (``__call__`` runs every control tick).
-    _knots: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self):
-        t = np.asarray(self.times_s, dtype=float)
-        v = np.asarray(self.speeds_mps, dtype=float)
-        if t.size == 0 or t.shape != v.shape:
-            raise InputError("a speed profile needs as many times as speeds, at least one knot")
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
-            raise InputError("speed profile times and speeds must be finite numbers")
-        if t[0] < 0 or np.any(np.diff(t) <= 0):
-            raise InputError(f"speed profile times must start at >= 0 s and increase strictly, got {t.tolist()}")
-        object.__setattr__(self, "_knots", (t, v))
-
-    @classmethod
-    def parse(cls, text: str) -> SpeedProfile:
-        """Parse ``"t0:v0,t1:v1,..."`` (s:m/s), e.g. ``"0:0,5:2.1"``."""
-        try:
-            pairs = [item.split(":") for item in text.split(",") if item.strip()]
-            times = tuple(float(a) for a, _ in pairs)
-            speeds = tuple(float(b) for _, b in pairs)
-        except ValueError:
-            raise InputError(f"speed profile must look like '0:0,5:2.1' (time_s:speed_mps,...), got {text!r}") from None
-        return cls(times, speeds)
-
-    @classmethod
-    def constant(cls, speed_mps: float) -> SpeedProfile:
-        """A constant speed."""
-        return cls((0.0,), (float(speed_mps),))
-
-    def __call__(self, t_s: float) -> float:
-        """Speed at time ``t_s``, m/s."""
-        times, speeds = self._knots
-        if t_s > times[-1]:  # held after the last knot: np.interp's value there, without its call
-            return float(speeds[-1])
-        return float(np.interp(t_s, times, speeds))
-
-    @property
-    def final_mps(self) -> float:
-        """The speed held after the last knot, m/s."""
-        return float(self.speeds_mps[-1])
+from amlip_qp.sim.speed_profile import SpeedProfile
 
 
 @dataclass(frozen=True)
@@ -142,30 +88,53 @@ class Scenario:
         return self._command(self.vx(t_s), self.turn_rate_at(t_s))
 
     def _command(self, vx_mps: float, turn_rate_radps: float) -> Command:
+        return Command(**self._command_fields(), vx_mps=vx_mps, turn_rate_radps=turn_rate_radps)
+
+    def _command_fields(self) -> dict[str, float]:
+        """The :class:`Command` fields that do not change during a run."""
         g = self.gait_settings
         clearance = self.setting.clearance_m
-        return Command(
-            step_time_s=g.step_time_s,
-            com_height_m=g.com_height_m,
-            clearance_m=g.clearance_m if clearance is None else clearance,
-            vx_mps=vx_mps,
-            vy_mps=self.vy_mps,
-            turn_rate_radps=turn_rate_radps,
-            step_width_m=g.step_width_m,
-        )
+        return {
+            "step_time_s": g.step_time_s,
+            "com_height_m": g.com_height_m,
+            "clearance_m": g.clearance_m if clearance is None else clearance,
+            "vy_mps": self.vy_mps,
+            "step_width_m": g.step_width_m,
+        }
 
     def command_function(self) -> Callable[[float], Command]:
-        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
+        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
+
+        From :meth:`hold_from_s` on, the command is the one made first there, without looking again.
+        """
         last: list = [None, None]
+        held: list = [None]
+        hold_from = self.hold_from_s()
+        vx_at, turn_rate_at, copysign = self.vx, self.turn_rate_at, math.copysign
+        make = partial(Command, **self._command_fields())
 
         def command(t_s: float) -> Command:
-            vx, turn = self.vx(t_s), self.turn_rate_at(t_s)
-            key = (vx, turn, math.copysign(1.0, vx), math.copysign(1.0, turn))  # a zero's sign counts too
+            if t_s >= hold_from and held[0] is not None:
+                return held[0]
+            vx, turn = vx_at(t_s), turn_rate_at(t_s)
+            key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
-                last[0], last[1] = key, self._command(vx, turn)
+                last[0], last[1] = key, make(vx_mps=vx, turn_rate_radps=turn)
+            if t_s >= hold_from:
+                held[0] = last[1]
             return last[1]
 
         return command
+
+    def hold_from_s(self) -> float:
+        """The time from which the command no longer changes, s: the speed profile's last knot or the turn's end."""
+        if self.turn_rate_radps == 0.0:
+            turn_hold = -math.inf
+        elif math.isinf(self.turn_angle_rad):
+            turn_hold = self.turn_start_s
+        else:  # turn_rate_at's end time
+            turn_hold = self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
+        return max(self.vx.times_s[-1], turn_hold)
 
     def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""

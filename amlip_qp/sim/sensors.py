@@ -24,6 +24,7 @@ step (a sample-and-hold, one plant step old); sensors change no trajectory.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
@@ -238,6 +239,30 @@ class PlantSensors:
             q[self._base_q] = np.nan
             v[self._base_v] = np.nan
         return Measurement(t_s=t, q=q, v=v, foot_contact=contact, imu=imu, base_known=bool(base_known))
+
+    def bind(self, data: mujoco.MjData, base_known: bool) -> Callable[[float, np.ndarray, np.ndarray], Measurement]:
+        """``f(t_s, q, v)``: :meth:`measure` of ``data`` at its time ``t_s``, with ``data``'s arrays bound once.
+
+        The harness's per-tick measurement; the same :class:`Measurement` as :meth:`measure`
+        (tested). ``t_s`` must be ``data.time``.
+        """
+        if self.model != "ideal" or not base_known:
+            return lambda t_s, q, v: self.measure(data, q, v, base_known)
+        sensordata, imu_idx, threshold = data.sensordata, self._imu_idx, self.contact_threshold_N
+        switches, contacts = self.plant.foot_contact_switches, data.contact  # a live view of the contacts
+
+        def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
+            x = sensordata[imu_idx]
+            return Measurement(
+                t_s=t_s,
+                q=q,
+                v=v,
+                foot_contact=switches(data, threshold, contacts),
+                imu=ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:]),
+                base_known=True,
+            )
+
+        return measure
 
 
 def base_indices(robot) -> tuple[slice | np.ndarray, slice | np.ndarray]:

@@ -1,0 +1,107 @@
+"""The per-tick state read: MuJoCo ``(qpos, qvel)`` -> Pinocchio ``(q, v)`` for one state map, in plain Python.
+
+:class:`StateReader` is :func:`~amlip_qp.robots.state.mj_to_pin` with its
+index maps composed once. It is called every control tick on vectors of a
+few dozen numbers, where each NumPy call costs more than the arithmetic, so
+it works on Python lists: one ``tolist`` per array in, one ``np.array`` per
+array out, Python float arithmetic in between, in the same operation order as
+:func:`~amlip_qp.robots.state.mj_to_pin` (whose dot products and 3x3 matrix
+products sum left to right without fused multiply-adds), so the two agree bit
+for bit (tested).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from operator import itemgetter
+
+import numpy as np
+
+from amlip_qp.robots.state import StateMap, mj_to_pin
+
+
+def _getter(indices: Sequence[int]) -> Callable[[Sequence[float]], list[float]]:
+    """``f(seq) -> [seq[i] for i in indices]`` (one ``itemgetter`` call)."""
+    idx = [int(i) for i in indices]
+    if len(idx) == 1:
+        i = idx[0]
+        return lambda seq: [seq[i]]
+    get = itemgetter(*idx)
+    return lambda seq: list(get(seq))
+
+
+class StateReader:
+    """:func:`~amlip_qp.robots.state.mj_to_pin` for one state map (called every control tick).
+
+    ``reader(qpos, qvel)`` equals ``mj_to_pin(state_map, qpos[qpos_src], qvel[qvel_src])``
+    bit for bit (tested); :meth:`lists` is the same on and to Python lists.
+
+    Args:
+        state_map: The controller's :class:`~amlip_qp.robots.state.StateMap`.
+        qpos_src: Where each of the map's MuJoCo ``qpos`` coordinates lies in the
+            arrays read (a plant with more joints); ``None``: the same layout.
+        qvel_src: The same for ``qvel``.
+    """
+
+    def __init__(self, state_map: StateMap, qpos_src: np.ndarray | None = None, qvel_src: np.ndarray | None = None):
+        m = state_map
+        qsrc = np.arange(m.nq_mj) if qpos_src is None else np.asarray(qpos_src, dtype=np.intp)
+        vsrc = np.arange(m.nv) if qvel_src is None else np.asarray(qvel_src, dtype=np.intp)
+        gq = np.empty(m.nq_pin, dtype=np.intp)
+        gv = np.empty(m.nv, dtype=np.intp)
+        gq[m.scalar_pin_q], gv[m.scalar_pin_v] = m.scalar_mj_q, m.scalar_mj_v
+        quats = []  # (plant indices of a quaternion's w, x, y, z; its first Pinocchio q index, x y z w order)
+        for qa, da, pq, pv in m.free:
+            gq[pq : pq + 3], gq[pq + 3 : pq + 7] = range(qa, qa + 3), (qa + 4, qa + 5, qa + 6, qa + 3)
+            gv[pv : pv + 6] = range(da, da + 6)
+            quats.append((*qsrc[qa + 3 : qa + 7].tolist(), pq + 3))
+        for qa, da, pq, pv in m.ball:
+            gq[pq : pq + 4] = (qa + 1, qa + 2, qa + 3, qa)
+            gv[pv : pv + 3] = range(da, da + 3)
+            quats.append((*qsrc[qa : qa + 4].tolist(), pq))
+        self.state_map = m
+        self._qsrc, self._vsrc = qsrc, vsrc
+        self._take_q, self._take_v = _getter(qsrc[gq]), _getter(vsrc[gv])
+        self._quats = tuple(quats)
+        # per free joint: its quaternion's first index in q (x y z w), its linear velocity's in v and in qvel
+        self._free = tuple((pq + 3, pv, *vsrc[da : da + 3].tolist()) for _, da, pq, pv in m.free)
+
+    def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
+
+        Unlike :func:`~amlip_qp.robots.state.mj_to_pin` it does not check the arrays' length
+        or type: give it the arrays of the layout it was built for.
+
+        Raises:
+            InputError: As :func:`~amlip_qp.robots.state.mj_to_pin`: NaN/inf, or a zero quaternion.
+        """
+        q, v = self.lists(qpos.tolist(), qvel.tolist())
+        return np.array(q), np.array(v)
+
+    def lists(self, qpos: list[float], qvel: list[float]) -> tuple[list[float], list[float]]:
+        """:meth:`__call__` on ``qpos.tolist()`` and ``qvel.tolist()``, giving ``(q, v)`` as new lists."""
+        q, v = self._take_q(qpos), self._take_v(qvel)
+        isfinite, sqrt = math.isfinite, math.sqrt
+        if not (isfinite(sum(q)) and isfinite(sum(v))):  # a finite sum implies finite entries
+            return self._checked(qpos, qvel)  # raises, naming the entries
+        for iw, ix, iy, iz, pq in self._quats:
+            w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
+            n = sqrt(w * w + x * x + y * y + z * z)
+            if n < 1e-9:
+                return self._checked(qpos, qvel)  # raises
+            q[pq], q[pq + 1], q[pq + 2], q[pq + 3] = x / n, y / n, z / n, w / n
+        for pq, pv, i0, i1, i2 in self._free:
+            # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
+            x, y, z, w = q[pq], q[pq + 1], q[pq + 2], q[pq + 3]
+            n = sqrt(w * w + x * x + y * y + z * z)
+            w, x, y, z = w / n, x / n, y / n, z / n
+            l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
+            v[pv] = (1 - 2 * (y * y + z * z)) * l0 + 2 * (x * y + w * z) * l1 + 2 * (x * z - w * y) * l2
+            v[pv + 1] = 2 * (x * y - w * z) * l0 + (1 - 2 * (x * x + z * z)) * l1 + 2 * (y * z + w * x) * l2
+            v[pv + 2] = 2 * (x * z + w * y) * l0 + 2 * (y * z - w * x) * l1 + (1 - 2 * (x * x + y * y)) * l2
+        return q, v
+
+    def _checked(self, qpos: list[float], qvel: list[float]) -> tuple[list[float], list[float]]:
+        q, v = mj_to_pin(self.state_map, np.array(qpos)[self._qsrc], np.array(qvel)[self._vsrc])
+        return q.tolist(), v.tolist()

@@ -1,0 +1,88 @@
+"""Tests of amlip_qp.robots.state_reader: the per-tick state read equals mj_to_pin bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import load_robot, mj_to_pin
+from amlip_qp.robots.state import StateMap
+from amlip_qp.robots.state_reader import StateReader
+from robot_states import ROBOTS, random_mj_state
+
+
+@pytest.fixture(scope="module", params=ROBOTS)
+def robot(request):
+    return load_robot(request.param)
+
+
+def test_state_reader_is_mj_to_pin_bit_for_bit(robot):
+    """The per-tick reader equals mj_to_pin exactly, unnormalized quaternions and a plant's own layout included."""
+    rng = np.random.default_rng(11)
+    smap = robot.state_map
+    nq, nv = robot.mj_model.nq, robot.nv
+    # a plant with 5 more coordinates of each kind, holding the model's in shuffled places
+    qsrc, vsrc = rng.permutation(nq + 5)[:nq], rng.permutation(nv + 5)[:nv]
+    readers = ((StateReader(smap), None, None), (StateReader(smap, qsrc, vsrc), qsrc, vsrc))
+    for _ in range(300):
+        qpos, qvel = random_mj_state(robot, rng)
+        qvel *= 10.0 ** rng.uniform(-3, 3)
+        if robot.is_floating:
+            qpos[3:7] *= rng.uniform(0.5, 2.0)  # as after an integration step: not exactly unit
+        q_ref, v_ref = mj_to_pin(robot, qpos, qvel)
+        for reader, qs, vs in readers:
+            if qs is None:
+                big_q, big_v = qpos, qvel
+            else:
+                big_q, big_v = rng.normal(size=nq + 5), rng.normal(size=nv + 5)
+                big_q[qs], big_v[vs] = qpos, qvel
+            q, v = reader(big_q, big_v)
+            assert q.dtype == v.dtype == np.float64
+            assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+            ql, vl = reader.lists(big_q.tolist(), big_v.tolist())
+            assert ql == q_ref.tolist() and vl == v_ref.tolist()
+
+
+def test_state_reader_refuses_nan_inf_and_zero_quaternions(robot):
+    reader, nv = StateReader(robot.state_map), robot.nv
+    bad = robot.qpos_stand.copy()
+    bad[2] = np.nan
+    with pytest.raises(InputError, match=r"qpos contains NaN or inf at indices \[2\]"):
+        reader(bad, np.zeros(nv))
+    with pytest.raises(InputError, match=rf"qvel contains NaN or inf at indices \[{nv - 1}\]"):
+        reader.lists(robot.qpos_stand.tolist(), [0.0] * (nv - 1) + [np.inf])
+    if robot.is_floating:
+        bad = robot.qpos_stand.copy()
+        bad[3:7] = 0.0
+        with pytest.raises(InputError, match="zero quaternion"):
+            reader(bad, np.zeros(nv))
+
+
+def test_state_reader_a_sum_that_overflows_is_checked_exactly(robot):
+    qpos, qvel = robot.qpos_stand.copy(), np.zeros(robot.nv)
+    qvel[-2:] = 1e308  # finite, but the sum overflows
+    q, v = StateReader(robot.state_map)(qpos, qvel)
+    q_ref, v_ref = mj_to_pin(robot, qpos, qvel)
+    assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+
+
+def test_state_reader_ball_joint_quaternion_is_normalized_and_reordered():
+    """A ball joint (none in the bundled robots): wxyz -> xyzw, normalized, angular velocity as is."""
+    i = np.intp
+    smap = StateMap(
+        nq_mj=5, nq_pin=5, nv=4,
+        scalar_mj_q=np.array([4], i), scalar_pin_q=np.array([4], i),
+        scalar_mj_v=np.array([3], i), scalar_pin_v=np.array([3], i),
+        free=(), ball=((0, 0, 0, 0),), joint_pin_q={"ball": 0, "hinge": 4}, joint_pin_v={"ball": 0, "hinge": 3},
+    )  # fmt: skip
+    rng = np.random.default_rng(3)
+    reader = StateReader(smap)
+    for _ in range(100):
+        qpos, qvel = rng.normal(size=5), rng.normal(size=4)
+        q, v = reader(qpos, qvel)
+        q_ref, v_ref = mj_to_pin(smap, qpos, qvel)
+        assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+        n = np.linalg.norm(qpos[:4])
+        np.testing.assert_allclose(q[:4], np.r_[qpos[1:4], qpos[0]] / n, rtol=1e-15)
+        assert v.tolist() == qvel.tolist()
