@@ -21,7 +21,7 @@ import numpy as np
 from amlip_qp.robots.state import StateMap, mj_to_pin
 
 
-def _getter(indices: Sequence[int]) -> Callable[[Sequence[float]], list[float]]:
+def _getter(indices: Sequence[int] | np.ndarray) -> Callable[[Sequence[float]], list[float]]:
     """``f(seq) -> [seq[i] for i in indices]`` (one ``itemgetter`` call)."""
     idx = [int(i) for i in indices]
     if len(idx) == 1:

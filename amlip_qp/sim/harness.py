@@ -17,6 +17,7 @@ import math
 import time
 from array import array
 from collections.abc import Callable
+from typing import cast
 
 import mujoco
 import numpy as np
@@ -159,7 +160,7 @@ class Simulation:
 
     def _add_noise(self, q: np.ndarray, v: np.ndarray) -> None:
         """``--noise`` (not ``None``) on the state ``(q, v)``, in place."""
-        n, rng = self.noise, self.rng
+        n, rng = cast(SensorNoise, self.noise), self.rng
         q[self._scalar_pin_q] += rng.normal(0.0, n.joint_pos_rad, self._scalar_pin_q.size)
         v[self._scalar_pin_v] += rng.normal(0.0, n.joint_vel_radps, self._scalar_pin_v.size)
         if self.robot.is_floating:
@@ -232,7 +233,7 @@ class Simulation:
         vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
         scalars = RowBlocks(len(scalar_keys))
         floating = self.robot.is_floating
-        bq, bv = self._base_q, self._base_v
+        bq, bv = cast(slice, self._base_q), cast(slice, self._base_v)  # used with a floating base: slices
         base_true = RowBlocks(sum(self._base_size))  # the measured base state's (q, v)
         base_est = RowBlocks(sum(self._base_size))  # the controller's
         scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
