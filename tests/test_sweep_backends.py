@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import socket
+import time
 
 import pytest
 
@@ -83,3 +84,27 @@ def test_on_ray_a_dying_worker_fails_its_own_cell_only():
     assert sorted(by_index) == [0, 1, 2, 3] and len(records) == 4
     assert by_index[2]["metrics"] == {} and by_index[2]["error"].startswith("WorkerDied: ")
     assert all(by_index[k]["metrics"] == {"x": 10 * k} for k in (0, 1, 3))
+
+
+def _dies_late_on_cell_1(task: dict) -> dict:
+    """Cell 1's worker dies after 0.3 s; the others return at once."""
+    if task["index"] == 1:
+        time.sleep(0.3)
+        os._exit(1)
+    return _identity(task)
+
+
+def test_a_death_while_a_record_is_written_loses_no_cell():
+    """The worker of cell 1 dies while the parent is busy in on_record (a slow write): the next
+    submit meets a broken pool. Every cell is still reported once, cell 1 as failed."""
+    records: list[dict] = []
+
+    def slow_record(record: dict) -> None:
+        records.append(record)
+        time.sleep(1.0)
+
+    backends.run_local([{"index": k} for k in range(4)], 2, slow_record, fn=_dies_late_on_cell_1)
+    by_index = {r["index"]: r for r in records}
+    assert sorted(r["index"] for r in records) == [0, 1, 2, 3]
+    assert by_index[1]["error"].startswith("WorkerDied: ")
+    assert all(by_index[k]["error"] is None for k in (0, 2, 3))

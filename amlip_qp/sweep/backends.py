@@ -45,6 +45,8 @@ def run_local(
     running are known. The pool is then replaced, and each of those cells runs
     again alone: if its worker dies again it is recorded as failed
     (:func:`~amlip_qp.sweep.run_cell.crashed_record`) and the sweep goes on.
+    Running them one at a time leaves the other workers idle meanwhile (a death
+    costs up to ``workers`` cell times), but it tells the culprit apart.
     On an error in ``on_record`` or an interrupt the tasks not yet started are
     cancelled (the finished ones have been reported).
 
@@ -71,22 +73,31 @@ def _run_pool(
 ) -> list[int]:
     """Run the tasks at the positions of ``queue`` (taken from its end) on one pool of ``n`` processes,
     at most ``n`` in flight. Returns the positions in flight when a worker died (``[]`` if none did);
-    the tasks not yet started stay in ``queue``."""
+    the tasks not yet started stay in ``queue``. Every record that finished is reported, also
+    those that finish together with the death."""
     pool = ProcessPoolExecutor(max_workers=n)
     in_flight: dict[Future, int] = {}
     try:
         while queue or in_flight:
             while queue and len(in_flight) < n:
                 k = queue.pop()
-                in_flight[pool.submit(run, tasks[k])] = k
+                try:
+                    in_flight[pool.submit(run, tasks[k])] = k
+                except BrokenProcessPool:  # a worker died since the last wait
+                    queue.append(k)
+                    break
             done, _ = wait(in_flight, return_when=FIRST_COMPLETED)
+            broken = False
             for fut in done:
                 try:
                     record = fut.result()
                 except BrokenProcessPool:
-                    return sorted(in_flight.values())
+                    broken = True
+                    continue
                 del in_flight[fut]
                 on_record(record)
+            if broken:
+                return sorted(in_flight.values())
         return []
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
@@ -175,6 +186,8 @@ def run_ray(ray: Any, tasks: Sequence[Task], on_record: OnRecord, fn: Callable[[
     cell with it: Ray runs that cell once more (``max_retries=1``, which retries
     only system failures), and if its worker dies again the cell is recorded as
     failed (:func:`~amlip_qp.sweep.run_cell.crashed_record`) and the sweep goes on.
+    A task that Ray's own memory monitor kills is retried as the cluster's
+    ``task_oom_retries`` setting says, then recorded the same way.
     """
     from amlip_qp.sweep.run_cell import crashed_record, run_cell
 
@@ -186,10 +199,11 @@ def run_ray(ray: Any, tasks: Sequence[Task], on_record: OnRecord, fn: Callable[[
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             for ref in done:
+                task = task_of.pop(ref)
                 try:
                     record = ray.get(ref)
                 except died:
-                    record = crashed_record(task_of[ref], deaths=2)
+                    record = crashed_record(task, deaths=2)
                 on_record(record)
     finally:
         for ref in pending:
