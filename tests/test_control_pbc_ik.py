@@ -287,6 +287,9 @@ def test_com_height_out_of_reach_short_of_the_knee_limit_holds_the_knee_at_its_e
         assert stuck.ok and not stuck.knee_at_limit and stuck.residual > 1e-3
         knees.append(stuck.q_r[iq])
     assert max(knees) - min(knees) > 0.05  # no limit point: it wanders
+    # an explicit iteration count runs exactly those iterations: no hold
+    exact = IterativeIK(robot).solve(*args, iterations=2, held_springs=np.array(FOLD_HELD))
+    assert not exact.knee_at_limit
     # the exchange at the limit alone does not see it: the iterates never clamp there
     old = IterativeIK(robot, IKSettings(knee_hold_short_of_limit=False)).solve(*args, held_springs=np.array(FOLD_HELD))
     assert not old.knee_at_limit and old.residual > 1e-3

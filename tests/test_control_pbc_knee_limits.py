@@ -78,3 +78,28 @@ def test_split_holds_a_knee_short_of_its_limit_at_its_estimate_when_its_output_i
     assert back == [] and swap == [(row, iq, iv, pytest.approx(q_est[iq]), other)]
     y[row] = 0.8  # reachable: nothing
     assert knees.split("left", q, F, y, h_d, q_est) == (None, [])
+    # an estimate outside the knee's range is clipped to it
+    q_est[iq] = max(limit, other) + 0.5
+    y[row] = 0.79
+    swap, _ = knees.split("left", q, F, y, h_d, q_est)
+    assert swap is not None and swap[0][3] == max(limit, other)
+
+
+def test_only_the_stance_knee_is_held_short_of_its_limit(cassie):
+    """The swing knee's output (com_x_over_swing) out of reach short of its limit: no hold, and
+    short_of_limit says so; the stance CoM height out of reach: short_of_limit, unless converged."""
+    knees = KneeLimits(cassie, IKSettings(swap_threshold=1e-3))
+    row_sw, iq_sw, _, lim_sw, oth_sw = next(e for e in knees.entries("left") if e[0] == 5)  # com_x_over_swing
+    row_st, iq_st, _, lim_st, oth_st = next(e for e in knees.entries("left") if e[0] == 4)
+    q = np.zeros(cassie.nq)
+    q[iq_sw] = lim_sw + 0.3 * (oth_sw - lim_sw)
+    q[iq_st] = lim_st + 0.3 * (oth_st - lim_st)
+    y, F, h_d = np.zeros(9), np.full(cassie.nv, 0.01), np.zeros(9)
+    y[row_sw], h_d[row_sw] = 0.30, 0.50  # the swing foot 20 cm short
+    assert not knees.short_of_limit("left", q, F, y, h_d)
+    assert knees.split("left", q, F, y, h_d, q.copy()) == (None, [])
+    y[row_st], h_d[row_st] = 0.79, 0.80  # and the CoM 1 cm low
+    assert knees.short_of_limit("left", q, F, y, h_d)
+    swap, _ = knees.split("left", q, F, y, h_d, q.copy())
+    assert swap is not None and [e[0] for e in swap] == [row_st]
+    assert not knees.short_of_limit("left", q, np.zeros(cassie.nv), y, h_d)  # converged

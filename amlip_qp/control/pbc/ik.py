@@ -304,6 +304,7 @@ class IterativeIK:
                 it = 1
             self._cache = None
             limit_handled = False
+            hold_tried = exact or not s.knee_hold_short_of_limit  # the hold needs the default counts
             knees = self._knees
             while True:
                 y, pos, rot = self._evaluate(q, stance, heading_rad, A, v_pred)
@@ -313,12 +314,17 @@ class IterativeIK:
                 lu = self._lu(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
                 if done and swap is None and knees is not None and knees.entries(stance) and not limit_handled:
-                    q_est = kin.state()[0] if s.knee_hold_short_of_limit else None
+                    if not hold_tried and knees.short_of_limit(stance, q, F, y, h_d):
+                        # a fold? more iterations first: a reachable CoM height converges in them
+                        hold_tried = True
+                        n_max = it + s.cold_iterations
+                        continue
+                    q_est = None if exact or not s.knee_hold_short_of_limit else kin.state()[0]
                     swap, back = knees.split(stance, q, F, y, h_d, q_est)
                     limit_handled = True
                     if swap is not None:
-                        # out of iterations, a knee straight and its output out of reach: trade
-                        # that output for the knee held at the limit, and iterate on
+                        # out of iterations, a knee straight (or short of it, at a fold) and its output
+                        # out of reach: trade that output for the knee held there, and iterate on
                         swap_rows(swap, q, A, F)
                         residual = float(np.max(np.abs(F)))
                         lu = self._lu(A)

@@ -39,11 +39,14 @@ class IKSettings:
             near-singular iterate). Without this the clamp breaks the rows
             through the knee (Cassie's coupling), the next step undoes it, and
             the iterates wander (``docs/TUNING.md``).
-        knee_hold_short_of_limit: With ``knee_limit_swap``: when the iterations
-            end unconverged with a knee's output out of reach but the knee off
-            its limit (the output's highest reachable value inside the range,
-            a fold the Newton iterates circle), exchange that output for "knee =
-            its estimate" and iterate on, as at the limit (:mod:`~amlip_qp.control.pbc.knee_limits`).
+        knee_hold_short_of_limit: With ``knee_limit_swap`` and the default
+            iteration counts: when the iterations end unconverged with the stance
+            CoM height out of reach but the stance knee off its limit (the
+            height's highest reachable value inside the range, a fold the Newton
+            iterates circle), run ``cold_iterations`` more; if they do not
+            converge either, exchange that output for "knee = its estimate"
+            (clipped to its range) and iterate on, as at the limit
+            (:mod:`~amlip_qp.control.pbc.knee_limits`).
         swap_threshold: See ``knee_limit_swap``.
         knee_back_off_rad: See ``knee_limit_swap``, rad.
     """
@@ -77,9 +80,10 @@ class IKResult:
         iterations: Newton iterations done.
         residual: Max-norm of the equation residual at ``q_r`` (m / rad).
         ok: False when the solve failed and the previous reference was kept.
-        knee_at_limit: A knee was held at its straight-leg limit in place of an
-            unreachable output (``com_z_over_stance`` for the stance knee,
-            ``com_x_over_swing`` for the swing knee).
+        knee_at_limit: A knee was held, in place of an unreachable output, at
+            its straight-leg limit (``com_z_over_stance`` for the stance knee,
+            ``com_x_over_swing`` for the swing knee) or, short of the limit, at
+            its estimate (the stance knee; ``IKSettings.knee_hold_short_of_limit``).
     """
 
     q_r: np.ndarray

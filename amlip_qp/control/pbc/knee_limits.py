@@ -15,12 +15,13 @@ decides, per clamped knee, between
   (near-singular) iterate; the caller restarts from the knee moved off the limit.
 
 With :attr:`IKSettings.knee_hold_short_of_limit
-<amlip_qp.control.pbc.ik_settings.IKSettings.knee_hold_short_of_limit>`, a knee whose output is
-out of reach *short of* the limit is exchanged too, for "knee = its estimate". The
-output's highest reachable value can lie inside the range (a fold: the
-stance CoM height over a foot far ahead, with the stance springs held at the
-model's deflections), where the Newton iterates circle the fold, never clamp,
-and give a reference that jumps from tick to tick.
+<amlip_qp.control.pbc.ik_settings.IKSettings.knee_hold_short_of_limit>`, a stance knee whose
+CoM height is out of reach *short of* the limit is exchanged too, for "knee = its
+estimate", when more iterations have not converged either. The height's highest
+reachable value can lie inside the range (a fold: the stance CoM height over a
+foot far ahead, with the stance springs held at the model's deflections), where
+the Newton iterates circle the fold, never clamp, and give a reference that
+jumps from tick to tick.
 
 A knee entry is the tuple ``(output row, knee q index, knee v index,
 straight-leg limit, other end of the range)``.
@@ -45,7 +46,7 @@ KneeEntry = tuple[int, int, int, float, float]
 
 
 class KneeLimits:
-    """The knees that may be held at their straight-leg limit, per stance side.
+    """The knees that may be held at their straight-leg limit (or the stance knee short of it), per stance side.
 
     Per stance: the stance knee against ``com_z_over_stance`` and the swing
     knee against ``com_x_over_swing`` (whichever outputs the robot has). The
@@ -80,6 +81,8 @@ class KneeLimits:
                 lo_, hi_ = float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])
                 limit, other_end = (hi_, lo_) if grow > 0 else (lo_, hi_)
                 self._knees[side].append((names.index(row_name), iq, iv, limit, other_end))
+        #: The output row a knee may be held short of its limit for: the stance CoM height.
+        self._hold_row = names.index("com_z_over_stance") if "com_z_over_stance" in names else None
 
     def entries(self, stance: str) -> tuple[KneeEntry, ...]:
         """The knees that may be held at their limit with this stance (module doc), possibly none."""
@@ -91,8 +94,9 @@ class KneeLimits:
         is ``None`` when empty.
 
         With ``q_est`` (the estimated configuration, when the settings hold a knee short of
-        its limit) a knee off its limit whose output is out of reach is in ``swap`` as well,
-        its entry's held value (the fourth field) replaced by its estimate ``q_est[knee]``.
+        its limit) a stance knee off its limit whose CoM height is out of reach is in ``swap``
+        as well, its entry's held value (the fourth field) replaced by its estimate
+        ``q_est[knee]``, clipped to the knee's range (:meth:`short_of_limit` says when).
         """
         thr = self.swap_threshold
         if float(np.max(np.abs(F))) <= thr:
@@ -104,9 +108,23 @@ class KneeLimits:
             out_of_reach = abs(y[row]) < abs(h_d[row]) - thr
             if abs(q[iq] - sp[3]) < 1e-9:
                 (swap if out_of_reach else back).append(sp)
-            elif out_of_reach and q_est is not None:
-                swap.append((row, iq, sp[2], float(q_est[iq]), sp[4]))
+            elif out_of_reach and q_est is not None and row == self._hold_row:
+                lo, hi = min(sp[3], sp[4]), max(sp[3], sp[4])
+                swap.append((row, iq, sp[2], min(hi, max(lo, float(q_est[iq]))), sp[4]))
         return (swap or None), back
+
+    def short_of_limit(self, stance: str, q, F, y, h_d) -> bool:
+        """Whether an unconverged solve (residual ``F`` above the threshold) has the stance CoM
+        height out of reach with the stance knee off its limit: the case :meth:`split` holds
+        the knee at its estimate for, once more iterations have not converged either."""
+        thr = self.swap_threshold
+        if self._hold_row is None or float(np.max(np.abs(F))) <= thr:
+            return False
+        row = self._hold_row
+        return any(
+            sp[0] == row and abs(q[sp[1]] - sp[3]) >= 1e-9 and abs(y[row]) < abs(h_d[row]) - thr
+            for sp in self._knees[stance]
+        )
 
 
 def swap_rows(swap: list[KneeEntry] | None, q, A, F) -> None:
