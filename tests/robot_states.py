@@ -58,3 +58,14 @@ def fd_jacobian(robot, fun, q):
     """The Jacobian of ``fun`` at ``q`` by central differences along each velocity direction."""
     eye = np.eye(robot.nv)
     return np.column_stack([fd_along(robot, fun, q, eye[k]) for k in range(robot.nv)])
+
+
+def assert_jacobians_match_fd(robot, checks, q, v, at, tol):
+    """Each ``(pos_fun, J, Jdot_v, jac_fun)`` of ``checks``: ``J`` against the finite difference of
+    ``pos_fun`` at ``q``, ``Jdot_v`` against that of ``jac_fun(q) @ v`` along ``v``; ``at(q, v, fun)``
+    evaluates ``fun`` on kinematics updated at ``(q, v)``."""
+    for pos_fun, J, jdv, jac_fun in checks:
+        J_fd = fd_jacobian(robot, lambda qq, f=pos_fun: at(qq, v, f), q)
+        np.testing.assert_allclose(J, J_fd, atol=tol)
+        jdv_fd = fd_along(robot, lambda qq, f=jac_fun: at(qq, v, f) @ v, q, v)
+        np.testing.assert_allclose(jdv, jdv_fd, atol=tol * max(1.0, np.abs(jdv_fd).max(initial=0.0)))

@@ -17,7 +17,7 @@ from amlip_qp.robots import (
     mj_to_pin,
     velocity_map,
 )
-from robot_states import ROBOTS, fd_along, fd_jacobian, mujoco_at, random_states
+from robot_states import ROBOTS, assert_jacobians_match_fd, fd_along, mujoco_at, random_states
 
 TOL_MJ = 1e-8  # Pinocchio vs MuJoCo (both exact rigid-body algorithms; only round-off differs)
 TOL_FD = 1e-6  # central differences with h = 1e-6: truncation ~h^2, round-off ~1e-16/h
@@ -145,11 +145,7 @@ def test_contact_coupling_and_base_jacobians_by_finite_differences(robot):
                     lambda k, s=side: k.contact_jacobian(s),
                 )
             )
-        for pos_fun, J, jdv, jac_fun in checks:
-            J_fd = fd_jacobian(robot, lambda qq: at(qq, v, pos_fun), q)
-            np.testing.assert_allclose(J, J_fd, atol=TOL_FD)
-            jdv_fd = fd_along(robot, lambda qq: at(qq, v, jac_fun) @ v, q, v)
-            np.testing.assert_allclose(jdv, jdv_fd, atol=TOL_FD * max(1.0, np.abs(jdv_fd).max(initial=0.0)))
+        assert_jacobians_match_fd(robot, checks, q, v, at, TOL_FD)
         # base angular velocity: R(q(t)) = R exp(w t) -> world w = log3(R^T R(t)) / t
         R0 = kin.base_rotation()
         rot_rate = fd_along(robot, lambda qq: R0 @ pin.log3(R0.T @ at(qq, v, lambda k: k.base_rotation())), q, v)

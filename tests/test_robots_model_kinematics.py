@@ -11,7 +11,7 @@ import pytest
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import bias_mj_to_pin, load_robot, mass_matrix_mj_to_pin, velocity_map
 from amlip_qp.robots.model_kinematics import ModelKinematics
-from robot_states import ROBOTS, fd_along, fd_jacobian, mujoco_at, random_states
+from robot_states import ROBOTS, assert_jacobians_match_fd, mujoco_at, random_states
 
 TOL_MJ = 1e-8  # Pinocchio vs MuJoCo (both exact rigid-body algorithms; only round-off differs)
 TOL_FD = 1e-6  # central differences with h = 1e-6: truncation ~h^2, round-off ~1e-16/h
@@ -132,11 +132,7 @@ def test_com_and_frame_jacobians_and_drifts_by_finite_differences(robot):
                         lambda k, f=f: k.frame_jacobian(f),
                     )
                 )
-        for pos_fun, J, jdv, jac_fun in checks:
-            J_fd = fd_jacobian(robot, lambda qq: at(qq, v, pos_fun), q)
-            np.testing.assert_allclose(J, J_fd, atol=TOL_FD)
-            jdv_fd = fd_along(robot, lambda qq: at(qq, v, jac_fun) @ v, q, v)
-            np.testing.assert_allclose(jdv, jdv_fd, atol=TOL_FD * max(1.0, np.abs(jdv_fd).max(initial=0.0)))
+        assert_jacobians_match_fd(robot, checks, q, v, at, TOL_FD)
 
 
 def test_model_kinematics_input_errors():

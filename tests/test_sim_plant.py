@@ -247,7 +247,7 @@ def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
         plant.write_ctrl(data, rng.uniform(-60.0, 60.0, cassie.nu) if k > 300 else np.zeros(cassie.nu))
         mujoco.mj_step(plant.model, data)
         forces = plant.foot_normal_forces_N(data)
-        for threshold in (0.0, 5.0, 20.0, 100.0, *forces.values()):
+        for threshold in (-1.0, 0.0, 5.0, 20.0, 100.0, *forces.values()):
             got = plant.foot_contact_switches(data, threshold)
             assert got == {side: f > threshold for side, f in forces.items()}
             assert plant.foot_contact_switches(data, threshold, contacts) == got  # kept from the start

@@ -174,14 +174,14 @@ class ModelKinematics:
         """``(q, v)`` of the last update: :attr:`q`, :attr:`v` themselves (read-only); InputError before any."""
         q, v = self.q, self.v
         if q is None or v is None:
-            raise InputError("RobotKinematics: call update(q, v) first")
+            raise InputError(f"{type(self).__name__}: call update(q, v) first")
         return q, v
 
     def require_dynamics(self) -> None:
         """Raise :class:`InputError` unless the last update was a full ``update(q, v)``."""
         self._ready()
         if self.positions_only:
-            raise InputError("RobotKinematics: dynamics not computed by update_positions(); call update(q, v)")
+            raise InputError(f"{type(self).__name__}: dynamics not computed by update_positions(); call update(q, v)")
 
     # ------------------------------------------------------------- frames
     def frame_position(self, frame_id: int) -> np.ndarray:

@@ -7,7 +7,9 @@ it works on Python lists: one ``tolist`` per array in, one ``np.array`` per
 array out, Python float arithmetic in between, in the same operation order as
 :func:`~amlip_qp.robots.state.mj_to_pin` (whose dot products and 3x3 matrix
 products sum left to right without fused multiply-adds), so the two agree bit
-for bit (tested).
+for bit (tested). That holds for NumPy's own small dot products, as on this
+machine; a NumPy build whose 3-element dot uses fused multiply-adds would
+make the two differ in the last bit (the test would say so).
 """
 
 from __future__ import annotations

@@ -360,7 +360,7 @@ class Plant:
         ``contacts``: ``data.contact`` if the caller keeps it (it follows the data's contacts).
         """
         normal = dict.fromkeys(self.foot_body_ids, 0.0)
-        on = dict.fromkeys(self.foot_body_ids, False)
+        on = dict.fromkeys(self.foot_body_ids, 0.0 > threshold_N)  # no contact: a zero sum
         m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
         contact_force = mujoco.mj_contactForce
         for i, (g1, g2) in enumerate((data.contact if contacts is None else contacts).geom.tolist()):
