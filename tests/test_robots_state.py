@@ -134,3 +134,15 @@ def test_norm_is_numpys_bit_for_bit():
     for _ in range(200):
         x = rng.normal(size=4) * 10.0 ** rng.uniform(-5, 5)
         assert _norm(x) == np.linalg.norm(x)
+
+
+def test_rotation_entries_are_pinocchios_rotation_of_the_quaternion():
+    """The one quaternion-rotation formula against Pinocchio's, on random unit quaternions."""
+    from amlip_qp.robots.state import rotation_entries
+
+    rng = np.random.default_rng(31)
+    for _ in range(20):
+        u = rng.normal(size=4)
+        w, x, y, z = (u / np.linalg.norm(u)).tolist()
+        R = pin.Quaternion(w, x, y, z).toRotationMatrix()
+        np.testing.assert_allclose(np.reshape(rotation_entries(w, x, y, z), (3, 3)), R, atol=1e-15)

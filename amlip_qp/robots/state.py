@@ -170,16 +170,23 @@ def _norm(x: np.ndarray) -> float:
     return math.sqrt(x.dot(x))
 
 
+def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
+    """The rotation matrix of the unit quaternion ``(w, x, y, z)``, row by row (9 floats).
+
+    The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot` and the per-tick
+    :class:`~amlip_qp.robots.state_reader.StateReader` both use it.
+    """
+    return (
+        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+    )  # fmt: skip
+
+
 def _quat_wxyz_to_rot(qw: np.ndarray) -> np.ndarray:
     """Rotation matrix of a (normalized here) quaternion in w, x, y, z order."""
-    w, x, y, z = (qw / _norm(qw)).tolist()
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    e = rotation_entries(*(qw / _norm(qw)).tolist())
+    return np.array([e[0:3], e[3:6], e[6:9]])
 
 
 def _normalized(quat: np.ndarray, what: str) -> np.ndarray:

@@ -20,7 +20,7 @@ from operator import itemgetter
 
 import numpy as np
 
-from amlip_qp.robots.state import StateMap, mj_to_pin
+from amlip_qp.robots.state import StateMap, mj_to_pin, rotation_entries
 
 
 def _getter(indices: Sequence[int] | np.ndarray) -> Callable[[Sequence[float]], list[float]]:
@@ -97,11 +97,11 @@ class StateReader:
             # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
             x, y, z, w = q[pq], q[pq + 1], q[pq + 2], q[pq + 3]
             n = sqrt(w * w + x * x + y * y + z * z)
-            w, x, y, z = w / n, x / n, y / n, z / n
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w / n, x / n, y / n, z / n)
             l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
-            v[pv] = (1 - 2 * (y * y + z * z)) * l0 + 2 * (x * y + w * z) * l1 + 2 * (x * z - w * y) * l2
-            v[pv + 1] = 2 * (x * y - w * z) * l0 + (1 - 2 * (x * x + z * z)) * l1 + 2 * (y * z + w * x) * l2
-            v[pv + 2] = 2 * (x * z + w * y) * l0 + 2 * (y * z - w * x) * l1 + (1 - 2 * (x * x + y * y)) * l2
+            v[pv] = r00 * l0 + r10 * l1 + r20 * l2
+            v[pv + 1] = r01 * l0 + r11 * l1 + r21 * l2
+            v[pv + 2] = r02 * l0 + r12 * l1 + r22 * l2
         return q, v
 
     def _checked(self, qpos: list[float], qvel: list[float]) -> tuple[list[float], list[float]]:
