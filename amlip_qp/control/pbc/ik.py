@@ -313,7 +313,14 @@ class IterativeIK:
                 residual = float(np.max(np.abs(F)))
                 lu = self._lu(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
-                if done and swap is None and knees is not None and knees.entries(stance) and not limit_handled:
+                if (
+                    done
+                    and residual > s.swap_threshold  # converged: nothing to exchange (split would say so)
+                    and swap is None
+                    and knees is not None
+                    and knees.entries(stance)
+                    and not limit_handled
+                ):
                     if not hold_tried and knees.short_of_limit(stance, q, F, y, h_d):
                         # a fold? more iterations first: a reachable CoM height converges in them
                         hold_tried = True
