@@ -6,6 +6,8 @@ keyframe); the trackers' own tests cover walking.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -134,6 +136,32 @@ def test_a_diverging_simulation_is_a_fall_not_a_restart():
     assert res.fall_time_s == pytest.approx(0.004, abs=1e-3)
     assert res.sim_time_s <= 0.006
     assert np.all(np.diff(res.log["t"]) > 0)
+
+
+def _controller_base_log(sim, duration_s, **run_options):
+    """A run and the world base state of the controller's kinematics after each tick (as the log's ``*_est``)."""
+    from amlip_qp.sim.run_log import world_base
+    from amlip_qp.sim.sensors import base_indices
+
+    rows, kin, (bq, bv) = [], sim.controller.kin, base_indices(sim.robot)
+
+    def keep(t_s, data):
+        q, v = kin.state()
+        rows.append(np.concatenate((q[bq], v[bv])))
+
+    res = sim.run(duration_s, on_tick=keep, **run_options)
+    return res, world_base(np.array(rows), "est")
+
+
+def test_the_estimated_base_is_the_controllers_with_and_without_noise():
+    """The logged ``*_est`` is what the controller's kinematics held, also where the harness logs it from the truth."""
+    for noise in (None, SensorNoise()):
+        sim = _sim("cassie", tracker_cls=HoldTracker, duration=0.05, noise=noise)
+        res, kept = _controller_base_log(sim, 0.05)
+        for key, value in kept.items():
+            assert np.array_equal(res.log[key], value), key
+        same = np.array_equal(res.log["base_vel_true"], res.log["base_vel_est"])
+        assert same == (noise is None)
 
 
 def test_the_true_and_estimated_base_are_logged_and_equal_with_the_truth():
@@ -295,3 +323,21 @@ def test_the_fall_check_measures_the_base_height_above_the_ground_under_it():
     )
     res = rising.run(0.02)
     assert res.fell and res.fall_time_s == 0.0
+
+
+def test_the_tilt_fall_is_the_first_tick_whose_tilt_is_over_the_limit_for_any_limit():
+    from amlip_qp.sim.run_types import FallCriteria
+
+    def knocked_over(max_tilt_rad):
+        sim = _sim("cassie", duration=0.4, pushes=[Push(0.0, (0.0, 2000.0, 0.0), 0.1)])
+        sim.fall = FallCriteria(min_height_fraction=-1e9, max_tilt_rad=max_tilt_rad)  # the tilt alone
+        return sim.run(0.4)
+
+    tilt = knocked_over(math.inf).log["base_tilt"]
+    assert tilt.size == 800 and tilt[0] < 0.05 < 1.5 < tilt.max()
+    limits = (-math.inf, -1.0, 0.0, 0.3, 1.0, float(tilt[400]), math.pi, math.inf, math.nan)
+    for limit in limits:
+        res = knocked_over(limit)
+        over = np.flatnonzero(tilt > limit)
+        assert res.fell == (over.size > 0), limit
+        assert res.log["t"].size == (over[0] + 1 if over.size else tilt.size), limit

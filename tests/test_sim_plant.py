@@ -240,16 +240,18 @@ def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
     plant = load_plant("cassie", cassie)
     data = plant.new_data("stand")
     data.qpos[2] += 0.05  # dropped from 5 cm: no contact, then a landing
-    contacts = data.contact
+    kept = {threshold: plant.contact_switcher(data, threshold) for threshold in (-1.0, 0.0, 5.0, 20.0, 100.0)}
     rng = np.random.default_rng(9)
     seen = set()
     for k in range(600):
         plant.write_ctrl(data, rng.uniform(-60.0, 60.0, cassie.nu) if k > 300 else np.zeros(cassie.nu))
         mujoco.mj_step(plant.model, data)
         forces = plant.foot_normal_forces_N(data)
-        for threshold in (-1.0, 0.0, 5.0, 20.0, 100.0, *forces.values()):
-            got = plant.foot_contact_switches(data, threshold)
+        for threshold, switches in kept.items():  # bound before the first step: they follow the data
+            got = switches()
             assert got == {side: f > threshold for side, f in forces.items()}
-            assert plant.foot_contact_switches(data, threshold, contacts) == got  # kept from the start
+            assert all(type(on) is bool for on in got.values())
             seen.add(tuple(got.values()))
+        for threshold in forces.values():  # at the forces themselves
+            assert plant.contact_switcher(data, threshold)() == {side: f > threshold for side, f in forces.items()}
     assert {(False, False), (True, True)} <= seen and len(seen) >= 3

@@ -53,21 +53,21 @@ class StateReader:
         gq = np.empty(m.nq_pin, dtype=np.intp)
         gv = np.empty(m.nv, dtype=np.intp)
         gq[m.scalar_pin_q], gv[m.scalar_pin_v] = m.scalar_mj_q, m.scalar_mj_v
-        quats = []  # (plant indices of a quaternion's w, x, y, z; its first Pinocchio q index, x y z w order)
+        # Per quaternion: the plant indices of its w, x, y, z; its first Pinocchio q index (x y z w
+        # order); for a free joint, its linear velocity's first index in v and its indices in qvel.
+        quats: list[tuple] = []
         for qa, da, pq, pv in m.free:
             gq[pq : pq + 3], gq[pq + 3 : pq + 7] = range(qa, qa + 3), (qa + 4, qa + 5, qa + 6, qa + 3)
             gv[pv : pv + 6] = range(da, da + 6)
-            quats.append((*qsrc[qa + 3 : qa + 7].tolist(), pq + 3))
+            quats.append((*qsrc[qa + 3 : qa + 7].tolist(), pq + 3, (pv, *vsrc[da : da + 3].tolist())))
         for qa, da, pq, pv in m.ball:
             gq[pq : pq + 4] = (qa + 1, qa + 2, qa + 3, qa)
             gv[pv : pv + 3] = range(da, da + 3)
-            quats.append((*qsrc[qa : qa + 4].tolist(), pq))
+            quats.append((*qsrc[qa : qa + 4].tolist(), pq, None))
         self.state_map = m
         self._qsrc, self._vsrc = qsrc, vsrc
         self._take_q, self._take_v = _getter(qsrc[gq]), _getter(vsrc[gv])
         self._quats = tuple(quats)
-        # per free joint: its quaternion's first index in q (x y z w), its linear velocity's in v and in qvel
-        self._free = tuple((pq + 3, pv, *vsrc[da : da + 3].tolist()) for _, da, pq, pv in m.free)
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
@@ -85,17 +85,19 @@ class StateReader:
         """:meth:`__call__` on ``qpos.tolist()`` and ``qvel.tolist()``, giving ``(q, v)`` as new lists."""
         q, v = self._take_q(qpos), self._take_v(qvel)
         isfinite, sqrt = math.isfinite, math.sqrt
-        if not (isfinite(sum(q)) and isfinite(sum(v))):  # a finite sum implies finite entries
+        if not isfinite(sum(q) + sum(v)):  # a finite sum implies finite entries (an overflow: checked too)
             return self._checked(qpos, qvel)  # raises, naming the entries
-        for iw, ix, iy, iz, pq in self._quats:
+        for iw, ix, iy, iz, pq, free in self._quats:
             w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
             n = sqrt(w * w + x * x + y * y + z * z)
             if n < 1e-9:
                 return self._checked(qpos, qvel)  # raises
-            q[pq], q[pq + 1], q[pq + 2], q[pq + 3] = x / n, y / n, z / n, w / n
-        for pq, pv, i0, i1, i2 in self._free:
+            x, y, z, w = x / n, y / n, z / n, w / n
+            q[pq], q[pq + 1], q[pq + 2], q[pq + 3] = x, y, z, w
+            if free is None:
+                continue
             # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
-            x, y, z, w = q[pq], q[pq + 1], q[pq + 2], q[pq + 3]
+            pv, i0, i1, i2 = free
             n = sqrt(w * w + x * x + y * y + z * z)
             r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w / n, x / n, y / n, z / n)
             l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]

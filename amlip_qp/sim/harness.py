@@ -235,7 +235,10 @@ class Simulation:
         floating = self.robot.is_floating
         bq, bv = cast(slice, self._base_q), cast(slice, self._base_v)  # used with a floating base: slices
         base_true = RowBlocks(sum(self._base_size))  # the measured base state's (q, v)
-        base_est = RowBlocks(sum(self._base_size))  # the controller's
+        # The controller's: with the true base and no --noise, the measured one itself (the
+        # controller's kinematics take the measurement as it is; tested), not logged twice.
+        est_is_true = self.true_base and self.noise is None
+        base_est = base_true if est_is_true else RowBlocks(sum(self._base_size))
         scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
         tick_ns = array("q")  # wall times per tick, ns: the controller, MuJoCo, the whole tick
         mujoco_ns = array("q")
@@ -263,6 +266,9 @@ class Simulation:
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
         min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
+        # Above this cosine the tilt is surely not above max_tilt (acos is decreasing, its error far
+        # below the margin; the clamp to acos's range keeps any max_tilt's answer): acos only under it.
+        upright_cos = math.cos(min(max(max_tilt, 0.0), math.pi)) + 1e-12
         fell, fall_time = False, float("nan")
         bar = None
         if progress:
@@ -288,7 +294,7 @@ class Simulation:
             tick = ctrl_step(meas, cmd)
             t1 = perf_ns()
             tick_ns.append(t1 - t0)
-            if floating:
+            if floating and not est_is_true:
                 q_est, v_est = kin_state()
                 est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
@@ -309,9 +315,9 @@ class Simulation:
             else:  # height above the ground under the base
                 x, y, z = xpos_b.tolist()
                 z -= ground(x, y)
-            tilt = acos(max(-1.0, min(1.0, r22)))
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
+                tilt = acos(max(-1.0, min(1.0, r22)))
                 scalar_rows.append(
                     (
                         t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
@@ -351,7 +357,8 @@ class Simulation:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
             qpos_list = qpos.tolist()  # also the next tick's
-            if z < min_z or tilt > max_tilt or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
+            tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
+            if z < min_z or tilted or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
                 total_ns.append(perf_ns() - t_tick)
                 break

@@ -248,8 +248,8 @@ class PlantSensors:
         """
         if self.model != "ideal" or not base_known:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)
-        sensordata, imu_idx, threshold = data.sensordata, self._imu_idx, self.contact_threshold_N
-        switches, contacts = self.plant.foot_contact_switches, data.contact  # a live view of the contacts
+        sensordata, imu_idx = data.sensordata, self._imu_idx
+        switches = self.plant.contact_switcher(data, self.contact_threshold_N)
 
         def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
             x = sensordata[imu_idx]
@@ -257,7 +257,7 @@ class PlantSensors:
                 t_s=t_s,
                 q=q,
                 v=v,
-                foot_contact=switches(data, threshold, contacts),
+                foot_contact=switches(),
                 imu=ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:]),
                 base_known=True,
             )
