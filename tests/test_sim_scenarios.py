@@ -154,20 +154,51 @@ def test_the_command_function_of_a_run_gives_the_scenarios_commands():
 
 
 @pytest.mark.parametrize(
-    "changes",
-    [{}, {"turn_angle_rad": math.inf}, {"turn_rate_radps": 0.0}, {"turn_rate_radps": -0.4, "turn_start_s": 6.0}],
+    ("changes", "hold"),
+    [
+        ({}, 8.0),  # the turn's end: 3 s + 90 deg / 18 deg/s
+        ({"turn_angle_rad": math.inf}, 3.0),  # an endless turn: from its start
+        ({"turn_rate_radps": 0.0}, 2.5),  # no turn: the last knot
+        ({"turn_rate_radps": -0.4, "turn_start_s": 6.0}, 6.0 + math.radians(90.0) / 0.4),
+    ],
 )
-def test_the_command_holds_from_the_last_knot_or_the_turns_end(changes):
+def test_the_command_holds_from_the_last_knot_or_the_turns_end(changes, hold):
     sc = get_scenario("cassie-turn-90").with_(**changes)
-    hold = sc.hold_from_s()
     times = [k * 0.0005 for k in range(0, 30000, 5)]
     held = [sc.command(t) for t in times if t >= hold]
     assert held and all(c == held[0] for c in held)
     assert sc.command(hold - 0.01) != held[0]  # it does change just before
+    assert sc.command_held_until_s(hold) == math.inf and sc.command_held_until_s(hold - 0.01) < math.inf
     command = sc.command_function()
     made = [command(t) for t in times]
     assert made == [sc.command(t) for t in times]
     assert all(c is made[-1] for c, t in zip(made, times) if t >= hold)
+
+
+def _bits(c):
+    return [math.copysign(1.0, x) * (abs(x) + 1.0) for x in (c.vx_mps, c.turn_rate_radps)]  # a zero's sign too
+
+
+@pytest.mark.parametrize(
+    "knots",
+    [
+        ((0.0, 1.0, 2.5, 3.0, 4.0), (0.0, 0.0, 0.7, 0.7, -0.3)),
+        ((0.5, 1.0, 2.0, 3.0), (-0.0, -0.0, 0.0, 0.0)),  # negative zeros: 0 * dt + (-0.0) is +0.0
+        ((1.0,), (-0.5,)),
+        ((0.0, 0.001, 1.0), (-0.4, -0.4, -0.4)),
+    ],
+)
+def test_the_command_is_made_once_per_stretch_where_it_holds_bit_for_bit(knots):
+    sc = get_scenario("cassie-turn-90").with_(vx=SpeedProfile(*knots), turn_start_s=1.7)
+    times = [k * 0.0005 for k in range(14000)]
+    command = sc.command_function()
+    made = [command(t) for t in times]
+    assert [_bits(c) for c in made] == [_bits(sc.command(t)) for t in times]
+    for t in (0.0, 0.7, 1.0, 1.7, 2.2, 3.1, 5.0, 9.0, 10.0):
+        until = sc.command_held_until_s(t)
+        assert until >= t and (until == t or _bits(sc.command(min(until, 12.0) - 1e-9)) == _bits(sc.command(t)))
+    changes = sum(a is not b for a, b in zip(made, made[1:]))
+    assert changes == sum(_bits(sc.command(a)) != _bits(sc.command(b)) for a, b in zip(times, times[1:]))
 
 
 def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import partial
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError
@@ -80,8 +79,7 @@ class Scenario:
             return 0.0
         if math.isinf(self.turn_angle_rad):
             return self.turn_rate_radps
-        t_end = self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
-        return self.turn_rate_radps if t_s < t_end else 0.0
+        return self.turn_rate_radps if t_s < self._turn_end_s() else 0.0
 
     def command(self, t_s: float) -> Command:
         """The :class:`~amlip_qp.alip.planner.Command` at time ``t_s``."""
@@ -105,36 +103,55 @@ class Scenario:
     def command_function(self) -> Callable[[float], Command]:
         """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
 
-        From :meth:`hold_from_s` on, the command is the one made first there, without looking again.
+        A command made at ``t`` is returned as it is up to :meth:`command_held_until_s` of ``t``,
+        without looking again (a run asks at increasing times).
         """
         last: list = [None, None]
-        held: list = [None]
-        hold_from = self.hold_from_s()
-        vx_at, turn_rate_at, copysign = self.vx, self.turn_rate_at, math.copysign
-        make = partial(Command, **self._command_fields())
+        span = [math.inf, -math.inf]  # [from, until): where the last command holds
+        vx_at, turn_rate_at, held_until, copysign = self.vx, self.turn_rate_at, self.command_held_until_s, math.copysign
+        f = self._command_fields()
+        T, H, clearance, vy, width = (
+            f["step_time_s"],
+            f["com_height_m"],
+            f["clearance_m"],
+            f["vy_mps"],
+            f["step_width_m"],
+        )
 
         def command(t_s: float) -> Command:
-            if t_s >= hold_from and held[0] is not None:
-                return held[0]
+            if span[0] <= t_s < span[1]:
+                return last[1]
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
-                last[0], last[1] = key, make(vx_mps=vx, turn_rate_radps=turn)
-            if t_s >= hold_from:
-                held[0] = last[1]
+                last[0] = key
+                last[1] = Command(
+                    step_time_s=T, com_height_m=H, clearance_m=clearance, vx_mps=vx, vy_mps=vy,
+                    turn_rate_radps=turn, step_width_m=width,
+                )  # fmt: skip
+            span[0], span[1] = t_s, held_until(t_s)
             return last[1]
 
         return command
 
-    def hold_from_s(self) -> float:
-        """The time from which the command no longer changes, s: the speed profile's last knot or the turn's end."""
+    def command_held_until_s(self, t_s: float) -> float:
+        """The time before which the command from ``t_s`` on is ``command(t_s)``, s (``t_s``: not known to be).
+
+        The speed profile's :meth:`~amlip_qp.sim.speed_profile.SpeedProfile.held_until_s`, cut at
+        the turn's start and end; ``inf`` after the last knot and the turn.
+        """
+        until = self.vx.held_until_s(t_s)
         if self.turn_rate_radps == 0.0:
-            turn_hold = -math.inf
-        elif math.isinf(self.turn_angle_rad):
-            turn_hold = self.turn_start_s
-        else:  # turn_rate_at's end time
-            turn_hold = self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
-        return max(self.vx.times_s[-1], turn_hold)
+            return until
+        t_end = math.inf if math.isinf(self.turn_angle_rad) else self._turn_end_s()
+        for change in (self.turn_start_s, t_end):
+            if t_s < change:
+                return min(until, change)
+        return until if t_s == t_s else t_s
+
+    def _turn_end_s(self) -> float:
+        """When a turn of a finite angle ends, s (as :meth:`turn_rate_at`)."""
+        return self.turn_start_s + abs(self.turn_angle_rad / self.turn_rate_radps)
 
     def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""
