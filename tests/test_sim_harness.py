@@ -341,3 +341,18 @@ def test_the_tilt_fall_is_the_first_tick_whose_tilt_is_over_the_limit_for_any_li
         over = np.flatnonzero(tilt > limit)
         assert res.fell == (over.size > 0), limit
         assert res.log["t"].size == (over[0] + 1 if over.size else tilt.size), limit
+
+
+@pytest.mark.parametrize("plant_step_s", [0.0005, 0.00025, 0.0005 / 3])
+def test_the_clock_is_mujocos_at_every_tick_with_one_or_more_plant_steps_a_tick(plant_step_s):
+    """The harness counts MuJoCo's clock (``time += timestep`` a step) instead of reading it: the same floats."""
+    from amlip_qp.sim.plant import load_plant
+
+    robot = factory.load("cassie")
+    plant = load_plant("cassie", robot, edits=[lambda spec: setattr(spec.option, "timestep", plant_step_s)])
+    sim = factory.build_simulation(Scenario("test", "cassie", 0.02), HoldTracker(robot), plant=plant)
+    times = []
+    res = sim.run(0.02, on_tick=lambda t, d: times.append((t, d.time)))
+    assert sim.substeps == round(0.0005 / plant_step_s) and len(times) == 40 and not res.fell
+    assert all(t == clock for t, clock in times) and res.sim_time_s == sim.data.time
+    assert res.log["t"].tolist() == [0.0] + [t for t, _ in times[:-1]]

@@ -225,9 +225,8 @@ class Simulation:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         full = log == "full"
         n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars and the base states go to row blocks (lists of
-        # rows turned into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row
-        # each, written by one np.concatenate.
+        # One row per tick: the Python scalars and the base states go to row blocks (lists of rows turned
+        # into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row (one np.concatenate).
         scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
         vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
         vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
@@ -240,25 +239,21 @@ class Simulation:
         est_is_true = self.true_base and self.noise is None
         base_est = base_true if est_is_true else RowBlocks(sum(self._base_size))
         scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
-        tick_ns = array("q")  # wall times per tick, ns: the controller, MuJoCo, the whole tick
-        mujoco_ns = array("q")
-        total_ns = array("q")
+        # per tick, ns: its start, the controller's start and end, MuJoCo's start and end, its end
+        stamps = array("q")
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
         add_noise = None if self.noise is None else self._add_noise
-        write_ctrl = plant.ctrl_writer(d)
-        ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
+        write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d), plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
-        step, substeps, qpos = mujoco.mj_step, self.substeps, d.qpos
+        step, substeps, dt_s, qpos = mujoco.mj_step, self.substeps, self.dt_s, d.qpos
         xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
         xfrc_b = d.xfrc_applied[self._base_body, :3]
-        pushes = bool(self.pushes)
-        no_push = np.zeros(3)
+        pushes, no_push = bool(self.pushes), np.zeros(3)
         if not pushes:
             xfrc_b[:] = no_push  # and so it stays
-        warn_number = d.warning.number
-        warn_idx = [int(w) for w in _DIVERGENCE_WARNINGS]
+        warn_number, warn_idx = d.warning.number, [int(w) for w in _DIVERGENCE_WARNINGS]
         warn_all0 = warn_number.tolist()
         warn0 = [warn_all0[i] for i in warn_idx]
         np_array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
@@ -266,11 +261,9 @@ class Simulation:
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
         min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
-        # Above this cosine the tilt is surely not above max_tilt (acos is decreasing, its error far
-        # below the margin; the clamp to acos's range keeps any max_tilt's answer): acos only under it.
+        # Above this cosine the tilt is surely not over max_tilt (acos decreases; its error << the margin).
         upright_cos = math.cos(min(max(max_tilt, 0.0), math.pi)) + 1e-12
-        fell, fall_time = False, float("nan")
-        bar = None
+        fell, fall_time, bar = False, float("nan"), None
         if progress:
             from tqdm import tqdm
 
@@ -290,10 +283,9 @@ class Simulation:
             if add_noise is not None:
                 add_noise(q, v)
             meas = sense(t, q, v)
-            t0 = perf_ns()
+            t_c0 = perf_ns()
             tick = ctrl_step(meas, cmd)
-            t1 = perf_ns()
-            tick_ns.append(t1 - t0)
+            t_c1 = perf_ns()
             if floating and not est_is_true:
                 q_est, v_est = kin_state()
                 est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
@@ -307,7 +299,6 @@ class Simulation:
                 xfrc_b[:] = push
             else:
                 push = no_push
-            # log
             est, plan = tick.estimate, tick.plan
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
             if ground is None:
@@ -336,18 +327,19 @@ class Simulation:
             else:
                 scalar_rows.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
-            t0 = perf_ns()
+            t_m0 = perf_ns()
             for _ in range(substeps):
                 step(m, d)
-            t_end = perf_ns()
-            mujoco_ns.append(t_end - t0)
-            t_next = d.time
-            # MuJoCo resets an unstable state to qpos0 (time back to ~0) and
-            # counts a warning; that is a divergence, reported as a fall.
+            t_m1 = perf_ns()
+            t_next = t
+            for _ in range(substeps):  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+                t_next += dt_s
+            # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
+            # warning; that is a divergence, reported as a fall.
             warn_all = warn_number.tolist()
-            if t_next < t or (warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0))):
+            if warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0)):
                 fell, fall_time, sim_time = True, t, t
-                total_ns.append(perf_ns() - t_tick)
+                stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
             warn_all0 = warn_all
             sim_time = t_next
@@ -360,9 +352,9 @@ class Simulation:
             tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
             if z < min_z or tilted or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
-                total_ns.append(perf_ns() - t_tick)
+                stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
-            total_ns.append(perf_ns() - t_tick)
+            stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
             if k % BLOCK_ROWS == BLOCK_ROWS - 1:
                 scalars.flush()
                 base_true.flush()
@@ -372,7 +364,8 @@ class Simulation:
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
-        tick_us, mujoco_us = np.array(tick_ns, dtype=float) * 1e-3, np.array(mujoco_ns, dtype=float) * 1e-3
+        ns = np.array(stamps, dtype=np.int64).reshape(n, 6)
+        tick_us, mujoco_us = (ns[:, 2] - ns[:, 1]) * 1e-3, (ns[:, 4] - ns[:, 3]) * 1e-3
         base_rows = base_true.array(), base_est.array()
         return RunResult(
             robot=self.robot.name,
@@ -386,7 +379,7 @@ class Simulation:
             steps=list(ctrl.steps),
             tick_time_us=tick_us,
             mujoco_time_us=mujoco_us,
-            harness_time_us=np.array(total_ns, dtype=float) * 1e-3 - tick_us - mujoco_us,
+            harness_time_us=(ns[:, 5] - ns[:, 0]) * 1e-3 - tick_us - mujoco_us,
             fallback_ticks=ctrl.fallback_ticks,
             safe_mode_ticks=ctrl.safe_mode_ticks,
             estimator_divergences=ctrl.estimator_divergences,
