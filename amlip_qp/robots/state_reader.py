@@ -23,9 +23,12 @@ import numpy as np
 from amlip_qp.robots.state import StateMap, mj_to_pin, rotation_entries
 
 
-def _getter(indices: Sequence[int] | np.ndarray) -> Callable[[Sequence[float]], list[float]]:
-    """``f(seq) -> [seq[i] for i in indices]`` (one ``itemgetter`` call)."""
+def _getter(indices: Sequence[int] | np.ndarray, n_in: int | None = None) -> Callable[[Sequence[float]], list[float]]:
+    """``f(seq) -> [seq[i] for i in indices]``: one ``itemgetter`` call, or ``list`` when ``indices`` take all ``n_in``
+    items of ``seq`` in order."""
     idx = [int(i) for i in indices]
+    if n_in is not None and idx == list(range(n_in)):
+        return list
     if len(idx) == 1:
         i = idx[0]
         return lambda seq: [seq[i]]
@@ -66,7 +69,8 @@ class StateReader:
             quats.append((*qsrc[qa : qa + 4].tolist(), pq, None))
         self.state_map = m
         self._qsrc, self._vsrc = qsrc, vsrc
-        self._take_q, self._take_v = _getter(qsrc[gq]), _getter(vsrc[gv])
+        n_q, n_v = (m.nq_mj if qpos_src is None else None), (m.nv if qvel_src is None else None)  # the layout read
+        self._take_q, self._take_v = _getter(qsrc[gq], n_q), _getter(vsrc[gv], n_v)
         self._quats = tuple(quats)
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -277,6 +277,12 @@ class Simulation:
             t = t_next
             cmd = command_fn(t)
             q_list, v_list = read_state(qpos_list)
+            r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
+            if ground is None:
+                z = xpos_b.item(2)
+            else:  # height above the ground under the base
+                x, y, z = xpos_b.tolist()
+                z -= ground(x, y)
             if floating:
                 true_rows.append(q_list[bq] + v_list[bv])
             q, v = np_array(q_list), np_array(v_list)
@@ -300,12 +306,6 @@ class Simulation:
             else:
                 push = no_push
             est, plan = tick.estimate, tick.plan
-            r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()
-            if ground is None:
-                z = xpos_b.item(2)
-            else:  # height above the ground under the base
-                x, y, z = xpos_b.tolist()
-                z -= ground(x, y)
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
                 tilt = acos(max(-1.0, min(1.0, r22)))
