@@ -103,8 +103,8 @@ class Scenario:
     def command_function(self) -> Callable[[float], Command]:
         """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
 
-        A command made at ``t`` is returned as it is up to :meth:`command_held_until_s` of ``t``,
-        without looking again (a run asks at increasing times).
+        Asked twice for the same values, at ``t``, it returns that command up to
+        :meth:`command_held_until_s` of ``t`` without looking again (a run asks at increasing times).
         """
         last: list = [None, None]
         span = [math.inf, -math.inf]  # [from, until): where the last command holds
@@ -123,13 +123,14 @@ class Scenario:
                 return last[1]
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
-            if key != last[0]:
+            if key != last[0]:  # new values (every tick of a ramp): no stretch looked for
                 last[0] = key
                 last[1] = Command(
                     step_time_s=T, com_height_m=H, clearance_m=clearance, vx_mps=vx, vy_mps=vy,
                     turn_rate_radps=turn, step_width_m=width,
                 )  # fmt: skip
-            span[0], span[1] = t_s, held_until(t_s)
+            else:  # the same values again: maybe a stretch where they hold
+                span[0], span[1] = t_s, held_until(t_s)
             return last[1]
 
         return command
