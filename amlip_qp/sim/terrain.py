@@ -237,18 +237,7 @@ def parse_terrain(text: str) -> TerrainSpec:
 
 # ------------------------------------------------------------------ the plant
 #: The floor's attributes every terrain geom copies (so contacts with the terrain are contacts with the floor).
-_CONTACT_ATTRS = (
-    "contype",
-    "conaffinity",
-    "condim",
-    "priority",
-    "friction",
-    "solmix",
-    "solref",
-    "solimp",
-    "margin",
-    "gap",
-)
+_CONTACT_ATTRS = tuple("contype conaffinity condim priority friction solmix solref solimp margin gap".split())
 
 
 @dataclass(frozen=True)
