@@ -28,6 +28,23 @@ def test_one_init_for_a_sequence_of_same_size_problems():
     assert solver.n_init == 1
 
 
+def test_one_persistent_qp_per_problem_shape():
+    """Two shapes in turn (the tracker's airborne and loaded swing foot): one init each, then warm updates."""
+    solver = ProxQPSolver(eps_abs=1e-9)
+    big = random_problem(3, n=10, n_eq=2, n_in=5)
+    small = random_problem(4, n=7, n_eq=2, n_in=3)
+    for k in range(6):
+        for p in (big, small):
+            q = p.copy()
+            q.g = p.g + 0.01 * k
+            x = solver.solve(q).x
+            assert np.max(np.abs(x - q.solve_with("quadprog"))) < 1e-6
+    assert solver.n_init == 2
+    solver.reset()
+    solver.solve(small)
+    assert solver.n_init == 3
+
+
 def test_warm_start_needs_fewer_iterations_on_a_slowly_varying_sequence():
     def run(warm: bool) -> int:
         solver = ProxQPSolver(warm_start=warm, eps_abs=1e-8)

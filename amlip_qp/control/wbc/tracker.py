@@ -5,6 +5,13 @@ current state and references, solve it with ONE persistent warm-started
 :class:`~amlip_qp.qp.solver.ProxQPSolver`, check the status, and recover the
 joint torques from the actuated rows of the dynamics.
 
+While the swing foot is in the air (force ramp ``w = 0``) its force
+variables are pinned to zero and its friction rows are lifted, so the tracker
+solves the problem without them (:meth:`QPProblem.leading
+<amlip_qp.qp.problem.QPProblem.leading>`: the same optimum, a smaller KKT
+system, about a quarter less solve time) with a second persistent ProxQP;
+both stay warm-started.
+
 Infeasible ticks get a second chance without the torque-limit rows (counted
 in :attr:`QPTracker.relaxed_solves`; the controller saturates the torques).
 Safe fallback: when the problem cannot be built or solved (non-finite data,
@@ -146,6 +153,12 @@ class QPTracker(Tracker):
         self._friction = friction
         # (ground pitch, heading) rad the stance pyramid is turned to; None: about the world's vertical
         self._friction_ground: tuple[float, float] | None = None
+        # The airborne swing foot's variables and friction rows trail the problem's (the layout and the
+        # constraint order put them last): the problem without them is a leading block.
+        L = self.builder.layout
+        self._airborne_dims = (L.sl_f_sw.start, friction.swing_rows.start)
+        self._airborne_ok = L.sl_f_sw.stop == L.n and friction.swing_rows.stop == self.builder.problem.n_in
+        self._airborne: tuple[QPProblem, QPProblem] | None = None  # (full problem, its leading block of views)
 
     def _orient_friction(self, target: TrackingTarget) -> None:
         """Turn the stance friction pyramid to the target's stance ground (only when that changes)."""
@@ -209,7 +222,7 @@ class QPTracker(Tracker):
         try:
             n_init = self.solver.n_init
             try:
-                sol = self.solver.solve(problem)
+                sol = self._solve(problem)
             except QPError:
                 # A warm start from a far-away iterate can stall: retry once from
                 # scratch (the solver re-initialises after a failure). A solve
@@ -217,7 +230,7 @@ class QPTracker(Tracker):
                 if self.solver.n_init != n_init:
                     raise
                 self.cold_retries += 1
-                sol = self.solver.solve(problem)
+                sol = self._solve(problem)
         except QPError as exc:
             relaxed = self._solve_relaxed(problem)
             if relaxed is not None:
@@ -226,6 +239,20 @@ class QPTracker(Tracker):
                 self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
             return self._fallback(kin, f"solver: {exc.status or exc}", info)
         return self._finish(kin, problem, sol, info, t0, t1, relaxed=False)
+
+    def _solve(self, problem: QPProblem) -> QPSolution:
+        """Solve ``problem``; while the swing foot is airborne, its leading block without the swing forces."""
+        if not (self._airborne_ok and self.builder.inputs.swing_force_weight == 0.0):
+            return self.solver.solve(problem)
+        pair = self._airborne
+        if pair is None or pair[0] is not problem:
+            # Views of the builder's live arrays: made once, valid for every later build.
+            pair = self._airborne = (problem, problem.leading(*self._airborne_dims))
+        sol = self.solver.solve(pair[1])
+        x = np.zeros(problem.n)  # the swing forces: their bounds, zero
+        x[: sol.x.shape[0]] = sol.x
+        sol.x = x
+        return sol
 
     def _solve_relaxed(self, problem: QPProblem) -> QPSolution | None:
         """Second chance after an infeasible tick: drop the torque-limit rows
