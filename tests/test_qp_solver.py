@@ -5,6 +5,7 @@ import pytest
 
 from amlip_qp.exceptions import QPError
 from amlip_qp.qp import ProxQPSolver
+from amlip_qp.qp.solver import MAX_SHAPES
 from test_qp_problem import random_problem
 
 
@@ -43,6 +44,20 @@ def test_one_persistent_qp_per_problem_shape():
     solver.reset()
     solver.solve(small)
     assert solver.n_init == 3
+
+
+def test_at_most_max_shapes_are_kept_the_oldest_dropped_first():
+    solver = ProxQPSolver()
+    sizes = [(6 + k, 2, 3) for k in range(MAX_SHAPES + 1)]
+    for n, n_eq, n_in in sizes:
+        solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 1
+    for n, n_eq, n_in in sizes[1:]:  # still kept: warm updates, no init
+        solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 1
+    n, n_eq, n_in = sizes[0]  # dropped: initialised again
+    solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 2
 
 
 def test_warm_start_needs_fewer_iterations_on_a_slowly_varying_sequence():

@@ -4,7 +4,8 @@ TSID re-initialises ProxQP at every control tick; here one
 ``proxsuite.proxqp.dense.QP`` lives as long as the tracker and is
 ``update``-d with the new matrices, starting from the previous solution.
 That works because the tracker's problems keep fixed dimensions. The solver
-keeps one ``QP`` per problem shape: the tracker solves two shapes (all
+keeps one ``QP`` per problem shape (at most :data:`MAX_SHAPES`, the oldest
+dropped first): the tracker with ``airborne_reduction`` solves two shapes (all
 variables, and without the swing foot's force variables while they are pinned
 to zero), each warm-started from its own previous solution.
 
@@ -25,6 +26,9 @@ from amlip_qp.qp._proxsuite import proxqp
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
+
+#: Problem shapes a :class:`ProxQPSolver` keeps a warm-started ProxQP for.
+MAX_SHAPES = 4
 
 
 @dataclass
@@ -135,6 +139,8 @@ class ProxQPSolver:
         args = (H, problem.g, A, problem.b, C, problem.l, problem.u, problem.lb, problem.ub)
         qp = self._qps.get(dims)
         if qp is None or not self.warm_start:
+            if dims not in self._qps and len(self._qps) >= MAX_SHAPES:
+                del self._qps[next(iter(self._qps))]  # the oldest shape
             qp = self._qps[dims] = self._new_qp(problem)
             qp.init(*args, **self._mu)
             self.n_init += 1
