@@ -15,14 +15,19 @@ from amlip_qp.sim.harness import Simulation
 from amlip_qp.sim.scenarios import SCENARIOS
 
 
-@pytest.fixture(scope="module", params=["cassie", "rabbit"])
+@pytest.fixture(
+    scope="module", params=[("cassie", False), ("rabbit", False), ("cassie", True), ("rabbit", True)], ids=str
+)
 def walk(request):
-    """A short recorded walk: (robot, tracker, run result)."""
-    robot = load_robot(request.param)
+    """A short recorded walk (the full problem solved every tick, or its leading
+    block while the swing foot is airborne): (robot, tracker, run result)."""
+    name, airborne_reduction = request.param
+    robot = load_robot(name)
     kin = RobotKinematics(robot)
-    tracker = QPTracker(robot, record=True)
+    tracker = QPTracker(robot, record=True, airborne_reduction=airborne_reduction)
+    assert tracker.airborne_reduction == airborne_reduction
     ctrl = WalkingController(robot, tracker, kin)
-    scenario = SCENARIOS["cassie-1mps" if request.param == "cassie" else "rabbit-0.5mps"]
+    scenario = SCENARIOS["cassie-1mps" if name == "cassie" else "rabbit-0.5mps"]
     result = Simulation(robot, ctrl, scenario.command).run(0.4)
     return robot, tracker, result
 
@@ -31,8 +36,12 @@ def test_one_persistent_solver_warm_started(walk):
     _, tracker, result = walk
     assert not result.fell
     assert len(tracker.recorded) == len(result.log["t"])
-    # One initialisation, plus one per cold retry after a failed warm solve.
-    assert tracker.solver.n_init == 1 + tracker.cold_retries
+    # One initialisation per problem shape (with airborne_reduction: the swing foot's
+    # forces loaded, and airborne, solved without them), plus one per cold retry.
+    airborne = [p.lb[p.variables["forces_swing"]] for p, _ in tracker.recorded]
+    assert any(np.all(b == 0.0) for b in airborne) and not all(np.all(b == 0.0) for b in airborne)
+    shapes = 2 if tracker.airborne_reduction else 1
+    assert tracker.solver.n_init == shapes + tracker.cold_retries
     assert tracker.cold_retries <= 0.02 * len(tracker.recorded)
     assert tracker.fallbacks == 0
     assert np.all(np.isfinite(result.log["tau"]))
@@ -174,7 +183,13 @@ def test_bad_arguments_and_targets_are_typed_errors():
     cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
     with pytest.raises(InputError, match="gains for 9 outputs but rabbit has 4"):
         QPTracker(rabbit, CASSIE_CONFIG)
-    for kwargs in ({"fallback_decay": -5.0}, {"fallback_damping_Nms": -1.0}, {"eps_abs": -1.0}, {"max_iter": 0}):
+    for kwargs in (
+        {"fallback_decay": -5.0},
+        {"fallback_damping_Nms": -1.0},
+        {"eps_abs": -1.0},
+        {"max_iter": 0},
+        {"airborne_reduction": "yes"},
+    ):
         with pytest.raises(InputError):
             QPTracker(cassie, **kwargs)
     tracker = QPTracker(cassie)

@@ -94,3 +94,26 @@ def test_qpsolvers_conversion_drops_infinite_rows_and_solves():
 def test_unknown_backend_is_a_typed_error():
     with pytest.raises(QPError, match="not installed"):
         random_problem(5).solve_with("no-such-solver")
+
+
+def test_leading_block_has_the_optimum_of_a_problem_with_trailing_variables_pinned_to_zero():
+    p = random_problem(6, n=10, n_eq=3, n_in=6)
+    p.variables = {"a": slice(0, 7), "b": slice(7, 10)}
+    p.in_rows = [("kept", slice(0, 4)), ("free", slice(4, 6))]
+    p.lb[7:] = p.ub[7:] = 0.0  # the last three variables pinned to zero
+    p.l[4:], p.u[4:] = -np.inf, np.inf  # the last two rows free
+    lead = p.leading(7, 4)
+    assert (lead.n, lead.n_eq, lead.n_in) == (7, 3, 4)
+    assert lead.variables == {"a": slice(0, 7)} and lead.in_rows == [("kept", slice(0, 4))]
+    for mine, whole in ((lead.H, p.H), (lead.A, p.A), (lead.C, p.C), (lead.lb, p.lb)):
+        assert np.shares_memory(mine, whole)  # views: later writes into the problem show
+    x_full = p.solve_with("quadprog")
+    x_lead = lead.solve_with("quadprog")
+    np.testing.assert_allclose(x_lead, x_full[:7], atol=1e-9)
+    assert np.all(x_full[7:] == 0.0)
+    p.g[0] += 1.0
+    assert lead.g[0] == p.g[0]
+    with pytest.raises(QPError, match="leading"):
+        p.leading(11, 4)
+    with pytest.raises(QPError, match="leading"):
+        p.leading(7, 7)

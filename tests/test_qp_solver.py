@@ -5,6 +5,7 @@ import pytest
 
 from amlip_qp.exceptions import QPError
 from amlip_qp.qp import ProxQPSolver
+from amlip_qp.qp.solver import MAX_SHAPES
 from test_qp_problem import random_problem
 
 
@@ -26,6 +27,37 @@ def test_one_init_for_a_sequence_of_same_size_problems():
         p.g = base.g + 0.01 * k
         solver.solve(p)
     assert solver.n_init == 1
+
+
+def test_one_persistent_qp_per_problem_shape():
+    """Two shapes in turn (the tracker's airborne and loaded swing foot): one init each, then warm updates."""
+    solver = ProxQPSolver(eps_abs=1e-9)
+    big = random_problem(3, n=10, n_eq=2, n_in=5)
+    small = random_problem(4, n=7, n_eq=2, n_in=3)
+    for k in range(6):
+        for p in (big, small):
+            q = p.copy()
+            q.g = p.g + 0.01 * k
+            x = solver.solve(q).x
+            assert np.max(np.abs(x - q.solve_with("quadprog"))) < 1e-6
+    assert solver.n_init == 2
+    solver.reset()
+    solver.solve(small)
+    assert solver.n_init == 3
+
+
+def test_at_most_max_shapes_are_kept_the_oldest_dropped_first():
+    solver = ProxQPSolver()
+    sizes = [(6 + k, 2, 3) for k in range(MAX_SHAPES + 1)]
+    for n, n_eq, n_in in sizes:
+        solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 1
+    for n, n_eq, n_in in sizes[1:]:  # still kept: warm updates, no init
+        solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 1
+    n, n_eq, n_in = sizes[0]  # dropped: initialised again
+    solver.solve(random_problem(n, n=n, n_eq=n_eq, n_in=n_in))
+    assert solver.n_init == MAX_SHAPES + 2
 
 
 def test_warm_start_needs_fewer_iterations_on_a_slowly_varying_sequence():

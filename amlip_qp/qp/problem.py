@@ -181,6 +181,38 @@ class QPProblem:
         )
         return reduced, free, x_fixed
 
+    def leading(self, n: int, n_in: int) -> QPProblem:
+        """The problem over the first ``n`` variables and the first ``n_in`` inequality rows (views, no copies).
+
+        It has the same optimum as this problem when the dropped variables are
+        fixed at zero (``lb = ub = 0``; e.g. the swing foot's forces in the
+        air) and the dropped rows are free (``l = -inf``, ``u = +inf``): the
+        dropped variables then add nothing to the cost, the equalities or the
+        kept rows. Not checked (once per control tick); the caller knows.
+        Variable and row names keep only the blocks wholly inside.
+
+        Raises:
+            QPError: ``n`` or ``n_in`` out of range.
+        """
+        if not (0 < n <= self.n and 0 <= n_in <= self.n_in):
+            raise QPError(
+                f"leading({n}, {n_in}) of a problem with {self.n} variables and {self.n_in} rows", problem=self
+            )
+        return QPProblem(
+            H=self.H[:n, :n],
+            g=self.g[:n],
+            A=self.A[:, :n],
+            b=self.b,
+            C=self.C[:n_in, :n],
+            l=self.l[:n_in],
+            u=self.u[:n_in],
+            lb=self.lb[:n],
+            ub=self.ub[:n],
+            variables={k: s for k, s in self.variables.items() if s.stop <= n},
+            eq_rows=self.eq_rows,
+            in_rows=[(k, s) for k, s in self.in_rows if s.stop <= n_in],
+        )
+
     def solve_with(self, solver: str, **kwargs) -> np.ndarray:
         """Solve with any installed ``qpsolvers`` backend (cross-checks, benchmarks).
 

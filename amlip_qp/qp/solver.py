@@ -3,8 +3,11 @@
 TSID re-initialises ProxQP at every control tick; here one
 ``proxsuite.proxqp.dense.QP`` lives as long as the tracker and is
 ``update``-d with the new matrices, starting from the previous solution.
-That works because the tracker's problem keeps fixed dimensions (the swing
-foot keeps its force variables, bounded to zero).
+That works because the tracker's problems keep fixed dimensions. The solver
+keeps one ``QP`` per problem shape (at most :data:`MAX_SHAPES`, the oldest
+dropped first): the tracker with ``airborne_reduction`` solves two shapes (all
+variables, and without the swing foot's force variables while they are pinned
+to zero), each warm-started from its own previous solution.
 
 Determinism: ProxSuite is imported through :mod:`amlip_qp.qp._proxsuite`,
 which loads its portable build (the vectorised builds are not bit-reproducible).
@@ -23,6 +26,9 @@ from amlip_qp.qp._proxsuite import proxqp
 from amlip_qp.qp.problem import QPProblem
 
 _OK = (proxqp.QPSolverOutput.PROXQP_SOLVED,)
+
+#: Problem shapes a :class:`ProxQPSolver` keeps a warm-started ProxQP for.
+MAX_SHAPES = 4
 
 
 @dataclass
@@ -89,9 +95,9 @@ class ProxQPSolver:
         if mu_in is not None:
             self._mu["mu_in"] = float(mu_in)
         self.update_preconditioner = bool(update_preconditioner)
-        self._qp: proxqp.dense.QP | None = None
-        self._dims: tuple[int, int, int] | None = None
-        #: Number of (re-)initialisations so far (1 in steady warm-started use).
+        #: One ProxQP per problem shape ``(n, n_eq, n_in)``, each warm-started from its own last solution.
+        self._qps: dict[tuple[int, int, int], proxqp.dense.QP] = {}
+        #: Number of (re-)initialisations so far (1 per problem shape in steady warm-started use).
         self.n_init = 0
 
     @property
@@ -122,9 +128,8 @@ class ProxQPSolver:
         return qp
 
     def reset(self) -> None:
-        """Forget the previous solution; the next solve re-initialises."""
-        self._qp = None
-        self._dims = None
+        """Forget the previous solutions; the next solve of each shape re-initialises."""
+        self._qps.clear()
 
     def solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
@@ -132,11 +137,12 @@ class ProxQPSolver:
         dims = (H.shape[0], A.shape[0], C.shape[0])
         t0 = time.perf_counter_ns()
         args = (H, problem.g, A, problem.b, C, problem.l, problem.u, problem.lb, problem.ub)
-        qp = self._qp
-        if qp is None or dims != self._dims or not self.warm_start:
-            qp = self._qp = self._new_qp(problem)
+        qp = self._qps.get(dims)
+        if qp is None or not self.warm_start:
+            if dims not in self._qps and len(self._qps) >= MAX_SHAPES:
+                del self._qps[next(iter(self._qps))]  # the oldest shape
+            qp = self._qps[dims] = self._new_qp(problem)
             qp.init(*args, **self._mu)
-            self._dims = dims
             self.n_init += 1
         else:
             qp.update(*args, update_preconditioner=self.update_preconditioner, **self._mu)
