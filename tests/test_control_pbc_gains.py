@@ -37,8 +37,9 @@ def test_bundled_robots_get_their_profiles_gains(name, expected):
     assert robot.profile is get_profile(name)
     assert get_profile(name).tracker_config("pbc") is expected
     assert default_gains(robot) is expected
-    # Cassie's legs have springs: softer stance gains, torso compensation, the spring model
-    assert (expected.kp_stance_ps2 < expected.kp_swing_ps2) == (name == "cassie")
+    # Cassie's legs have springs: stiffer stance gains (they hold the CoM height through the
+    # springs, docs/TUNING.md), torso compensation, the spring model
+    assert (expected.kp_stance_ps2 > expected.kp_swing_ps2) == (name == "cassie")
     assert expected.spring_model_offset == (name == "cassie")
 
 

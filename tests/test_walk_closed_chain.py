@@ -6,8 +6,7 @@ Every Cassie acceptance scenario runs on the hardware-like setting
 sensors (IMU with noise and drifting biases, quantised encoders, noisy contact
 switches; no base state) and the contact-aided invariant EKF -- with both
 trackers, and the QP tracker also walks ``cassie-1mps-cc-ekf`` for 10 s under
-each model mismatch of :data:`~amlip_qp.sim.scenarios.MISMATCHES`. The PBC
-does not pass the 2.1 m/s ramp and 2.5 m/s there yet (:data:`PBC_FALLS`). The
+each model mismatch of :data:`~amlip_qp.sim.scenarios.MISMATCHES`. The
 thresholds are those of the ideal acceptance (tests/test_walk_pbc.py and
 tests/test_walk_qp.py). Mean speed = mean CoM velocity over the last 3 s in
 the heading frame, from the simulator's truth.
@@ -37,16 +36,10 @@ DURATIONS: dict[str, float | None] = {
     "cassie-diagonal": 8.0,  # command reached at 2.5 s
 }
 
-#: The scenarios the PBC does not pass yet on this setting (README "Limitations"): with the
-#: robot's sensors and the EKF it falls on ramp-2.1 at 9.20 s and at 2.5mps at 13.10 s (with
-#: exact sensors it walks the ramp and falls at 2.5 m/s at 13.56 s). They are not run here;
-#: everything else is asserted for both trackers.
-PBC_FALLS: tuple[str, ...] = ("cassie-ramp-2.1", "cassie-2.5mps")
-
 #: (scenario, tracker) -> duration in s (``None``: the scenario's own).
 RUNS: dict[tuple[str, str], float | None] = {
     **{(f"{name}-cc-ekf", "qp"): duration for name, duration in DURATIONS.items()},
-    **{(f"{name}-cc-ekf", "pbc"): duration for name, duration in DURATIONS.items() if name not in PBC_FALLS},
+    **{(f"{name}-cc-ekf", "pbc"): duration for name, duration in DURATIONS.items()},
     **{(f"cassie-1mps-cc-ekf-{key}", "qp"): None for key in ("mass-0.8", "mass-1.2", "payload-5kg", "friction-0.5")},
     ("cassie-1mps-cc-ekf-delay-1", "qp"): None,
 }
@@ -139,9 +132,10 @@ def test_walks_at_the_commanded_velocity(results, tracker, name):
     _speed_ok(r)
 
 
-@pytest.mark.parametrize("name", PBC_FALLS)
-def test_qp_holds_the_fast_commands(results, name):
-    r = results[(f"{name}-cc-ekf", "qp")]
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+@pytest.mark.parametrize("name", ["cassie-ramp-2.1", "cassie-2.5mps"])
+def test_holds_the_fast_commands(results, tracker, name):
+    r = results[(f"{name}-cc-ekf", tracker)]
     _walked(r)
     _speed_ok(r)
 

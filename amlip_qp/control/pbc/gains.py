@@ -158,12 +158,13 @@ class PBCGains:
         return start * (1.0 - self.touchdown_gain_drop * w)
 
 
-#: Cassie (leg springs): softer stance gains, a stiffer swing ankle, swing-leg torso compensation,
-#: pelvis-yaw feedback on the swing hip yaw, the paper's spring model (the robot's achilles linkage
-#: under the robot's weight).
+#: Cassie (leg springs): stiffer stance gains (critically damped, 2 sqrt(500) = 44.72 1/s), a
+#: stiffer swing ankle, swing-leg torso compensation, pelvis-yaw feedback on the swing hip yaw, the
+#: paper's spring model (the robot's achilles linkage under the robot's weight). docs/TUNING.md
+#: ("Closed-chain plant: the stance gains") has the measurements behind the stance gains.
 CASSIE_GAINS = PBCGains(
-    kp_stance_ps2=200.0,
-    kd_stance_ps=28.0,
+    kp_stance_ps2=500.0,
+    kd_stance_ps=44.72,
     kp_swing_ps2=400.0,
     kd_swing_ps=40.0,
     swing_ankle_gain_scale=10.0,
