@@ -105,7 +105,8 @@ def test_leading_block_has_the_optimum_of_a_problem_with_trailing_variables_pinn
     lead = p.leading(7, 4)
     assert (lead.n, lead.n_eq, lead.n_in) == (7, 3, 4)
     assert lead.variables == {"a": slice(0, 7)} and lead.in_rows == [("kept", slice(0, 4))]
-    for mine, whole in ((lead.H, p.H), (lead.A, p.A), (lead.C, p.C), (lead.lb, p.lb)):
+    pairs = ((lead.H, p.H), (lead.g, p.g), (lead.A, p.A), (lead.b, p.b), (lead.C, p.C), (lead.l, p.l), (lead.u, p.u))
+    for mine, whole in (*pairs, (lead.lb, p.lb), (lead.ub, p.ub)):
         assert np.shares_memory(mine, whole)  # views: later writes into the problem show
     x_full = p.solve_with("quadprog")
     x_lead = lead.solve_with("quadprog")

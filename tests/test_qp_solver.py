@@ -85,3 +85,21 @@ def test_infeasible_problem_raises_with_the_problem_attached():
         solver.solve(p)
     assert info.value.problem is p
     assert info.value.status != "PROXQP_SOLVED"
+
+
+def test_a_failed_solve_reinitialises_only_its_own_shape():
+    """After a failure that shape starts cold again; the other shape keeps its warm ProxQP."""
+    solver = ProxQPSolver(max_iter=100)
+    ok = random_problem(4, n=7, n_eq=2, n_in=3)
+    bad = random_problem(3)
+    bad.A = np.vstack([np.eye(bad.n)[0], np.eye(bad.n)[0]])  # x0 = 0.5 and x0 = -0.5 at once
+    bad.b = np.array([0.5, -0.5])
+    solver.solve(ok)
+    with pytest.raises(QPError):
+        solver.solve(bad)
+    assert solver.n_init == 2
+    solver.solve(ok)  # still warm
+    assert solver.n_init == 2
+    with pytest.raises(QPError):
+        solver.solve(bad)  # cold again, not from the failed iterate
+    assert solver.n_init == 3

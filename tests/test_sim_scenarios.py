@@ -153,6 +153,15 @@ def test_the_command_function_of_a_run_gives_the_scenarios_commands():
     assert made[0] is not made[-1]
 
 
+def test_the_command_function_answers_earlier_times_too():
+    # 0.5 m/s held until 1 s, then 1.0 m/s: a stretch found at 0.1-0.2 s must not answer for the newer command.
+    sc = get_scenario("cassie-turn-90").with_(vx=SpeedProfile((0.0, 1.0, 1.0 + 1e-9), (0.5, 0.5, 1.0)))
+    command = sc.command_function()
+    times = [0.1, 0.2, 2.5, 0.5, 0.15, 2.6, 0.3]
+    made = [command(t).vx_mps for t in times]
+    assert made == [sc.command(t).vx_mps for t in times] == [0.5, 0.5, 1.0, 0.5, 0.5, 1.0, 0.5]
+
+
 @pytest.mark.parametrize(
     ("changes", "hold"),
     [

@@ -209,7 +209,7 @@ class QPProblem:
             lb=self.lb[:n],
             ub=self.ub[:n],
             variables={k: s for k, s in self.variables.items() if s.stop <= n},
-            eq_rows=self.eq_rows,
+            eq_rows=list(self.eq_rows),
             in_rows=[(k, s) for k, s in self.in_rows if s.stop <= n_in],
         )
 

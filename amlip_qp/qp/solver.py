@@ -156,8 +156,8 @@ class ProxQPSolver:
         # Python floats is cheaper than a numpy reduction at this size.
         if status not in _OK or not math.isfinite(sum(x.tolist())):
             name = getattr(status, "name", str(status))
-            # Do not warm-start the next tick from a failed iterate.
-            self.reset()
+            # Do not warm-start the next solve of this shape from a failed iterate (other shapes stay warm).
+            del self._qps[dims]
             raise QPError(
                 f"ProxQP failed with status {name} after {info.iter} iterations", problem=problem, status=name
             )

@@ -254,8 +254,8 @@ class Simulation:
         if not pushes:
             xfrc_b[:] = no_push  # and so it stays
         warn_number, warn_idx = d.warning.number, [int(w) for w in _DIVERGENCE_WARNINGS]
+        warn_number[warn_idx] = 0  # an earlier run's divergence on this data must not hide one of this run
         warn_all0 = warn_number.tolist()
-        warn0 = [warn_all0[i] for i in warn_idx]
         np_array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
         ground = self.ground_height_m  # None on flat ground: the height is z itself
@@ -337,7 +337,7 @@ class Simulation:
             # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
             # warning; that is a divergence, reported as a fall.
             warn_all = warn_number.tolist()
-            if warn_all != warn_all0 and any(warn_all[i] > w for i, w in zip(warn_idx, warn0)):
+            if warn_all != warn_all0 and any(warn_all[i] for i in warn_idx):
                 fell, fall_time, sim_time = True, t, t
                 stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break

@@ -124,7 +124,7 @@ class Scenario:
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:  # new values (every tick of a ramp): no stretch looked for
-                last[0] = key
+                last[0], span[0], span[1] = key, math.inf, -math.inf  # the old stretch is not this command's
                 last[1] = Command(
                     step_time_s=T, com_height_m=H, clearance_m=clearance, vx_mps=vx, vy_mps=vy,
                     turn_rate_radps=turn, step_width_m=width,

@@ -244,7 +244,8 @@ class PlantSensors:
         """``f(t_s, q, v)``: :meth:`measure` of ``data`` at its time ``t_s``, with ``data``'s arrays bound once.
 
         The harness's per-tick measurement; the same :class:`Measurement` as :meth:`measure`
-        (tested). ``t_s`` must be ``data.time``.
+        (tested). ``t_s`` must be ``data.time`` (the harness passes its own count of MuJoCo's
+        clock, equal to it bit for bit: ``tests/test_sim_harness.py``).
         """
         if self.model != "ideal" or not base_known:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)

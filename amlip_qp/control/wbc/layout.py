@@ -8,7 +8,9 @@
   **swing** foot, N. Cassie: toe then heel sphere centre, 3-D each (6 per
   foot); Rabbit (planar): the point foot, ``(f_x, f_z)`` (2 per foot). The
   stance foot's block always comes first, so the dimensions never change
-  and one persistent ProxQP serves the whole walk.
+  and one persistent ProxQP serves the whole walk (two with
+  ``QPTracker(airborne_reduction=True)``: the problem without the airborne
+  swing foot's block is the other).
 
 The rigid-spring constraint forces ``lambda`` are not variables (they are
 eliminated, :mod:`amlip_qp.control.wbc.spring_elimination`); the layout only

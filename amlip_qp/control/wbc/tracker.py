@@ -53,7 +53,7 @@ if TYPE_CHECKING:
 
 
 class QPTracker(Tracker):
-    """Whole-body QP tracker (one persistent ProxQP, warm-started).
+    """Whole-body QP tracker (one persistent ProxQP, warm-started; two with ``airborne_reduction``).
 
     Args:
         robot: The robot.
