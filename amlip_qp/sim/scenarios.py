@@ -101,54 +101,18 @@ class Scenario:
         }
 
     def command_function(self) -> Callable[[float], Command]:
-        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
-
-        Asked twice for the same values, at ``t``, it returns that command up to
-        :meth:`command_held_until_s` of ``t`` without looking again (a run asks at increasing times).
-        """
+        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
         last: list = [None, None]
-        span = [math.inf, -math.inf]  # [from, until): where the last command holds
-        vx_at, turn_rate_at, held_until, copysign = self.vx, self.turn_rate_at, self.command_held_until_s, math.copysign
-        f = self._command_fields()
-        T, H, clearance, vy, width = (
-            f["step_time_s"],
-            f["com_height_m"],
-            f["clearance_m"],
-            f["vy_mps"],
-            f["step_width_m"],
-        )
+        vx_at, turn_rate_at, copysign, fields = self.vx, self.turn_rate_at, math.copysign, self._command_fields()
 
         def command(t_s: float) -> Command:
-            if span[0] <= t_s < span[1]:
-                return last[1]
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
-            if key != last[0]:  # new values (every tick of a ramp): no stretch looked for
-                last[0], span[0], span[1] = key, math.inf, -math.inf  # the old stretch is not this command's
-                last[1] = Command(
-                    step_time_s=T, com_height_m=H, clearance_m=clearance, vx_mps=vx, vy_mps=vy,
-                    turn_rate_radps=turn, step_width_m=width,
-                )  # fmt: skip
-            else:  # the same values again: maybe a stretch where they hold
-                span[0], span[1] = t_s, held_until(t_s)
+            if key != last[0]:
+                last[0], last[1] = key, Command(**fields, vx_mps=vx, turn_rate_radps=turn)
             return last[1]
 
         return command
-
-    def command_held_until_s(self, t_s: float) -> float:
-        """The time before which the command from ``t_s`` on is ``command(t_s)``, s (``t_s``: not known to be).
-
-        The speed profile's :meth:`~amlip_qp.sim.speed_profile.SpeedProfile.held_until_s`, cut at
-        the turn's start and end; ``inf`` after the last knot and the turn.
-        """
-        until = self.vx.held_until_s(t_s)
-        if self.turn_rate_radps == 0.0:
-            return until
-        t_end = math.inf if math.isinf(self.turn_angle_rad) else self._turn_end_s()
-        for change in (self.turn_start_s, t_end):
-            if t_s < change:
-                return min(until, change)
-        return until if t_s == t_s else t_s
 
     def _turn_end_s(self) -> float:
         """When a turn of a finite angle ends, s (as :meth:`turn_rate_at`)."""

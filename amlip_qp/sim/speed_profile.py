@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
@@ -76,24 +75,6 @@ class SpeedProfile:
             if v != v and v_j == speeds[j + 1]:
                 v = v_j
         return v
-
-    def held_until_s(self, t_s: float) -> float:
-        """The time before which the speed from ``t_s`` on is ``self(t_s)`` bit for bit, s (``t_s``: not known to be).
-
-        After the last knot: ``inf``; before the first: the first; between two equal knots, the
-        next knot (``0 * (t - t_j) + v_j`` is ``v_j``, but for a negative zero ``v_j``).
-        """
-        times, speeds = self._knots
-        if t_s >= times[-1] or len(times) == 1:
-            return math.inf
-        if t_s < times[0]:
-            return times[0]
-        if t_s != t_s:  # NaN
-            return t_s
-        j = bisect_right(times, t_s) - 1
-        v_j = speeds[j]
-        flat = speeds[j + 1] == v_j and (v_j != 0.0 or math.copysign(1.0, v_j) > 0.0)
-        return times[j + 1] if flat else t_s
 
     @property
     def final_mps(self) -> float:
