@@ -118,3 +118,73 @@ def test_leading_block_has_the_optimum_of_a_problem_with_trailing_variables_pinn
         p.leading(11, 4)
     with pytest.raises(QPError, match="leading"):
         p.leading(7, 7)
+
+
+def allocated_problem(n: int = 6, n_eq: int = 2, n_in: int = 3) -> QPProblem:
+    """An allocated problem filled from a valid random one."""
+    src = random_problem(8, n, n_eq, n_in)
+    p = QPProblem.allocate(n, n_eq, n_in, variables={"x": slice(0, n)})
+    for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+        getattr(p, name)[...] = getattr(src, name)
+    return p
+
+
+def test_allocate_makes_zero_views_of_shared_buffers_with_the_problem_shapes():
+    p = QPProblem.allocate(5, 2, 3, variables={"x": slice(0, 5)})
+    assert (p.n, p.n_eq, p.n_in) == (5, 2, 3) and p.variables == {"x": slice(0, 5)}
+    shapes = {k: getattr(p, k).shape for k in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")}
+    assert shapes == {"H": (5, 5), "g": (5,), "A": (2, 5), "b": (2,), "C": (3, 5), "l": (3,), "u": (3,),
+                      "lb": (5,), "ub": (5,)}  # fmt: skip
+    for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+        arr = getattr(p, name)
+        assert arr.flags.c_contiguous and not arr.flags.owndata and np.all(arr == 0.0)
+    base = p.H.base
+    assert all(getattr(p, k).base is base for k in ("g", "A", "b", "C"))  # one buffer for the finite fields
+    assert p.l.base is p.lb.base and p.u.base is p.ub.base  # one of the lower bounds, one of the upper
+    assert len({id(base), id(p.l.base), id(p.u.base)}) == 3
+    p.validate()  # zeros: finite, l <= u
+    assert p.copy().validate() is None
+    with pytest.raises(QPError, match="sizes"):
+        QPProblem.allocate(0, 1, 1)
+
+
+@pytest.mark.parametrize(
+    ("field", "index", "value"),
+    [("H", (1, 2), np.inf), ("g", (0,), np.nan), ("A", (1, 0), np.nan), ("b", (1,), -np.inf), ("C", (2, 5), np.nan)],
+)
+def test_allocated_problem_names_a_non_finite_entry_like_any_problem(field, index, value):
+    p = allocated_problem()
+    p.validate()
+    getattr(p, field)[index] = value
+    with pytest.raises(QPError, match=f"QP field {field} contains NaN or inf: check the state estimate") as info:
+        p.validate()
+    assert info.value.problem is p
+
+
+@pytest.mark.parametrize("field", ["l", "u", "lb", "ub"])
+def test_allocated_problem_names_a_nan_bound_and_a_crossed_pair(field):
+    p = allocated_problem()
+    getattr(p, field)[1] = np.nan
+    with pytest.raises(QPError, match=f"QP bound {field} contains NaN"):
+        p.validate()
+    p = allocated_problem()
+    p.l[0], p.u[0] = -np.inf, np.inf  # infinite bounds are fine
+    p.validate()
+    p.lb[2], p.ub[2] = 1.0, 0.5
+    with pytest.raises(QPError, match="lower bound above its upper bound"):
+        p.validate()
+
+
+def test_allocated_problem_with_a_replaced_array_is_validated_in_full():
+    p = allocated_problem()
+    p.g = np.full(p.n, np.nan)  # no longer the allocated view: the general path checks it
+    with pytest.raises(QPError, match="g contains NaN"):
+        p.validate()
+    p = allocated_problem()
+    p.b = np.zeros(5)
+    with pytest.raises(QPError, match="b has shape"):
+        p.validate()
+    p = allocated_problem()
+    p.ub = p.lb - 1.0
+    with pytest.raises(QPError, match="lower bound above"):
+        p.validate()

@@ -58,3 +58,45 @@ def test_a_contiguous_increasing_index_becomes_a_slice():
     assert contiguous_index(idx) is idx
     descending = np.array([4, 3])
     assert contiguous_index(descending) is descending
+
+
+def _reference_passive_forces(robot, q, v):
+    """The general arithmetic (numpy dots for every tendon), the pair path's reference."""
+    from amlip_qp.robots.passive import tendon_force
+
+    f = -robot.dof_damping * v
+    pv = robot.state_map.scalar_pin_v
+    f[pv] -= robot.dof_stiffness[pv] * (q[robot.state_map.scalar_pin_q] - robot.dof_springref[pv])
+    for c in robot.couplings:
+        force = tendon_force(c, float(c.coefficients.dot(q[c.pin_q_idx])), float(c.coefficients.dot(v[c.pin_v_idx])))
+        for i, k in zip(c.pin_v_idx.tolist(), c.coefficients.tolist()):
+            f[i] += k * force
+    return f
+
+
+@pytest.mark.parametrize("coefficients", [None, (1.0, -1.0), (0.7, 1.3)])
+def test_passive_forces_equal_the_general_arithmetic_bit_for_bit(coefficients):
+    """The +-1 pair path (Cassie's rods) and the general path give the numpy dots' bits."""
+    import dataclasses
+    import types
+
+    from amlip_qp.robots.passive import PassiveForces
+
+    cassie = load_robot("cassie")
+    robot = cassie
+    if coefficients is not None:
+        couplings = tuple(dataclasses.replace(c, coefficients=np.array(coefficients)) for c in cassie.couplings)
+        fields = ("state_map", "dof_damping", "dof_stiffness", "dof_springref")
+        robot = types.SimpleNamespace(couplings=couplings, **{k: getattr(cassie, k) for k in fields})
+    forces = PassiveForces(robot)
+    rng = np.random.default_rng(11)
+    smap = cassie.state_map
+    for scale in (1e-3, 0.05, 0.5, 3.0):
+        q = cassie.q_stand.copy()
+        q[smap.scalar_pin_q] += rng.normal(0.0, scale, smap.scalar_pin_q.size)
+        v = rng.normal(0.0, 10 * scale, cassie.nv)
+        got, want = forces(q, v), _reference_passive_forces(robot, q, v)
+        assert np.array_equal(got, want)
+        assert np.array_equal(np.signbit(got), np.signbit(want))
+    zero = forces(cassie.q_stand.copy(), np.zeros(cassie.nv))
+    assert np.array_equal(zero, _reference_passive_forces(robot, cassie.q_stand.copy(), np.zeros(cassie.nv)))

@@ -8,6 +8,12 @@
 Rows and variables carry names, so a failing problem can be read by a person:
 ``problem.variables["forces"]`` is the slice of the force variables,
 ``problem.eq_rows`` and ``problem.in_rows`` list ``(name, slice)`` blocks.
+
+A problem made by :meth:`QPProblem.allocate` keeps its arrays as views of
+three contiguous buffers (``H, g, A, b, C``; the lower bounds ``l, lb``; the
+upper bounds ``u, ub``), so that :meth:`QPProblem.validate`, once per control
+tick, checks finiteness with one reduction and the bound order with one
+comparison while the fields are still those views.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from amlip_qp.exceptions import QPError
 
 _sum = np.add.reduce
 _all = np.logical_and.reduce
+_le = np.less_equal
 
 
 @dataclass
@@ -54,6 +61,35 @@ class QPProblem:
     variables: dict[str, slice] = field(default_factory=dict)
     eq_rows: list[tuple[str, slice]] = field(default_factory=list)
     in_rows: list[tuple[str, slice]] = field(default_factory=list)
+    #: Set by :meth:`allocate`: the buffers and the views the fields were made as.
+    _packed: _Packed | None = field(default=None, init=False, repr=False, compare=False)
+
+    @classmethod
+    def allocate(
+        cls,
+        n: int,
+        n_eq: int,
+        n_in: int,
+        variables: dict[str, slice] | None = None,
+        eq_rows: list[tuple[str, slice]] | None = None,
+        in_rows: list[tuple[str, slice]] | None = None,
+    ) -> QPProblem:
+        """A problem of zeros (every array, bounds included) whose arrays are views of three
+        contiguous buffers (see the module doc): fill it in place, never replace its arrays
+        (a replaced array is still validated, by the general path)."""
+        if min(n, n_eq, n_in) < 0 or n == 0:
+            raise QPError(f"allocate({n}, {n_eq}, {n_in}): sizes must be >= 0 and n > 0")
+        sizes = (n * n, n, n_eq * n, n_eq, n_in * n)
+        data = np.zeros(sum(sizes))
+        H, g, A, b, C = np.split(data, np.cumsum(sizes)[:-1])
+        lower, upper = np.zeros(n_in + n), np.zeros(n_in + n)
+        problem = cls(
+            H.reshape(n, n), g, A.reshape(n_eq, n), b, C.reshape(n_in, n),
+            lower[:n_in], upper[:n_in], lower[n_in:], upper[n_in:],
+            variables=dict(variables or {}), eq_rows=list(eq_rows or []), in_rows=list(in_rows or []),
+        )  # fmt: skip
+        problem._packed = _Packed(data, lower, upper, problem)
+        return problem
 
     @property
     def n(self) -> int:
@@ -93,6 +129,12 @@ class QPProblem:
     def validate(self) -> None:
         """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
         H, g, A, b, C, l, u, lb, ub = self.H, self.g, self.A, self.b, self.C, self.l, self.u, self.lb, self.ub
+        packed = self._packed
+        if packed is not None and packed.holds(H, g, A, b, C, l, u, lb, ub):
+            # The allocated views (shapes fixed at allocation): one sum and one comparison; only if
+            # either fails, the general path below names the defect.
+            if math.isfinite(_sum(packed.data)) and _all(_le(packed.lower, packed.upper)):
+                return
         n, n_eq, n_in = H.shape[0], A.shape[0], C.shape[0]
         got = (H.shape, g.shape, A.shape, b.shape, C.shape, l.shape, u.shape, lb.shape, ub.shape)
         expected = ((n, n), (n,), (n_eq, n), (n_eq,), (n_in, n), (n_in,), (n_in,), (n,), (n,))
@@ -237,3 +279,22 @@ class QPProblem:
         x[free] = solution.x
         x[~free] = x_fixed
         return x
+
+
+class _Packed:
+    """The buffers of an :meth:`QPProblem.allocate` problem and its nine views, by identity."""
+
+    __slots__ = ("data", "lower", "upper", "_views")
+
+    def __init__(self, data: np.ndarray, lower: np.ndarray, upper: np.ndarray, problem: QPProblem):
+        self.data, self.lower, self.upper = data, lower, upper
+        p = problem
+        self._views = (p.H, p.g, p.A, p.b, p.C, p.l, p.u, p.lb, p.ub)
+
+    def holds(self, H, g, A, b, C, l, u, lb, ub) -> bool:
+        """Whether these are still the allocated views (not replaced arrays)."""
+        v = self._views
+        return (
+            H is v[0] and g is v[1] and A is v[2] and b is v[3] and C is v[4]
+            and l is v[5] and u is v[6] and lb is v[7] and ub is v[8]
+        )  # fmt: skip

@@ -83,6 +83,11 @@ class PassiveForces:
     the passive generalized forces (N m or N), shape (nv,): the arithmetic of
     :func:`passive_forces`, with the index gathers of the constant terms
     done once here.
+
+    A tendon of two joints with coefficients +-1 (Cassie's achilles rods) gets
+    its length and rate as Python floats, ``0.0 + k0 q0 + k1 q1``: the products
+    are exact, so that is the rounding of the exact sum, bit for bit what the
+    numpy dot of the general path gives, at a third of its cost.
     """
 
     def __init__(self, robot: Robot):
@@ -92,17 +97,34 @@ class PassiveForces:
         self._pq, self._pv = contiguous_index(smap.scalar_pin_q), contiguous_index(pv)
         self._stiffness = robot.dof_stiffness[pv]
         self._springref = robot.dof_springref[pv]
-        # Per tendon: the coupling, its coefficients, q and v indices, and (index, coefficient) pairs.
-        self._tendons = tuple(
-            (c, c.coefficients, c.pin_q_idx, c.pin_v_idx, tuple(zip(c.pin_v_idx.tolist(), c.coefficients.tolist())))
-            for c in robot.couplings
-        )
+        # Per tendon, in model order: the coupling, then for a +-1 pair ``(iq0, iq1, iv0, iv1, k0, k1)``
+        # and ``None``; else ``None`` and its coefficients, q and v indices, and (index, coefficient) pairs.
+        tendons: list[tuple] = []
+        for c in robot.couplings:
+            coef = [float(k) for k in c.coefficients]
+            if len(coef) == 2 and all(abs(k) == 1.0 for k in coef):
+                pair = (*(int(i) for i in c.pin_q_idx), *(int(i) for i in c.pin_v_idx), *coef)
+                tendons.append((c, pair, None))
+            else:
+                general = (c.coefficients, c.pin_q_idx, c.pin_v_idx, tuple(zip(c.pin_v_idx.tolist(), coef)))
+                tendons.append((c, None, general))
+        self._tendons = tuple(tendons)
+        self._lists = any(pair is not None for _, pair, _ in tendons)
 
     def __call__(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         f = self._neg_damping * v
         pv = self._pv
         f[pv] -= self._stiffness * (q[self._pq] - self._springref)
-        for c, coef, iq, iv, pairs in self._tendons:
+        if self._lists:
+            ql, vl = q.tolist(), v.tolist()
+        for c, pair, general in self._tendons:
+            if pair is not None:
+                iq0, iq1, iv0, iv1, k0, k1 = pair
+                force = tendon_force(c, 0.0 + k0 * ql[iq0] + k1 * ql[iq1], 0.0 + k0 * vl[iv0] + k1 * vl[iv1])
+                f[iv0] += k0 * force
+                f[iv1] += k1 * force
+                continue
+            coef, iq, iv, pairs = general
             force = tendon_force(c, float(coef.dot(q[iq])), float(coef.dot(v[iv])))
             # A tendon couples distinct joints: one addition per joint.
             for i, k in pairs:

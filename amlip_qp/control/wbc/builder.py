@@ -110,14 +110,14 @@ class WholeBodyQP:
             if c.kind in ends:
                 ends[c.kind] = c.place(ends[c.kind])
         n, n_eq, n_in, inf = L.n, ends["eq"], ends["in"], np.inf
-        self.problem = QPProblem(
-            H=np.zeros((n, n)), g=np.zeros(n), A=np.zeros((n_eq, n)), b=np.zeros(n_eq),
-            C=np.zeros((n_in, n)), l=np.full(n_in, -inf), u=np.zeros(n_in),
-            lb=np.full(n, -inf), ub=np.full(n, inf),
+        # One set of buffers for the whole run (QPProblem.allocate: a cheap validation per tick).
+        self.problem = P = QPProblem.allocate(
+            n, n_eq, n_in,
             variables={"vdot": L.sl_vdot, "forces_stance": L.sl_f_st, "forces_swing": L.sl_f_sw},
             eq_rows=[b for c in self.constraints if c.kind == "eq" for b in c.row_blocks()],
             in_rows=[b for c in self.constraints if c.kind == "in" for b in c.row_blocks()],
         )  # fmt: skip
+        P.l[:], P.lb[:], P.ub[:] = -inf, -inf, inf
         for c in self.constraints:
             c.initialize(self.problem)
 
