@@ -1,0 +1,135 @@
+"""Walk speed of this checkout against another one, interleaved on the same machine.
+
+The machine's speed drifts (by up to 1.6x within minutes on the 2-core
+development machine), so a walk's wall time means little alone. This script
+alternates walks of a reference checkout (``--reference``, e.g. a
+``git worktree`` of an older commit) and of this checkout, each in its own
+process, and compares them within each pair. Every walk is timed the same way,
+whatever the checkout's harness reports: the loop's wall time per control
+tick, the controller's tick (``tick_time_us``, which every version records)
+and MuJoCo's steps (``mujoco.mj_step`` wrapped with a timer in the walk's
+process before the walk). The harness's own time is what is left. Each part
+is also divided by MuJoCo's step time of the same walk, which is the same work
+in both checkouts: those ratios compare walks run at different machine speeds.
+
+    git worktree add --detach /tmp/ref 82a46cd
+    python examples/speed_against.py --reference /tmp/ref --pairs 5
+
+prints one line per walk and the medians over the pairs. Exit status: 0, or 2
+on bad input (a reference folder without the package, a bad number).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import statistics
+import subprocess
+import sys
+
+HERE = pathlib.Path(__file__).resolve().parents[1]
+
+#: Runs in the walk's process, with the checkout first on sys.path.
+WALK = r"""
+import json, sys, time
+import amlip_qp
+import mujoco
+import numpy as np
+from amlip_qp.sim.factory import build_simulation
+from amlip_qp.sim.scenarios import get_scenario
+
+scenario, tracker, duration, log = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+sc = get_scenario(scenario).with_(duration_s=duration)
+build_simulation(sc, tracker).run(0.1)  # warm-up: imports, compiled kernels, caches
+step, clock, spent = mujoco.mj_step, time.perf_counter_ns, []
+
+def timed_step(m, d):
+    t0 = clock()
+    step(m, d)
+    spent.append(clock() - t0)
+
+mujoco.mj_step = timed_step
+sim = build_simulation(sc, tracker)
+try:
+    result = sim.run(duration, log=log)
+except TypeError:  # a version without log modes
+    result = sim.run(duration)
+n = len(result.tick_time_us)
+wall_us = result.wall_time_s * 1e6 / n
+mujoco_us = sum(spent) * 1e-3 / n
+controller_us = float(np.mean(result.tick_time_us))
+print(json.dumps({
+    "ticks": n, "fell": bool(result.fell), "realtime_factor": result.sim_time_s / result.wall_time_s,
+    "wall_us": wall_us, "controller_us": controller_us, "mujoco_us": mujoco_us,
+    "harness_us": wall_us - controller_us - mujoco_us, "package": amlip_qp.__file__,
+}))
+"""
+
+
+def walk(tree: pathlib.Path, args: argparse.Namespace) -> dict:
+    """One walk of the checkout at ``tree`` in a fresh process; its timing record."""
+    env_code = f"import sys; sys.path.insert(0, {str(tree)!r})\n" + WALK
+    out = subprocess.run(
+        [sys.executable, "-c", env_code, args.scenario, args.tracker, str(args.duration), args.log],
+        capture_output=True,
+        text=True,
+        cwd=tree,
+        check=False,
+    )
+    if out.returncode != 0:
+        raise RuntimeError(f"the walk of {tree} failed:\n{out.stderr.strip()[-2000:]}")
+    rec = json.loads(out.stdout.strip().splitlines()[-1])
+    if not pathlib.Path(rec["package"]).resolve().is_relative_to(tree):
+        raise RuntimeError(f"the walk meant for {tree} imported {rec['package']}")
+    for part in ("wall", "controller", "harness"):
+        rec[f"{part}_per_mujoco"] = rec[f"{part}_us"] / rec["mujoco_us"]
+    return rec
+
+
+def line(name: str, r: dict) -> str:
+    return (
+        f"{name:9s} {r['realtime_factor']:5.2f}x  wall {r['wall_us']:6.1f}  controller {r['controller_us']:6.1f}  "
+        f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  per MuJoCo step: wall "
+        f"{r['wall_per_mujoco']:5.2f}  harness {r['harness_per_mujoco']:4.2f}" + ("  FELL" if r["fell"] else "")
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--reference", required=True, help="a checkout of the reference version (its top folder)")
+    p.add_argument("--pairs", type=int, default=5, help="reference/this walk pairs, interleaved (default 5)")
+    p.add_argument("--scenario", default="cassie-1mps", help="scenario (default cassie-1mps)")
+    p.add_argument("--tracker", default="qp", help="tracker (default qp)")
+    p.add_argument("--duration", type=float, default=10.0, help="simulated time per walk, s (default 10)")
+    p.add_argument("--log", default="summary", help="this checkout's log mode (default summary)")
+    p.add_argument("--json", default=None, help="write every record and the medians to this JSON file")
+    args = p.parse_args(argv)
+    ref = pathlib.Path(args.reference).resolve()
+    if not (ref / "amlip_qp" / "__init__.py").is_file():
+        print(f"error: --reference {args.reference}: no amlip_qp package there (give a checkout's top folder)")
+        return 2
+    if args.pairs < 1 or not args.duration > 0:
+        print("error: --pairs must be >= 1 and --duration > 0")
+        return 2
+    pairs = []
+    for _ in range(args.pairs):
+        pair = {"reference": walk(ref, args), "this": walk(HERE, args)}
+        pairs.append(pair)
+        print(line("reference", pair["reference"]))
+        print(line("this", pair["this"]), flush=True)
+    keys = ("realtime_factor", "wall_per_mujoco", "harness_per_mujoco", "harness_us", "controller_us")
+    ratios = {k: statistics.median(p["this"][k] / p["reference"][k] for p in pairs) for k in keys}
+    medians = {who: {k: statistics.median(p[who][k] for p in pairs) for k in keys} for who in ("reference", "this")}
+    print(f"medians over {len(pairs)} pairs (this ÷ reference, per pair):")
+    for k in keys:
+        print(
+            f"  {k:20s} reference {medians['reference'][k]:8.3f}  this {medians['this'][k]:8.3f}  ratio {ratios[k]:.3f}"
+        )
+    if args.json:
+        pathlib.Path(args.json).write_text(json.dumps({"pairs": pairs, "medians": medians, "ratios": ratios}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,45 @@
+"""``examples/speed_against.py``: interleaved walks of two checkouts, timed the same way."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import pathlib
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def speed_against():
+    spec = importlib.util.spec_from_file_location("speed_against", ROOT / "examples" / "speed_against.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_checkout_against_itself_splits_each_walk_and_compares_the_pairs(speed_against, tmp_path, capsys):
+    out = tmp_path / "speed.json"
+    argv = ["--reference", str(ROOT), "--pairs", "2", "--duration", "0.1", "--scenario", "rabbit-0.5mps"]
+    assert speed_against.main([*argv, "--json", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert len(report["pairs"]) == 2
+    for pair in report["pairs"]:
+        for rec in pair.values():
+            assert pathlib.Path(rec["package"]).resolve().is_relative_to(ROOT)  # the checkout's own package ran
+            assert rec["ticks"] == 200 and not rec["fell"]
+            assert rec["mujoco_us"] > 0.0 and rec["controller_us"] > 0.0 and rec["harness_us"] > 0.0
+            assert rec["wall_us"] == pytest.approx(rec["controller_us"] + rec["mujoco_us"] + rec["harness_us"])
+            assert rec["wall_per_mujoco"] == pytest.approx(rec["wall_us"] / rec["mujoco_us"])
+    ratio = report["ratios"]["wall_per_mujoco"]
+    pairs = [p["this"]["wall_per_mujoco"] / p["reference"]["wall_per_mujoco"] for p in report["pairs"]]
+    assert ratio == pytest.approx(sorted(pairs)[0] + (sorted(pairs)[1] - sorted(pairs)[0]) / 2)  # the median
+    assert "medians over 2 pairs" in capsys.readouterr().out
+
+
+def test_a_folder_without_the_package_exits_2_in_one_line(speed_against, tmp_path, capsys):
+    assert speed_against.main(["--reference", str(tmp_path)]) == 2
+    assert capsys.readouterr().out.count("\n") == 1
+    assert speed_against.main(["--reference", str(ROOT), "--pairs", "0"]) == 2
