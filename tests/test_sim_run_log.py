@@ -66,3 +66,17 @@ def test_row_blocks_keep_every_row_in_order_across_flushes():
     got = blocks.array()
     assert got.dtype == np.float64 and got.tobytes() == np.array(rows).tobytes()
     assert blocks.array().tobytes() == got.tobytes()  # again: the same rows
+
+
+def test_row_blocks_of_integers_keep_them_exactly():
+    """The harness's clock stamps (ns since boot: beyond float64's exact integers after 104 days)."""
+    from amlip_qp.sim.run_log import RowBlocks
+
+    blocks = RowBlocks(2, np.int64)
+    assert blocks.array().dtype == np.int64 and blocks.array().shape == (0, 2)
+    big = 2**62 + 1
+    blocks.rows.append((big, big + 1))
+    blocks.flush()
+    blocks.rows.append((1, 2))
+    got = blocks.array()
+    assert got.dtype == np.int64 and got.tolist() == [[big, big + 1], [1, 2]]

@@ -40,28 +40,29 @@ VECTOR_GROUPS_FULL = (
 
 
 class RowBlocks:
-    """Rows of ``width`` floats appended as Python sequences to :attr:`rows`, kept as float arrays.
+    """Rows of ``width`` numbers appended as Python sequences to :attr:`rows`, kept as arrays of ``dtype``.
 
     The loop appends each tick's row to :attr:`rows` (a list append: the cheapest per tick)
     and calls :meth:`flush` now and then (every :data:`BLOCK_ROWS` ticks), which turns the rows
-    so far into one array block and empties the list: the memory stays that of the floats.
+    so far into one array block and empties the list: the memory stays that of the numbers.
     """
 
-    def __init__(self, width: int):
+    def __init__(self, width: int, dtype: type = float):
         self.width = int(width)
+        self.dtype = dtype
         self.rows: list = []
         self._blocks: list[np.ndarray] = []
 
     def flush(self) -> None:
         """Move the rows appended so far into an array block."""
         if self.rows:
-            self._blocks.append(np.array(self.rows, dtype=float).reshape(-1, self.width))
+            self._blocks.append(np.array(self.rows, dtype=self.dtype).reshape(-1, self.width))
             self.rows.clear()
 
     def array(self) -> np.ndarray:
         """All rows, shape ``(n, width)``."""
         self.flush()
-        return np.concatenate(self._blocks) if self._blocks else np.zeros((0, self.width))
+        return np.concatenate(self._blocks) if self._blocks else np.zeros((0, self.width), dtype=self.dtype)
 
 
 #: How many rows the loop appends between :meth:`RowBlocks.flush` calls.
