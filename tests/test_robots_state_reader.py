@@ -24,7 +24,12 @@ def test_state_reader_is_mj_to_pin_bit_for_bit(robot):
     nq, nv = robot.mj_model.nq, robot.nv
     # a plant with 5 more coordinates of each kind, holding the model's in shuffled places
     qsrc, vsrc = rng.permutation(nq + 5)[:nq], rng.permutation(nv + 5)[:nv]
-    readers = ((StateReader(smap), None, None), (StateReader(smap, qsrc, vsrc), qsrc, vsrc))
+    first_q, first_v = np.arange(nq), np.arange(nv)  # the model's coordinates first, then 5 more
+    readers = (
+        (StateReader(smap), None, None),
+        (StateReader(smap, qsrc, vsrc), qsrc, vsrc),
+        (StateReader(smap, first_q, first_v), first_q, first_v),
+    )
     for _ in range(300):
         qpos, qvel = random_mj_state(robot, rng)
         qvel *= 10.0 ** rng.uniform(-3, 3)

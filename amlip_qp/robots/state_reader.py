@@ -56,9 +56,9 @@ class StateReader:
         self.state_map = m
         self._qsrc, self._vsrc = qsrc, vsrc
         self._quats = tuple(quats)
-        # one NumPy gather per array (qvel's: a copy when it is qvel as it is)
+        # one NumPy gather per array (qvel's: a copy when it is the plant's qvel as it is)
         self._gather_q, gather_v = qsrc[gq], vsrc[gv]
-        self._gather_v = None if np.array_equal(gather_v, np.arange(m.nv)) else gather_v
+        self._gather_v = None if qvel_src is None and np.array_equal(gather_v, np.arange(m.nv)) else gather_v
         # the first free joint's row of arrays(): its position's qpos and its angular velocity's qvel indices
         self._root: tuple | None = None
         if m.free:
