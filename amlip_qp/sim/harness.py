@@ -224,7 +224,7 @@ class Simulation:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         full = log == "full"
         n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars and the base states go to row blocks (lists of rows turned
+        # One row per tick: the Python scalars and the base states go to row blocks (flat lists turned
         # into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row (one np.concatenate).
         scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
         vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
@@ -237,10 +237,11 @@ class Simulation:
         # controller's kinematics take the measurement as it is; tested), not logged twice.
         est_is_true = self.true_base and self.noise is None
         base_est = base_true if est_is_true else RowBlocks(sum(self._base_size))
-        scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
+        # each tick extends these flat lists by its row
+        scalar_rows, true_rows, est_rows = scalars.rows.extend, base_true.rows.extend, base_est.rows.extend
         # per tick, ns: its start, the controller's start and end, MuJoCo's start and end, its end
         stamps = RowBlocks(6, np.int64)
-        stamp_rows = stamps.rows
+        stamp_rows = stamps.rows.extend
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
@@ -285,7 +286,7 @@ class Simulation:
                 x, y, z = xpos_b.tolist()
                 z -= ground(x, y)
             if floating:
-                true_rows.append(root)
+                true_rows(root)
             if add_noise is not None:
                 add_noise(q, v)
             meas = sense(t, q, v)
@@ -294,7 +295,7 @@ class Simulation:
             t_c1 = perf_ns()
             if floating and not est_is_true:
                 q_est, v_est = kin_state()
-                est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
+                est_rows(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
             if ctrl_filter is None:
                 write_ctrl(tau)
@@ -309,7 +310,7 @@ class Simulation:
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
                 tilt = acos(max(-1.0, min(1.0, r22)))
-                scalar_rows.append(
+                scalar_rows(
                     (
                         t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
                         tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
@@ -325,7 +326,7 @@ class Simulation:
                     out=vectors[k],
                 )  # fmt: skip
             else:
-                scalar_rows.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
+                scalar_rows((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
             t_m0 = perf_ns()
             for _ in range(substeps):
@@ -339,7 +340,7 @@ class Simulation:
             warn_all = warn_number.tolist()
             if warn_all != warn_all0 and any(warn_all[i] for i in warn_idx):
                 fell, fall_time, sim_time = True, t, t
-                stamp_rows.append((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
             warn_all0 = warn_all
             sim_time = t_next
@@ -353,9 +354,9 @@ class Simulation:
             tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
             if z < min_z or tilted or (not isfinite(qpos_sum) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
-                stamp_rows.append((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
-            stamp_rows.append((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+            stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
             if k % BLOCK_ROWS == BLOCK_ROWS - 1:
                 stamps.flush()
                 scalars.flush()
