@@ -17,7 +17,7 @@ ground with today's numbers bit for bit.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -85,17 +85,22 @@ class Command:
         Raises:
             InputError: As the constructor, for the two values.
         """
-        _check_command_number("vx_mps", vx_mps)
-        _check_command_number("turn_rate_radps", turn_rate_radps)
+        if (
+            type(vx_mps) is not float
+            or type(turn_rate_radps) is not float
+            or not math.isfinite(vx_mps + turn_rate_radps)
+        ):
+            _check_command_number("vx_mps", vx_mps)  # the general check (a finite sum: both finite)
+            _check_command_number("turn_rate_radps", turn_rate_radps)
         new = object.__new__(Command)
-        put = object.__setattr__  # the frozen dataclass's own way
-        put(new, "step_time_s", self.step_time_s)
-        put(new, "com_height_m", self.com_height_m)
-        put(new, "clearance_m", self.clearance_m)
-        put(new, "vx_mps", vx_mps)
-        put(new, "vy_mps", self.vy_mps)
-        put(new, "turn_rate_radps", turn_rate_radps)
-        put(new, "step_width_m", self.step_width_m)
+        put_T, put_H, put_cl, put_vx, put_vy, put_turn, put_w = _COMMAND_SETTERS  # the frozen fields' own setters
+        put_T(new, self.step_time_s)
+        put_H(new, self.com_height_m)
+        put_cl(new, self.clearance_m)
+        put_vx(new, vx_mps)
+        put_vy(new, self.vy_mps)
+        put_turn(new, turn_rate_radps)
+        put_w(new, self.step_width_m)
         return new
 
 
@@ -107,6 +112,10 @@ def _check_command_number(name: str, value) -> None:
         or not math.isfinite(value)
     ):
         raise InputError(f"Command.{name} must be a finite number, got {value!r}")
+
+
+#: The slot setters of :class:`Command`'s fields, in field order (``object.__setattr__`` without its lookup).
+_COMMAND_SETTERS = tuple(getattr(Command, f.name).__set__ for f in fields(Command))
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
