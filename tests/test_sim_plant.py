@@ -29,7 +29,7 @@ def test_the_default_plant_is_the_robots_own_model_with_an_imu(cassie):
     assert plant.free_base and plant.name == "cassie"
     m0 = cassie.mj_model
     assert (plant.model.nq, plant.model.nv, plant.model.nu) == (m0.nq, m0.nv, m0.nu)
-    assert plant.model.nsite == m0.nsite + 1 and plant.model.nsensor == 3
+    assert plant.model.nsite == m0.nsite + 1 and plant.model.nsensor == 3 + 2  # the IMU's, the feet's contacts
     site = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SITE, IMU_SITE)
     assert plant.model.site_bodyid[site] == plant.base_body_id
     assert np.allclose(plant.model.site_pos[site], (0.03155, 0.0, -0.07996))
@@ -38,7 +38,8 @@ def test_the_default_plant_is_the_robots_own_model_with_an_imu(cassie):
 
 
 def test_the_imu_changes_no_trajectory(cassie):
-    """The IMU site and sensors only read the state: 200 steps with random controls are bit-identical."""
+    """The IMU site and sensors and the contact sensors only read the state: 200 steps with random controls
+    are bit-identical."""
     plant = load_plant("cassie", cassie)
     rng = np.random.default_rng(3)
     ctrls = rng.uniform(-1.0, 1.0, (200, cassie.nu))

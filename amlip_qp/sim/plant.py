@@ -37,6 +37,7 @@ import numpy as np
 from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots.state_reader import StateReader
+from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -91,8 +92,8 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
     """Load the plant ``source`` (a plant name of ``robot`` or an MJCF path) for ``robot``'s controller.
 
     The model is read with ``mujoco.MjSpec.from_file``; every edit of ``edits``
-    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`),
-    then it is compiled.
+    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`) and the
+    feet's contact sensors (:func:`amlip_qp.sim.contact_sensors.contact_spec_edit`), then it is compiled.
 
     Raises:
         InputError: An unknown plant name.
@@ -111,6 +112,9 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
     if has_base:
         pos = robot.profile.imu_pos_in_base_m if robot.profile is not None else (0.0, 0.0, 0.0)
         imu_spec_edit(spec, robot.base_body, pos)
+    feet = {side: Plant._body_name_of_site(robot, side) for side in robot.foot_sides}
+    if all(spec.body(body) is not None for body in feet.values()):
+        contact_spec_edit(spec, feet)
     try:
         model = spec.compile()
     except Exception as exc:
@@ -364,8 +368,14 @@ class Plant:
         rounded sum of non-negative numbers never decreases, so the switch is already known.
         (A NaN force, which only a diverged simulation gives, would switch the full sum off.)
         ``data``'s contacts (a live view), the sides each geom pair adds to and the sums' lookups
-        are bound once: the harness's per-tick switches.
+        are bound once: the harness's per-tick switches. With the feet's contact sensors of
+        :func:`load_plant`, read from them (:func:`~amlip_qp.sim.contact_sensors.sensor_switcher`).
         """
+        general = self._contact_switcher(data, threshold_N)
+        return sensor_switcher(self.model, data, self.foot_body_ids, threshold_N, general) or general
+
+    def _contact_switcher(self, data: mujoco.MjData, threshold_N: float) -> Callable[[], dict[str, bool]]:
+        """:meth:`contact_switcher` contact by contact."""
         m, contacts, ng = self.model, data.contact, int(self.model.ngeom)
         pair_sides = self._pair_sides.get
         off, zero = dict.fromkeys(self.foot_body_ids, 0.0 > threshold_N), dict.fromkeys(self.foot_body_ids, 0.0)
