@@ -56,8 +56,15 @@ class StateReader:
         self.state_map = m
         self._qsrc, self._vsrc = qsrc, vsrc
         self._quats = tuple(quats)
-        # one NumPy gather per array (qvel's: a copy when it is the plant's qvel as it is)
-        self._gather_q, gather_v = qsrc[gq], vsrc[gv]
+        # one NumPy gather per array, a copy (cheaper) when it takes the plant's array as it is (the
+        # quaternions, written in after it, from anywhere)
+        gather_q, gather_v = qsrc[gq], vsrc[gv]
+        as_is = gather_q.copy()
+        for _, _, pq, _ in m.free:
+            as_is[pq + 3 : pq + 7] = range(pq + 3, pq + 7)
+        for _, _, pq, _ in m.ball:
+            as_is[pq : pq + 4] = range(pq, pq + 4)
+        self._gather_q = None if qpos_src is None and np.array_equal(as_is, np.arange(m.nq_mj)) else gather_q
         self._gather_v = None if qvel_src is None and np.array_equal(gather_v, np.arange(m.nv)) else gather_v
         # the first free joint's row of arrays(): its position's qpos and its angular velocity's qvel indices
         self._root: tuple | None = None
@@ -100,8 +107,8 @@ class StateReader:
         qvel_list = qvel.tolist()
         if not math.isfinite((sum(qpos_list) if qpos_sum is None else qpos_sum) + sum(qvel_list)):
             return self._checked_arrays(qpos_list, qvel_list)  # a finite sum implies finite entries
-        q = qpos[self._gather_q]
-        gather_v = self._gather_v
+        gather_q, gather_v = self._gather_q, self._gather_v
+        q = qpos.copy() if gather_q is None else qpos[gather_q]
         v = qvel.copy() if gather_v is None else qvel[gather_v]
         root: list[float] = []
         sqrt = math.sqrt
