@@ -33,7 +33,13 @@ def contact_sensor_name(side: str) -> str:
 
 
 def contact_spec_edit(spec: mujoco.MjSpec, foot_bodies: dict[str, str]) -> None:
-    """Add a contact sensor per side (side -> name of its foot's body) unless the model has one of that name."""
+    """Add a contact sensor per side (side -> name of its foot's body) unless the model has one of that name.
+
+    None with a MuJoCo older than its contact sensors (``mujoco>=3.2`` is allowed): the switches are
+    then computed contact by contact.
+    """
+    if not hasattr(mujoco.mjtSensor, "mjSENS_CONTACT"):  # pragma: no cover - MuJoCo before 3.3
+        return
     for side, body in foot_bodies.items():
         name = contact_sensor_name(side)
         if spec.sensor(name) is None:
