@@ -1,5 +1,7 @@
 """Tests of amlip_qp.alip.messages: Command, StateEstimate and PlannerOutput, their conversion and validation."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -34,6 +36,22 @@ def test_dataclasses_are_frozen():
 def test_bad_command_raises_input_error(kw, match):
     with pytest.raises(InputError, match=match):
         cmd(**kw)
+
+
+def test_with_speeds_is_replace_checking_the_two_speeds():
+    from dataclasses import replace
+
+    c = cmd(turn_rate_radps=0.2)
+    for vx, turn in ((1.25, -0.0), (-0.0, 0.3), (np.float64(0.7), 2)):
+        got, ref = c.with_speeds(vx, turn), replace(c, vx_mps=vx, turn_rate_radps=turn)
+        assert type(got) is type(ref) and got == ref and repr(got) == repr(ref)
+        assert [type(getattr(got, f)) for f in got.__slots__] == [type(getattr(ref, f)) for f in ref.__slots__]
+    assert math.copysign(1.0, c.with_speeds(-0.0, 0.0).vx_mps) == -1.0
+    with pytest.raises(AttributeError):
+        c.with_speeds(1.0, 0.0).vx_mps = 2.0  # type: ignore[misc]
+    for vx, turn, match in ((np.nan, 0.0, "vx_mps"), (1.0, np.inf, "turn_rate_radps"), (True, 0.0, "vx_mps")):
+        with pytest.raises(InputError, match=f"Command.{match} must be a finite number"):
+            c.with_speeds(vx, turn)
 
 
 @pytest.mark.parametrize(

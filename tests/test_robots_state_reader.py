@@ -24,7 +24,12 @@ def test_state_reader_is_mj_to_pin_bit_for_bit(robot):
     nq, nv = robot.mj_model.nq, robot.nv
     # a plant with 5 more coordinates of each kind, holding the model's in shuffled places
     qsrc, vsrc = rng.permutation(nq + 5)[:nq], rng.permutation(nv + 5)[:nv]
-    readers = ((StateReader(smap), None, None), (StateReader(smap, qsrc, vsrc), qsrc, vsrc))
+    first_q, first_v = np.arange(nq), np.arange(nv)  # the model's coordinates first, then 5 more
+    readers = (
+        (StateReader(smap), None, None),
+        (StateReader(smap, qsrc, vsrc), qsrc, vsrc),
+        (StateReader(smap, first_q, first_v), first_q, first_v),
+    )
     for _ in range(300):
         qpos, qvel = random_mj_state(robot, rng)
         qvel *= 10.0 ** rng.uniform(-3, 3)
@@ -40,8 +45,15 @@ def test_state_reader_is_mj_to_pin_bit_for_bit(robot):
             q, v = reader(big_q, big_v)
             assert q.dtype == v.dtype == np.float64
             assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
-            ql, vl = reader.lists(big_q.tolist(), big_v.tolist())
-            assert ql == q_ref.tolist() and vl == v_ref.tolist()
+            qpos_list = big_q.tolist()
+            for qpos_sum in (None, sum(qpos_list)):
+                qa, va, root = reader.arrays(big_q, big_v, qpos_list, qpos_sum)
+                assert qa.tobytes() == q_ref.tobytes() and va.tobytes() == v_ref.tobytes()
+                assert not np.shares_memory(qa, big_q) and not np.shares_memory(va, big_v)  # new arrays
+                if robot.is_floating:  # the root free joint's (q, v)
+                    assert root == q_ref[:7].tolist() + v_ref[:6].tolist()
+                else:
+                    assert root == []
 
 
 def test_state_reader_refuses_nan_inf_and_zero_quaternions(robot):
@@ -50,8 +62,13 @@ def test_state_reader_refuses_nan_inf_and_zero_quaternions(robot):
     bad[2] = np.nan
     with pytest.raises(InputError, match=r"qpos contains NaN or inf at indices \[2\]"):
         reader(bad, np.zeros(nv))
+    bad_v = np.zeros(nv)
+    bad_v[-1] = np.inf
     with pytest.raises(InputError, match=rf"qvel contains NaN or inf at indices \[{nv - 1}\]"):
-        reader.lists(robot.qpos_stand.tolist(), [0.0] * (nv - 1) + [np.inf])
+        reader.arrays(robot.qpos_stand, bad_v, robot.qpos_stand.tolist())
+    # the sum given is the one checked
+    with pytest.raises(InputError, match=r"qpos contains NaN or inf at indices \[2\]"):
+        reader.arrays(bad, np.zeros(nv), bad.tolist(), np.nan)
     if robot.is_floating:
         bad = robot.qpos_stand.copy()
         bad[3:7] = 0.0
@@ -65,6 +82,9 @@ def test_state_reader_a_sum_that_overflows_is_checked_exactly(robot):
     q, v = StateReader(robot.state_map)(qpos, qvel)
     q_ref, v_ref = mj_to_pin(robot, qpos, qvel)
     assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+    q, v, root = StateReader(robot.state_map).arrays(qpos, qvel, qpos.tolist())
+    assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+    assert root == (q_ref[:7].tolist() + v_ref[:6].tolist() if robot.is_floating else [])
 
 
 def test_state_reader_ball_joint_quaternion_is_normalized_and_reordered():

@@ -29,7 +29,7 @@ def test_the_default_plant_is_the_robots_own_model_with_an_imu(cassie):
     assert plant.free_base and plant.name == "cassie"
     m0 = cassie.mj_model
     assert (plant.model.nq, plant.model.nv, plant.model.nu) == (m0.nq, m0.nv, m0.nu)
-    assert plant.model.nsite == m0.nsite + 1 and plant.model.nsensor == 3
+    assert plant.model.nsite == m0.nsite + 1 and plant.model.nsensor == 3 + 2  # the IMU's, the feet's contacts
     site = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SITE, IMU_SITE)
     assert plant.model.site_bodyid[site] == plant.base_body_id
     assert np.allclose(plant.model.site_pos[site], (0.03155, 0.0, -0.07996))
@@ -38,7 +38,8 @@ def test_the_default_plant_is_the_robots_own_model_with_an_imu(cassie):
 
 
 def test_the_imu_changes_no_trajectory(cassie):
-    """The IMU site and sensors only read the state: 200 steps with random controls are bit-identical."""
+    """The IMU site and sensors and the contact sensors only read the state: 200 steps with random controls
+    are bit-identical."""
     plant = load_plant("cassie", cassie)
     rng = np.random.default_rng(3)
     ctrls = rng.uniform(-1.0, 1.0, (200, cassie.nu))
@@ -194,20 +195,24 @@ def test_contact_forces_are_mujocos_summed_per_foot_and_controls_are_clipped(cas
     assert np.array_equal(plant.ctrl_from_tau(tau), np.clip(tau / plant.gear, *plant.ctrl_range.T), equal_nan=True)
 
 
-def test_the_list_reader_is_read_state_as_lists(cassie, tmp_path):
-    """Bound once, it follows the data (a free-joint plant and a slide-and-ball one)."""
+def test_the_array_reader_is_read_state_with_the_root_row(cassie, tmp_path):
+    """Bound once, it follows the data (a free-joint plant and a slide-and-ball one); new arrays each call."""
     for plant in (
         load_plant("cassie", cassie),
         load_plant(write_plant(slide_ball_spec(), tmp_path / "sb.xml"), cassie),
     ):
         d = plant.new_data("stand")
-        read = plant.list_reader(d)
+        read = plant.array_reader(d)
         rng = np.random.default_rng(5)
         for _ in range(20):
             plant.write_ctrl(d, rng.uniform(-50.0, 50.0, cassie.nu))
             mujoco.mj_step(plant.model, d)
-            q, v = plant.read_state(d)
-            assert read() == (q.tolist(), v.tolist()) == read(d.qpos.tolist())
+            q_ref, v_ref = plant.read_state(d)
+            qpos_list = d.qpos.tolist()
+            for q, v, root in (read(qpos_list), read(qpos_list, sum(qpos_list))):
+                assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+                assert root == q_ref[:7].tolist() + v_ref[:6].tolist()
+                assert not np.shares_memory(q, d.qpos) and not np.shares_memory(v, d.qvel)
 
 
 def test_the_ctrl_writer_writes_what_write_ctrl_does(cassie, tmp_path):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from amlip_qp.sim import run_log
 from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
@@ -59,10 +60,27 @@ def test_row_blocks_keep_every_row_in_order_across_flushes():
     blocks = RowBlocks(3)
     assert blocks.array().shape == (0, 3)
     for k, row in enumerate(rows):
-        blocks.rows.append(tuple(row) if k % 2 else row)
+        blocks.rows.extend(tuple(row) if k % 2 else row)
         if k % 7 == 6:
             blocks.flush()
             assert not blocks.rows
     got = blocks.array()
     assert got.dtype == np.float64 and got.tobytes() == np.array(rows).tobytes()
     assert blocks.array().tobytes() == got.tobytes()  # again: the same rows
+    blocks.rows.extend((1.0, 2.0))  # not a whole row
+    with pytest.raises(ValueError):
+        blocks.flush()
+
+
+def test_row_blocks_of_integers_keep_them_exactly():
+    """The harness's clock stamps (ns since boot: beyond float64's exact integers after 104 days)."""
+    from amlip_qp.sim.run_log import RowBlocks
+
+    blocks = RowBlocks(2, np.int64)
+    assert blocks.array().dtype == np.int64 and blocks.array().shape == (0, 2)
+    big = 2**62 + 1
+    blocks.rows.extend((big, big + 1))
+    blocks.flush()
+    blocks.rows.extend((1, 2))
+    got = blocks.array()
+    assert got.dtype == np.int64 and got.tolist() == [[big, big + 1], [1, 2]]

@@ -196,14 +196,29 @@ def _bits(c):
         ((0.0, 0.001, 1.0), (-0.4, -0.4, -0.4)),
     ],
 )
-def test_the_command_is_made_once_while_its_values_hold_bit_for_bit(knots):
+@pytest.mark.parametrize("turn_rate_radps", [math.radians(18.0), 0.0, -0.0])
+def test_the_command_is_made_once_while_its_values_hold_bit_for_bit(knots, turn_rate_radps):
     sc = get_scenario("cassie-turn-90").with_(vx=SpeedProfile(*knots), turn_start_s=1.7)
+    sc = sc.with_(turn_rate_radps=turn_rate_radps)
     times = [k * 0.0005 for k in range(14000)]
     command = sc.command_function()
     made = [command(t) for t in times]
     assert [_bits(c) for c in made] == [_bits(sc.command(t)) for t in times]
     changes = sum(a is not b for a, b in zip(made, made[1:]))
     assert changes == sum(_bits(sc.command(a)) != _bits(sc.command(b)) for a, b in zip(times, times[1:]))
+
+
+@pytest.mark.parametrize("turn_rate_radps", [0.3, 0.0])
+def test_the_command_function_refuses_a_nan_time_first_or_later(turn_rate_radps):
+    """NaN in, a speed of NaN: the constructor's error for the first Command and for the later ones."""
+    sc = get_scenario("cassie-1mps").with_(turn_rate_radps=turn_rate_radps)
+    for later in (False, True):
+        command = sc.command_function()
+        if later:
+            assert command(2.0) == sc.command(2.0)
+        with pytest.raises(InputError, match="vx_mps must be a finite number"):
+            command(math.nan)
+        assert command(2.5) == sc.command(2.5)  # and it goes on
 
 
 def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():

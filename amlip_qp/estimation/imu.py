@@ -27,3 +27,18 @@ class ImuReading:
     quat_xyzw: np.ndarray
     gyro_radps: np.ndarray
     accel_mps2: np.ndarray
+
+    @classmethod
+    def of_packed(cls, packed: np.ndarray) -> ImuReading:
+        """``ImuReading(packed[:4], packed[4:7], packed[7:])``: the reading of one array of 10 floats
+        (quaternion x y z w, gyro, accelerometer), holding views of it.
+
+        The same object as the constructor's (tested), made without its three frozen
+        ``object.__setattr__`` calls: the harness's per-tick reading.
+        """
+        reading = object.__new__(cls)
+        fields = reading.__dict__
+        fields["quat_xyzw"] = packed[:4]
+        fields["gyro_radps"] = packed[4:7]
+        fields["accel_mps2"] = packed[7:]
+        return reading

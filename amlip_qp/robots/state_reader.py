@@ -3,8 +3,9 @@
 :class:`StateReader` is :func:`~amlip_qp.robots.state.mj_to_pin` with its
 index maps composed once. It is called every control tick on vectors of a
 few dozen numbers, where each NumPy call costs more than the arithmetic, so
-it works on Python lists: one ``tolist`` per array in, one ``np.array`` per
-array out, Python float arithmetic in between, in the same operation order as
+it does one NumPy gather per array and the rest on Python floats (one
+``tolist`` per array in): the quaternions and the free joints' linear
+velocities are computed in plain Python and written in, in the same operation order as
 :func:`~amlip_qp.robots.state.mj_to_pin` (whose dot products and 3x3 matrix
 products sum left to right without fused multiply-adds), so the two agree bit
 for bit (tested). That holds for NumPy's own small dot products, as on this
@@ -15,32 +16,17 @@ make the two differ in the last bit (the test would say so).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from operator import itemgetter
 
 import numpy as np
 
 from amlip_qp.robots.state import StateMap, mj_to_pin, rotation_entries
 
 
-def _getter(indices: Sequence[int] | np.ndarray, n_in: int | None = None) -> Callable[[Sequence[float]], list[float]]:
-    """``f(seq) -> [seq[i] for i in indices]``: one ``itemgetter`` call, or ``list`` when ``indices`` take all ``n_in``
-    items of ``seq`` in order."""
-    idx = [int(i) for i in indices]
-    if n_in is not None and idx == list(range(n_in)):
-        return list
-    if len(idx) == 1:
-        i = idx[0]
-        return lambda seq: [seq[i]]
-    get = itemgetter(*idx)
-    return lambda seq: list(get(seq))
-
-
 class StateReader:
     """:func:`~amlip_qp.robots.state.mj_to_pin` for one state map (called every control tick).
 
     ``reader(qpos, qvel)`` equals ``mj_to_pin(state_map, qpos[qpos_src], qvel[qvel_src])``
-    bit for bit (tested); :meth:`lists` is the same on and to Python lists.
+    bit for bit (tested); :meth:`arrays` is the same, given ``qpos.tolist()`` too.
 
     Args:
         state_map: The controller's :class:`~amlip_qp.robots.state.StateMap`.
@@ -69,9 +55,22 @@ class StateReader:
             quats.append((*qsrc[qa : qa + 4].tolist(), pq, None))
         self.state_map = m
         self._qsrc, self._vsrc = qsrc, vsrc
-        n_q, n_v = (m.nq_mj if qpos_src is None else None), (m.nv if qvel_src is None else None)  # the layout read
-        self._take_q, self._take_v = _getter(qsrc[gq], n_q), _getter(vsrc[gv], n_v)
         self._quats = tuple(quats)
+        # one NumPy gather per array, a copy (cheaper) when it takes the plant's array as it is (the
+        # quaternions, written in after it, from anywhere)
+        gather_q, gather_v = qsrc[gq], vsrc[gv]
+        as_is = gather_q.copy()
+        for _, _, pq, _ in m.free:
+            as_is[pq + 3 : pq + 7] = range(pq + 3, pq + 7)
+        for _, _, pq, _ in m.ball:
+            as_is[pq : pq + 4] = range(pq, pq + 4)
+        self._gather_q = None if qpos_src is None and np.array_equal(as_is, np.arange(m.nq_mj)) else gather_q
+        self._gather_v = None if qvel_src is None and np.array_equal(gather_v, np.arange(m.nv)) else gather_v
+        # the first free joint's row of arrays(): its position's qpos and its angular velocity's qvel indices
+        self._root: tuple | None = None
+        if m.free:
+            qa, da, _, _ = m.free[0]
+            self._root = (*qsrc[qa : qa + 3].tolist(), *vsrc[da + 3 : da + 6].tolist())
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
@@ -82,34 +81,73 @@ class StateReader:
         Raises:
             InputError: As :func:`~amlip_qp.robots.state.mj_to_pin`: NaN/inf, or a zero quaternion.
         """
-        q, v = self.lists(qpos.tolist(), qvel.tolist())
-        return np.array(q), np.array(v)
+        q, v, _ = self.arrays(qpos, qvel, qpos.tolist())
+        return q, v
 
-    def lists(self, qpos: list[float], qvel: list[float]) -> tuple[list[float], list[float]]:
-        """:meth:`__call__` on ``qpos.tolist()`` and ``qvel.tolist()``, giving ``(q, v)`` as new lists."""
-        q, v = self._take_q(qpos), self._take_v(qvel)
-        isfinite, sqrt = math.isfinite, math.sqrt
-        if not isfinite(sum(q) + sum(v)):  # a finite sum implies finite entries (an overflow: checked too)
-            return self._checked(qpos, qvel)  # raises, naming the entries
+    def arrays(
+        self, qpos: np.ndarray, qvel: np.ndarray, qpos_list: list[float], qpos_sum: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, list[float]]:
+        """:meth:`__call__` (bit for bit) given ``qpos.tolist()`` too, and the first free joint's row.
+
+        The harness's per-tick read: ``q`` and ``v`` are NumPy gathers of ``qpos`` and ``qvel``
+        with the quaternions and the free joints' linear velocities written in.
+
+        Args:
+            qpos, qvel: The plant's float64 arrays (read only).
+            qpos_list: ``qpos.tolist()``.
+            qpos_sum: ``sum(qpos_list)`` if the caller has it (``None``: summed here).
+
+        Returns:
+            ``(q, v, root)``: new arrays, and ``q[pq:pq + 7] + v[pv:pv + 6]`` of the first free
+            joint (at ``pq``, ``pv``) as a list of 13 floats (``[]`` without a free joint).
+
+        Raises:
+            InputError: As :meth:`__call__`.
+        """
+        qvel_list = qvel.tolist()
+        if not math.isfinite((sum(qpos_list) if qpos_sum is None else qpos_sum) + sum(qvel_list)):
+            return self._checked_arrays(qpos_list, qvel_list)  # a finite sum implies finite entries
+        gather_q, gather_v = self._gather_q, self._gather_v
+        q = qpos.copy() if gather_q is None else qpos[gather_q]
+        v = qvel.copy() if gather_v is None else qvel[gather_v]
+        root: list[float] = []
+        sqrt = math.sqrt
         for iw, ix, iy, iz, pq, free in self._quats:
-            w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
+            w, x, y, z = qpos_list[iw], qpos_list[ix], qpos_list[iy], qpos_list[iz]
             n = sqrt(w * w + x * x + y * y + z * z)
             if n < 1e-9:
-                return self._checked(qpos, qvel)  # raises
+                return self._checked_arrays(qpos_list, qvel_list)  # raises
             x, y, z, w = x / n, y / n, z / n, w / n
-            q[pq], q[pq + 1], q[pq + 2], q[pq + 3] = x, y, z, w
+            q[pq] = x
+            q[pq + 1] = y
+            q[pq + 2] = z
+            q[pq + 3] = w
             if free is None:
                 continue
             # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
             pv, i0, i1, i2 = free
             n = sqrt(w * w + x * x + y * y + z * z)
             r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w / n, x / n, y / n, z / n)
-            l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
-            v[pv] = r00 * l0 + r10 * l1 + r20 * l2
-            v[pv + 1] = r01 * l0 + r11 * l1 + r21 * l2
-            v[pv + 2] = r02 * l0 + r12 * l1 + r22 * l2
-        return q, v
+            l0, l1, l2 = qvel_list[i0], qvel_list[i1], qvel_list[i2]
+            a = r00 * l0 + r10 * l1 + r20 * l2
+            b = r01 * l0 + r11 * l1 + r21 * l2
+            c = r02 * l0 + r12 * l1 + r22 * l2
+            v[pv] = a
+            v[pv + 1] = b
+            v[pv + 2] = c
+            if not root:
+                p0, p1, p2, a0, a1, a2 = self._root  # type: ignore[misc]
+                root = [
+                    qpos_list[p0], qpos_list[p1], qpos_list[p2], x, y, z, w,
+                    a, b, c, qvel_list[a0], qvel_list[a1], qvel_list[a2],
+                ]  # fmt: skip
+        return q, v, root
 
-    def _checked(self, qpos: list[float], qvel: list[float]) -> tuple[list[float], list[float]]:
+    def _checked_arrays(self, qpos: list[float], qvel: list[float]) -> tuple[np.ndarray, np.ndarray, list[float]]:
+        """:meth:`arrays` through :func:`~amlip_qp.robots.state.mj_to_pin` (which raises naming the bad entries)."""
         q, v = mj_to_pin(self.state_map, np.array(qpos)[self._qsrc], np.array(qvel)[self._vsrc])
-        return q.tolist(), v.tolist()
+        root: list[float] = []
+        if self.state_map.free:
+            _, _, pq, pv = self.state_map.free[0]
+            root = q[pq : pq + 7].tolist() + v[pv : pv + 6].tolist()
+        return q, v, root

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 import time
-from array import array
 from collections.abc import Callable
 from typing import cast
 
@@ -225,7 +224,7 @@ class Simulation:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
         full = log == "full"
         n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars and the base states go to row blocks (lists of rows turned
+        # One row per tick: the Python scalars and the base states go to row blocks (flat lists turned
         # into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row (one np.concatenate).
         scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
         vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
@@ -238,12 +237,14 @@ class Simulation:
         # controller's kinematics take the measurement as it is; tested), not logged twice.
         est_is_true = self.true_base and self.noise is None
         base_est = base_true if est_is_true else RowBlocks(sum(self._base_size))
-        scalar_rows, true_rows, est_rows = scalars.rows, base_true.rows, base_est.rows
+        # each tick extends these flat lists by its row
+        scalar_rows, true_rows, est_rows = scalars.rows.extend, base_true.rows.extend, base_est.rows.extend
         # per tick, ns: its start, the controller's start and end, MuJoCo's start and end, its end
-        stamps = array("q")
+        stamps = RowBlocks(6, np.int64)
+        stamp_rows = stamps.rows.extend
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
-        read_state, sense, push_force = plant.list_reader(d), self.sensors.bind(d, self.true_base), self.push_force
+        read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
         add_noise = None if self.noise is None else self._add_noise
         write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d), plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
@@ -256,7 +257,7 @@ class Simulation:
         warn_number, warn_idx = d.warning.number, [int(w) for w in _DIVERGENCE_WARNINGS]
         warn_number[warn_idx] = 0  # an earlier run's divergence on this data must not hide one of this run
         warn_all0 = warn_number.tolist()
-        np_array, concatenate, perf_ns = np.array, np.concatenate, time.perf_counter_ns
+        concatenate, perf_ns = np.concatenate, time.perf_counter_ns
         acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
         ground = self.ground_height_m  # None on flat ground: the height is z itself
         z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
@@ -271,12 +272,13 @@ class Simulation:
         wall0 = time.perf_counter()
         sim_time = t_next = float(d.time)
         qpos_list = qpos.tolist()
+        qpos_sum = sum(qpos_list)
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
             t = t_next
             cmd = command_fn(t)
-            q_list, v_list = read_state(qpos_list)
+            q, v, root = read_state(qpos_list, qpos_sum)  # root: the base's (q, v) as one list
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
             if ground is None:
                 z = xpos_b.item(2)
@@ -284,8 +286,7 @@ class Simulation:
                 x, y, z = xpos_b.tolist()
                 z -= ground(x, y)
             if floating:
-                true_rows.append(q_list[bq] + v_list[bv])
-            q, v = np_array(q_list), np_array(v_list)
+                true_rows(root)
             if add_noise is not None:
                 add_noise(q, v)
             meas = sense(t, q, v)
@@ -294,7 +295,7 @@ class Simulation:
             t_c1 = perf_ns()
             if floating and not est_is_true:
                 q_est, v_est = kin_state()
-                est_rows.append(q_est.tolist()[bq] + v_est.tolist()[bv])
+                est_rows(q_est.tolist()[bq] + v_est.tolist()[bv])
             tau = tick.tau_Nm
             if ctrl_filter is None:
                 write_ctrl(tau)
@@ -309,7 +310,7 @@ class Simulation:
             ok = 1.0 if tick.tracker_ok else 0.0
             if full:
                 tilt = acos(max(-1.0, min(1.0, r22)))
-                scalar_rows.append(
+                scalar_rows(
                     (
                         t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
                         tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
@@ -325,7 +326,7 @@ class Simulation:
                     out=vectors[k],
                 )  # fmt: skip
             else:
-                scalar_rows.append((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
+                scalar_rows((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
             t_m0 = perf_ns()
             for _ in range(substeps):
@@ -339,7 +340,7 @@ class Simulation:
             warn_all = warn_number.tolist()
             if warn_all != warn_all0 and any(warn_all[i] for i in warn_idx):
                 fell, fall_time, sim_time = True, t, t
-                stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
             warn_all0 = warn_all
             sim_time = t_next
@@ -348,14 +349,16 @@ class Simulation:
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            qpos_list = qpos.tolist()  # also the next tick's
+            qpos_list = qpos.tolist()  # also the next tick's, with its sum
+            qpos_sum = sum(qpos_list)
             tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
-            if z < min_z or tilted or (not isfinite(sum(qpos_list)) and not np.all(np.isfinite(qpos))):
+            if z < min_z or tilted or (not isfinite(qpos_sum) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
-                stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break
-            stamps.extend((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+            stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
             if k % BLOCK_ROWS == BLOCK_ROWS - 1:
+                stamps.flush()
                 scalars.flush()
                 base_true.flush()
                 base_est.flush()
@@ -364,7 +367,7 @@ class Simulation:
         if bar is not None:
             bar.update(n - bar.n)
             bar.close()
-        ns = np.array(stamps, dtype=np.int64).reshape(n, 6)
+        ns = stamps.array()
         tick_us, mujoco_us = (ns[:, 2] - ns[:, 1]) * 1e-3, (ns[:, 4] - ns[:, 3]) * 1e-3
         base_rows = base_true.array(), base_est.array()
         return RunResult(

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -36,6 +37,7 @@ import numpy as np
 from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots.state_reader import StateReader
+from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -90,8 +92,8 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
     """Load the plant ``source`` (a plant name of ``robot`` or an MJCF path) for ``robot``'s controller.
 
     The model is read with ``mujoco.MjSpec.from_file``; every edit of ``edits``
-    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`),
-    then it is compiled.
+    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`) and the
+    feet's contact sensors (:func:`amlip_qp.sim.contact_sensors.contact_spec_edit`), then it is compiled.
 
     Raises:
         InputError: An unknown plant name.
@@ -110,6 +112,9 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
     if has_base:
         pos = robot.profile.imu_pos_in_base_m if robot.profile is not None else (0.0, 0.0, 0.0)
         imu_spec_edit(spec, robot.base_body, pos)
+    feet = {side: Plant._body_name_of_site(robot, side) for side in robot.foot_sides}
+    if all(spec.body(body) is not None for body in feet.values()):
+        contact_spec_edit(spec, feet)
     try:
         model = spec.compile()
     except Exception as exc:
@@ -218,6 +223,14 @@ class Plant:
         geom_body = model.geom_bodyid.tolist()
         self._geom_sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
         self._geom_world = [b == 0 for b in geom_body]
+        # geom pair (g1 * ngeom + g2) -> the sides of foot_normal_forces_N it adds to: the pairs of a foot's geom
+        # and a world geom (every other pair adds to none)
+        sides, world, ng = self._geom_sides, self._geom_world, int(model.ngeom)
+        self._pair_sides: dict[int, tuple[str, ...]] = {}
+        for f in [g for g in range(ng) if sides[g]]:
+            for w in [g for g in range(ng) if world[g]]:
+                for g1, g2 in ((f, w), (w, f)):
+                    self._pair_sides[g1 * ng + g2] = (sides[g1] if world[g2] else ()) + (sides[g2] if world[g1] else ())
         self._force6 = np.zeros(6)
         if not self.free_base and robot.is_floating:
             smap = robot.state_map  # every hinge and slide joint of the controller's model
@@ -257,26 +270,23 @@ class Plant:
             return self._reader(data.qpos, data.qvel)
         return self._read_body_base(data)
 
-    def list_reader(self, data: mujoco.MjData) -> Callable[..., tuple[list[float], list[float]]]:
-        """``f(qpos_list=None)``: :meth:`read_state` of ``data`` now, as Python lists.
+    def array_reader(self, data: mujoco.MjData) -> Callable[..., tuple[np.ndarray, np.ndarray, list[float]]]:
+        """``f(qpos_list, qpos_sum=None)``: :meth:`read_state` of ``data`` now, and the base's row.
 
-        ``data``'s arrays are bound once (MuJoCo keeps them across steps): the per-tick read of
-        the harness, which logs parts of the state as lists. ``qpos_list``: ``data.qpos.tolist()``
-        if the caller has it already (``None``: read here).
+        The harness's per-tick read, with ``data``'s arrays bound once (MuJoCo keeps them across
+        steps). ``qpos_list``: ``data.qpos.tolist()`` (the caller has it); ``qpos_sum``: its
+        ``sum`` if the caller has it. Returns ``(q, v, root)``: ``root`` is ``q[pq:pq + 7] +
+        v[pv:pv + 6]`` of the controller's first free joint as a list (``[]`` without one), as
+        :meth:`~amlip_qp.robots.state_reader.StateReader.arrays`.
         """
-        if self._reader is None:
+        if self._reader is None:  # the base from the base body: the free joint is the root, at 0
 
-            def read_body_base(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
+            def read_body_base(qpos_list: list[float], qpos_sum: float | None = None):
                 q, v = self._read_body_base(data)
-                return q.tolist(), v.tolist()
+                return q, v, q[:7].tolist() + v[:6].tolist()
 
             return read_body_base
-        lists, qpos, qvel = self._reader.lists, data.qpos, data.qvel
-
-        def read(qpos_list: list[float] | None = None) -> tuple[list[float], list[float]]:
-            return lists(qpos.tolist() if qpos_list is None else qpos_list, qvel.tolist())
-
-        return read
+        return partial(self._reader.arrays, data.qpos, data.qvel)
 
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
@@ -357,28 +367,34 @@ class Plant:
         A side's sum stops once it is above the threshold: the terms are magnitudes, and a
         rounded sum of non-negative numbers never decreases, so the switch is already known.
         (A NaN force, which only a diverged simulation gives, would switch the full sum off.)
-        ``data``'s contacts (a live view) and the sums' lookups are bound once: the harness's
-        per-tick switches.
+        ``data``'s contacts (a live view), the sides each geom pair adds to and the sums' lookups
+        are bound once: the harness's per-tick switches. With the feet's contact sensors of
+        :func:`load_plant`, read from them (:func:`~amlip_qp.sim.contact_sensors.sensor_switcher`).
         """
-        m, geom_sides, world, contacts = self.model, self._geom_sides, self._geom_world, data.contact
-        sides0, none_on, force6 = list(self.foot_body_ids), 0.0 > threshold_N, np.zeros(6)
+        general = self._contact_switcher(data, threshold_N)
+        return sensor_switcher(self.model, data, self.foot_body_ids, threshold_N, general) or general
+
+    def _contact_switcher(self, data: mujoco.MjData, threshold_N: float) -> Callable[[], dict[str, bool]]:
+        """:meth:`contact_switcher` contact by contact."""
+        m, contacts, ng = self.model, data.contact, int(self.model.ngeom)
+        pair_sides = self._pair_sides.get
+        off, zero = dict.fromkeys(self.foot_body_ids, 0.0 > threshold_N), dict.fromkeys(self.foot_body_ids, 0.0)
+        force6 = np.zeros(6)
         contact_force, normal_of = mujoco.mj_contactForce, force6.item  # item(0): a Python float
 
         def switches() -> dict[str, bool]:
-            on = dict.fromkeys(sides0, none_on)  # no contact: a zero sum
-            pairs = contacts.geom.tolist()
-            if not pairs:
-                return on
-            normal = dict.fromkeys(sides0, 0.0)
-            for i, (g1, g2) in enumerate(pairs):
-                sides = geom_sides[g1] if world[g2] else ()
-                if world[g1]:
-                    sides += geom_sides[g2]
-                for side in sides:
-                    if not on[side]:
-                        contact_force(m, data, i, force6)
-                        normal[side] += abs(normal_of(0))
-                        on[side] = normal[side] > threshold_N
+            on, normal = off.copy(), zero.copy()  # no contact: zero sums
+            i = 0
+            for g1, g2 in contacts.geom.tolist():
+                sides = pair_sides(g1 * ng + g2)
+                if sides is not None:
+                    for side in sides:
+                        if not on[side]:
+                            contact_force(m, data, i, force6)
+                            f = normal[side] + abs(normal_of(0))
+                            normal[side] = f
+                            on[side] = f > threshold_N
+                i += 1
             return on
 
         return switches

@@ -101,15 +101,37 @@ class Scenario:
         }
 
     def command_function(self) -> Callable[[float], Command]:
-        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold."""
+        """:meth:`command` for one run: the same commands, each :class:`Command` made once while its values hold.
+
+        The first is made by the constructor, the next ones by its
+        :meth:`~amlip_qp.alip.planner.Command.with_speeds` (only the speeds change). Without a
+        turn the turn rate is 0.0 throughout (:meth:`turn_rate_at`), and only the speed is compared.
+        """
         last: list = [None, None]
         vx_at, turn_rate_at, copysign, fields = self.vx, self.turn_rate_at, math.copysign, self._command_fields()
+
+        def make(vx: float, turn: float) -> Command:
+            held = last[1]
+            return Command(**fields, vx_mps=vx, turn_rate_radps=turn) if held is None else held.with_speeds(vx, turn)
+
+        if self.turn_rate_radps == 0.0:
+
+            def speed_command(t_s: float) -> Command:
+                vx = vx_at(t_s)
+                key = (vx, copysign(1.0, vx))  # a zero's sign counts too
+                if key != last[0]:
+                    last[1] = make(vx, 0.0)
+                    last[0] = key
+                return last[1]
+
+            return speed_command
 
         def command(t_s: float) -> Command:
             vx, turn = vx_at(t_s), turn_rate_at(t_s)
             key = (vx, turn, copysign(1.0, vx), copysign(1.0, turn))  # a zero's sign counts too
             if key != last[0]:
-                last[0], last[1] = key, Command(**fields, vx_mps=vx, turn_rate_radps=turn)
+                last[1] = make(vx, turn)
+                last[0] = key
             return last[1]
 
         return command

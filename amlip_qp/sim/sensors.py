@@ -183,8 +183,7 @@ class PlantSensors:
     # ------------------------------------------------------------------ IMU
     def exact_imu(self, data: mujoco.MjData) -> ImuReading:
         """The IMU sample without noise (MuJoCo's sensors)."""
-        x = data.sensordata[self._imu_idx]
-        return ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:])
+        return ImuReading.of_packed(data.sensordata[self._imu_idx])
 
     def robot_imu(self, data: mujoco.MjData) -> ImuReading:
         """The IMU sample with white noise and the random-walk biases (advanced by one sample)."""
@@ -251,17 +250,11 @@ class PlantSensors:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)
         sensordata, imu_idx = data.sensordata, self._imu_idx
         switches = self.plant.contact_switcher(data, self.contact_threshold_N)
+        imu_of = ImuReading.of_packed
 
         def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
-            x = sensordata[imu_idx]
-            return Measurement(
-                t_s=t_s,
-                q=q,
-                v=v,
-                foot_contact=switches(),
-                imu=ImuReading(quat_xyzw=x[:4], gyro_radps=x[4:7], accel_mps2=x[7:]),
-                base_known=True,
-            )
+            # Measurement(t_s, q, v, foot_contact, imu, base_known), positional: its cheapest call
+            return Measurement(t_s, q, v, switches(), imu_of(sensordata[imu_idx]), True)
 
         return measure
 
