@@ -4,7 +4,8 @@ The machine's speed drifts (by up to 1.6x within minutes on the 2-core
 development machine), so a walk's wall time means little alone. This script
 alternates walks of a reference checkout (``--reference``, e.g. a
 ``git worktree`` of an older commit) and of this checkout, each in its own
-process, and compares them within each pair. Every walk is timed the same way,
+process (reference first in the odd pairs, this checkout first in the even
+ones), and compares them within each pair. Every walk is timed the same way,
 whatever the checkout's harness reports: the loop's wall time per control
 tick, the controller's tick (``tick_time_us``, which every version records)
 and MuJoCo's steps (``mujoco.mj_step`` wrapped with a timer in the walk's
@@ -113,8 +114,13 @@ def main(argv: list[str] | None = None) -> int:
         print("error: --pairs must be >= 1 and --duration > 0")
         return 2
     pairs = []
-    for _ in range(args.pairs):
-        pair = {"reference": walk(ref, args), "this": walk(HERE, args)}
+    for i in range(args.pairs):
+        # ABBA: the order alternates, so a steady drift of the machine's speed favours neither
+        if i % 2 == 0:
+            pair = {"reference": walk(ref, args), "this": walk(HERE, args)}
+        else:
+            this = walk(HERE, args)
+            pair = {"reference": walk(ref, args), "this": this}
         pairs.append(pair)
         print(line("reference", pair["reference"]))
         print(line("this", pair["this"]), flush=True)
