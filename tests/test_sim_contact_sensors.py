@@ -109,3 +109,23 @@ def test_the_sensors_are_the_feet_against_the_world(cassie):
         sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, contact_sensor_name(side))
         assert m.sensor_objid[sid] == body and m.sensor_refid[sid] == 0
         assert m.sensor_dim[sid] == 4 * CONTACT_SLOTS  # found, force (3) per slot
+
+
+@pytest.mark.parametrize("setting", ["rk4", "sensors-disabled"])
+def test_the_plant_switches_contact_by_contact_where_the_sensors_lag_or_sleep(cassie, setting):
+    """RK4's later stages recompute the contacts but not the sensors, and disabled sensors read 0:
+    the plant's switches then go contact by contact and stay the definition on every step."""
+    plant = load_plant("cassie", cassie)
+    if setting == "rk4":
+        plant.model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    else:
+        plant.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_SENSOR
+    data = plant.new_data("stand")
+    assert sensor_switcher(plant.model, data, plant.foot_body_ids, 20.0, dict) is None
+    switches = plant.contact_switcher(data, 20.0)
+    seen = set()
+    for _ in _walk(plant, data):
+        got = switches()
+        assert got == _definition(plant, data, 20.0)()
+        seen.add(tuple(got.values()))
+    assert (True, True) in seen and len(seen) >= 2

@@ -68,7 +68,14 @@ def sensor_switcher(
         foot_bodies: Side -> plant body id of its foot (a sensor must match that body and the world).
         threshold_N: Normal force above which a switch is on, N.
         general: The switches computed contact by contact (a tick with more contacts than slots).
+
+    ``None`` too when the sensors do not describe the contacts the step ends with: with the
+    RK4 integrator (its later stages recompute the contacts but not the sensors) or with the
+    sensors disabled (``<flag sensor="disable"/>``).
     """
+    opt = model.opt
+    if opt.integrator == mujoco.mjtIntegrator.mjINT_RK4 or opt.disableflags & mujoco.mjtDisableBit.mjDSBL_SENSOR:
+        return None
     idx: list[int] = []
     for side, body in foot_bodies.items():
         sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, contact_sensor_name(side))
