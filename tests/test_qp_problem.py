@@ -1,5 +1,8 @@
 """QPProblem: validation, residuals and the qpsolvers conversion."""
 
+import copy
+import pickle
+
 import numpy as np
 import pytest
 
@@ -188,3 +191,19 @@ def test_allocated_problem_with_a_replaced_array_is_validated_in_full():
     p.ub = p.lb - 1.0
     with pytest.raises(QPError, match="lower bound above"):
         p.validate()
+
+
+@pytest.mark.parametrize("copier", ["deepcopy", "pickle"])
+def test_a_deep_copy_of_an_allocated_problem_still_names_a_non_finite_entry(copier):
+    """Its arrays are copied apart from its buffers: a NaN in the copy is still found."""
+    p = allocated_problem()
+    q = copy.deepcopy(p) if copier == "deepcopy" else pickle.loads(pickle.dumps(p))
+    q.validate()
+    q.H[0, 0] = np.nan
+    with pytest.raises(QPError, match="QP field H contains NaN or inf"):
+        q.validate()
+    q.H[0, 0] = 1.0
+    q.u[0] = q.l[0] - 1.0
+    with pytest.raises(QPError, match="lower bound above its upper bound"):
+        q.validate()
+    p.validate()  # the original is untouched

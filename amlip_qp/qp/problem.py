@@ -292,9 +292,11 @@ class _Packed:
         self._views = (p.H, p.g, p.A, p.b, p.C, p.l, p.u, p.lb, p.ub)
 
     def holds(self, H, g, A, b, C, l, u, lb, ub) -> bool:
-        """Whether these are still the allocated views (not replaced arrays)."""
+        """Whether these are still the allocated views (not replaced arrays) of these buffers
+        (a deep copy or a pickle round trip copies every array apart: the general path then)."""
         v = self._views
         return (
             H is v[0] and g is v[1] and A is v[2] and b is v[3] and C is v[4]
             and l is v[5] and u is v[6] and lb is v[7] and ub is v[8]
+            and H.base is self.data and l.base is self.lower and u.base is self.upper
         )  # fmt: skip
