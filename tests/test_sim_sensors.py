@@ -3,7 +3,9 @@ encoder quantisation, contact switches and determinism per seed."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from types import SimpleNamespace
 
 import mujoco
 import numpy as np
@@ -14,7 +16,7 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.sim import factory
 from amlip_qp.sim.plant import load_plant
 from amlip_qp.sim.scenarios import Scenario
-from amlip_qp.sim.sensors import PlantSensors, SensorSettings
+from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
 
 DT = 0.0005
 
@@ -239,3 +241,16 @@ def test_bind_measures_what_measure_does(plant, model, base_known):
         assert _same_measurement(a, b)
         switches.add(tuple(b.foot_contact.values()))
     assert len(switches) > 1
+
+
+def test_the_base_is_the_first_free_joint_or_refused(cassie):
+    """The harness logs the true base from the state reader's first free joint: the same joint."""
+    bq, bv = base_indices(cassie)
+    assert (bq.start, bv.start) == cassie.state_map.free[0][2:]
+    for free in ((), ((0, 0, 7, 6),)):
+        other = SimpleNamespace(
+            name="other", is_floating=True, root_joint_names=cassie.root_joint_names,
+            state_map=dataclasses.replace(cassie.state_map, free=free),
+        )  # fmt: skip
+        with pytest.raises(InputError, match="is not the first free joint"):
+            base_indices(other)

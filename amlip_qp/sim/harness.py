@@ -124,13 +124,9 @@ class Simulation:
             )
         self._base_body = self.plant.base_body_id
         self.sensors = PlantSensors(
-            self.plant,
-            sensors,
-            dt_s=controller.dt_s,
-            seed=self.seed,
-            settings=sensor_settings,
+            self.plant, sensors, dt_s=controller.dt_s, seed=self.seed, settings=sensor_settings,
             contact_threshold_N=self.contact_threshold_N,
-        )
+        )  # fmt: skip
         self.estimator = str(estimator)
         self.true_base = self.estimator == "truth"
         self.ctrl_filter = ctrl_filter

@@ -223,14 +223,14 @@ class Plant:
         geom_body = model.geom_bodyid.tolist()
         self._geom_sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
         self._geom_world = [b == 0 for b in geom_body]
-        # geom pair (g1 * ngeom + g2) -> the sides of foot_normal_forces_N it adds to: the pairs of a foot's geom
-        # and a world geom (every other pair adds to none)
+        # geom pair (g1 + 1) * (ngeom + 1) + g2 + 1 (a flex's geom is -1) -> the sides it adds to: foot-world pairs
         sides, world, ng = self._geom_sides, self._geom_world, int(model.ngeom)
         self._pair_sides: dict[int, tuple[str, ...]] = {}
         for f in [g for g in range(ng) if sides[g]]:
             for w in [g for g in range(ng) if world[g]]:
                 for g1, g2 in ((f, w), (w, f)):
-                    self._pair_sides[g1 * ng + g2] = (sides[g1] if world[g2] else ()) + (sides[g2] if world[g1] else ())
+                    pair = (g1 + 1) * (ng + 1) + g2 + 1
+                    self._pair_sides[pair] = (sides[g1] if world[g2] else ()) + (sides[g2] if world[g1] else ())
         self._force6 = np.zeros(6)
         if not self.free_base and robot.is_floating:
             smap = robot.state_map  # every hinge and slide joint of the controller's model
@@ -376,7 +376,7 @@ class Plant:
 
     def _contact_switcher(self, data: mujoco.MjData, threshold_N: float) -> Callable[[], dict[str, bool]]:
         """:meth:`contact_switcher` contact by contact."""
-        m, contacts, ng = self.model, data.contact, int(self.model.ngeom)
+        m, contacts, ng = self.model, data.contact, int(self.model.ngeom) + 1
         pair_sides = self._pair_sides.get
         off, zero = dict.fromkeys(self.foot_body_ids, 0.0 > threshold_N), dict.fromkeys(self.foot_body_ids, 0.0)
         force6 = np.zeros(6)
@@ -386,7 +386,7 @@ class Plant:
             on, normal = off.copy(), zero.copy()  # no contact: zero sums
             i = 0
             for g1, g2 in contacts.geom.tolist():
-                sides = pair_sides(g1 * ng + g2)
+                sides = pair_sides((g1 + 1) * ng + g2 + 1)
                 if sides is not None:
                     for side in sides:
                         if not on[side]:

@@ -264,6 +264,8 @@ def base_indices(robot) -> tuple[slice | np.ndarray, slice | np.ndarray]:
     smap = robot.state_map
     if robot.is_floating:
         pq, pv = smap.joint_pin_q[robot.root_joint_names[0]], smap.joint_pin_v[robot.root_joint_names[0]]
+        if not smap.free or smap.free[0][2:] != (pq, pv):  # the state reader's base row is the first free joint's
+            raise InputError(f"{robot.name}: the root joint {robot.root_joint_names[0]} is not the first free joint")
         return slice(pq, pq + 7), slice(pv, pv + 6)
     return (
         np.array([smap.joint_pin_q[n] for n in robot.root_joint_names], dtype=np.intp),
