@@ -221,10 +221,10 @@ class Plant:
         for side, body in self.foot_body_ids.items():
             sides_of_body[body] = sides_of_body.get(body, ()) + (side,)
         geom_body = model.geom_bodyid.tolist()
-        self._geom_sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
-        self._geom_world = [b == 0 for b in geom_body]
+        sides = [sides_of_body.get(b, ()) for b in geom_body]  # the sides whose foot the geom is on
+        world, ng = [b == 0 for b in geom_body], int(model.ngeom)
         # geom pair (g1 + 1) * (ngeom + 1) + g2 + 1 (a flex's geom is -1) -> the sides it adds to: foot-world pairs
-        sides, world, ng = self._geom_sides, self._geom_world, int(model.ngeom)
+        self._pair_stride = ng + 1
         self._pair_sides: dict[int, tuple[str, ...]] = {}
         for f in [g for g in range(ng) if sides[g]]:
             for w in [g for g in range(ng) if world[g]]:
@@ -350,13 +350,10 @@ class Plant:
     def foot_normal_forces_N(self, data: mujoco.MjData, out: dict[str, float] | None = None) -> dict[str, float]:
         """Side -> normal force of the floor (world body) on that foot's body, N (summed over contacts)."""
         normal = dict.fromkeys(self.foot_body_ids, 0.0) if out is None else out
-        m, geom_sides, world, force6 = self.model, self._geom_sides, self._geom_world, self._force6
+        m, pair_sides, ng, force6 = self.model, self._pair_sides.get, self._pair_stride, self._force6
         contact_force = mujoco.mj_contactForce
         for i, (g1, g2) in enumerate(data.contact.geom.tolist()):
-            sides = geom_sides[g1] if world[g2] else ()
-            if world[g1]:
-                sides += geom_sides[g2]
-            for side in sides:
+            for side in pair_sides((g1 + 1) * ng + g2 + 1, ()):
                 contact_force(m, data, i, force6)
                 normal[side] += abs(force6[0])
         return normal
@@ -376,7 +373,7 @@ class Plant:
 
     def _contact_switcher(self, data: mujoco.MjData, threshold_N: float) -> Callable[[], dict[str, bool]]:
         """:meth:`contact_switcher` contact by contact."""
-        m, contacts, ng = self.model, data.contact, int(self.model.ngeom) + 1
+        m, contacts, ng = self.model, data.contact, self._pair_stride
         pair_sides = self._pair_sides.get
         off, zero = dict.fromkeys(self.foot_body_ids, 0.0 > threshold_N), dict.fromkeys(self.foot_body_ids, 0.0)
         force6 = np.zeros(6)
