@@ -17,7 +17,7 @@ ground with today's numbers bit for bit.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -61,7 +61,7 @@ class Command:
             "turn_rate_radps",
             "step_width_m",
         ):
-            v = getattr(self, name)  # as _check_command_number, inline: the controller makes Commands every tick
+            v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
                 raise InputError(f"Command.{name} must be a finite number, got {v!r}")
         if not self.step_time_s > 0.0:
@@ -90,8 +90,8 @@ class Command:
             or type(turn_rate_radps) is not float
             or not math.isfinite(vx_mps + turn_rate_radps)
         ):
-            _check_command_number("vx_mps", vx_mps)  # the general check (a finite sum: both finite)
-            _check_command_number("turn_rate_radps", turn_rate_radps)
+            # anything else: the constructor's checks (and errors) through replace (a finite sum: both finite)
+            return replace(self, vx_mps=vx_mps, turn_rate_radps=turn_rate_radps)
         new = object.__new__(Command)
         put_T, put_H, put_cl, put_vx, put_vy, put_turn, put_w = _COMMAND_SETTERS  # the frozen fields' own setters
         put_T(new, self.step_time_s)
@@ -102,16 +102,6 @@ class Command:
         put_turn(new, turn_rate_radps)
         put_w(new, self.step_width_m)
         return new
-
-
-def _check_command_number(name: str, value) -> None:
-    """A :class:`Command` field must be a finite real number (not a bool)."""
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, (int, float, np.integer, np.floating))
-        or not math.isfinite(value)
-    ):
-        raise InputError(f"Command.{name} must be a finite number, got {value!r}")
 
 
 #: The slot setters of :class:`Command`'s fields, in field order (``object.__setattr__`` without its lookup).
