@@ -18,17 +18,26 @@ in both checkouts: those ratios compare walks run at different machine speeds.
     python examples/speed_against.py --reference /tmp/ref --pairs 5
 
 prints one line per walk and the medians over the pairs. Exit status: 0, or 2
-on bad input (a reference folder without the package, a bad number).
+with one line on bad input (a reference folder without the package, a bad
+number, an unknown scenario, tracker or log mode, an unwritable ``--json``),
+before any walk.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import pathlib
 import statistics
 import subprocess
 import sys
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.output_paths import check_output_path
+from amlip_qp.sim.factory import TRACKER_MODULES
+from amlip_qp.sim.run_log import LOG_MODES
+from amlip_qp.sim.scenarios import get_scenario
 
 HERE = pathlib.Path(__file__).resolve().parents[1]
 
@@ -105,14 +114,24 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tracker", default="qp", help="tracker (default qp)")
     p.add_argument("--duration", type=float, default=10.0, help="simulated time per walk, s (default 10)")
     p.add_argument("--log", default="summary", help="this checkout's log mode (default summary)")
-    p.add_argument("--json", default=None, help="write every record and the medians to this JSON file")
+    p.add_argument("--json", default=None, help="write every record and the medians to this JSON file ('-': stdout)")
     args = p.parse_args(argv)
     ref = pathlib.Path(args.reference).resolve()
     if not (ref / "amlip_qp" / "__init__.py").is_file():
         print(f"error: --reference {args.reference}: no amlip_qp package there (give a checkout's top folder)")
         return 2
-    if args.pairs < 1 or not args.duration > 0:
-        print("error: --pairs must be >= 1 and --duration > 0")
+    if args.pairs < 1 or not (args.duration > 0 and math.isfinite(args.duration)):
+        print("error: --pairs must be >= 1 and --duration a finite number of seconds > 0")
+        return 2
+    try:  # every walk's settings, before any walk
+        get_scenario(args.scenario)
+        if args.tracker not in TRACKER_MODULES:
+            raise InputError(f"--tracker {args.tracker}: unknown; known: {', '.join(TRACKER_MODULES)}")
+        if args.log not in LOG_MODES:
+            raise InputError(f"--log {args.log}: unknown; known: {', '.join(LOG_MODES)}")
+        check_output_path("--json", args.json)
+    except InputError as exc:
+        print(f"error: {exc}")
         return 2
     pairs = []
     for i in range(args.pairs):
@@ -133,8 +152,11 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"  {k:20s} reference {medians['reference'][k]:8.3f}  this {medians['this'][k]:8.3f}  ratio {ratios[k]:.3f}"
         )
-    if args.json:
-        pathlib.Path(args.json).write_text(json.dumps({"pairs": pairs, "medians": medians, "ratios": ratios}, indent=1))
+    report = json.dumps({"pairs": pairs, "medians": medians, "ratios": ratios}, indent=1)
+    if args.json == "-":
+        print(report)
+    elif args.json:
+        pathlib.Path(args.json).write_text(report)
     return 0
 
 

@@ -39,7 +39,19 @@ def test_a_checkout_against_itself_splits_each_walk_and_compares_the_pairs(speed
     assert "medians over 2 pairs" in capsys.readouterr().out
 
 
-def test_a_folder_without_the_package_exits_2_in_one_line(speed_against, tmp_path, capsys):
+def test_bad_input_exits_2_in_one_line_before_any_walk(speed_against, tmp_path, capsys):
     assert speed_against.main(["--reference", str(tmp_path)]) == 2
     assert capsys.readouterr().out.count("\n") == 1
     assert speed_against.main(["--reference", str(ROOT), "--pairs", "0"]) == 2
+    capsys.readouterr()
+    bad = [
+        ("--scenario", "nowhere", "unknown scenario"),
+        ("--tracker", "lqr", "--tracker lqr: unknown"),
+        ("--log", "verbose", "--log verbose: unknown"),
+        ("--json", str(tmp_path / "missing" / "x.json"), "--json"),
+        ("--duration", "nan", "--duration a finite number"),
+    ]
+    for option, value, message in bad:
+        assert speed_against.main(["--reference", str(ROOT), option, value]) == 2
+        out = capsys.readouterr().out
+        assert out.count("\n") == 1 and message in out
