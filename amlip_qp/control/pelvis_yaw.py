@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import casadi as ca
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -60,6 +61,21 @@ class PelvisYawFeedback:
         e = psi - (target.heading_rad - float(target.h_d[i_st]))
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
         return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))
+
+    def symbolic_correction(self, R, yaw_rate, heading_rad, h_d, dh_d):
+        """:meth:`correction` as CasADi expressions (for generated code).
+
+        Args:
+            R: The base's world rotation (3, 3).
+            yaw_rate: ``psidot`` (rad/s): the base's world-z angular velocity.
+            heading_rad: The heading ``D``.
+            h_d, dh_d: The output references and rates.
+        """
+        i_st, k = self.stance_index, self.gain
+        e = ca.atan2(R[1, 0], R[0, 0]) - (heading_rad - h_d[i_st]) + math.pi
+        e = ca.fmod(e, 2.0 * math.pi)  # Python's floor modulo: C's fmod, moved into [0, 2 pi)
+        e = ca.if_else(e < 0.0, e + 2.0 * math.pi, e) - math.pi
+        return -k * e, -k * (yaw_rate + dh_d[i_st])
 
     def references(self, kin: RobotKinematics, target: TrackingTarget) -> tuple[np.ndarray, np.ndarray]:
         """Copies of ``target.h_d`` (rad, m) and ``target.dh_d`` with the swing hip-yaw entries corrected."""

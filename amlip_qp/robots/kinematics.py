@@ -127,6 +127,15 @@ class RobotKinematics(ModelKinematics):
         self._output_map = output_map
         self._out_cache = None
 
+    def store_outputs(self, stance: str, heading_rad: float, result: tuple) -> None:
+        """Keep ``result = (y, J, Jdot_v)``, the standard output map ``h_0`` evaluated
+        elsewhere at this update's state (e.g. inside the QP tracker's generated
+        assembly), as :meth:`outputs`' cached value for ``(stance, heading_rad)``
+        until the next update. Only for the output map's own quantities: the
+        caller vouches for them."""
+        self._ready()
+        self._out_cache = (stance, heading_rad, result)
+
     def outputs(self, stance: str, heading_rad: float = 0.0):
         """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`.
 

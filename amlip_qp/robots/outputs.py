@@ -170,6 +170,10 @@ class OutputMap:
         yaw_v_idx: Side -> Pinocchio ``v`` index of its hip-yaw joint (``cassie`` layout; empty otherwise).
     """
 
+    #: This map evaluates the robot's standard ``h_0`` (docs/ARCHITECTURE.md), which generated code
+    #: may then compute in its place (the QP tracker's compiled assembly); a drop-in with other outputs leaves it out.
+    standard_outputs = True
+
     def __init__(self, robot: Robot):
         """Pick the layout (:func:`output_layout`).
 
