@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -64,3 +65,24 @@ def test_the_yaw_error_is_wrapped_and_no_error_changes_nothing():
 def test_no_feedback_without_gain_or_hip_yaw_outputs():
     assert PelvisYawFeedback.for_outputs(("stance_hip_yaw", "swing_hip_yaw"), 0.0) is None
     assert PelvisYawFeedback.for_outputs(OutputMap(load_robot("rabbit")).names, 1.0) is None
+
+
+@pytest.mark.parametrize("yaw_rad", [-7.0, -3.3, -math.pi, -0.4, 0.0, 0.2, math.pi - 1e-9, 3.3, 9.5])
+def test_the_symbolic_correction_equals_the_numeric_one(yaw_rad):
+    """The CasADi form the QP tracker's generated assembly uses, with the wrap of any yaw error."""
+    robot = load_robot("cassie")
+    names = OutputMap(robot).names
+    fb = PelvisYawFeedback.for_outputs(names, 0.7)
+    n = len(names)
+    kin = _kin_with_base_yaw(robot, yaw_rad, -0.3)
+    h_d, dh_d = np.linspace(-0.3, 0.4, n), np.linspace(0.2, -0.1, n)
+    tgt = TrackingTarget(stance="left", phase=0.3, heading_rad=0.6, h_d=h_d, dh_d=dh_d, ddh_d=np.zeros(n))
+    R, rate, D = ca.SX.sym("R", 3, 3), ca.SX.sym("rate"), ca.SX.sym("D")
+    hs, dhs = ca.SX.sym("h_d", n), ca.SX.sym("dh_d", n)
+    fn = ca.Function("corr", [R, rate, D, hs, dhs], list(fb.symbolic_correction(R, rate, D, hs, dhs)))
+    base = robot.base_frame_id
+    yaw_rate = float(kin.frame_jacobian6(base)[5] @ kin.v)
+    got = [float(x) for x in fn(kin.frame_rotation(base), yaw_rate, 0.6, h_d, dh_d)]
+    want = fb.correction(kin, tgt)
+    assert got == pytest.approx(want, rel=0, abs=1e-12)
+    assert abs(got[0]) <= 0.7 * math.pi + 1e-12  # the error is wrapped into [-pi, pi)
