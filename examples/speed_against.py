@@ -11,8 +11,13 @@ tick, the controller's tick (``tick_time_us``, which every version records)
 and MuJoCo's steps (``mujoco.mj_step`` wrapped with a timer in the walk's
 process before the walk). The harness's own time is what is left; it holds
 the wrapper's own call (well under a microsecond a tick, the same for both). Each part
-is also divided by MuJoCo's step time of the same walk, which is the same work
-in both checkouts: those ratios compare walks run at different machine speeds.
+is also divided by MuJoCo's step time alone, measured in the same process right
+after the walk (:mod:`amlip_qp.sim.mujoco_yardstick`, this checkout's recipe in
+both walks: ``mj_step`` replayed on copies of the state at the end of the
+0.5-s warm-up walk): those ratios compare walks run at different machine
+speeds. MuJoCo's time inside the loop is no such yardstick: there the rest of
+the tick evicts MuJoCo's data from the caches, by an amount that depends on
+the code under test.
 
     git worktree add --detach /tmp/ref 82a46cd
     python examples/speed_against.py --reference /tmp/ref --pairs 5
@@ -40,6 +45,10 @@ from amlip_qp.sim.run_log import LOG_MODES
 from amlip_qp.sim.scenarios import get_scenario
 
 HERE = pathlib.Path(__file__).resolve().parents[1]
+#: The yardstick's recipe (MuJoCo's step alone on a fixed state), run in the walks of both checkouts.
+YARDSTICK = HERE / "amlip_qp" / "sim" / "mujoco_yardstick.py"
+#: The warm-up walk before each timed walk (imports, compiled kernels; its end state is the yardstick's), s.
+WARMUP_S = 0.5
 
 #: Runs in the walk's process, with the checkout first on sys.path.
 WALK = r"""
@@ -50,9 +59,12 @@ import numpy as np
 from amlip_qp.sim.factory import build_simulation
 from amlip_qp.sim.scenarios import get_scenario
 
-scenario, tracker, duration, log = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+scenario, tracker, duration, log, yardstick = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4], sys.argv[5]
 sc = get_scenario(scenario).with_(duration_s=duration)
-build_simulation(sc, tracker).run(0.1)  # warm-up: imports, compiled kernels, caches
+ys = {}  # this checkout's amlip_qp/sim/mujoco_yardstick.py, the same recipe in every version
+exec(compile(open(yardstick).read(), yardstick, "exec"), ys)
+# warm-up (imports, compiled kernels, caches), and the state the yardstick replays
+model, state = ys["snapshot_walk"](lambda: build_simulation(sc, tracker).run(WARMUP_S))
 step, clock, spent = mujoco.mj_step, time.perf_counter_ns, []
 
 def timed_step(m, d):
@@ -66,6 +78,8 @@ if "log" in inspect.signature(sim.run).parameters:
     result = sim.run(duration, log=log)
 else:  # a version without log modes
     result = sim.run(duration)
+mujoco.mj_step = step  # unwrapped: the yardstick's steps are not the walk's
+step_alone_us = ys["step_time_us"](model, state)
 n = len(result.tick_time_us)
 wall_us = result.wall_time_s * 1e6 / n
 mujoco_us = sum(spent) * 1e-3 / n
@@ -73,16 +87,16 @@ controller_us = float(np.mean(result.tick_time_us))
 print(json.dumps({
     "ticks": n, "fell": bool(result.fell), "realtime_factor": result.sim_time_s / result.wall_time_s,
     "wall_us": wall_us, "controller_us": controller_us, "mujoco_us": mujoco_us,
-    "harness_us": wall_us - controller_us - mujoco_us, "package": amlip_qp.__file__,
+    "harness_us": wall_us - controller_us - mujoco_us, "step_alone_us": step_alone_us, "package": amlip_qp.__file__,
 }))
 """
 
 
 def walk(tree: pathlib.Path, args: argparse.Namespace) -> dict:
     """One walk of the checkout at ``tree`` in a fresh process; its timing record."""
-    env_code = f"import sys; sys.path.insert(0, {str(tree)!r})\n" + WALK
+    env_code = f"import sys; sys.path.insert(0, {str(tree)!r})\nWARMUP_S = {WARMUP_S!r}\n" + WALK
     out = subprocess.run(
-        [sys.executable, "-c", env_code, args.scenario, args.tracker, str(args.duration), args.log],
+        [sys.executable, "-c", env_code, args.scenario, args.tracker, str(args.duration), args.log, str(YARDSTICK)],
         capture_output=True,
         text=True,
         cwd=tree,
@@ -93,16 +107,17 @@ def walk(tree: pathlib.Path, args: argparse.Namespace) -> dict:
     rec = json.loads(out.stdout.strip().splitlines()[-1])
     if not pathlib.Path(rec["package"]).resolve().is_relative_to(tree):
         raise RuntimeError(f"the walk meant for {tree} imported {rec['package']}")
-    for part in ("wall", "controller", "harness"):
-        rec[f"{part}_per_mujoco"] = rec[f"{part}_us"] / rec["mujoco_us"]
+    for part in ("wall", "controller", "harness", "mujoco"):
+        rec[f"{part}_per_step"] = rec[f"{part}_us"] / rec["step_alone_us"]
     return rec
 
 
 def line(name: str, r: dict) -> str:
     return (
         f"{name:9s} {r['realtime_factor']:5.2f}x  wall {r['wall_us']:6.1f}  controller {r['controller_us']:6.1f}  "
-        f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  per MuJoCo step: wall "
-        f"{r['wall_per_mujoco']:5.2f}  harness {r['harness_per_mujoco']:4.2f}" + ("  FELL" if r["fell"] else "")
+        f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  step alone {r['step_alone_us']:5.2f} µs;"
+        f" per step alone: wall {r['wall_per_step']:5.2f}  harness {r['harness_per_step']:4.2f}"
+        + ("  FELL" if r["fell"] else "")
     )
 
 
@@ -144,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
         pairs.append(pair)
         print(line("reference", pair["reference"]))
         print(line("this", pair["this"]), flush=True)
-    keys = ("realtime_factor", "wall_per_mujoco", "harness_per_mujoco", "harness_us", "controller_us")
+    keys = ("realtime_factor", "wall_per_step", "harness_per_step", "mujoco_per_step", "harness_us", "controller_us")
     ratios = {k: statistics.median(p["this"][k] / p["reference"][k] for p in pairs) for k in keys}
     medians = {who: {k: statistics.median(p[who][k] for p in pairs) for k in keys} for who in ("reference", "this")}
     print(f"medians over {len(pairs)} pairs (this ÷ reference, per pair):")

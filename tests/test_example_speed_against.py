@@ -33,8 +33,11 @@ def test_a_checkout_against_itself_splits_each_walk_and_compares_the_pairs(speed
             # the three timed parts fit in the loop's wall time, none counted twice
             assert rec["mujoco_us"] > 0.0 and rec["controller_us"] > 0.0 and rec["harness_us"] > 0.0
             assert rec["realtime_factor"] == pytest.approx(500.0 / rec["wall_us"])  # 0.5 ms ticks
-    ratio = report["ratios"]["wall_per_mujoco"]
-    pairs = [p["this"]["wall_per_mujoco"] / p["reference"]["wall_per_mujoco"] for p in report["pairs"]]
+            # the yardstick: MuJoCo's step alone, which the loop's MuJoCo time per tick cannot beat by much
+            assert 0.0 < rec["step_alone_us"] < 2.0 * rec["mujoco_us"]
+            assert rec["wall_per_step"] == pytest.approx(rec["wall_us"] / rec["step_alone_us"])
+    ratio = report["ratios"]["wall_per_step"]
+    pairs = [p["this"]["wall_per_step"] / p["reference"]["wall_per_step"] for p in report["pairs"]]
     assert ratio == pytest.approx(sorted(pairs)[0] + (sorted(pairs)[1] - sorted(pairs)[0]) / 2)  # the median
     assert "medians over 2 pairs" in capsys.readouterr().out
 

@@ -14,15 +14,17 @@ real-time factor; it also checks that both log modes give the same summary
 (timing fields aside), as they walk the same trajectory.
 
 Speed goals compare with the code the issue measured (:data:`REFERENCE_COMMIT`)
-in units of MuJoCo's step time of the same walk, which is the same work in every
-version of the code: a walk of ``tick_per_mujoco`` MuJoCo steps of wall time
-per tick would run at ``realtime_factor_at_reference`` on the machine state on
-which the issue saw the reference's QP walk at 0.65x real time; the goal is
-1.0x (:data:`GOAL_REALTIME_FACTOR`). The harness goal is a quarter of the
-reference's own time per tick (:data:`GOAL_HARNESS_PER_MUJOCO`). The
+in units of MuJoCo's step time alone, measured in the same process after each
+walk (:mod:`amlip_qp.sim.mujoco_yardstick`: ``mj_step`` replayed on a fixed
+walking state, the same work for every version of the code): a walk of
+``tick_per_step`` such steps of wall time per tick would run at
+``realtime_factor_at_reference`` on the machine state on which the issue saw
+the reference's QP walk at 0.65x real time; the goal is 1.0x
+(:data:`GOAL_REALTIME_FACTOR`). The harness goal is a quarter of the
+reference's own time per tick (:data:`GOAL_HARNESS_PER_STEP`). The
 reference's figures come from ``examples/speed_against.py``, which walks the
-reference and this code interleaved and times both the same way. Recording
-needs the plant, so the benchmark lives in ``sim``.
+reference and this code interleaved and times both the same way, with the
+same yardstick. Recording needs the plant, so the benchmark lives in ``sim``.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import numpy as np
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.factory import TRACKER_MODULES, build_simulation
+from amlip_qp.sim.mujoco_yardstick import snapshot_walk, step_time_us
 from amlip_qp.sim.run_log import LOG_MODES
 from amlip_qp.sim.scenarios import get_scenario
 from amlip_qp.sim.summary import TIMING_FIELDS, summarize, to_jsonable
@@ -41,16 +44,14 @@ from amlip_qp.sim.summary import TIMING_FIELDS, summarize, to_jsonable
 GOAL_REALTIME_FACTOR = 1.0
 
 #: The code the issue was measured on (the last commit before the issues' work began), and its
-#: 10-s ``cassie-1mps`` QP walk on the 2-core development machine: the medians of 6 walks of
+#: 10-s ``cassie-1mps`` QP walk on the 2-core development machine: the medians of the walks of
 #: ``examples/speed_against.py --reference`` (a checkout of that commit), interleaved with this
 #: code. Its wall time per tick and its harness's own time per tick (wall time less controller and
-#: MuJoCo: its harness reports no split), each divided by MuJoCo's step time per tick of the same
-#: walk (MuJoCo's step is the same work in every version, so the ratios compare runs made at
-#: different machine speeds; the new code's leaner harness leaves MuJoCo's step a little faster, so
-#: these ratios slightly understate the new code's gain).
+#: MuJoCo: its harness reports no split), each divided by MuJoCo's step time alone
+#: (:func:`~amlip_qp.sim.mujoco_yardstick.step_time_us`) in the same process.
 REFERENCE_COMMIT = "82a46cd"
-REFERENCE_TICK_PER_MUJOCO = 13.2
-REFERENCE_HARNESS_PER_MUJOCO = 3.01
+REFERENCE_TICK_PER_STEP = 0.0
+REFERENCE_HARNESS_PER_STEP = 0.0
 
 #: The real-time factor the issue measured for the reference's QP walk.
 REFERENCE_REALTIME_FACTOR = 0.65
@@ -58,11 +59,11 @@ REFERENCE_REALTIME_FACTOR = 0.65
 #: The scenario and tracker of the reference's walks: the goals are judged on those only.
 REFERENCE_SCENARIO, REFERENCE_TRACKER = "cassie-1mps", "qp"
 
-#: The issue's harness goal: a quarter of the reference's own cost per tick, in MuJoCo steps.
-GOAL_HARNESS_PER_MUJOCO = REFERENCE_HARNESS_PER_MUJOCO / 4.0
+#: The issue's harness goal: a quarter of the reference's own cost per tick, in MuJoCo steps alone.
+GOAL_HARNESS_PER_STEP = REFERENCE_HARNESS_PER_STEP / 4.0
 
-#: Simulated time of the warm-up walk of each tracker (not timed), s.
-WARMUP_S = 0.1
+#: Simulated time of the warm-up walk of each tracker (not timed; its end state is the yardstick's), s.
+WARMUP_S = 0.5
 
 
 def run(
@@ -76,8 +77,10 @@ def run(
     Returns:
         The report: per ``"{tracker}/{mode}"`` the medians (µs per tick) of the
         controller, MuJoCo and harness times and their sum, the median real-time
-        factor, the wall time per tick and the harness's mean per tick in MuJoCo
-        steps (``tick_per_mujoco``, ``harness_per_mujoco``), the real-time factor
+        factor, MuJoCo's step time alone (``step_alone_us``, the median after
+        each walk), the wall time per tick and the harness's mean per tick in
+        such steps (``tick_per_step``, ``harness_per_step``: medians of the
+        walks' ratios), the real-time factor
         on the reference's machine state (``realtime_factor_at_reference``), the
         ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (its
@@ -94,8 +97,11 @@ def run(
     if repeats < 1 or not duration_s > 0:
         raise InputError(f"bench harness needs repeats >= 1 and a duration > 0 s, got {repeats}, {duration_s}")
     sc = sc.with_(duration_s=duration_s)
-    for tracker in trackers:  # warm-up: imports, compiled kernels, caches
-        build_simulation(sc, tracker).run(WARMUP_S)
+    states = {  # warm-up (imports, compiled kernels, caches), and the state the yardstick replays
+        tracker: snapshot_walk(lambda tracker=tracker: build_simulation(sc, tracker).run(WARMUP_S))
+        for tracker in trackers
+    }
+    per_step: dict[str, dict[str, list[float]]] = {}
     parts: dict[str, dict[str, list[np.ndarray]]] = {}
     rtf: dict[str, list[float]] = {}
     wall: dict[str, float] = {}
@@ -106,6 +112,12 @@ def run(
             for mode in LOG_MODES:
                 key = f"{tracker}/{mode}"
                 result = build_simulation(sc, tracker).run(duration_s, log=mode)
+                alone = step_time_us(*states[tracker])
+                n_ticks = len(result.tick_time_us)
+                ratios = per_step.setdefault(key, {"alone": [], "tick": [], "harness": []})
+                ratios["alone"].append(alone)
+                ratios["tick"].append(result.wall_time_s * 1e6 / n_ticks / alone)
+                ratios["harness"].append(float(np.mean(result.harness_time_us)) / alone)
                 got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": []})
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))
@@ -120,17 +132,17 @@ def run(
         ticks = {name: np.concatenate(arrays) for name, arrays in got.items()}
         med = {name: float(np.median(a)) for name, a in ticks.items()}
         n = int(ticks["controller"].size)
-        mujoco_mean = float(np.mean(ticks["mujoco"]))
-        tick_per_mujoco = wall[key] * 1e6 / n / mujoco_mean
+        tick_per_step = float(np.median(per_step[key]["tick"]))
         report["runs"][key] = {
             "controller_us_per_tick": med["controller"],
             "mujoco_us_per_tick": med["mujoco"],
             "harness_us_per_tick": med["harness"],
             "sum_us_per_tick": med["controller"] + med["mujoco"] + med["harness"],
             "realtime_factor": float(np.median(rtf[key])),
-            "tick_per_mujoco": tick_per_mujoco,
-            "harness_per_mujoco": float(np.mean(ticks["harness"])) / mujoco_mean,
-            "realtime_factor_at_reference": reference_realtime(tick_per_mujoco),
+            "step_alone_us": float(np.median(per_step[key]["alone"])),
+            "tick_per_step": tick_per_step,
+            "harness_per_step": float(np.median(per_step[key]["harness"])),
+            "realtime_factor_at_reference": reference_realtime(tick_per_step),
             "ticks": n,
             "fell": fell[key],
         }
@@ -139,29 +151,29 @@ def run(
         "commit": REFERENCE_COMMIT,
         "scenario": REFERENCE_SCENARIO,
         "tracker": REFERENCE_TRACKER,
-        "tick_per_mujoco": REFERENCE_TICK_PER_MUJOCO,
-        "harness_per_mujoco": REFERENCE_HARNESS_PER_MUJOCO,
+        "tick_per_step": REFERENCE_TICK_PER_STEP,
+        "harness_per_step": REFERENCE_HARNESS_PER_STEP,
         "realtime_factor": REFERENCE_REALTIME_FACTOR,
     }
     report["goal_realtime_factor"] = GOAL_REALTIME_FACTOR
-    report["goal_harness_per_mujoco"] = GOAL_HARNESS_PER_MUJOCO
+    report["goal_harness_per_step"] = GOAL_HARNESS_PER_STEP
     same_walk = scenario == REFERENCE_SCENARIO
     qp = report["runs"].get(f"{REFERENCE_TRACKER}/summary")
     report["qp_meets_realtime_goal"] = (
         None if qp is None or not same_walk else bool(qp["realtime_factor_at_reference"] >= GOAL_REALTIME_FACTOR)
     )
     report["harness_meets_goal"] = {
-        key: bool(row["harness_per_mujoco"] <= GOAL_HARNESS_PER_MUJOCO)
+        key: bool(row["harness_per_step"] <= GOAL_HARNESS_PER_STEP)
         for key, row in report["runs"].items()
         if same_walk and key.startswith(f"{REFERENCE_TRACKER}/")
     }
     return report
 
 
-def reference_realtime(tick_per_mujoco: float) -> float:
-    """The real-time factor of a walk costing ``tick_per_mujoco`` MuJoCo steps of wall time per tick,
+def reference_realtime(tick_per_step: float) -> float:
+    """The real-time factor of a walk costing ``tick_per_step`` MuJoCo steps (alone) of wall time per tick,
     on the machine state on which the reference's walk ran at :data:`REFERENCE_REALTIME_FACTOR`."""
-    return REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / tick_per_mujoco
+    return REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_STEP / tick_per_step
 
 
 def format_report(r: dict) -> str:
@@ -169,22 +181,22 @@ def format_report(r: dict) -> str:
     ref = r["reference"]
     lines = [
         f"closed-loop tick, {r['scenario']}, {r['duration_s']:g} s x {r['repeats']} per row, interleaved "
-        "(medians, µs per tick; per MuJoCo step: means)",
+        "(medians, µs per tick; per MuJoCo step alone: medians of the walks' ratios)",
         f"  {'tracker/log':14s} {'controller':>10s} {'MuJoCo':>8s} {'harness':>8s} {'sum':>8s} {'realtime':>9s}"
-        f" {'tick/MJ':>8s} {'harn/MJ':>8s} {'at ref.':>8s}",
+        f" {'step alone':>10s} {'tick/step':>9s} {'harn/step':>9s} {'at ref.':>8s}",
     ]
     for key, row in r["runs"].items():
         lines.append(
             f"  {key:14s} {row['controller_us_per_tick']:10.1f} {row['mujoco_us_per_tick']:8.1f} "
             f"{row['harness_us_per_tick']:8.1f} {row['sum_us_per_tick']:8.1f} {row['realtime_factor']:8.2f}x"
-            f" {row['tick_per_mujoco']:8.2f} {row['harness_per_mujoco']:8.2f}"
+            f" {row['step_alone_us']:10.2f} {row['tick_per_step']:9.2f} {row['harness_per_step']:9.2f}"
             f" {row['realtime_factor_at_reference']:7.2f}x" + (" (FELL)" if row["fell"] else "")
         )
     same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
     lines.append(f"  same summary in both log modes: {same}")
     lines.append(
         f"  reference: the issue's code ({ref['commit']}), {ref['scenario']} {ref['tracker']} walk "
-        f"{ref['tick_per_mujoco']:.2f} MuJoCo steps of wall time per tick, harness {ref['harness_per_mujoco']:.2f}, "
+        f"{ref['tick_per_step']:.2f} MuJoCo steps (alone) of wall time per tick, harness {ref['harness_per_step']:.2f}, "
         f"at {ref['realtime_factor']:g}x real time"
     )
     if r["qp_meets_realtime_goal"] is not None:
@@ -197,7 +209,7 @@ def format_report(r: dict) -> str:
         return "\n".join(lines)
     met = [key for key, ok in r["harness_meets_goal"].items() if ok]
     lines.append(
-        f"  harness <= {r['goal_harness_per_mujoco']:.2f} MuJoCo steps per tick (a quarter of the reference's): "
+        f"  harness <= {r['goal_harness_per_step']:.2f} MuJoCo steps (alone) per tick (a quarter of the reference's): "
         + (f"met by {', '.join(met)}" if met else "NOT met")
     )
     return "\n".join(lines)
