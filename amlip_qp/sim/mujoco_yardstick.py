@@ -30,7 +30,8 @@ STEPS, ROUNDS = 200, 9
 def snapshot_walk(walk) -> tuple:
     """Call ``walk()`` (one closed-loop walk) and return ``(model, data)``: MuJoCo's model and a
     copy of its data after the walk's last step, caught by wrapping ``mujoco.mj_step`` meanwhile."""
-    step, seen = mujoco.mj_step, []
+    step = mujoco.mj_step
+    seen: list[tuple] = []
 
     def catching(m, d):
         step(m, d)
