@@ -155,10 +155,22 @@ def _quaternion_writer(quats: tuple, root_at: tuple | None) -> Callable[..., lis
             rw, rx, ry, rz = w, x, y, z
         else:
             rw, rx, ry, rz = w / n, x / n, y / n, z / n
-        # rotation_entries(rw, rx, ry, rz), its formula written out; then R^T @ qvel's linear part
-        r00, r01, r02 = 1 - 2 * (ry * ry + rz * rz), 2 * (rx * ry - rw * rz), 2 * (rx * rz + rw * ry)
-        r10, r11, r12 = 2 * (rx * ry + rw * rz), 1 - 2 * (rx * rx + rz * rz), 2 * (ry * rz - rw * rx)
-        r20, r21, r22 = 2 * (rx * rz - rw * ry), 2 * (ry * rz + rw * rx), 1 - 2 * (rx * rx + ry * ry)
+        # rotation_entries(rw, rx, ry, rz), its formula written out, each product computed once (the
+        # same operands: the same numbers); then R^T @ qvel's linear part
+        xx, yy, zz, xy, xz, yz, wx, wy, wz = (
+            rx * rx,
+            ry * ry,
+            rz * rz,
+            rx * ry,
+            rx * rz,
+            ry * rz,
+            rw * rx,
+            rw * ry,
+            rw * rz,
+        )
+        r00, r01, r02 = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+        r10, r11, r12 = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+        r20, r21, r22 = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
         l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
         a = r00 * l0 + r10 * l1 + r20 * l2
         b = r01 * l0 + r11 * l1 + r21 * l2
