@@ -245,6 +245,7 @@ class Simulation:
         write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d), plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, substeps, dt_s, qpos = mujoco.mj_step, self.substeps, self.dt_s, d.qpos
+        later_steps = range(substeps - 1)  # the plant steps after a tick's first
         xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
         xfrc_b = d.xfrc_applied[self._base_body, :3]
         pushes, no_push = bool(self.pushes), np.zeros(3)
@@ -328,8 +329,8 @@ class Simulation:
             for _ in range(substeps):
                 step(m, d)
             t_m1 = perf_ns()
-            t_next = t
-            for _ in range(substeps):  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+            t_next = t + dt_s  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+            for _ in later_steps:
                 t_next += dt_s
             # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
             # warning; that is a divergence, reported as a fall.
