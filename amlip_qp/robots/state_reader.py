@@ -73,7 +73,10 @@ class StateReader:
         if m.free:
             qa, da, _, _ = m.free[0]
             self._root = (*qsrc[qa : qa + 3].tolist(), *vsrc[da + 3 : da + 6].tolist())
-        self._write = _quaternion_writer(self._quats, self._root)
+        #: arrays() of one free joint and no ball joint (a floating-base robot), in straight lines; else None
+        self._fast = _one_free_joint_arrays(
+            self._quats, self._root, self._gather_q, self._gather_v, self._checked_arrays
+        )
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
@@ -107,16 +110,22 @@ class StateReader:
         Raises:
             InputError: As :meth:`__call__`.
         """
+        if self._fast is not None:
+            return self._fast(qpos, qvel, qpos_list, qpos_sum)
         qvel_list = qvel.tolist()
         if not math.isfinite((sum(qpos_list) if qpos_sum is None else qpos_sum) + sum(qvel_list)):
             return self._checked_arrays(qpos_list, qvel_list)  # a finite sum implies finite entries
         gather_q, gather_v = self._gather_q, self._gather_v
         q = qpos.copy() if gather_q is None else qpos[gather_q]
         v = qvel.copy() if gather_v is None else qvel[gather_v]
-        root = self._write(q, v, qpos_list, qvel_list)
+        root = _write_quaternions(q, v, qpos_list, qvel_list, self._quats, self._root)
         if root is None:
             return self._checked_arrays(qpos_list, qvel_list)  # raises: a zero quaternion
         return q, v, root
+
+    def bind(self, qpos: np.ndarray, qvel: np.ndarray) -> Callable[..., tuple[np.ndarray, np.ndarray, list[float]]]:
+        """``f(qpos_list, qpos_sum=None)``: :meth:`arrays` of ``qpos`` and ``qvel`` (bound once; e.g. ``data.qpos``)."""
+        return partial(self.arrays if self._fast is None else self._fast, qpos, qvel)
 
     def _checked_arrays(self, qpos: list[float], qvel: list[float]) -> tuple[np.ndarray, np.ndarray, list[float]]:
         """:meth:`arrays` through :func:`~amlip_qp.robots.state.mj_to_pin` (which raises naming the bad entries)."""
@@ -128,23 +137,28 @@ class StateReader:
         return q, v, root
 
 
-def _quaternion_writer(quats: tuple, root_at: tuple | None) -> Callable[..., list[float] | None]:
-    """``f(q, v, qpos, qvel)``: :func:`_write_quaternions` of the table ``quats`` and ``root_at``.
+def _one_free_joint_arrays(quats: tuple, root_at: tuple | None, gather_q, gather_v, checked) -> Callable | None:
+    """:meth:`StateReader.arrays` when the map has one free joint and no ball joint (else ``None``).
 
-    One free joint and no ball joint (a floating-base robot): a function of that joint alone, in
-    straight lines; the same numbers (tested).
+    One function of that joint alone, in straight lines: the same numbers as the general
+    path (tested). ``checked``: :meth:`StateReader._checked_arrays` (NaN, inf, a zero quaternion).
     """
     if len(quats) != 1 or quats[0][5] is None:
-        return partial(_write_quaternions, quats=quats, root_at=root_at)
+        return None
     iw, ix, iy, iz, pq, (pv, i0, i1, i2) = quats[0]
     p0, p1, p2, a0, a1, a2 = root_at  # type: ignore[misc]
-    q1, q2, q3, v1, v2, sqrt = pq + 1, pq + 2, pq + 3, pv + 1, pv + 2, math.sqrt
+    q1, q2, q3, v1, v2, sqrt, isfinite = pq + 1, pq + 2, pq + 3, pv + 1, pv + 2, math.sqrt, math.isfinite
 
-    def write(q: np.ndarray, v: np.ndarray, qpos: list[float], qvel: list[float]) -> list[float] | None:
+    def arrays(qpos_a: np.ndarray, qvel_a: np.ndarray, qpos: list[float], qpos_sum: float | None = None):
+        qvel = qvel_a.tolist()
+        if not isfinite((sum(qpos) if qpos_sum is None else qpos_sum) + sum(qvel)):
+            return checked(qpos, qvel)  # a finite sum implies finite entries
+        q = qpos_a.copy() if gather_q is None else qpos_a[gather_q]
+        v = qvel_a.copy() if gather_v is None else qvel_a[gather_v]
         w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
         n = sqrt(w * w + x * x + y * y + z * z)
         if n < 1e-9:
-            return None
+            return checked(qpos, qvel)  # raises: a zero quaternion
         x, y, z, w = x / n, y / n, z / n, w / n
         q[pq] = x
         q[q1] = y
@@ -157,17 +171,9 @@ def _quaternion_writer(quats: tuple, root_at: tuple | None) -> Callable[..., lis
             rw, rx, ry, rz = w / n, x / n, y / n, z / n
         # rotation_entries(rw, rx, ry, rz), its formula written out, each product computed once (the
         # same operands: the same numbers); then R^T @ qvel's linear part
-        xx, yy, zz, xy, xz, yz, wx, wy, wz = (
-            rx * rx,
-            ry * ry,
-            rz * rz,
-            rx * ry,
-            rx * rz,
-            ry * rz,
-            rw * rx,
-            rw * ry,
-            rw * rz,
-        )
+        xx, yy, zz = rx * rx, ry * ry, rz * rz
+        xy, xz, yz = rx * ry, rx * rz, ry * rz
+        wx, wy, wz = rw * rx, rw * ry, rw * rz
         r00, r01, r02 = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
         r10, r11, r12 = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
         r20, r21, r22 = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
@@ -178,9 +184,9 @@ def _quaternion_writer(quats: tuple, root_at: tuple | None) -> Callable[..., lis
         v[pv] = a
         v[v1] = b
         v[v2] = c
-        return [qpos[p0], qpos[p1], qpos[p2], x, y, z, w, a, b, c, qvel[a0], qvel[a1], qvel[a2]]
+        return q, v, [qpos[p0], qpos[p1], qpos[p2], x, y, z, w, a, b, c, qvel[a0], qvel[a1], qvel[a2]]
 
-    return write
+    return arrays
 
 
 def _write_quaternions(q, v, qpos, qvel, quats, root_at) -> list[float] | None:
