@@ -123,3 +123,16 @@ def test_the_one_free_joint_path_both_when_the_normalized_quaternion_s_norm_is_o
         assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
         assert root == q_ref[:7].tolist() + v_ref[:6].tolist()
     assert norms == {True, False}
+
+
+def test_bind_is_arrays_of_the_bound_arrays_read_now(robot):
+    """The bound read sees the arrays' values at each call (views into them, as MuJoCo's data)."""
+    reader, rng = StateReader(robot.state_map), np.random.default_rng(8)
+    qpos, qvel = random_mj_state(robot, rng)
+    read = reader.bind(qpos, qvel)
+    for _ in range(20):
+        new_q, new_v = random_mj_state(robot, rng)
+        qpos[:], qvel[:] = new_q, new_v
+        q, v, root = read(qpos.tolist())
+        q_ref, v_ref, root_ref = reader.arrays(qpos.copy(), qvel.copy(), qpos.tolist())
+        assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes() and root == root_ref
