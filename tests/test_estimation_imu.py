@@ -33,3 +33,12 @@ def test_of_packed_is_the_constructor_on_views_of_one_array():
     assert repr(fast) == repr(ref)
     with pytest.raises(dataclasses.FrozenInstanceError):
         fast.quat_xyzw = np.ones(4)  # type: ignore[misc]
+
+
+def test_of_packed_from_a_start_reads_the_ten_floats_there():
+    """A reading inside a longer array: its 10 floats from ``start``, views of it."""
+    packed = np.arange(25.0)
+    fast, ref = ImuReading.of_packed(packed, 7), ImuReading(packed[7:11], packed[11:14], packed[14:17])
+    for f in ("quat_xyzw", "gyro_radps", "accel_mps2"):
+        a, b = getattr(fast, f), getattr(ref, f)
+        assert a.tobytes() == b.tobytes() and a.shape == b.shape and np.shares_memory(a, packed)

@@ -106,3 +106,33 @@ def test_state_reader_ball_joint_quaternion_is_normalized_and_reordered():
         n = np.linalg.norm(qpos[:4])
         np.testing.assert_allclose(q[:4], np.r_[qpos[1:4], qpos[0]] / n, rtol=1e-15)
         assert v.tolist() == qvel.tolist()
+
+
+def test_the_one_free_joint_path_both_when_the_normalized_quaternion_s_norm_is_one_and_when_not():
+    """The free joint's rotation divides by the re-normalized quaternion's norm only when it is not 1.0."""
+    robot = load_robot("cassie")
+    reader, rng = StateReader(robot.state_map), np.random.default_rng(5)
+    norms = set()
+    for _ in range(200):
+        qpos, qvel = random_mj_state(robot, rng)
+        qpos[3:7] *= rng.uniform(0.5, 2.0)
+        u = qpos[3:7] / np.sqrt(np.sum(qpos[3:7] ** 2))
+        norms.add(bool(np.sqrt(np.sum(u**2)) == 1.0))
+        q_ref, v_ref = mj_to_pin(robot, qpos, qvel)
+        q, v, root = reader.arrays(qpos, qvel, qpos.tolist())
+        assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes()
+        assert root == q_ref[:7].tolist() + v_ref[:6].tolist()
+    assert norms == {True, False}
+
+
+def test_bind_is_arrays_of_the_bound_arrays_read_now(robot):
+    """The bound read sees the arrays' values at each call (views into them, as MuJoCo's data)."""
+    reader, rng = StateReader(robot.state_map), np.random.default_rng(8)
+    qpos, qvel = random_mj_state(robot, rng)
+    read = reader.bind(qpos, qvel)
+    for _ in range(20):
+        new_q, new_v = random_mj_state(robot, rng)
+        qpos[:], qvel[:] = new_q, new_v
+        q, v, root = read(qpos.tolist())
+        q_ref, v_ref, root_ref = reader.arrays(qpos.copy(), qvel.copy(), qpos.tolist())
+        assert q.tobytes() == q_ref.tobytes() and v.tobytes() == v_ref.tobytes() and root == root_ref

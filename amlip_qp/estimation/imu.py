@@ -29,16 +29,16 @@ class ImuReading:
     accel_mps2: np.ndarray
 
     @classmethod
-    def of_packed(cls, packed: np.ndarray) -> ImuReading:
-        """``ImuReading(packed[:4], packed[4:7], packed[7:])``: the reading of one array of 10 floats
-        (quaternion x y z w, gyro, accelerometer), holding views of it.
+    def of_packed(cls, packed: np.ndarray, start: int = 0) -> ImuReading:
+        """``ImuReading(p[:4], p[4:7], p[7:10])`` of ``p = packed[start:]``: the reading of 10 floats
+        (quaternion x y z w, gyro, accelerometer) of one array, holding views of it.
 
         The same object as the constructor's (tested), made without its three frozen
         ``object.__setattr__`` calls: the harness's per-tick reading.
         """
         reading = object.__new__(cls)
         fields = reading.__dict__
-        fields["quat_xyzw"] = packed[:4]
-        fields["gyro_radps"] = packed[4:7]
-        fields["accel_mps2"] = packed[7:]
+        fields["quat_xyzw"] = packed[start : start + 4]
+        fields["gyro_radps"] = packed[start + 4 : start + 7]
+        fields["accel_mps2"] = packed[start + 7 : start + 10]
         return reading

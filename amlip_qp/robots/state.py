@@ -174,7 +174,8 @@ def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...
     """The rotation matrix of the unit quaternion ``(w, x, y, z)``, row by row (9 floats).
 
     The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot` and the per-tick
-    :class:`~amlip_qp.robots.state_reader.StateReader` both use it.
+    :class:`~amlip_qp.robots.state_reader.StateReader` both use it (the reader's one-free-joint
+    path has it written out, the same operations: tested bit for bit).
     """
     return (
         1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),

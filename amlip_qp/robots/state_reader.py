@@ -16,6 +16,8 @@ make the two differ in the last bit (the test would say so).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -71,6 +73,10 @@ class StateReader:
         if m.free:
             qa, da, _, _ = m.free[0]
             self._root = (*qsrc[qa : qa + 3].tolist(), *vsrc[da + 3 : da + 6].tolist())
+        #: arrays() of one free joint and no ball joint (a floating-base robot), in straight lines; else None
+        self._fast = _one_free_joint_arrays(
+            self._quats, self._root, self._gather_q, self._gather_v, self._checked_arrays
+        )
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).
@@ -104,44 +110,22 @@ class StateReader:
         Raises:
             InputError: As :meth:`__call__`.
         """
+        if self._fast is not None:
+            return self._fast(qpos, qvel, qpos_list, qpos_sum)
         qvel_list = qvel.tolist()
         if not math.isfinite((sum(qpos_list) if qpos_sum is None else qpos_sum) + sum(qvel_list)):
             return self._checked_arrays(qpos_list, qvel_list)  # a finite sum implies finite entries
         gather_q, gather_v = self._gather_q, self._gather_v
         q = qpos.copy() if gather_q is None else qpos[gather_q]
         v = qvel.copy() if gather_v is None else qvel[gather_v]
-        root: list[float] = []
-        sqrt = math.sqrt
-        for iw, ix, iy, iz, pq, free in self._quats:
-            w, x, y, z = qpos_list[iw], qpos_list[ix], qpos_list[iy], qpos_list[iz]
-            n = sqrt(w * w + x * x + y * y + z * z)
-            if n < 1e-9:
-                return self._checked_arrays(qpos_list, qvel_list)  # raises
-            x, y, z, w = x / n, y / n, z / n, w / n
-            q[pq] = x
-            q[pq + 1] = y
-            q[pq + 2] = z
-            q[pq + 3] = w
-            if free is None:
-                continue
-            # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
-            pv, i0, i1, i2 = free
-            n = sqrt(w * w + x * x + y * y + z * z)
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w / n, x / n, y / n, z / n)
-            l0, l1, l2 = qvel_list[i0], qvel_list[i1], qvel_list[i2]
-            a = r00 * l0 + r10 * l1 + r20 * l2
-            b = r01 * l0 + r11 * l1 + r21 * l2
-            c = r02 * l0 + r12 * l1 + r22 * l2
-            v[pv] = a
-            v[pv + 1] = b
-            v[pv + 2] = c
-            if not root:
-                p0, p1, p2, a0, a1, a2 = self._root  # type: ignore[misc]
-                root = [
-                    qpos_list[p0], qpos_list[p1], qpos_list[p2], x, y, z, w,
-                    a, b, c, qvel_list[a0], qvel_list[a1], qvel_list[a2],
-                ]  # fmt: skip
+        root = _write_quaternions(q, v, qpos_list, qvel_list, self._quats, self._root)
+        if root is None:
+            return self._checked_arrays(qpos_list, qvel_list)  # raises: a zero quaternion
         return q, v, root
+
+    def bind(self, qpos: np.ndarray, qvel: np.ndarray) -> Callable[..., tuple[np.ndarray, np.ndarray, list[float]]]:
+        """``f(qpos_list, qpos_sum=None)``: :meth:`arrays` of ``qpos`` and ``qvel`` (bound once; e.g. ``data.qpos``)."""
+        return partial(self.arrays if self._fast is None else self._fast, qpos, qvel)
 
     def _checked_arrays(self, qpos: list[float], qvel: list[float]) -> tuple[np.ndarray, np.ndarray, list[float]]:
         """:meth:`arrays` through :func:`~amlip_qp.robots.state.mj_to_pin` (which raises naming the bad entries)."""
@@ -151,3 +135,93 @@ class StateReader:
             _, _, pq, pv = self.state_map.free[0]
             root = q[pq : pq + 7].tolist() + v[pv : pv + 6].tolist()
         return q, v, root
+
+
+def _one_free_joint_arrays(quats: tuple, root_at: tuple | None, gather_q, gather_v, checked) -> Callable | None:
+    """:meth:`StateReader.arrays` when the map has one free joint and no ball joint (else ``None``).
+
+    One function of that joint alone, in straight lines: the same numbers as the general
+    path (tested). ``checked``: :meth:`StateReader._checked_arrays` (NaN, inf, a zero quaternion).
+    """
+    if len(quats) != 1 or quats[0][5] is None:
+        return None
+    iw, ix, iy, iz, pq, (pv, i0, i1, i2) = quats[0]
+    p0, p1, p2, a0, a1, a2 = root_at  # type: ignore[misc]
+    q1, q2, q3, v1, v2, sqrt, isfinite = pq + 1, pq + 2, pq + 3, pv + 1, pv + 2, math.sqrt, math.isfinite
+
+    def arrays(qpos_a: np.ndarray, qvel_a: np.ndarray, qpos: list[float], qpos_sum: float | None = None):
+        qvel = qvel_a.tolist()
+        if not isfinite((sum(qpos) if qpos_sum is None else qpos_sum) + sum(qvel)):
+            return checked(qpos, qvel)  # a finite sum implies finite entries
+        q = qpos_a.copy() if gather_q is None else qpos_a[gather_q]
+        v = qvel_a.copy() if gather_v is None else qvel_a[gather_v]
+        w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
+        n = sqrt(w * w + x * x + y * y + z * z)
+        if n < 1e-9:
+            return checked(qpos, qvel)  # raises: a zero quaternion
+        x, y, z, w = x / n, y / n, z / n, w / n
+        q[pq] = x
+        q[q1] = y
+        q[q2] = z
+        q[q3] = w
+        n = sqrt(w * w + x * x + y * y + z * z)
+        if n == 1.0:  # u / 1.0 is u
+            rw, rx, ry, rz = w, x, y, z
+        else:
+            rw, rx, ry, rz = w / n, x / n, y / n, z / n
+        # rotation_entries(rw, rx, ry, rz), its formula written out, each product computed once (the
+        # same operands: the same numbers); then R^T @ qvel's linear part
+        xx, yy, zz = rx * rx, ry * ry, rz * rz
+        xy, xz, yz = rx * ry, rx * rz, ry * rz
+        wx, wy, wz = rw * rx, rw * ry, rw * rz
+        r00, r01, r02 = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+        r10, r11, r12 = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+        r20, r21, r22 = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+        l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
+        a = r00 * l0 + r10 * l1 + r20 * l2
+        b = r01 * l0 + r11 * l1 + r21 * l2
+        c = r02 * l0 + r12 * l1 + r22 * l2
+        v[pv] = a
+        v[v1] = b
+        v[v2] = c
+        return q, v, [qpos[p0], qpos[p1], qpos[p2], x, y, z, w, a, b, c, qvel[a0], qvel[a1], qvel[a2]]
+
+    return arrays
+
+
+def _write_quaternions(q, v, qpos, qvel, quats, root_at) -> list[float] | None:
+    """Write the normalized quaternions and the free joints' linear velocities into ``q`` and ``v``.
+
+    ``qpos`` and ``qvel`` are lists holding the plant's coordinates at the indices of ``quats``
+    (:class:`StateReader`'s table) and ``root_at`` (the first free joint's position and angular
+    velocity). Returns the first free joint's row (``[]`` without one), ``None`` at a zero quaternion.
+    """
+    root: list[float] = []
+    sqrt = math.sqrt
+    for iw, ix, iy, iz, pq, free in quats:
+        w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
+        n = sqrt(w * w + x * x + y * y + z * z)
+        if n < 1e-9:
+            return None
+        x, y, z, w = x / n, y / n, z / n, w / n
+        q[pq] = x
+        q[pq + 1] = y
+        q[pq + 2] = z
+        q[pq + 3] = w
+        if free is None:
+            continue
+        # the rotation of the (re-normalized) quaternion, as state._quat_wxyz_to_rot; then R^T @ qvel's linear part
+        pv, i0, i1, i2 = free
+        n = sqrt(w * w + x * x + y * y + z * z)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w / n, x / n, y / n, z / n)
+        l0, l1, l2 = qvel[i0], qvel[i1], qvel[i2]
+        a = r00 * l0 + r10 * l1 + r20 * l2
+        b = r01 * l0 + r11 * l1 + r21 * l2
+        c = r02 * l0 + r12 * l1 + r22 * l2
+        v[pv] = a
+        v[pv + 1] = b
+        v[pv + 2] = c
+        if not root:
+            p0, p1, p2, a0, a1, a2 = root_at
+            root = [qpos[p0], qpos[p1], qpos[p2], x, y, z, w, a, b, c, qvel[a0], qvel[a1], qvel[a2]]
+    return root

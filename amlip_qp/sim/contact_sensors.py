@@ -69,6 +69,24 @@ def sensor_switcher(
         threshold_N: Normal force above which a switch is on, N.
         general: The switches computed contact by contact (a tick with more contacts than slots).
 
+    ``None`` too when the sensors do not describe the contacts the step ends with (see
+    :func:`contact_sensor_indices`).
+    """
+    gather = contact_sensor_indices(model, foot_bodies)
+    if gather is None:
+        return None
+    sensordata, of_values = data.sensordata, list_switcher(tuple(foot_bodies), threshold_N, general)
+
+    def switches() -> dict[str, bool]:
+        return of_values(sensordata[gather].tolist())
+
+    return switches
+
+
+def contact_sensor_indices(model: mujoco.MjModel, foot_bodies: dict[str, int]) -> np.ndarray | None:
+    """The ``sensordata`` indices that :func:`list_switcher` reads (per side: the count of contacts
+    found, then each slot's normal force), or ``None`` without the sensors of :func:`contact_spec_edit`.
+
     ``None`` too when the sensors do not describe the contacts the step ends with: with the
     RK4 integrator (its later stages recompute the contacts but not the sensors) or with the
     sensors disabled (``<flag sensor="disable"/>``).
@@ -90,25 +108,35 @@ def sensor_switcher(
             return None
         adr = int(model.sensor_adr[sid])
         idx += [adr] + [adr + _SLOT * i + 1 for i in range(CONTACT_SLOTS)]  # found, then each slot's normal
-    gather, sensordata = np.array(idx, dtype=np.intp), data.sensordata
-    sides, none_on, n = tuple(foot_bodies), 0.0 > threshold_N, CONTACT_SLOTS
+    return np.array(idx, dtype=np.intp)
 
-    def switches() -> dict[str, bool]:
-        values = sensordata[gather].tolist()
+
+def list_switcher(
+    sides: tuple[str, ...], threshold_N: float, general: Callable[[], dict[str, bool]]
+) -> Callable[[list[float]], dict[str, bool]]:
+    """``f(values)``: side -> switch, ``values`` starting with ``sensordata[contact_sensor_indices(...)]``.
+
+    A side's switch is on once the running sum of its contacts' normal force magnitudes
+    exceeds ``threshold_N``; a side with more contacts than slots takes ``general()``.
+    """
+    none_on, n = 0.0 > threshold_N, CONTACT_SLOTS
+    layout = tuple((side, i * (n + 1)) for i, side in enumerate(sides))  # each side's count of contacts found
+
+    def switches(values: list[float]) -> dict[str, bool]:
         on: dict[str, bool] = {}
-        j = 0
-        for side in sides:
+        for side, j in layout:
             found = values[j]
             if found > n:
                 return general()  # the slots hold only the first contacts
-            total, switch = 0.0, none_on  # no contact: a zero sum
-            for f in values[j + 1 : j + 1 + int(found)]:
-                total += abs(f)
-                if total > threshold_N:  # a rounded sum of magnitudes never decreases: known
-                    switch = True
-                    break
+            switch = none_on  # no contact: a zero sum
+            if found:
+                total = 0.0
+                for f in values[j + 1 : j + 1 + int(found)]:
+                    total += abs(f)
+                    if total > threshold_N:  # a rounded sum of magnitudes never decreases: known
+                        switch = True
+                        break
             on[side] = switch
-            j += n + 1
         return on
 
     return switches

@@ -244,9 +244,9 @@ class Simulation:
         add_noise = None if self.noise is None else self._add_noise
         write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d), plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
-        step, substeps, dt_s, qpos = mujoco.mj_step, self.substeps, self.dt_s, d.qpos
-        xpos_b, xmat_b = d.xpos[self._base_body], d.xmat[self._base_body]
-        xfrc_b = d.xfrc_applied[self._base_body, :3]
+        step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
+        later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
+        xpos_b, xmat_b, xfrc_b = d.xpos[self._base_body], d.xmat[self._base_body], d.xfrc_applied[self._base_body, :3]
         pushes, no_push = bool(self.pushes), np.zeros(3)
         if not pushes:
             xfrc_b[:] = no_push  # and so it stays
@@ -325,11 +325,11 @@ class Simulation:
                 scalar_rows((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
                 concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
             t_m0 = perf_ns()
-            for _ in range(substeps):
+            for _ in plant_steps:
                 step(m, d)
             t_m1 = perf_ns()
-            t_next = t
-            for _ in range(substeps):  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+            t_next = t + dt_s  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+            for _ in later_steps:
                 t_next += dt_s
             # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
             # warning; that is a divergence, reported as a fall.

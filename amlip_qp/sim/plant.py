@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -286,7 +285,7 @@ class Plant:
                 return q, v, q[:7].tolist() + v[:6].tolist()
 
             return read_body_base
-        return partial(self._reader.arrays, data.qpos, data.qvel)
+        return self._reader.bind(data.qpos, data.qvel)
 
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""

@@ -115,13 +115,18 @@ class Scenario:
             return Command(**fields, vx_mps=vx, turn_rate_radps=turn) if held is None else held.with_speeds(vx, turn)
 
         if self.turn_rate_radps == 0.0:
+            # from the last knot on the speed is held: once last[1] is its command, it is every such time's
+            t_held, held = self.vx.times_s[-1], [False]
 
             def speed_command(t_s: float) -> Command:
+                if t_s >= t_held and held[0]:
+                    return last[1]
                 vx = vx_at(t_s)
                 key = (vx, copysign(1.0, vx))  # a zero's sign counts too
                 if key != last[0]:
                     last[1] = make(vx, 0.0)
                     last[0] = key
+                held[0] = t_s >= t_held
                 return last[1]
 
             return speed_command

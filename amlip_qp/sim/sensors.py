@@ -34,6 +34,7 @@ import numpy as np
 from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
+from amlip_qp.sim.contact_sensors import contact_sensor_indices, list_switcher
 from amlip_qp.sim.run_types import quat_mul_small_rotation
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -248,15 +249,26 @@ class PlantSensors:
         """
         if self.model != "ideal" or not base_known:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)
-        sensordata, imu_idx = data.sensordata, self._imu_idx
-        switches = self.plant.contact_switcher(data, self.contact_threshold_N)
+        sensordata, imu_idx, plant = data.sensordata, self._imu_idx, self.plant
+        switches = plant.contact_switcher(data, self.contact_threshold_N)
         imu_of = ImuReading.of_packed
+        contacts = contact_sensor_indices(plant.model, plant.foot_body_ids)
+        if contacts is None:  # the switches contact by contact
 
-        def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
-            # Measurement(t_s, q, v, foot_contact, imu, base_known), positional: its cheapest call
-            return Measurement(t_s, q, v, switches(), imu_of(sensordata[imu_idx]), True)
+            def measure(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
+                # Measurement(t_s, q, v, foot_contact, imu, base_known), positional: its cheapest call
+                return Measurement(t_s, q, v, switches(), imu_of(sensordata[imu_idx]), True)
 
-        return measure
+            return measure
+        # one gather of the contact sensors' numbers, then the IMU's
+        both, at_imu = np.concatenate((contacts, imu_idx)), contacts.size
+        switches_of = list_switcher(tuple(plant.foot_body_ids), self.contact_threshold_N, switches)
+
+        def measure_sensors(t_s: float, q: np.ndarray, v: np.ndarray) -> Measurement:
+            values = sensordata[both]
+            return Measurement(t_s, q, v, switches_of(values.tolist()), imu_of(values, at_imu), True)
+
+        return measure_sensors
 
 
 def base_indices(robot) -> tuple[slice | np.ndarray, slice | np.ndarray]:
