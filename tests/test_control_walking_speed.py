@@ -28,9 +28,7 @@ def test_lateral_uses_the_stride_mean_so_sway_does_not_accumulate():
 
 
 def test_bounds_disturbances_settling_and_planar():
-    integ = SpeedIntegrator(
-        SpeedCorrection(gain_per_step=1.0, max_correction_mps=0.2, settle_steps=2, max_forward_correction_mps=None)
-    )
+    integ = SpeedIntegrator(SpeedCorrection(gain_per_step=1.0, max_correction_mps=0.2, settle_steps=2))
     integ.update(np.array([0.0, 0.0]), np.array([0.3, 0.0]))
     integ.update(np.array([0.0, 0.0]), np.array([0.3, 0.0]))
     assert np.all(integ.correction_mps == 0.0)  # still settling
@@ -44,22 +42,6 @@ def test_bounds_disturbances_settling_and_planar():
     off = SpeedIntegrator(SpeedCorrection(enabled=False, settle_steps=0))
     off.update(np.zeros(2), np.array([0.3, 0.0]))
     assert np.all(off.correction_mps == 0.0)
-
-
-def test_the_forward_correction_has_its_own_bound():
-    """Forward 0.5 m/s by default (the bias grows with the speed), lateral max_correction_mps."""
-    integ = SpeedIntegrator(SpeedCorrection(gain_per_step=1.0, settle_steps=0))
-    for _ in range(4):
-        integ.update(np.array([1.4, 0.3]), np.array([2.1, -0.3]))  # 0.7 slow (ignored: a push), lateral 0.6
-    assert np.all(integ.correction_mps == 0.0)
-    for _ in range(4):
-        integ.update(np.array([1.7, 0.0]), np.array([2.1, 0.45]))
-    assert integ.correction_mps[0] == 0.5 and integ.correction_mps[1] == 0.3
-    same = SpeedIntegrator(SpeedCorrection(gain_per_step=1.0, settle_steps=0, max_forward_correction_mps=None))
-    same.update(np.array([1.7, 0.0]), np.array([2.1, 0.0]))
-    assert same.correction_mps[0] == 0.3
-    with pytest.raises(InputError, match="bounds"):
-        SpeedCorrection(max_forward_correction_mps=-0.1)
 
 
 def test_bad_speed_correction_is_a_typed_error():

@@ -41,16 +41,10 @@ class SpeedCorrection:
     Attributes:
         enabled: Apply the correction.
         gain_per_step: Fraction of the error corrected per step (dimensionless).
-        max_correction_mps: Bound on the lateral correction, m/s, and on the
-            forward one unless ``max_forward_correction_mps`` is given.
+        max_correction_mps: Bound on the correction, m/s.
         max_error_mps: Larger step errors are disturbances (a push), not bias:
             they are left to the foot placement and do not enter the integral, m/s.
         settle_steps: Steps ignored at the start of a run.
-        max_forward_correction_mps: Bound on the forward correction, m/s
-            (``None``: ``max_correction_mps``). The forward bias grows with the
-            speed: on the closed-chain Cassie plant with the robot's sensors and
-            the EKF the QP's forward correction sat at 0.3 m/s in every run of
-            the 2.1 m/s ramp, which then ended 0.06-0.28 m/s slow.
     """
 
     enabled: bool = True
@@ -58,20 +52,14 @@ class SpeedCorrection:
     max_correction_mps: float = 0.3
     max_error_mps: float = 0.5
     settle_steps: int = 2
-    max_forward_correction_mps: float | None = 0.5
 
     def __post_init__(self):
-        vals = (self.gain_per_step, self.max_correction_mps, self.max_error_mps, self.forward_bound_mps)
+        vals = (self.gain_per_step, self.max_correction_mps, self.max_error_mps)
         if not all(math.isfinite(v) and v >= 0 for v in vals) or self.gain_per_step > 1 or self.settle_steps < 0:
             raise InputError(
                 "SpeedCorrection needs 0 <= gain_per_step <= 1, finite non-negative bounds and settle_steps >= 0, "
                 f"got {self!r}"
             )
-
-    @property
-    def forward_bound_mps(self) -> float:
-        """The bound on the forward correction, m/s."""
-        return self.max_correction_mps if self.max_forward_correction_mps is None else self.max_forward_correction_mps
 
 
 class SpeedIntegrator:
@@ -113,13 +101,13 @@ class SpeedIntegrator:
         self._prev_vy = float(v_step_mps[1])
         if not p.enabled or self._steps <= p.settle_steps:
             return self.correction_mps
-        for axis, v, bound in ((0, float(v_step_mps[0]), p.forward_bound_mps), (1, vy_stride, p.max_correction_mps)):
+        for axis, v in ((0, float(v_step_mps[0])), (1, vy_stride)):
             if axis == 1 and self.planar or not math.isfinite(v):
                 continue
             err = float(v_aimed_mps[axis]) - v
             if abs(err) <= p.max_error_mps:
                 c = self._correction[axis] + p.gain_per_step * err
-                self._correction[axis] = min(max(c, -bound), bound)
+                self._correction[axis] = min(max(c, -p.max_correction_mps), p.max_correction_mps)
         return self.correction_mps
 
 
