@@ -115,7 +115,8 @@ def walk(tree: pathlib.Path, args: argparse.Namespace) -> dict:
 def line(name: str, r: dict) -> str:
     return (
         f"{name:9s} {r['realtime_factor']:5.2f}x  wall {r['wall_us']:6.1f}  controller {r['controller_us']:6.1f}  "
-        f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  step alone {r['step_alone_us']:5.2f} µs;"
+        f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  "
+        f"step alone {r['step_alone_us']:5.2f} µs;"
         f" per step alone: wall {r['wall_per_step']:5.2f}  harness {r['harness_per_step']:4.2f}"
         + ("  FELL" if r["fell"] else "")
     )

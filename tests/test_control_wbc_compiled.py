@@ -13,8 +13,6 @@ from amlip_qp.control.wbc.inputs import swing_force_weight
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
-from amlip_qp.robots.kinematics import RobotKinematics
-from amlip_qp.robots.outputs import OutputMap
 from wbc_cases import FIELDS, random_cases
 
 
@@ -64,52 +62,6 @@ def test_compiled_build_equals_the_python_build(name, changes):
         rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
         assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
         assert builder.inputs.swing_force_weight == swing_force_weight(builder.config, target)
-
-
-@pytest.mark.parametrize("name", ["cassie", "rabbit"])
-def test_the_outputs_it_computes_are_the_kinematics_outputs(name):
-    """The compiled build stores h_0's (y, J, Jdot v) of the tick in the kinematics' cache: they equal
-    the output map's, on the same kinematics after a rebinding to another one's data, and back."""
-    robot = load_robot(name)
-    compiled = CompiledBuild(WholeBodyQP(robot))
-    cases = list(random_cases(robot, 4, seed=5))
-    for kin, target in cases + cases[:2]:
-        compiled.build(kin, target)
-        got = kin.outputs(target.stance, target.heading_rad)
-        fresh = RobotKinematics(robot)
-        fresh.update(kin.q, kin.v)
-        for a, b in zip(got, fresh.outputs(target.stance, target.heading_rad)):
-            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
-
-
-def test_a_drop_in_output_map_gets_the_python_build():
-    """Only the Python build reads a drop-in output map (the generated code computes the standard h_0)."""
-    robot = load_robot("rabbit")
-    builder = WholeBodyQP(robot)
-    compiled = CompiledBuild(builder)
-    calls = []
-
-    class Shifted:  # a drop-in: the standard names, other values
-        def __init__(self):
-            self.names = OutputMap(robot).names
-            self.inner = OutputMap(robot)
-
-        def evaluate(self, kin, stance, heading_rad=0.0):
-            calls.append(stance)
-            y, J, jdv = self.inner.evaluate(kin, stance, heading_rad)
-            return y + 0.1, J, jdv
-
-    kin, target = next(random_cases(robot, 1, seed=6))
-    q, v = kin.q.copy(), kin.v.copy()
-    kin.output_map = Shifted()
-    kin.update(q, v)
-    got = compiled.build(kin, target).copy()
-    assert calls  # the Python build asked the drop-in
-    kin.output_map = OutputMap(robot)
-    kin.update(q, v)
-    standard = compiled.build(kin, target)
-    assert len(calls) == 1 and not np.allclose(got.g, standard.g)  # the drop-in's outputs moved the cost
-    _assert_same(_python(builder, kin, target)[0], standard, "standard map")
 
 
 def test_the_functions_follow_the_constraint_and_cost_lists():

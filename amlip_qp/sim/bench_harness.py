@@ -196,7 +196,8 @@ def format_report(r: dict) -> str:
     lines.append(f"  same summary in both log modes: {same}")
     lines.append(
         f"  reference: the issue's code ({ref['commit']}), {ref['scenario']} {ref['tracker']} walk "
-        f"{ref['tick_per_step']:.2f} MuJoCo steps (alone) of wall time per tick, harness {ref['harness_per_step']:.2f}, "
+        f"{ref['tick_per_step']:.2f} MuJoCo steps (alone) of wall time per tick, "
+        f"harness {ref['harness_per_step']:.2f}, "
         f"at {ref['realtime_factor']:g}x real time"
     )
     if r["qp_meets_realtime_goal"] is not None:

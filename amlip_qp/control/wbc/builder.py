@@ -70,8 +70,8 @@ class WholeBodyQP:
     Attributes:
         layout: The :class:`VariableLayout`.
         tasks: Output, posture and (with ``spring_weight > 0``) spring-damping tasks.
-        inputs: The :class:`TickInputs` of the last build (the compiled build,
-            :class:`~amlip_qp.control.wbc.compiled.CompiledBuild`, sets only its ``swing_force_weight``).
+        inputs: The :class:`TickInputs` of the last build (the in-place build,
+            :class:`~amlip_qp.control.wbc.compiled_in_place.InPlaceBuild`, sets only its ``swing_force_weight``).
         dynamics: The :class:`ReducedDynamics` of the last build (torque map ``T, tau0``).
         constraints: The constraint objects, in the order of their rows.
         costs: The cost objects.

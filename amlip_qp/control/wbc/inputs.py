@@ -1,14 +1,15 @@
-"""The per-tick inputs of the whole-body QP.
+"""The per-tick inputs of the whole-body QP, gathered once for either build.
 
 Everything a tick's problem depends on besides the robot and the
 configuration is read from the kinematics and the target by ONE function,
-:func:`gather_inputs`, into a :class:`TickInputs`, for the Python build
-(:meth:`WholeBodyQP.build <amlip_qp.control.wbc.builder.WholeBodyQP.build>`).
-:class:`SymbolicInputs` are the same inputs as CasADi symbols, for the
-constraint and cost objects' symbolic forms; the compiled build
-(:class:`~amlip_qp.control.wbc.compiled.CompiledBuild`) forms them from
-Pinocchio's arrays inside its generated code, and is tested equal to the
-Python build.
+:func:`gather_inputs`, into a :class:`TickInputs`. The Python build
+(:meth:`WholeBodyQP.build <amlip_qp.control.wbc.builder.WholeBodyQP.build>`)
+and the compiled one (:class:`~amlip_qp.control.wbc.compiled.CompiledBuild`)
+both call it, so they cannot read different states. :class:`SymbolicInputs`
+are the same inputs as CasADi symbols, for the generated build. (The
+in-place build, :class:`~amlip_qp.control.wbc.compiled_in_place.InPlaceBuild`,
+forms them from Pinocchio's arrays inside its generated code, and is tested
+equal to the Python build.)
 
 The inputs: the dynamics terms ``M`` (its upper triangle) and ``h - taup``; the force-point
 Jacobians ``Jf`` (world-aligned, the layout's axes, stance foot then swing
@@ -159,7 +160,7 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
 
 
 def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
-    """Slices of the assembly function's packed small input: ``q``, ``v``,
+    """Slices of the generated build's packed small input: ``q``, ``v``,
     ``contact`` (two points: stance toe and heel positions, m, then their
     drifts, m/s^2; one point: its drift on the layout's axes), ``r`` (output
     task residual, pelvis-yaw shift applied), ``w`` (swing force ramp); and its ``size``."""
@@ -175,12 +176,9 @@ def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
 
 
 class PackedInput:
-    """The packed small input :attr:`array` of
-    :func:`~amlip_qp.control.wbc.compiled.assembly_function` (slices
-    :attr:`slices` of :func:`packed_layout`) filled from numeric
-    :class:`TickInputs`, with views of its parts made once: the constraint and
-    cost tests evaluate the symbolic forms with it. (The compiled build forms
-    this input inside its generated code.)
+    """The generated build's packed small input :attr:`array` (slices :attr:`slices`
+    of :func:`packed_layout`), with views of its parts made once (a tick's copies
+    then cost no slicing).
 
     Args:
         nq: Configuration size.

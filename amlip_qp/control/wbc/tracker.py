@@ -40,6 +40,7 @@ from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import CompiledBuild
+from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild
 from amlip_qp.control.wbc.config import QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
@@ -76,6 +77,13 @@ class QPTracker(Tracker):
         airborne_reduction: While the swing foot's force ramp is 0, solve the
             problem without its force variables and friction rows (same
             optimum, about a quarter less solve time; see the module doc).
+        in_place_assembly: Assemble with the generated C of
+            :mod:`amlip_qp.control.wbc.compiled_in_place`, which reads
+            Pinocchio's arrays in place (the same problem to rounding; the
+            controller's tick about a quarter shorter). Off by default: the
+            trajectories then change by rounding, and two acceptance walks
+            are at their edge on rounding (docs/TUNING.md). Needs the
+            compiled build (not ``compiled_build=False``).
 
     Attributes:
         last_problem: The last built :class:`QPProblem` (the builder's live
@@ -85,7 +93,8 @@ class QPTracker(Tracker):
         fallbacks: Number of ticks that used the fallback.
         cold_retries: Ticks whose warm-started solve failed and was retried
             from scratch (once) before any fallback.
-        build_backend: ``"c"`` (compiled assembly) or ``"python"``.
+        build_backend: ``"c"`` (compiled assembly), ``"c-in-place"``
+            (``in_place_assembly``) or ``"python"``.
         build_problem: The assembly in use, ``(kin, target) -> QPProblem``
             (the builder's live arrays).
     """
@@ -104,6 +113,7 @@ class QPTracker(Tracker):
         fallback_damping_Nms: float = 5.0,
         compiled_build: bool | None = None,
         airborne_reduction: bool = False,
+        in_place_assembly: bool = False,
     ):
         if not 0.0 <= fallback_decay <= 1.0:
             raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
@@ -115,6 +125,11 @@ class QPTracker(Tracker):
             raise InputError(f"compiled_build must be None, True or False, got {compiled_build!r}")
         if airborne_reduction not in (True, False):
             raise InputError(f"airborne_reduction must be True or False, got {airborne_reduction!r}")
+        if in_place_assembly not in (True, False) or (in_place_assembly and compiled_build is False):
+            raise InputError(
+                f"in_place_assembly must be True or False and needs the compiled build, got {in_place_assembly!r} "
+                f"with compiled_build={compiled_build!r}"
+            )
         if int(max_iter) < 1:
             raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
         self.robot = robot
@@ -124,8 +139,12 @@ class QPTracker(Tracker):
         self.build_backend = "python"
         if compiled_build is None or compiled_build:
             try:
-                self.build_problem = CompiledBuild(self.builder).build
-                self.build_backend = "c"
+                if in_place_assembly:
+                    self.build_problem = InPlaceBuild(self.builder).build
+                    self.build_backend = "c-in-place"
+                else:
+                    self.build_problem = CompiledBuild(self.builder).build
+                    self.build_backend = "c"
             except CompilerUnavailableError as exc:
                 if compiled_build:
                     raise

@@ -1,0 +1,248 @@
+"""The whole-body QP's per-tick assembly as generated C that reads Pinocchio's arrays in place.
+
+An option of the QP tracker (``QPTracker(in_place_assembly=True)``), the same
+problem as :class:`~amlip_qp.control.wbc.compiled.CompiledBuild` and the
+Python build to rounding, with less Python a tick:
+
+- :class:`~amlip_qp.control.wbc.compiled.CompiledBuild` gathers the tick's
+  inputs in Python (:func:`~amlip_qp.control.wbc.inputs.gather_inputs`: a
+  dozen Pinocchio getters, a new array each, the output map ``h_0`` with
+  its own generated C, the output task's residual and the pelvis-yaw
+  feedback with numpy) and copies them into its generated assembly;
+- :class:`InPlaceBuild` binds its generated function's inputs once to
+  Pinocchio's own storage (:class:`~amlip_qp.control.wbc.frame_terms.FrameTerms`:
+  the joint Jacobians ``data.J``, the joints' rotations, velocities and
+  accelerations, the frames' positions, the CoM terms, ``M``, ``h``; every
+  update overwrites them in place) plus one small packed array per tick
+  (``q``, ``v``, the references, the heading, the swing force ramp ``w``).
+  The function (one per stance side) forms the frames' Jacobians (bit for
+  bit Pinocchio's) and drifts (to rounding), the output map
+  (:func:`~amlip_qp.codegen.output_map.output_map_function`), the output
+  task's residual with the pelvis-yaw feedback
+  (:meth:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback.symbolic_correction`),
+  the passive forces (:mod:`~amlip_qp.control.wbc.passive_symbolic`) and,
+  through :func:`~amlip_qp.control.wbc.compiled.assembly_function`, the whole
+  problem; ``H = H0 + E^T E`` stays one numpy product. It stores ``h_0``'s
+  ``(y, J, Jdot v)`` in the kinematics' output cache
+  (:meth:`RobotKinematics.store_outputs
+  <amlip_qp.robots.kinematics.RobotKinematics.store_outputs>`), so the
+  controller's ``kin.outputs`` of the same tick costs nothing.
+
+It is not the default because the QP's trajectories then differ from the
+default build's by rounding, and two acceptance walks are at their edge on
+rounding (docs/TUNING.md, "The compiled assembly reads Pinocchio's arrays in
+place"). A kinematics whose output map is not the robot's standard ``h_0`` (a
+drop-in without ``standard_outputs``) is built by the Python build instead.
+The C source depends on the robot and the :class:`QPConfig`; it is compiled
+once into the codegen cache (about 5 s for Cassie).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+
+from amlip_qp.alip import other_side
+from amlip_qp.codegen import generate, runtime
+from amlip_qp.codegen.output_map import output_map_function
+from amlip_qp.control.wbc.compiled import FUNCTION_STEM, assembly_function, bind_buffers
+from amlip_qp.control.wbc.frame_terms import FrameTerms
+from amlip_qp.control.wbc.inputs import dm, swing_force_weight
+from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots.outputs import OutputMap
+
+if TYPE_CHECKING:
+    from amlip_qp.control.tracker import TrackingTarget
+    from amlip_qp.control.wbc.builder import WholeBodyQP
+    from amlip_qp.qp.problem import QPProblem
+    from amlip_qp.robots.kinematics import RobotKinematics
+
+#: File names inside the cache folder.
+SOURCE_FILE = "amlip_wbqp_in_place.c"
+LIBRARY_FILE = "libamlip_wbqp_in_place.so"
+
+
+def small_layout(nq: int, nv: int, n_outputs: int) -> dict:
+    """Slices of the tick function's small packed input: ``q``, ``v``, ``h_d``,
+    ``dh_d``, ``ddh_d`` (the output references), ``heading`` (rad), ``w`` (the
+    swing force ramp); and its ``size``."""
+    sizes = {"q": nq, "v": nv, "h_d": n_outputs, "dh_d": n_outputs, "ddh_d": n_outputs, "heading": 1, "w": 1}
+    out: dict = {}
+    at = 0
+    for name, size in sizes.items():
+        out[name] = slice(at, at + size)
+        at += size
+    out["size"] = at
+    return out
+
+
+def frame_terms(builder: WholeBodyQP) -> FrameTerms:
+    """The Pinocchio terms the tick functions read: the base, the contact points and the force points."""
+    robot = builder.robot
+    frames = [robot.base_frame_id]
+    for side in robot.foot_sides:
+        frames += [robot.contact_frame_ids[side], *robot.force_frame_ids[side]]
+    return FrameTerms(robot.pin_model, frames, [robot.base_frame_id])
+
+
+def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Function:
+    """The CasADi function of ``stance``'s whole tick (see the module doc): the
+    inputs ``M_upper`` and ``nle`` (Pinocchio's ``M``, read above the diagonal,
+    and ``h``), the :attr:`FrameTerms.symbols` and ``small``
+    (:func:`small_layout`); the outputs of :func:`assembly_function`, then ``y``,
+    ``JyT`` and ``jdv`` of the output map."""
+    B, L, robot = builder, builder.layout, builder.robot
+    nv, nq, task = L.nv, robot.nq, B.output_task
+    n_out = task.size
+    swing = other_side(stance)
+    outputs = OutputMap(robot)
+    cassie = outputs.layout == "cassie"
+    Mu, nle = ca.MX.sym("M_upper", nv, nv), ca.MX.sym("nle", nv)
+    sl = small_layout(nq, nv, n_out)
+    u = ca.MX.sym("small", sl["size"])
+    q, v, h_d, dh_d, ddh_d = (u[sl[k]] for k in ("q", "v", "h_d", "dh_d", "ddh_d"))
+    heading, w = u[sl["heading"]], u[sl["w"]]
+    T = terms
+    base = robot.base_frame_id
+    # The output map (codegen.output_map's packed order), with the hip-yaw rows' ones.
+    J_base = T.jacobian(base)
+    frames = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
+    frames += list(robot.force_frame_ids[swing]) if cassie else []
+    JT = ca.horzcat(J_base[3:6, :].T, T.Jcom.T, *[T.jacobian(f)[0:3, :].T for f in frames])
+    yaw = [q[outputs.yaw_q_idx[stance]], q[outputs.yaw_q_idx[swing]]] if cassie else [0.0, 0.0]
+    R = T.rotation(base)
+    packed = ca.vertcat(
+        ca.reshape(R.T, 9, 1), T.drift(base)[3:6], T.com, T.acom,
+        *[ca.vertcat(T.position(f), T.drift(f)[0:3]) for f in frames], *yaw, heading, v,
+    )  # fmt: skip
+    y, JyT, jdv = output_map_function(outputs.layout, nv)[0](JT, packed)
+    if cassie:
+        rows, cols = [outputs.yaw_v_idx[stance], outputs.yaw_v_idx[swing]], [2, 3]
+        JyT = JyT + ca.DM(ca.Sparsity.triplet(nv, n_out, rows, cols), 1.0)  # structural zeros there
+    # The output task's residual r = Jdot v - ydd_d - K_d (yd_d - J v) - K_p (y_d - y), the feedback's shift applied.
+    kp, kd = dm(task.gains.kp), dm(task.gains.kd)
+    r = jdv - ddh_d - kd * (dh_d - ca.mtimes(JyT.T, v)) - kp * (h_d - y)
+    fb = B.inputs.feedback
+    if fb is not None:
+        dh, ddh = fb.symbolic_correction(R, ca.mtimes(J_base[5, :], v), heading, h_d, dh_d)
+        i = fb.swing_index
+        shift = ca.MX.zeros(n_out)
+        shift[i] = task.gains.kd[i] * ddh + task.gains.kp[i] * dh
+        r = r - shift
+    # The assembly's inputs: Jf (the layout's axes; stance points, then swing points) and the packed rest.
+    axes = L.axes_index if isinstance(L.axes_index, slice) else [int(a) for a in L.axes_index]
+    jf = [T.jacobian(f)[axes, :] for side in (stance, swing) for f in robot.force_frame_ids[side]]
+    points = robot.force_frame_ids[stance]
+    if L.n_points == 2:
+        contact = ca.vertcat(*[T.position(f) for f in points], *[T.drift(f)[0:3] for f in points])
+    else:
+        contact = T.drift(points[0])[axes]
+    core = assembly_function(B, stance)
+    hp = nle - passive_forces_expression(robot, q, v)  # h - taup
+    parts = core(Mu, hp, ca.vertcat(*jf).T, JyT, ca.vertcat(q, v, contact, r, w))
+    names = [core.name_out(i) for i in range(core.n_out())]
+    args = [Mu, nle, *(s for _, s in T.symbols), u]
+    arg_names = ["M_upper", "nle", *(n for n, _ in T.symbols), "small"]
+    return ca.Function(
+        f"{FUNCTION_STEM}_{stance}", args, [*parts, ca.densify(y), ca.densify(JyT), ca.densify(jdv)],
+        arg_names, [*names, "y", "JyT", "jdv"],
+    )  # fmt: skip
+
+
+def generate_in_place_source(builder: WholeBodyQP) -> tuple[bytes, dict[str, ca.Function]]:
+    """The C source of both stances' tick functions for ``builder``, and the functions."""
+    # Expanded to scalar (SX) code: sparsity and constants folded; E^T E stays with numpy (docs/TUNING.md).
+    terms = frame_terms(builder)
+    functions = {side: tick_function(builder, side, terms).expand() for side in builder.robot.foot_sides}
+    options = dict(generate.CODEGEN_OPTIONS, with_header=False)
+    cg = ca.CodeGenerator(SOURCE_FILE, options)
+    for fn in functions.values():
+        cg.add(fn)
+    with tempfile.TemporaryDirectory(prefix="amlip_qp_wbqp_") as tmp:
+        cg.generate(tmp + os.sep)
+        source = (Path(tmp) / SOURCE_FILE).read_bytes()
+    return generate.banner().encode("ascii") + source, functions
+
+
+class InPlaceBuild:
+    """The compiled assembly of one :class:`WholeBodyQP` (see the module doc).
+
+    Args:
+        builder: The :class:`~amlip_qp.control.wbc.builder.WholeBodyQP`
+            whose problem arrays it fills (with its inputs and dynamics buffers).
+        cache_dir: Overrides the codegen cache folder.
+
+    Raises:
+        CompilerUnavailableError: No C compiler.
+        CodegenError: The compiler rejected the source or the library does not load.
+    """
+
+    def __init__(self, builder: WholeBodyQP, cache_dir: str | os.PathLike | None = None):
+        self.builder = B = builder
+        runtime.require_compiler()  # before the generation, which takes seconds
+        source, symbolic = generate_in_place_source(builder)
+        self._terms = frame_terms(builder)
+        fn = symbolic[B.robot.foot_sides[0]]
+        L, P, n_out = B.layout, B.problem, B.output_task.size
+        self._slices = small_layout(B.robot.nq, L.nv, n_out)
+        self._small = np.zeros(self._slices["size"])
+        self._E = np.zeros((fn.size_out(fn.index_out("ET"))[1], L.n))
+        self._EtE = np.zeros((L.n, L.n))
+        self._y, self._J, self._jdv = np.zeros(n_out), np.zeros((n_out, L.nv)), np.zeros(n_out)
+        n_tau = fn.size_out(fn.index_out("TT"))[1]  # the leading inequality rows with a varying C
+        self._outputs = [
+            self._E, P.g, P.A, P.b, P.C[:n_tau], P.l[:n_tau], P.u, P.lb, P.ub, B.dynamics.RD, B.dynamics.Rhp,
+            self._y, self._J, self._jdv,
+        ]  # fmt: skip
+        self._names = {side: f"{FUNCTION_STEM}_{side}" for side in B.robot.foot_sides}
+        self.library_path, self._functions = runtime.compile_and_load(
+            source, list(self._names.values()), SOURCE_FILE, LIBRARY_FILE, cache_dir
+        )
+        self._data = None  # the Pinocchio data the functions read (bound on the first build with it)
+        self._views: list = []  # keeps the bound views alive
+        self._eval: dict = {}
+
+    def _bind_data(self, kin: RobotKinematics) -> None:
+        """Bind the functions' inputs to ``kin``'s Pinocchio arrays (see the module doc)."""
+        data = kin.data
+        self._views = [data.M, data.nle, *self._terms.views(data), self._small]
+        bound = bind_buffers(self._functions, self._views, self._outputs)
+        self._eval = {side: bound[name][1] for side, name in self._names.items()}
+        self._buffers = [bound[name][0] for name in self._names.values()]  # the evaluators need them alive
+        self._data = data
+
+    def build(self, kin: RobotKinematics, target: TrackingTarget) -> QPProblem:
+        """Fill the builder's problem for ``kin`` and ``target``; return it.
+        Same contract as :meth:`WholeBodyQP.build`."""
+        B = self.builder
+        if not getattr(kin.output_map, "standard_outputs", False):
+            return B.build(kin, target)  # a drop-in output map: only the Python build reads it
+        kin.require_dynamics()
+        stance = target.stance
+        if stance not in self._names:
+            raise InputError(f"target.stance must be one of {tuple(self._names)}, got {stance!r}")
+        if kin.data is not self._data:
+            self._bind_data(kin)
+        sl, u = self._slices, self._small
+        q, v = kin.state()
+        u[sl["q"]] = q
+        u[sl["v"]] = v
+        u[sl["h_d"]] = target.h_d
+        u[sl["dh_d"]] = target.dh_d
+        u[sl["ddh_d"]] = target.ddh_d
+        heading = float(target.heading_rad)
+        u[sl["heading"]] = heading
+        B.inputs.swing_force_weight = w = swing_force_weight(B.config, target)  # the tracker reads it
+        u[sl["w"]] = w
+        self._eval[stance]()
+        E = self._E
+        np.add(B.constant_cost.H0, np.matmul(E.T, E, out=self._EtE), out=B.problem.H)
+        B.dynamics.filled_for(stance)
+        kin.store_outputs(stance, heading, (self._y.copy(), self._J.copy(), self._jdv.copy()))
+        return B.problem

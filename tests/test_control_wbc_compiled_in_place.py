@@ -1,0 +1,148 @@
+"""The in-place compiled assembly (amlip_qp.control.wbc.compiled_in_place) against the Python build."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.wbc.builder import WholeBodyQP
+from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild, tick_function
+from amlip_qp.control.wbc.compiled_in_place import frame_terms as make_frame_terms
+from amlip_qp.control.wbc.config import default_config
+from amlip_qp.control.wbc.inputs import swing_force_weight
+from amlip_qp.control.wbc.tracker import QPTracker
+from amlip_qp.exceptions import InputError
+from amlip_qp.robots import load_robot
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.outputs import OutputMap
+from wbc_cases import FIELDS, random_cases
+
+
+def _python(builder, kin, target):
+    problem = builder.build(kin, target)
+    return problem.copy(), builder.dynamics.RD.copy(), builder.dynamics.Rhp.copy()
+
+
+def _assert_same(ref, got, what):
+    for name in FIELDS:
+        a, b = getattr(ref, name), getattr(got, name)
+        finite = np.isfinite(a)
+        assert np.array_equal(finite, np.isfinite(b)), f"{what}: {name} has infinities elsewhere"
+        assert np.array_equal(a[~finite], b[~finite]), f"{what}: {name} infinities differ"
+        scale = 1.0 + np.abs(a[finite])
+        assert np.max(np.abs(a[finite] - b[finite]) / scale, initial=0.0) < 1e-12, f"{what}: {name}"
+
+
+@pytest.mark.parametrize(
+    "name, changes",
+    [
+        ("cassie", {}),
+        ("cassie", {"rigid_springs": "none", "touchdown_blend": 1.0, "stance_yaw_moment_weight": 0.0}),
+        ("cassie", {"rigid_springs": "swing", "hip_yaw_feedback": 0.0, "stance_foot_torque_max_Nm": np.inf}),
+        ("rabbit", {}),
+        ("rabbit", {"touchdown_blend": 0.5, "reg_torque": 0.0}),
+    ],
+)
+def test_the_in_place_build_equals_the_python_build(name, changes):
+    robot = load_robot(name)
+    builder = WholeBodyQP(robot, default_config(robot).with_(**changes))
+    compiled = InPlaceBuild(builder)
+    for i, (kin, target) in enumerate(random_cases(robot, 8)):
+        ref, RD, Rhp = _python(builder, kin, target)
+        # Poison the shared arrays: the compiled build must write every varying entry.
+        P, dyn = builder.problem, builder.dynamics
+        for arr in (P.H, P.g, P.A, P.b, P.lb, P.ub, P.l[builder.constraint("torque").rows], P.u, dyn.RD, dyn.Rhp):
+            arr[...] = np.nan
+        builder.inputs.swing_force_weight = np.nan
+        got = compiled.build(kin, target)
+        assert got is builder.problem
+        _assert_same(ref, got, f"{name} state {i} ({target.stance}, phase {target.phase})")
+        assert np.max(np.abs(dyn.RD - RD) / (1.0 + np.abs(RD))) < 1e-12
+        assert np.max(np.abs(dyn.Rhp - Rhp) / (1.0 + np.abs(Rhp))) < 1e-12
+        x = np.random.default_rng(i).normal(0.0, 10.0, builder.n_variables)
+        rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
+        assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
+        assert builder.inputs.swing_force_weight == swing_force_weight(builder.config, target)
+
+
+@pytest.mark.parametrize("name", ["cassie", "rabbit"])
+def test_the_outputs_it_computes_are_the_kinematics_outputs(name):
+    """It stores h_0's (y, J, Jdot v) of the tick in the kinematics' cache: they equal the output
+    map's, on each kinematics after a rebinding to another one's data, and back."""
+    robot = load_robot(name)
+    compiled = InPlaceBuild(WholeBodyQP(robot))
+    cases = list(random_cases(robot, 4, seed=5))
+    for kin, target in cases + cases[:2]:
+        compiled.build(kin, target)
+        got = kin.outputs(target.stance, target.heading_rad)
+        fresh = RobotKinematics(robot)
+        fresh.update(kin.q, kin.v)
+        for a, b in zip(got, fresh.outputs(target.stance, target.heading_rad)):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+
+
+def test_a_drop_in_output_map_gets_the_python_build():
+    """Only the Python build reads a drop-in output map (the generated code computes the standard h_0)."""
+    robot = load_robot("rabbit")
+    builder = WholeBodyQP(robot)
+    compiled = InPlaceBuild(builder)
+    calls = []
+
+    class Shifted:  # a drop-in: the standard names, other values
+        def __init__(self):
+            self.names = OutputMap(robot).names
+            self.inner = OutputMap(robot)
+
+        def evaluate(self, kin, stance, heading_rad=0.0):
+            calls.append(stance)
+            y, J, jdv = self.inner.evaluate(kin, stance, heading_rad)
+            return y + 0.1, J, jdv
+
+    kin, target = next(random_cases(robot, 1, seed=6))
+    q, v = kin.q.copy(), kin.v.copy()
+    kin.output_map = Shifted()
+    kin.update(q, v)
+    got = compiled.build(kin, target).copy()
+    assert calls  # the Python build asked the drop-in
+    kin.output_map = OutputMap(robot)
+    kin.update(q, v)
+    standard = compiled.build(kin, target)
+    assert len(calls) == 1 and not np.allclose(got.g, standard.g)  # the drop-in's outputs moved the cost
+    _assert_same(_python(builder, kin, target)[0], standard, "standard map")
+
+
+def test_a_kinematics_without_dynamics_or_a_bad_stance_is_an_input_error():
+    robot = load_robot("rabbit")
+    compiled = InPlaceBuild(WholeBodyQP(robot))
+    kin, target = next(random_cases(robot, 1, seed=7))
+    light = RobotKinematics(robot)
+    light.update_positions(kin.q)
+    with pytest.raises(InputError, match="dynamics"):
+        compiled.build(light, target)
+    target.stance = "up"
+    with pytest.raises(InputError, match="stance"):
+        compiled.build(kin, target)
+
+
+def test_the_functions_take_pinocchios_arrays_and_give_the_assembly_and_the_outputs():
+    robot = load_robot("cassie")
+    builder = WholeBodyQP(robot)
+    terms = make_frame_terms(builder)
+    fn = tick_function(builder, "left", terms)
+    names_in = [fn.name_in(i) for i in range(fn.n_in())]
+    assert names_in == ["M_upper", "nle", *(n for n, _ in terms.symbols), "small"]
+    names_out = [fn.name_out(i) for i in range(fn.n_out())]
+    assert names_out[-3:] == ["y", "JyT", "jdv"] and "ET" in names_out and "Rhp" in names_out
+
+
+def test_the_tracker_option_gives_the_same_torques_as_the_python_build():
+    robot = load_robot("cassie")
+    opts = {"eps_abs": 1e-9, "warm_start": False}
+    fast, slow = QPTracker(robot, in_place_assembly=True, **opts), QPTracker(robot, compiled_build=False, **opts)
+    assert fast.build_backend == "c-in-place" and QPTracker(robot).build_backend == "c"
+    for kin, target in random_cases(robot, 6, seed=3):
+        a, b = fast.compute(kin, target), slow.compute(kin, target)
+        assert a.ok and b.ok
+        np.testing.assert_allclose(a.tau_Nm, b.tau_Nm, atol=1e-6)
+    with pytest.raises(InputError, match="in_place_assembly"):
+        QPTracker(robot, in_place_assembly=True, compiled_build=False)
+    with pytest.raises(InputError, match="in_place_assembly"):
+        QPTracker(robot, in_place_assembly="yes")
