@@ -59,12 +59,24 @@ import numpy as np
 from amlip_qp.sim.factory import build_simulation
 from amlip_qp.sim.scenarios import get_scenario
 
-scenario, tracker, duration, log, yardstick = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4], sys.argv[5]
+scenario, tracker_name, duration, log = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+yardstick, in_place = sys.argv[5], sys.argv[6] == "1"
 sc = get_scenario(scenario).with_(duration_s=duration)
+
+def tracker():
+    if not in_place:
+        return tracker_name
+    from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.sim.factory import load
+    made = QPTracker(load(sc.robot), in_place_assembly=True)
+    if made.build_backend != "c-in-place":
+        raise SystemExit(f"no in-place assembly: {made.build_backend}")
+    return made
+
 ys = {}  # this checkout's amlip_qp/sim/mujoco_yardstick.py, the same recipe in every version
 exec(compile(open(yardstick).read(), yardstick, "exec"), ys)
 # warm-up (imports, compiled kernels, caches), and the state the yardstick replays
-model, state = ys["snapshot_walk"](lambda: build_simulation(sc, tracker).run(WARMUP_S))
+model, state = ys["snapshot_walk"](lambda: build_simulation(sc, tracker()).run(WARMUP_S))
 step, clock, spent = mujoco.mj_step, time.perf_counter_ns, []
 
 def timed_step(m, d):
@@ -73,7 +85,7 @@ def timed_step(m, d):
     spent.append(clock() - t0)
 
 mujoco.mj_step = timed_step
-sim = build_simulation(sc, tracker)
+sim = build_simulation(sc, tracker())
 if "log" in inspect.signature(sim.run).parameters:
     result = sim.run(duration, log=log)
 else:  # a version without log modes
@@ -88,15 +100,27 @@ print(json.dumps({
     "ticks": n, "fell": bool(result.fell), "realtime_factor": result.sim_time_s / result.wall_time_s,
     "wall_us": wall_us, "controller_us": controller_us, "mujoco_us": mujoco_us,
     "harness_us": wall_us - controller_us - mujoco_us, "step_alone_us": step_alone_us, "package": amlip_qp.__file__,
+    "in_place": in_place,
 }))
 """
 
 
-def walk(tree: pathlib.Path, args: argparse.Namespace) -> dict:
-    """One walk of the checkout at ``tree`` in a fresh process; its timing record."""
+def walk(tree: pathlib.Path, args: argparse.Namespace, in_place: bool = False) -> dict:
+    """One walk of the checkout at ``tree`` in a fresh process; its timing record
+    (``in_place``: the QP tracker with ``in_place_assembly=True``)."""
     env_code = f"import sys; sys.path.insert(0, {str(tree)!r})\nWARMUP_S = {WARMUP_S!r}\n" + WALK
     out = subprocess.run(
-        [sys.executable, "-c", env_code, args.scenario, args.tracker, str(args.duration), args.log, str(YARDSTICK)],
+        [
+            sys.executable,
+            "-c",
+            env_code,
+            args.scenario,
+            args.tracker,
+            str(args.duration),
+            args.log,
+            str(YARDSTICK),
+            "1" if in_place else "0",
+        ],  # fmt: skip
         capture_output=True,
         text=True,
         cwd=tree,
@@ -130,6 +154,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tracker", default="qp", help="tracker (default qp)")
     p.add_argument("--duration", type=float, default=10.0, help="simulated time per walk, s (default 10)")
     p.add_argument("--log", default="summary", help="this checkout's log mode (default summary)")
+    p.add_argument(
+        "--in-place",
+        action="store_true",
+        help="this checkout's QP tracker with in_place_assembly=True (the reference's as it is)",
+    )
     p.add_argument("--json", default=None, help="write every record and the medians to this JSON file ('-': stdout)")
     args = p.parse_args(argv)
     ref = pathlib.Path(args.reference).resolve()
@@ -145,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
             raise InputError(f"--tracker {args.tracker}: unknown; known: {', '.join(TRACKER_MODULES)}")
         if args.log not in LOG_MODES:
             raise InputError(f"--log {args.log}: unknown; known: {', '.join(LOG_MODES)}")
+        if args.in_place and args.tracker != "qp":
+            raise InputError(f"--in-place is an option of the qp tracker, not of {args.tracker}")
         check_output_path("--json", args.json)
     except InputError as exc:
         print(f"error: {exc}")
@@ -153,9 +184,9 @@ def main(argv: list[str] | None = None) -> int:
     for i in range(args.pairs):
         # ABBA: the order alternates, so a steady drift of the machine's speed favours neither
         if i % 2 == 0:
-            pair = {"reference": walk(ref, args), "this": walk(HERE, args)}
+            pair = {"reference": walk(ref, args), "this": walk(HERE, args, args.in_place)}
         else:
-            this = walk(HERE, args)
+            this = walk(HERE, args, args.in_place)
             pair = {"reference": walk(ref, args), "this": this}
         pairs.append(pair)
         print(line("reference", pair["reference"]))
