@@ -86,7 +86,12 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--repeats", type=positive_int, default=3, help="walks per tracker and log mode, interleaved (default 3)"
     )
-    b.add_argument("--trackers", default="qp,pbc", metavar="NAMES", help="comma-separated trackers (default qp,pbc)")
+    b.add_argument(
+        "--trackers",
+        default="qp,pbc",
+        metavar="NAMES",
+        help="comma-separated trackers: qp, pbc, qp-in-place (the QP with its in-place assembly) (default qp,pbc)",
+    )
     b.set_defaults(func=handler("amlip_qp.sim.bench_harness:run_bench"))
 
     b = bench.add_parser(
