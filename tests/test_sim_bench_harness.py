@@ -21,11 +21,12 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
     assert r["qp_meets_realtime_goal"] == {}  # no QP walk timed
     for row in r["runs"].values():
         # the loop's wall time holds the three timed parts (and nothing of them twice)
-        assert row["tick_per_step"] > row["harness_per_step"] > 0.0 and row["step_alone_us"] > 0.0
-        # in the loop MuJoCo's step costs at least its time alone (the caches are colder there)
-        assert row["mujoco_us_per_tick"] > 0.5 * row["step_alone_us"]
-        ref = bench_harness.REFERENCE_TICK_PER_STEP
-        assert row["realtime_factor_at_reference"] == pytest.approx(0.65 * ref / row["tick_per_step"])
+        assert row["tick_per_mujoco"] > 1.0 + row["harness_per_mujoco"]
+        ref = bench_harness.REFERENCE_TICK_PER_MUJOCO
+        assert row["realtime_factor_at_reference"] == pytest.approx(0.65 * ref / row["tick_per_mujoco"])
+        # MuJoCo's step alone: in the loop it costs at least about as much (colder caches there)
+        assert 0.0 < row["step_alone_us"] < 2.0 * row["mujoco_us_per_tick"]
+        assert row["tick_per_step"] > row["harness_per_step"] > 0.0
     assert r["harness_meets_goal"] == {}  # the reference's walks were QP walks: no verdict on a PBC walk
     text = bench_harness.format_report(r)
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
@@ -43,10 +44,9 @@ def test_the_goals_are_judged_on_the_reference_walk_only(scenario):
         return
     row = r["runs"]["qp/summary"]
     assert r["qp_meets_realtime_goal"] == {"qp/summary": row["realtime_factor_at_reference"] >= 1.0}
-    goal = bench_harness.REFERENCE_HARNESS_PER_STEP / 4
-    assert r["harness_meets_goal"] == {k: row["harness_per_step"] <= goal for k, row in r["runs"].items()}
-    assert f"harness <= {goal:.2f} MuJoCo steps (alone) per tick" in text
-    assert "qp/summary walk at >= 1x real time" in text
+    goal = bench_harness.REFERENCE_HARNESS_PER_MUJOCO / 4
+    assert r["harness_meets_goal"] == {k: row["harness_per_mujoco"] <= goal for k, row in r["runs"].items()}
+    assert f"harness <= {goal:.2f} MuJoCo steps per tick" in text and "qp/summary walk at >= 1x real time" in text
 
 
 def test_the_in_place_qp_variant_is_timed_and_judged_too():
@@ -58,6 +58,7 @@ def test_the_in_place_qp_variant_is_timed_and_judged_too():
     assert "qp-in-place/summary walk at >= 1x real time" in bench_harness.format_report(r)
     tracker = bench_harness.tracker_for(bench_harness.get_scenario("cassie-1mps"), "qp-in-place")
     assert tracker.build_backend == "c-in-place"
+    assert bench_harness.tracker_for(bench_harness.get_scenario("cassie-1mps"), "qp") == "qp"
 
 
 def test_bad_trackers_and_counts_are_refused_before_simulating():

@@ -1,14 +1,16 @@
 """MuJoCo's step time alone on a fixed walking state: the machine-speed yardstick of the speed goals.
 
-The speed goals compare this code with older code (``amlip-qp bench harness``,
-``examples/speed_against.py``) on a shared machine whose speed drifts, so each
-walk's wall time is divided by a yardstick measured in the same process: the
-time of one ``mujoco.mj_step`` replayed alone, on copies of the state at the
-end of a short walk (:func:`snapshot_walk`, :func:`step_time_us`). The
-MuJoCo time measured inside the walking loop is no such yardstick: there the
-rest of the tick evicts MuJoCo's data from the caches, so the step costs
-about twice as much, and how much more depends on the code under test (a leaner
-loop leaves MuJoCo faster).
+The speed goals compare this code with older code (``examples/speed_against.py``,
+``amlip-qp bench harness``) on a shared machine whose speed drifts, so each
+walk's wall time is also divided by a yardstick measured in the same process:
+the time of one ``mujoco.mj_step`` replayed alone, on copies of the state at
+the end of a short walk (:func:`snapshot_walk`, :func:`step_time_us`). It
+does not depend on the code under test, unlike MuJoCo's time inside the
+walking loop, where the rest of the tick evicts MuJoCo's data from the caches
+(the step costs about twice as much there, and a leaner loop leaves it
+faster). But it lasts about 25 ms, so it swings with the machine's load
+(10-35 µs a step seen on the loaded 2-core machine), where the step inside
+the loop follows the walk's own conditions.
 
 This file uses only ``copy``, ``statistics``, ``time`` and ``mujoco``, and
 ``examples/speed_against.py`` runs this file's source inside the walks of
