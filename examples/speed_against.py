@@ -11,13 +11,16 @@ tick, the controller's tick (``tick_time_us``, which every version records)
 and MuJoCo's steps (``mujoco.mj_step`` wrapped with a timer in the walk's
 process before the walk). The harness's own time is what is left; it holds
 the wrapper's own call (well under a microsecond a tick, the same for both). Each part
-is also divided by MuJoCo's step time alone, measured in the same process right
-after the walk (:mod:`amlip_qp.sim.mujoco_yardstick`, this checkout's recipe in
-both walks: ``mj_step`` replayed on copies of the state at the end of the
-0.5-s warm-up walk): those ratios compare walks run at different machine
-speeds. MuJoCo's time inside the loop is no such yardstick: there the rest of
-the tick evicts MuJoCo's data from the caches, by an amount that depends on
-the code under test.
+is also divided by two yardsticks of the machine's speed, to compare walks run
+at different machine speeds: MuJoCo's step time of the same walk (``_per_mujoco``;
+stable under load, but a leaner loop leaves MuJoCo's data in the caches and its
+step faster, so it understates a leaner code's gain) and MuJoCo's step time
+alone, measured in the same process right after the walk (``_per_step``;
+:mod:`amlip_qp.sim.mujoco_yardstick`, this checkout's recipe in both walks:
+``mj_step`` replayed on copies of the state at the end of the 0.5-s warm-up
+walk; independent of the code, but it swings with the machine's load). The
+real-time factors' ratio needs no yardstick; the ABBA order and the median
+over the pairs average the drift out.
 
     git worktree add --detach /tmp/ref 82a46cd
     python examples/speed_against.py --reference /tmp/ref --pairs 5
@@ -131,6 +134,8 @@ def walk(tree: pathlib.Path, args: argparse.Namespace, in_place: bool = False) -
     rec = json.loads(out.stdout.strip().splitlines()[-1])
     if not pathlib.Path(rec["package"]).resolve().is_relative_to(tree):
         raise RuntimeError(f"the walk meant for {tree} imported {rec['package']}")
+    for part in ("wall", "controller", "harness"):
+        rec[f"{part}_per_mujoco"] = rec[f"{part}_us"] / rec["mujoco_us"]
     for part in ("wall", "controller", "harness", "mujoco"):
         rec[f"{part}_per_step"] = rec[f"{part}_us"] / rec["step_alone_us"]
     return rec
@@ -140,6 +145,7 @@ def line(name: str, r: dict) -> str:
     return (
         f"{name:9s} {r['realtime_factor']:5.2f}x  wall {r['wall_us']:6.1f}  controller {r['controller_us']:6.1f}  "
         f"MuJoCo {r['mujoco_us']:5.1f}  harness {r['harness_us']:6.1f} µs/tick  |  "
+        f"per MuJoCo step: wall {r['wall_per_mujoco']:5.2f}  harness {r['harness_per_mujoco']:4.2f}  |  "
         f"step alone {r['step_alone_us']:5.2f} µs;"
         f" per step alone: wall {r['wall_per_step']:5.2f}  harness {r['harness_per_step']:4.2f}"
         + ("  FELL" if r["fell"] else "")
@@ -191,7 +197,10 @@ def main(argv: list[str] | None = None) -> int:
         pairs.append(pair)
         print(line("reference", pair["reference"]))
         print(line("this", pair["this"]), flush=True)
-    keys = ("realtime_factor", "wall_per_step", "harness_per_step", "mujoco_per_step", "harness_us", "controller_us")
+    keys = (
+        "realtime_factor", "wall_per_mujoco", "harness_per_mujoco", "wall_per_step", "harness_per_step",
+        "mujoco_per_step", "harness_us", "controller_us",
+    )  # fmt: skip
     ratios = {k: statistics.median(p["this"][k] / p["reference"][k] for p in pairs) for k in keys}
     medians = {who: {k: statistics.median(p[who][k] for p in pairs) for k in keys} for who in ("reference", "this")}
     print(f"medians over {len(pairs)} pairs (this ÷ reference, per pair):")

@@ -36,6 +36,7 @@ def test_a_checkout_against_itself_splits_each_walk_and_compares_the_pairs(speed
             # the yardstick: MuJoCo's step alone, which the loop's MuJoCo time per tick cannot beat by much
             assert 0.0 < rec["step_alone_us"] < 2.0 * rec["mujoco_us"]
             assert rec["wall_per_step"] == pytest.approx(rec["wall_us"] / rec["step_alone_us"])
+            assert rec["harness_per_mujoco"] == pytest.approx(rec["harness_us"] / rec["mujoco_us"])
     ratio = report["ratios"]["wall_per_step"]
     pairs = [p["this"]["wall_per_step"] / p["reference"]["wall_per_step"] for p in report["pairs"]]
     assert ratio == pytest.approx(sorted(pairs)[0] + (sorted(pairs)[1] - sorted(pairs)[0]) / 2)  # the median
