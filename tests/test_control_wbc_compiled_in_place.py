@@ -7,28 +7,12 @@ from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild, tick_function
 from amlip_qp.control.wbc.compiled_in_place import frame_terms as make_frame_terms
 from amlip_qp.control.wbc.config import default_config
-from amlip_qp.control.wbc.inputs import swing_force_weight
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.outputs import OutputMap
-from wbc_cases import FIELDS, random_cases
-
-
-def _python(builder, kin, target):
-    problem = builder.build(kin, target)
-    return problem.copy(), builder.dynamics.RD.copy(), builder.dynamics.Rhp.copy()
-
-
-def _assert_same(ref, got, what):
-    for name in FIELDS:
-        a, b = getattr(ref, name), getattr(got, name)
-        finite = np.isfinite(a)
-        assert np.array_equal(finite, np.isfinite(b)), f"{what}: {name} has infinities elsewhere"
-        assert np.array_equal(a[~finite], b[~finite]), f"{what}: {name} infinities differ"
-        scale = 1.0 + np.abs(a[finite])
-        assert np.max(np.abs(a[finite] - b[finite]) / scale, initial=0.0) < 1e-12, f"{what}: {name}"
+from wbc_cases import assert_compiled_build_equals_the_python_build, assert_same_problem, python_build, random_cases
 
 
 @pytest.mark.parametrize(
@@ -44,23 +28,7 @@ def _assert_same(ref, got, what):
 def test_the_in_place_build_equals_the_python_build(name, changes):
     robot = load_robot(name)
     builder = WholeBodyQP(robot, default_config(robot).with_(**changes))
-    compiled = InPlaceBuild(builder)
-    for i, (kin, target) in enumerate(random_cases(robot, 8)):
-        ref, RD, Rhp = _python(builder, kin, target)
-        # Poison the shared arrays: the compiled build must write every varying entry.
-        P, dyn = builder.problem, builder.dynamics
-        for arr in (P.H, P.g, P.A, P.b, P.lb, P.ub, P.l[builder.constraint("torque").rows], P.u, dyn.RD, dyn.Rhp):
-            arr[...] = np.nan
-        builder.inputs.swing_force_weight = np.nan
-        got = compiled.build(kin, target)
-        assert got is builder.problem
-        _assert_same(ref, got, f"{name} state {i} ({target.stance}, phase {target.phase})")
-        assert np.max(np.abs(dyn.RD - RD) / (1.0 + np.abs(RD))) < 1e-12
-        assert np.max(np.abs(dyn.Rhp - Rhp) / (1.0 + np.abs(Rhp))) < 1e-12
-        x = np.random.default_rng(i).normal(0.0, 10.0, builder.n_variables)
-        rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
-        assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
-        assert builder.inputs.swing_force_weight == swing_force_weight(builder.config, target)
+    assert_compiled_build_equals_the_python_build(builder, InPlaceBuild(builder), random_cases(robot, 8))
 
 
 @pytest.mark.parametrize("name", ["cassie", "rabbit"])
@@ -106,7 +74,7 @@ def test_a_drop_in_output_map_gets_the_python_build():
     kin.update(q, v)
     standard = compiled.build(kin, target)
     assert len(calls) == 1 and not np.allclose(got.g, standard.g)  # the drop-in's outputs moved the cost
-    _assert_same(_python(builder, kin, target)[0], standard, "standard map")
+    assert_same_problem(python_build(builder, kin, target)[0], standard, "standard map")
 
 
 def test_a_kinematics_without_dynamics_or_a_bad_stance_is_an_input_error():

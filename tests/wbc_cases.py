@@ -5,6 +5,7 @@ from dataclasses import replace
 import numpy as np
 
 from amlip_qp.control.tracker import TrackingTarget
+from amlip_qp.control.wbc.inputs import swing_force_weight
 from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.robots.kinematics import RobotKinematics
 
@@ -68,3 +69,41 @@ def build_and_solve(builder, kin, target):
     problem = builder.build(kin, target)
     problem.validate()
     return problem, solve(problem)
+
+
+def python_build(builder, kin, target):
+    """The Python build's problem (a copy) and its row maps ``RD``, ``Rhp`` (copies)."""
+    problem = builder.build(kin, target)
+    return problem.copy(), builder.dynamics.RD.copy(), builder.dynamics.Rhp.copy()
+
+
+def assert_same_problem(ref, got, what, rtol=1e-12):
+    """The problems' arrays agree: infinities at the same places, finite entries to ``rtol`` (of 1 + |ref|)."""
+    for name in FIELDS:
+        a, b = getattr(ref, name), getattr(got, name)
+        finite = np.isfinite(a)
+        assert np.array_equal(finite, np.isfinite(b)), f"{what}: {name} has infinities elsewhere"
+        assert np.array_equal(a[~finite], b[~finite]), f"{what}: {name} infinities differ"
+        scale = 1.0 + np.abs(a[finite])
+        assert np.max(np.abs(a[finite] - b[finite]) / scale, initial=0.0) < rtol, f"{what}: {name}"
+
+
+def assert_compiled_build_equals_the_python_build(builder, compiled, cases):
+    """``compiled.build`` writes every varying entry (the shared arrays poisoned first) and equals the Python build."""
+    name = builder.robot.name
+    for i, (kin, target) in enumerate(cases):
+        ref, RD, Rhp = python_build(builder, kin, target)
+        P, dyn = builder.problem, builder.dynamics
+        for arr in (P.H, P.g, P.A, P.b, P.lb, P.ub, P.l[builder.constraint("torque").rows], P.u, dyn.RD, dyn.Rhp):
+            arr[...] = np.nan
+        builder.inputs.swing_force_weight = np.nan
+        got = compiled.build(kin, target)
+        assert got is builder.problem
+        assert_same_problem(ref, got, f"{name} state {i} ({target.stance}, phase {target.phase})")
+        assert np.max(np.abs(dyn.RD - RD) / (1.0 + np.abs(RD))) < 1e-12
+        assert np.max(np.abs(dyn.Rhp - Rhp) / (1.0 + np.abs(Rhp))) < 1e-12
+        # The recovery maps read the same buffers.
+        x = np.random.default_rng(i).normal(0.0, 10.0, builder.n_variables)
+        rows = slice(dyn.elimination.n_dyn, dyn.elimination.n_dyn + dyn.T.shape[0])
+        assert np.allclose(builder.torques(x), RD[rows] @ x + Rhp[rows])
+        assert builder.inputs.swing_force_weight == swing_force_weight(builder.config, target)

@@ -52,7 +52,7 @@ from amlip_qp.codegen import generate, runtime
 from amlip_qp.codegen.output_map import output_map_function
 from amlip_qp.control.wbc.compiled import FUNCTION_STEM, assembly_function, bind_buffers
 from amlip_qp.control.wbc.frame_terms import FrameTerms
-from amlip_qp.control.wbc.inputs import dm, swing_force_weight
+from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots.outputs import OutputMap
@@ -73,13 +73,7 @@ def small_layout(nq: int, nv: int, n_outputs: int) -> dict:
     ``dh_d``, ``ddh_d`` (the output references), ``heading`` (rad), ``w`` (the
     swing force ramp); and its ``size``."""
     sizes = {"q": nq, "v": nv, "h_d": n_outputs, "dh_d": n_outputs, "ddh_d": n_outputs, "heading": 1, "w": 1}
-    out: dict = {}
-    at = 0
-    for name, size in sizes.items():
-        out[name] = slice(at, at + size)
-        at += size
-    out["size"] = at
-    return out
+    return consecutive_slices(sizes)
 
 
 def frame_terms(builder: WholeBodyQP) -> FrameTerms:

@@ -165,7 +165,11 @@ def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
     drifts, m/s^2; one point: its drift on the layout's axes), ``r`` (output
     task residual, pelvis-yaw shift applied), ``w`` (swing force ramp); and its ``size``."""
     n_con = 12 if layout.n_points == 2 else layout.point_dim
-    sizes = {"q": nq, "v": layout.nv, "contact": n_con, "r": n_outputs, "w": 1}
+    return consecutive_slices({"q": nq, "v": layout.nv, "contact": n_con, "r": n_outputs, "w": 1})
+
+
+def consecutive_slices(sizes: dict[str, int]) -> dict[str, Any]:
+    """Per name, the slice of a packed vector holding ``sizes`` one after the other; and its ``size``."""
     out: dict[str, Any] = {}
     at = 0
     for name, size in sizes.items():
