@@ -96,6 +96,7 @@ else:  # a version without log modes
 mujoco.mj_step = step  # unwrapped: the yardstick's steps are not the walk's
 step_alone_us = ys["step_time_us"](model, state)
 n = len(result.tick_time_us)
+steps_per_tick = len(spent) / n
 wall_us = result.wall_time_s * 1e6 / n
 mujoco_us = sum(spent) * 1e-3 / n
 controller_us = float(np.mean(result.tick_time_us))
@@ -103,7 +104,7 @@ print(json.dumps({
     "ticks": n, "fell": bool(result.fell), "realtime_factor": result.sim_time_s / result.wall_time_s,
     "wall_us": wall_us, "controller_us": controller_us, "mujoco_us": mujoco_us,
     "harness_us": wall_us - controller_us - mujoco_us, "step_alone_us": step_alone_us, "package": amlip_qp.__file__,
-    "in_place": in_place,
+    "in_place": in_place, "steps_per_tick": steps_per_tick,
 }))
 """
 
@@ -136,8 +137,8 @@ def walk(tree: pathlib.Path, args: argparse.Namespace, in_place: bool = False) -
         raise RuntimeError(f"the walk meant for {tree} imported {rec['package']}")
     for part in ("wall", "controller", "harness"):
         rec[f"{part}_per_mujoco"] = rec[f"{part}_us"] / rec["mujoco_us"]
-    for part in ("wall", "controller", "harness", "mujoco"):
-        rec[f"{part}_per_step"] = rec[f"{part}_us"] / rec["step_alone_us"]
+    for part in ("wall", "controller", "harness", "mujoco"):  # per a tick's worth of MuJoCo steps alone
+        rec[f"{part}_per_step"] = rec[f"{part}_us"] / (rec["step_alone_us"] * rec["steps_per_tick"])
     return rec
 
 

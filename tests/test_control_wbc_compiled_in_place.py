@@ -1,5 +1,7 @@
 """The in-place compiled assembly (amlip_qp.control.wbc.compiled_in_place) against the Python build."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -11,7 +13,7 @@ from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
-from amlip_qp.robots.outputs import OutputMap
+from amlip_qp.robots.outputs import OutputMap, computes_standard_outputs
 from wbc_cases import assert_compiled_build_equals_the_python_build, assert_same_problem, python_build, random_cases
 
 
@@ -32,19 +34,59 @@ def test_the_in_place_build_equals_the_python_build(name, changes):
 
 
 @pytest.mark.parametrize("name", ["cassie", "rabbit"])
+def test_one_kinematics_updated_again_and_again_stays_bound(name):
+    """The bound views follow every update of the same kinematics (Pinocchio overwrites its arrays in place)."""
+    robot = load_robot(name)
+    builder = WholeBodyQP(robot)
+    compiled = InPlaceBuild(builder)
+    kin = RobotKinematics(robot)
+    for i, (other, target) in enumerate(random_cases(robot, 6, seed=8)):
+        kin.update(other.q, other.v)
+        ref = python_build(builder, kin, target)[0]
+        kin.update(other.q, other.v)  # a fresh update, as in the walking loop
+        assert_same_problem(ref, compiled.build(kin, target), f"{name} update {i}")
+
+
+@pytest.mark.parametrize("name", ["cassie", "rabbit"])
 def test_the_outputs_it_computes_are_the_kinematics_outputs(name):
-    """It stores h_0's (y, J, Jdot v) of the tick in the kinematics' cache: they equal the output
-    map's, on each kinematics after a rebinding to another one's data, and back."""
+    """It stores h_0's (y, J, Jdot v) of the tick in the kinematics' cache (the output map is not
+    asked again): they equal the output map's, on each kinematics after a rebinding to another
+    one's data, and back."""
     robot = load_robot(name)
     compiled = InPlaceBuild(WholeBodyQP(robot))
+    calls = []
+
+    class Counted(OutputMap):
+        standard_outputs = True
+
+        def evaluate(self, kin, stance, heading_rad=0.0):
+            calls.append(stance)
+            return super().evaluate(kin, stance, heading_rad)
+
     cases = list(random_cases(robot, 4, seed=5))
     for kin, target in cases + cases[:2]:
+        kin.output_map = Counted(robot)
+        kin.update(kin.q.copy(), kin.v.copy())  # no cached outputs
         compiled.build(kin, target)
         got = kin.outputs(target.stance, target.heading_rad)
+        assert calls == []
         fresh = RobotKinematics(robot)
         fresh.update(kin.q, kin.v)
         for a, b in zip(got, fresh.outputs(target.stance, target.heading_rad)):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+
+
+def test_a_subclass_of_the_output_map_is_a_drop_in_unless_it_says_otherwise():
+    robot = load_robot("rabbit")
+
+    class Sub(OutputMap):
+        pass
+
+    class Standard(OutputMap):
+        standard_outputs = True
+
+    assert computes_standard_outputs(OutputMap(robot)) and computes_standard_outputs(Standard(robot))
+    assert not computes_standard_outputs(Sub(robot)) and not computes_standard_outputs(object())
 
 
 def test_a_drop_in_output_map_gets_the_python_build():
@@ -85,6 +127,8 @@ def test_a_kinematics_without_dynamics_or_a_bad_stance_is_an_input_error():
     light.update_positions(kin.q)
     with pytest.raises(InputError, match="dynamics"):
         compiled.build(light, target)
+    with pytest.raises(InputError, match="heading_rad must be finite"):
+        compiled.build(kin, replace(target, heading_rad=float("nan")))
     target.stance = "up"
     with pytest.raises(InputError, match="stance"):
         compiled.build(kin, target)

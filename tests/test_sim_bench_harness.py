@@ -24,9 +24,7 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         assert row["tick_per_mujoco"] > 1.0 + row["harness_per_mujoco"]
         ref = bench_harness.REFERENCE_TICK_PER_MUJOCO
         assert row["realtime_factor_at_reference"] == pytest.approx(0.65 * ref / row["tick_per_mujoco"])
-        # MuJoCo's step alone: in the loop it costs at least about as much (colder caches there)
-        assert 0.0 < row["step_alone_us"] < 2.0 * row["mujoco_us_per_tick"]
-        assert row["tick_per_step"] > row["harness_per_step"] > 0.0
+        assert row["step_alone_us"] > 0.0 and row["tick_per_step"] > row["harness_per_step"] > 0.0
     assert r["harness_meets_goal"] == {}  # the reference's walks were QP walks: no verdict on a PBC walk
     text = bench_harness.format_report(r)
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text

@@ -2,8 +2,8 @@
 
 The symbolic form shared by the generated output map
 (:mod:`amlip_qp.control.walking.outputs_compiled`) and the QP tracker's
-generated assembly (:mod:`amlip_qp.control.wbc.compiled`), which composes it
-with the frame terms it reads from Pinocchio's data. The readable reference is
+in-place assembly (:mod:`amlip_qp.control.wbc.compiled_in_place`), which
+composes it with the frame terms it reads from Pinocchio's data. The readable reference is
 :class:`~amlip_qp.robots.outputs.OutputMap`; the chain rule is described in
 :mod:`amlip_qp.control.walking.outputs_compiled`.
 
@@ -25,7 +25,8 @@ from amlip_qp.alip.formulas import world_to_heading_xy
 FUNCTION_NAME = "output_map"
 
 
-def _skew(r):
+def skew(r):
+    """``[r]x`` (CasADi): ``skew(r) @ x == r x x``."""
     return ca.vertcat(
         ca.horzcat(0, -r[2], r[1]),
         ca.horzcat(r[2], 0, -r[0]),
@@ -65,7 +66,7 @@ def output_map_function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
         r = R[:, j]
         X_parts.append(ca.SX.sym(f"R{j}", 3))
         val_parts.append(r)
-        Jx_parts.append(-ca.mtimes(_skew(r), Jw))
+        Jx_parts.append(-ca.mtimes(skew(r), Jw))
         dx_parts.append(ca.cross(alpha, r) + ca.cross(w, ca.cross(w, r)))
     for value, jac, drift in [(com, Jc, com_drift)] + list(zip(pos, Jf, drifts)):
         X_parts.append(ca.SX.sym("p", 3))

@@ -157,6 +157,13 @@ def output_layout(robot: Robot) -> str:
     return fits
 
 
+def computes_standard_outputs(output_map) -> bool:
+    """Whether ``output_map`` evaluates the robot's standard ``h_0``: its own class (not a base
+    class) sets ``standard_outputs = True``, so a subclass that changes ``evaluate`` is not taken
+    for the standard map unless it says so."""
+    return vars(type(output_map)).get("standard_outputs") is True
+
+
 class OutputMap:
     """``h_0(q)`` for one robot; evaluate on an updated :class:`RobotKinematics`.
 
@@ -171,7 +178,8 @@ class OutputMap:
     """
 
     #: This map evaluates the robot's standard ``h_0`` (docs/ARCHITECTURE.md), which generated code
-    #: may then compute in its place (the QP tracker's compiled assembly); a drop-in with other outputs leaves it out.
+    #: may then compute in its place (the QP tracker's in-place assembly). Read with
+    #: :func:`computes_standard_outputs`: a subclass counts only if it sets the flag itself.
     standard_outputs = True
 
     def __init__(self, robot: Robot):

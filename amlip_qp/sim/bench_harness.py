@@ -97,8 +97,8 @@ def run(
         steps (``tick_per_mujoco``, ``harness_per_mujoco``), the real-time factor
         on the reference's machine state (``realtime_factor_at_reference``),
         MuJoCo's step time alone (``step_alone_us``, the median after each
-        walk) and the tick and harness in such steps (``tick_per_step``,
-        ``harness_per_step``: medians of the walks' ratios), the
+        walk) and the tick and harness in a tick's worth of such steps
+        (``tick_per_step``, ``harness_per_step``: medians of the walks' ratios), the
         ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (its
         figures) and the goals' verdicts, given only for the QP rows (``qp``
@@ -130,12 +130,14 @@ def run(
         for tracker in trackers:
             for mode in LOG_MODES:
                 key = f"{tracker}/{mode}"
-                result = build_simulation(sc, tracker_for(sc, tracker)).run(duration_s, log=mode)
+                sim = build_simulation(sc, tracker_for(sc, tracker))
+                result = sim.run(duration_s, log=mode)
                 alone = step_time_us(*states[tracker])
                 ratios = per_step.setdefault(key, {"alone": [], "tick": [], "harness": []})
                 ratios["alone"].append(alone)
-                ratios["tick"].append(result.wall_time_s * 1e6 / len(result.tick_time_us) / alone)
-                ratios["harness"].append(float(np.mean(result.harness_time_us)) / alone)
+                tick_alone = alone * sim.substeps  # a tick's MuJoCo steps, alone
+                ratios["tick"].append(result.wall_time_s * 1e6 / len(result.tick_time_us) / tick_alone)
+                ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
                 got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": []})
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))

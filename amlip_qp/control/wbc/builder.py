@@ -211,7 +211,11 @@ class WholeBodyQP:
         return self.dynamics.rigid_forces(x)
 
     def generalized_contact_force(self, x: np.ndarray) -> np.ndarray:
-        """``J_f^T f + G^T lambda`` (nv,) of a solution of the last built problem (for checks)."""
+        """``J_f^T f + G^T lambda`` (nv,) of a solution of the last built problem (for checks).
+
+        Reads :attr:`inputs`' ``Jf``: after a Python or a default compiled build, not after the
+        in-place build (:class:`~amlip_qp.control.wbc.compiled_in_place.InPlaceBuild`), which leaves it.
+        """
         out = self.inputs.Jf.T @ x[self.layout.sl_forces]
         if self.layout.n_lambda:
             out = out + self.dynamics.G.T @ self.rigid_forces(x)

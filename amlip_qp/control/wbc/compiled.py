@@ -179,9 +179,6 @@ class CompiledBuild:
             "ET": self._E, "g": P.g, "AT": P.A, "b": P.b, "TT": P.C[:n_tau], "l_tau": P.l[:n_tau],
             "u_in": P.u, "lb": P.lb, "ub": P.ub, "RDT": B.dynamics.RD, "Rhp": B.dynamics.Rhp,
         }  # fmt: skip
-        for name, arr in outputs.items():
-            if not (arr.flags.c_contiguous or arr.flags.f_contiguous):
-                raise InputError(f"compiled QP assembly: output {name} is not contiguous")
         self._outputs = outputs  # keeps the bound arrays alive
         names = {side: f"{FUNCTION_STEM}_{side}" for side in B.robot.foot_sides}
         self.library_path, functions = runtime.compile_and_load(

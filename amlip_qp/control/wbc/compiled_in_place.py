@@ -32,13 +32,14 @@ It is not the default because the QP's trajectories then differ from the
 default build's by rounding, and two acceptance walks are at their edge on
 rounding (docs/TUNING.md, "The compiled assembly reads Pinocchio's arrays in
 place"). A kinematics whose output map is not the robot's standard ``h_0`` (a
-drop-in without ``standard_outputs``) is built by the Python build instead.
+drop-in, :func:`~amlip_qp.robots.outputs.computes_standard_outputs`) is built by the Python build instead.
 The C source depends on the robot and the :class:`QPConfig`; it is compiled
 once into the codegen cache (about 5 s for Cassie).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -55,7 +56,7 @@ from amlip_qp.control.wbc.frame_terms import FrameTerms
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
 from amlip_qp.exceptions import InputError
-from amlip_qp.robots.outputs import OutputMap
+from amlip_qp.robots.outputs import OutputMap, computes_standard_outputs
 
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
@@ -149,10 +150,13 @@ def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Fu
     )  # fmt: skip
 
 
-def generate_in_place_source(builder: WholeBodyQP) -> tuple[bytes, dict[str, ca.Function]]:
-    """The C source of both stances' tick functions for ``builder``, and the functions."""
+def generate_in_place_source(
+    builder: WholeBodyQP, terms: FrameTerms | None = None
+) -> tuple[bytes, dict[str, ca.Function]]:
+    """The C source of both stances' tick functions for ``builder`` (reading ``terms``, default
+    :func:`frame_terms`), and the functions."""
     # Expanded to scalar (SX) code: sparsity and constants folded; E^T E stays with numpy (docs/TUNING.md).
-    terms = frame_terms(builder)
+    terms = frame_terms(builder) if terms is None else terms
     functions = {side: tick_function(builder, side, terms).expand() for side in builder.robot.foot_sides}
     options = dict(generate.CODEGEN_OPTIONS, with_header=False)
     cg = ca.CodeGenerator(SOURCE_FILE, options)
@@ -180,8 +184,8 @@ class InPlaceBuild:
     def __init__(self, builder: WholeBodyQP, cache_dir: str | os.PathLike | None = None):
         self.builder = B = builder
         runtime.require_compiler()  # before the generation, which takes seconds
-        source, symbolic = generate_in_place_source(builder)
         self._terms = frame_terms(builder)
+        source, symbolic = generate_in_place_source(builder, self._terms)
         fn = symbolic[B.robot.foot_sides[0]]
         L, P, n_out = B.layout, B.problem, B.output_task.size
         self._slices = small_layout(B.robot.nq, L.nv, n_out)
@@ -215,7 +219,7 @@ class InPlaceBuild:
         """Fill the builder's problem for ``kin`` and ``target``; return it.
         Same contract as :meth:`WholeBodyQP.build`."""
         B = self.builder
-        if not getattr(kin.output_map, "standard_outputs", False):
+        if not computes_standard_outputs(kin.output_map):
             return B.build(kin, target)  # a drop-in output map: only the Python build reads it
         kin.require_dynamics()
         stance = target.stance
@@ -231,6 +235,8 @@ class InPlaceBuild:
         u[sl["dh_d"]] = target.dh_d
         u[sl["ddh_d"]] = target.ddh_d
         heading = float(target.heading_rad)
+        if not math.isfinite(heading):
+            raise InputError(f"target.heading_rad must be finite, got {target.heading_rad!r}")
         u[sl["heading"]] = heading
         B.inputs.swing_force_weight = w = swing_force_weight(B.config, target)  # the tracker reads it
         u[sl["w"]] = w

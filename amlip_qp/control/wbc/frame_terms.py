@@ -32,14 +32,7 @@ from collections.abc import Iterable
 import casadi as ca
 import numpy as np
 
-
-def skew(r) -> ca.MX:
-    """``[r]x``: ``skew(r) @ x == r x x``."""
-    return ca.vertcat(
-        ca.horzcat(0, -r[2], r[1]),
-        ca.horzcat(r[2], 0, -r[0]),
-        ca.horzcat(-r[1], r[0], 0),
-    )
+from amlip_qp.codegen.output_map import skew
 
 
 class FrameTerms:
