@@ -222,12 +222,12 @@ def format_report(r: dict) -> str:
     lines = [
         f"closed-loop tick, {r['scenario']}, {r['duration_s']:g} s x {r['repeats']} per row, interleaved "
         "(medians, µs per tick; per MuJoCo step: means; per step alone: medians of the walks' ratios)",
-        f"  {'tracker/log':16s} {'controller':>10s} {'MuJoCo':>8s} {'harness':>8s} {'sum':>8s} {'realtime':>9s}"
+        f"  {'tracker/log':19s} {'controller':>10s} {'MuJoCo':>8s} {'harness':>8s} {'sum':>8s} {'realtime':>9s}"
         f" {'tick/MJ':>8s} {'harn/MJ':>8s} {'at ref.':>8s} {'alone':>6s} {'tick/al':>8s} {'harn/al':>8s}",
     ]
     for key, row in r["runs"].items():
         lines.append(
-            f"  {key:16s} {row['controller_us_per_tick']:10.1f} {row['mujoco_us_per_tick']:8.1f} "
+            f"  {key:19s} {row['controller_us_per_tick']:10.1f} {row['mujoco_us_per_tick']:8.1f} "
             f"{row['harness_us_per_tick']:8.1f} {row['sum_us_per_tick']:8.1f} {row['realtime_factor']:8.2f}x"
             f" {row['tick_per_mujoco']:8.2f} {row['harness_per_mujoco']:8.2f}"
             f" {row['realtime_factor_at_reference']:7.2f}x {row['step_alone_us']:6.2f} {row['tick_per_step']:8.2f}"
