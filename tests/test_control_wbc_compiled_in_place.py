@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
+from amlip_qp.control.wbc.compiled import assembly_function
 from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild, tick_function
 from amlip_qp.control.wbc.compiled_in_place import frame_terms as make_frame_terms
 from amlip_qp.control.wbc.config import default_config
@@ -141,6 +142,7 @@ def test_the_functions_take_pinocchios_arrays_and_give_the_assembly_and_the_outp
     fn = tick_function(builder, "left", terms)
     names_in = [fn.name_in(i) for i in range(fn.n_in())]
     assert names_in == ["M_upper", "nle", *(n for n, _ in terms.symbols), "small"]
+    assert fn.name() == "wbqp_in_place_left" != assembly_function(builder, "left").name()  # no symbol clash
     names_out = [fn.name_out(i) for i in range(fn.n_out())]
     assert names_out[-3:] == ["y", "JyT", "jdv"] and "ET" in names_out and "Rhp" in names_out
 

@@ -51,7 +51,7 @@ import numpy as np
 from amlip_qp.alip import other_side
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.codegen.output_map import output_map_function
-from amlip_qp.control.wbc.compiled import FUNCTION_STEM, assembly_function, bind_buffers
+from amlip_qp.control.wbc.compiled import assembly_function, bind_buffers
 from amlip_qp.control.wbc.frame_terms import FrameTerms
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
@@ -64,6 +64,9 @@ if TYPE_CHECKING:
     from amlip_qp.qp.problem import QPProblem
     from amlip_qp.robots.kinematics import RobotKinematics
 
+#: Name stem of the generated functions (``<stem>_left``, ``<stem>_right``), other than the default
+#: build's, so both libraries can be loaded in one process without a clash of symbols.
+FUNCTION_STEM = "wbqp_in_place"
 #: File names inside the cache folder.
 SOURCE_FILE = "amlip_wbqp_in_place.c"
 LIBRARY_FILE = "libamlip_wbqp_in_place.so"
