@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import casadi as ca
+
 from amlip_qp.codegen import generate
 from amlip_qp.paths import CODEGEN_DIR
 
@@ -43,3 +45,13 @@ def test_write_leaves_unchanged_files_alone(tmp_path):
     before = path.stat().st_mtime_ns
     generate.write_files(tmp_path)
     assert path.stat().st_mtime_ns == before
+
+
+def test_a_single_file_source_holds_every_function_after_the_banner_and_is_deterministic():
+    x = ca.SX.sym("x", 2)
+    f, g = ca.Function("f_one", [x], [x * 2.0]), ca.Function("g_two", [x], [ca.sumsqr(x)])
+    text = generate.single_file_source([f, g], "one.c")
+    assert text == generate.single_file_source([f, g], "one.c")
+    body = text.decode("ascii")
+    assert body.startswith(generate.banner()) and "/tmp" not in body
+    assert "int f_one(const casadi_real** arg" in body and "int g_two(const casadi_real** arg" in body

@@ -62,6 +62,19 @@ def banner() -> str:
     )
 
 
+def single_file_source(functions, source_file: str) -> bytes:
+    """The C source of the CasADi ``functions`` in one file named ``source_file``
+    (:data:`CODEGEN_OPTIONS`, no header), opened by :func:`banner`: the form every
+    generated C of the package is compiled from (``runtime.compile_and_load``)."""
+    cg = ca.CodeGenerator(source_file, dict(CODEGEN_OPTIONS, with_header=False))
+    for fn in functions:
+        cg.add(fn)
+    with tempfile.TemporaryDirectory(prefix="amlip_qp_codegen_") as tmp:
+        cg.generate(tmp + os.sep)
+        source = (Path(tmp) / source_file).read_bytes()
+    return banner().encode("ascii") + source
+
+
 def generate_files() -> dict[str, bytes]:
     """Generate the library in memory: ``{file name: content}`` (``.c`` and ``.h``)."""
     cg = ca.CodeGenerator(SOURCE_FILE, dict(CODEGEN_OPTIONS))

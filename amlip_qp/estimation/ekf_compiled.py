@@ -23,8 +23,6 @@ no branches but the small-angle one of ``Exp``.
 from __future__ import annotations
 
 import os
-import tempfile
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -241,12 +239,7 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
 def generate_source(noise: EkfNoise, legs: LegKinematics) -> bytes:
     """The C source of one EKF tick for these settings and this robot's leg kinematics."""
     fn = _function(noise, legs)
-    cg = ca.CodeGenerator(SOURCE_FILE, dict(generate.CODEGEN_OPTIONS, with_header=False))
-    cg.add(fn)
-    with tempfile.TemporaryDirectory(prefix="amlip_qp_ekf_") as tmp:
-        cg.generate(tmp + os.sep)
-        source = (Path(tmp) / SOURCE_FILE).read_bytes()
-    return generate.banner().encode("ascii") + source
+    return generate.single_file_source([fn], SOURCE_FILE)
 
 
 class CompiledEkf:

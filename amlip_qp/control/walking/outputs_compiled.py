@@ -27,11 +27,8 @@ through ``kin.outputs``.
 from __future__ import annotations
 
 import os
-import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
@@ -50,12 +47,7 @@ LIBRARY_FILE = "libamlip_outputs.so"
 def generate_source(layout: str, nv: int) -> bytes:
     """The C source of the output map for a layout (``"cassie"`` or ``"rabbit"``) and ``nv``."""
     fn, _, _ = output_map_function(layout, nv)
-    cg = ca.CodeGenerator(SOURCE_FILE, dict(generate.CODEGEN_OPTIONS, with_header=False))
-    cg.add(fn)
-    with tempfile.TemporaryDirectory(prefix="amlip_qp_outputs_") as tmp:
-        cg.generate(tmp + os.sep)
-        source = (Path(tmp) / SOURCE_FILE).read_bytes()
-    return generate.banner().encode("ascii") + source
+    return generate.single_file_source([fn], SOURCE_FILE)
 
 
 class CompiledOutputMap:

@@ -29,8 +29,6 @@ rounding (tested to 1e-12 relative). Measured times: docs/TUNING.md.
 from __future__ import annotations
 
 import os
-import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import casadi as ca
@@ -112,14 +110,7 @@ def generate_source(builder: WholeBodyQP) -> tuple[bytes, dict[str, ca.Function]
     # Expanded to scalar (SX) code: sparsity and constants folded, ~5000
     # operations per stance; E^T E stays with numpy (docs/TUNING.md).
     functions = {side: assembly_function(builder, side).expand() for side in builder.robot.foot_sides}
-    options = dict(generate.CODEGEN_OPTIONS, with_header=False)
-    cg = ca.CodeGenerator(SOURCE_FILE, options)
-    for fn in functions.values():
-        cg.add(fn)
-    with tempfile.TemporaryDirectory(prefix="amlip_qp_wbqp_") as tmp:
-        cg.generate(tmp + os.sep)
-        source = (Path(tmp) / SOURCE_FILE).read_bytes()
-    return generate.banner().encode("ascii") + source, functions
+    return generate.single_file_source(functions.values(), SOURCE_FILE), functions
 
 
 def bind_buffers(functions: dict[str, ca.Function], inputs: list, outputs: list) -> dict[str, tuple]:

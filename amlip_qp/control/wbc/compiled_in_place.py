@@ -41,8 +41,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import casadi as ca
@@ -161,14 +159,7 @@ def generate_in_place_source(
     # Expanded to scalar (SX) code: sparsity and constants folded; E^T E stays with numpy (docs/TUNING.md).
     terms = frame_terms(builder) if terms is None else terms
     functions = {side: tick_function(builder, side, terms).expand() for side in builder.robot.foot_sides}
-    options = dict(generate.CODEGEN_OPTIONS, with_header=False)
-    cg = ca.CodeGenerator(SOURCE_FILE, options)
-    for fn in functions.values():
-        cg.add(fn)
-    with tempfile.TemporaryDirectory(prefix="amlip_qp_wbqp_") as tmp:
-        cg.generate(tmp + os.sep)
-        source = (Path(tmp) / SOURCE_FILE).read_bytes()
-    return generate.banner().encode("ascii") + source, functions
+    return generate.single_file_source(functions.values(), SOURCE_FILE), functions
 
 
 class InPlaceBuild:
