@@ -12,18 +12,12 @@ from amlip_qp.control.wbc.config import default_config
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
-from wbc_cases import assert_compiled_build_equals_the_python_build, random_cases
+from wbc_cases import BUILD_CONFIGS, assert_compiled_build_equals_the_python_build, random_cases
 
 
 @pytest.mark.parametrize(
     "name, changes",
-    [
-        ("cassie", {}),
-        ("cassie", {"rigid_springs": "none", "touchdown_blend": 1.0, "stance_yaw_moment_weight": 0.0}),
-        ("cassie", {"rigid_springs": "swing", "hip_yaw_feedback": 0.0, "stance_foot_torque_max_Nm": np.inf}),
-        ("rabbit", {}),
-        ("rabbit", {"touchdown_blend": 0.5, "reg_torque": 0.0}),
-    ],
+    BUILD_CONFIGS,
 )
 def test_compiled_build_equals_the_python_build(name, changes):
     robot = load_robot(name)

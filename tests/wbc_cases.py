@@ -12,6 +12,15 @@ from amlip_qp.robots.kinematics import RobotKinematics
 #: The problem's arrays.
 FIELDS = ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")
 
+#: ``(robot name, QPConfig changes)`` the compiled builds are checked against the Python build with.
+BUILD_CONFIGS = [
+    ("cassie", {}),
+    ("cassie", {"rigid_springs": "none", "touchdown_blend": 1.0, "stance_yaw_moment_weight": 0.0}),
+    ("cassie", {"rigid_springs": "swing", "hip_yaw_feedback": 0.0, "stance_foot_torque_max_Nm": np.inf}),
+    ("rabbit", {}),
+    ("rabbit", {"touchdown_blend": 0.5, "reg_torque": 0.0}),
+]
+
 
 def kin_at(robot, seed=0, scale=0.02, v_scale=0.2):
     """Kinematics at a random state near the robot's stand pose."""
