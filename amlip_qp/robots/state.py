@@ -166,8 +166,20 @@ def _check(x, n: int, what: str) -> np.ndarray:
 
 
 def _norm(x: np.ndarray) -> float:
-    """Euclidean norm of a 1-D array; the same arithmetic as ``np.linalg.norm`` (``sqrt(x . x)``), cheaper."""
-    return math.sqrt(x.dot(x))
+    """Euclidean norm of a 1-D array, ``sqrt(x0 x0 + x1 x1 + ...)`` summed left to right.
+
+    Written out rather than ``x.dot(x)``: NumPy's dot goes to its BLAS, whose kernel (and so
+    its summation order and fused multiply-adds) depends on the CPU, and the per-tick
+    :class:`~amlip_qp.robots.state_reader.StateReader` must give the same numbers on any machine.
+    """
+    return math.sqrt(sum(t * t for t in x.tolist()))
+
+
+def _transposed_times(R: np.ndarray, u: np.ndarray) -> list[float]:
+    """``R^T u`` of a 3x3 ``R`` and a 3-vector, each entry summed left to right (no BLAS: see :func:`_norm`)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    l0, l1, l2 = u.tolist()
+    return [r00 * l0 + r10 * l1 + r20 * l2, r01 * l0 + r11 * l1 + r21 * l2, r02 * l0 + r12 * l1 + r22 * l2]
 
 
 def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
@@ -281,7 +293,7 @@ def _qvel_to_v(m: StateMap, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
     v[m.scalar_pin_v] = qvel[m.scalar_mj_v]
     for _, da, pq, pv in m.free:
         R = _quat_wxyz_to_rot(_wxyz(q[pq + 3 : pq + 7]))
-        v[pv : pv + 3] = R.T @ qvel[da : da + 3]
+        v[pv : pv + 3] = _transposed_times(R, qvel[da : da + 3])
         v[pv + 3 : pv + 6] = qvel[da + 3 : da + 6]
     for _, da, _, pv in m.ball:
         v[pv : pv + 3] = qvel[da : da + 3]
