@@ -18,10 +18,33 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
 from amlip_qp.robots.state import StateMap, mj_to_pin, rotation_entries
+
+
+class FreeJointPlan(NamedTuple):
+    """Where :meth:`StateReader.arrays` of one free joint (and no ball joint) takes each number.
+
+    For another implementation of the same read (the harness's generated C,
+    :mod:`amlip_qp.sim.compiled_io`), which must give the same numbers: ``q`` is
+    ``qpos[gather_q]`` and ``v`` is ``qvel[gather_v]``, then the quaternion
+    ``qpos[quat_wxyz]``, normalized, is written to ``q[pq:pq + 4]`` (x y z w) and the
+    linear velocity ``qvel[lin_xyz]`` rotated into the base frame to ``v[pv:pv + 3]``;
+    the root row is ``qpos[root_pos]``, the quaternion, ``v[pv:pv + 3]`` and
+    ``qvel[root_ang]`` (plant indices).
+    """
+
+    gather_q: tuple[int, ...]
+    gather_v: tuple[int, ...]
+    quat_wxyz: tuple[int, int, int, int]
+    pq: int
+    pv: int
+    lin_xyz: tuple[int, int, int]
+    root_pos: tuple[int, int, int]
+    root_ang: tuple[int, int, int]
 
 
 class StateReader:
@@ -77,6 +100,15 @@ class StateReader:
         self._fast = _one_free_joint_arrays(
             self._quats, self._root, self._gather_q, self._gather_v, self._checked_arrays
         )
+        #: The fast read's indices (:class:`FreeJointPlan`); ``None`` unless one free joint and no ball joint.
+        self.free_joint_plan: FreeJointPlan | None = None
+        if self._fast is not None:
+            iw, ix, iy, iz, pq, (pv, i0, i1, i2) = self._quats[0]
+            assert self._root is not None
+            self.free_joint_plan = FreeJointPlan(
+                tuple(gather_q.tolist()), tuple(gather_v.tolist()), (iw, ix, iy, iz), pq, pv, (i0, i1, i2),
+                self._root[:3], self._root[3:],
+            )  # fmt: skip
 
     def __call__(self, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` (new arrays) of the plant's float64 ``qpos`` and ``qvel`` (read only; ``data.qpos``).

@@ -241,8 +241,15 @@ class Simulation:
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
+        # The same read as generated C, made after each tick's plant steps for the next tick (None: no C compiler
+        # or a base it does not read; read_state reads at each tick's start)
+        read_next = plant.compiled_reader(d)
         add_noise = None if self.noise is None else self._add_noise
-        write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d), plant.ctrl_from_tau, plant.apply_ctrl
+        write_ctrl, ctrl_from_tau, apply_ctrl = (
+            plant.ctrl_writer(d, compiled=True),
+            plant.ctrl_from_tau,
+            plant.apply_ctrl,
+        )
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
         later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
@@ -267,14 +274,15 @@ class Simulation:
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
         sim_time = t_next = float(d.time)
-        qpos_list = qpos.tolist()
-        qpos_sum = sum(qpos_list)
+        state = None  # this tick's (q, v, root) if read already (after the last tick's plant steps)
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
             t = t_next
             cmd = command_fn(t)
-            q, v, root = read_state(qpos_list, qpos_sum)  # root: the base's (q, v) as one list
+            if state is None:  # read here: the first tick, no compiled read, or a state it left to read_state's checks
+                state = read_state(qpos.tolist())
+            q, v, root = state  # root: the base's (q, v) as one list
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
             if ground is None:
                 z = xpos_b.item(2)
@@ -345,10 +353,12 @@ class Simulation:
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            qpos_list = qpos.tolist()  # also the next tick's, with its sum
-            qpos_sum = sum(qpos_list)
+            if read_next is None:
+                state, total = None, sum(qpos.tolist())
+            else:  # the next tick's state, and the sum of qpos and qvel
+                state, total = read_next()
             tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
-            if z < min_z or tilted or (not isfinite(qpos_sum) and not np.all(np.isfinite(qpos))):
+            if z < min_z or tilted or (not isfinite(total) and not np.all(np.isfinite(qpos))):
                 fell, fall_time = True, t
                 stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
                 break

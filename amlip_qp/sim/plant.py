@@ -33,9 +33,10 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from amlip_qp.exceptions import InputError, MJCFError, ModelFileError, PlantMismatchError
+from amlip_qp.exceptions import CompilerUnavailableError, InputError, MJCFError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots.state_reader import StateReader
+from amlip_qp.sim.compiled_io import CompiledCtrlWrite, CompiledStateRead, ReadResult
 from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
 from amlip_qp.sim.sensors import imu_spec_edit
 
@@ -287,6 +288,21 @@ class Plant:
             return read_body_base
         return self._reader.bind(data.qpos, data.qvel)
 
+    def compiled_reader(self, data: mujoco.MjData) -> Callable[[], ReadResult] | None:
+        """``f()``: :meth:`array_reader`'s read of ``data`` now as generated C (the same numbers; tested),
+        with ``sum(qpos) + sum(qvel)``: :class:`~amlip_qp.sim.compiled_io.CompiledStateRead`.
+
+        ``None`` where it does not apply (a base not floated by one free joint, a ball joint) or
+        without a C compiler: the harness then reads with :meth:`array_reader`.
+        """
+        plan = None if self._reader is None else self._reader.free_joint_plan
+        if plan is None:
+            return None
+        try:
+            return CompiledStateRead(plan, data).reader()
+        except CompilerUnavailableError:
+            return None
+
     def _read_body_base(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)`` with the base from the base body's pose and twist (a base not floated by a free joint)."""
         m, s, b = self.model, self._scratch, self.base_body_id
@@ -317,11 +333,13 @@ class Plant:
         np.maximum(ctrl, self._ctrl_lo, out=ctrl)
         return np.minimum(ctrl, self._ctrl_hi, out=ctrl)
 
-    def ctrl_writer(self, data: mujoco.MjData) -> Callable[[np.ndarray], None]:
+    def ctrl_writer(self, data: mujoco.MjData, compiled: bool = False) -> Callable[[np.ndarray], None]:
         """``f(tau_Nm)``: :meth:`write_ctrl` into ``data`` (bound once; the same numbers, fewer NumPy calls).
 
         With the controller's actuators first in the plant's order, ``tau / gear`` and its clip
-        are computed in place in ``data.ctrl``.
+        are computed in place in ``data.ctrl``; with ``compiled``, as one call of generated C
+        (:class:`~amlip_qp.sim.compiled_io.CompiledCtrlWrite`; the same numbers: tested) when a C
+        compiler is available.
         """
         if not self._ctrl_prefix:
             return lambda tau_Nm: self.write_ctrl(data, tau_Nm)
@@ -333,7 +351,12 @@ class Plant:
             maximum(out, lo, out=out)
             minimum(out, hi, out=out)
 
-        return write
+        if not compiled:
+            return write
+        try:
+            return CompiledCtrlWrite(out, gear, lo, hi, write).writer()
+        except CompilerUnavailableError:
+            return write
 
     def apply_ctrl(self, data: mujoco.MjData, ctrl: np.ndarray) -> None:
         """Write controls in the controller's actuator order to the plant's actuators."""
