@@ -26,7 +26,7 @@ def stairs(x_m: float, y_m: float) -> float:
 def test_edges_are_found_with_their_rise_along_the_heading():
     sel = FootholdSelector(stairs)
     edges = sel.edges(1.2, 0.0, 0.0, -0.3, 0.3)
-    assert [round(e, 3) for e, _ in edges] == [-0.205, 0.095]  # the risers at x = 0.995 and 1.295 (+-5 mm)
+    assert [e for e, _ in edges] == pytest.approx([-0.2, 0.1])  # the risers at x = 1.0 and 1.3 (+-5 mm)
     assert [r for _, r in edges] == pytest.approx([0.1, 0.1])
     # walking the other way the same risers are drops
     back = sel.edges(1.2, 0.0, math.pi, -0.3, 0.3)
@@ -35,33 +35,41 @@ def test_edges_are_found_with_their_rise_along_the_heading():
 
 def test_a_target_across_an_edge_moves_to_the_nearest_tread_spot():
     sel = FootholdSelector(stairs)
-    # On the floor before the first riser the toe (0.12 m ahead) keeps 0.03 m from it: x <= 0.845.
+    # On the floor before the first riser the toe (0.12 m ahead) keeps 0.03 m from it: x <= 0.85.
     assert sel.place(0.80, 0.1, 0.0) == (0.80, 0.1)  # fits: the same floats
     sel.new_step()
-    assert sel.place(0.95, 0.1, 0.0) == pytest.approx((0.845, 0.1))
+    assert sel.place(0.95, 0.1, 0.0) == pytest.approx((0.85, 0.1))
     sel.new_step()
     # Just short of the edge (the failing run's 0.998): onto the first tread, heel (0.08 m behind) on it.
-    assert sel.place(0.998, 0.1, 0.0) == pytest.approx((1.075, 0.1))
+    assert sel.place(0.998, 0.1, 0.0) == pytest.approx((1.08, 0.1))
     sel.new_step()
-    assert sel.place(1.2, -0.2, 0.0) == pytest.approx((1.145, -0.2))  # toe 0.03 m short of the next riser
+    assert sel.place(1.2, -0.2, 0.0) == pytest.approx((1.15, -0.2))  # toe 0.03 m short of the next riser
     sel.new_step()
     # Down the stairs: a drop ahead needs the blade on the tread only, a riser behind 0.03 m for the heel.
-    assert sel.place(3.12, 0.0, 0.0) == pytest.approx((3.075, 0.0))
+    assert sel.place(3.12, 0.0, 0.0) == pytest.approx((3.08, 0.0))
     sel.new_step()
-    assert sel.place(3.25, 0.0, 0.0) == pytest.approx((3.305, 0.0))
+    assert sel.place(3.25, 0.0, 0.0) == pytest.approx((3.31, 0.0))
 
 
 def test_the_choice_has_hysteresis_and_is_kept_late_in_the_swing():
     sel = FootholdSelector(stairs)
     sel.new_step()
-    # Between the spots 1.145 and 1.375 the nearer wins, except that the last one wins by 0.05 m.
+    # Between the spots 1.15 and 1.38 the nearer wins, except that the last one wins by 0.05 m.
     placed = [sel.place(x, 0.0, 0.0, 0.2)[0] for x in (1.15, 1.2, 1.25, 1.28, 1.30)]
-    assert placed == pytest.approx([1.145, 1.145, 1.145, 1.145, 1.375])
+    assert placed == pytest.approx([1.15, 1.15, 1.15, 1.15, 1.38])
     # From phase 0.5 on the stretch is kept whatever the raw target does ...
-    assert sel.place(1.2, 0.0, 0.0, 0.6)[0] == pytest.approx(1.375)
+    assert sel.place(1.2, 0.0, 0.0, 0.6)[0] == pytest.approx(1.38)
     # ... and a new step chooses afresh.
     sel.new_step()
-    assert sel.place(1.2, 0.0, 0.0, 0.6)[0] == pytest.approx(1.145)
+    assert sel.place(1.2, 0.0, 0.0, 0.6)[0] == pytest.approx(1.15)
+
+
+def test_a_one_sample_glitch_of_the_height_function_is_no_edge():
+    # a ray cast between two boxes of terrain can miss both and hit the floor below
+    holey = FootholdSelector(lambda x, y: -1.0 if abs(x - 1.305) < 0.004 else stairs(x, y))
+    edges = holey.edges(1.2, 0.0, 0.0, -0.3, 0.3)
+    assert [e for e, _ in edges] == pytest.approx([-0.2, 0.11])  # the riser at 1.3 m, read one sample late
+    assert [r for _, r in edges] == pytest.approx([0.1, 0.1])
 
 
 def test_smooth_ground_is_a_no_op():

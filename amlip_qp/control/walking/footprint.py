@@ -95,7 +95,7 @@ class FootholdSelector:
         key = (ix, iy)
         z = self._cache.get(key)
         if z is None:
-            z = float(self.height_fn(ix * SAMPLE_STEP_M, iy * SAMPLE_STEP_M))
+            z = float(self.height_fn((ix + 0.5) * SAMPLE_STEP_M, (iy + 0.5) * SAMPLE_STEP_M))
             self._cache[key] = z
         return z
 
@@ -104,16 +104,21 @@ class FootholdSelector:
         ``(offset m, rise m)`` each, the rise positive where the ground steps up along the heading."""
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         step = SAMPLE_STEP_M
-        out: list[tuple[float, float]] = []
-        prev_t = prev_z = math.nan
+        ts: list[float] = []
+        zs: list[float] = []
         for k in range(math.floor(lo_m / step), math.ceil(hi_m / step) + 1):
-            px, py = x_m + k * step * c, y_m + k * step * s
-            ix, iy = round(px / step), round(py / step)
-            t = (ix * step - x_m) * c + (iy * step - y_m) * s
-            z = self._sample(ix, iy)
-            if abs(z - prev_z) > EDGE_RISE_M:
-                out.append((0.5 * (t + prev_t), z - prev_z))
-            prev_t, prev_z = t, z
+            # grid points half a step off the round coordinates, where boxes of terrain meet
+            ix, iy = math.floor((x_m + k * step * c) / step), math.floor((y_m + k * step * s) / step)
+            ts.append(((ix + 0.5) * step - x_m) * c + ((iy + 0.5) * step - y_m) * s)
+            zs.append(self._sample(ix, iy))
+        for k in range(1, len(zs) - 1):  # a notch or spike one sample wide is a glitch of the ray, not ground
+            a, b = zs[k - 1], zs[k + 1]
+            if not min(a, b) - EDGE_RISE_M <= zs[k] <= max(a, b) + EDGE_RISE_M:
+                zs[k] = a
+        out: list[tuple[float, float]] = []
+        for k in range(1, len(zs)):
+            if abs(zs[k] - zs[k - 1]) > EDGE_RISE_M:
+                out.append((0.5 * (ts[k] + ts[k - 1]), zs[k] - zs[k - 1]))
         return out
 
     def zones(self, edges: list[tuple[float, float]]) -> list[tuple[float, float]]:

@@ -162,15 +162,15 @@ class GroundPredictor:
         return fit_clearance(prediction, command)
 
     def _edge_rise(self, x: float, y: float, dz: float, heading_rad: float) -> float:
-        """The rise (m) from lift-off to the target ``(x, y)`` m if a rising edge lies between them; else 0."""
-        rise = dz - self._liftoff_dz
+        """The height (m) the swing foot climbs or drops from lift-off to the target ``(x, y)`` m if an edge lies
+        between them; else 0."""
+        rise = abs(dz - self._liftoff_dz)
         lx, ly = self._liftoff_xy
         if not rise > EDGE_RISE_M or not math.isfinite(lx):
             return 0.0
         assert self.selector is not None
         reach = math.cos(heading_rad) * (x - lx) + math.sin(heading_rad) * (y - ly)
-        edges = self.selector.edges(lx, ly, heading_rad, 0.0, reach)
-        return rise if any(r > 0.0 for _, r in edges) else 0.0
+        return rise if self.selector.edges(lx, ly, heading_rad, 0.0, reach) else 0.0
 
     def _height(self, x: float, y: float) -> float:
         """The height function at ``(x, y)`` m; where it has no ground (NaN), the stance's (or 0 before any)."""
