@@ -268,12 +268,9 @@ class Planner:
             terrain: the ground heights and pitches relative to the stance contact
                 (:class:`TerrainPrediction`); ``None`` is flat ground (the same
                 numbers as all zeros). Rabbit uses its heights, not its pitches.
-            foothold: where the swing foot may land: world ``(x, y)`` m of the
-                placement law's target, the next step's heading (rad) and the phase ->
-                the foothold, world ``(x, y)`` m (a terrain-aware controller
-                moves targets off stair edges). The foot is placed there instead;
-                the next step's placement corrects for it. ``None`` (default):
-                the law's target.
+            foothold: ``(x, y, heading_next, s) -> (x, y)``: the law's target (world, m) -> where the foot
+                goes instead (a terrain-aware controller moves targets off stair edges; the next step's
+                placement corrects for it). ``None``: the law's target.
 
         Returns:
             A :class:`PlannerOutput`.

@@ -16,7 +16,12 @@ the modes of :data:`GROUND_MODES`:
   plant's scene; the controller never sees the simulator), read at the swing
   target (height, and pitch: the gentler of the grades half a blade behind and
   ahead along the heading, so that a stair's edge reads as its tread) and under
-  the stance contact.
+  the stance contact. The planner's swing target is moved off the terrain's
+  edges, so that the foot's footprint lies on one tread
+  (:class:`~amlip_qp.control.walking.footprint.FootholdSelector`, the hook
+  :meth:`GroundPredictor.foothold`), and a step over an edge gets its rise (up
+  or down) as extra swing clearance (:meth:`GroundPredictor.fit`). On smooth
+  ground (slopes, waves) both change nothing.
 
 In both terrain modes the height where the swing foot lifted off is the
 previous stance contact's, as measured (blind) or read (aware). The
