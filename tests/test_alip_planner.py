@@ -338,3 +338,28 @@ def test_bad_terrain_raises_input_error():
     for bad in ("up", -0.1, 0.0, True):
         with pytest.raises(InputError, match="late_descent"):
             Planner("cassie", M, late_descent=bad)
+
+
+def test_a_foothold_hook_moves_the_swing_target_and_the_placement():
+    from amlip_qp.alip import TerrainPrediction
+
+    terrain = TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1)
+    free = started().update(est(t_in_step_s=0.1), cmd(), terrain)
+    seen = []
+
+    def keep(x, y, heading, s):
+        seen.append((x, y, heading, s))
+        return x, y
+
+    kept = started().update(est(t_in_step_s=0.1), cmd(), terrain, keep)
+    # the hook gets the law's target, the next heading and the phase; returning it changes no bit
+    assert seen == [(*free.swing_target_world_m[:2].tolist(), free.heading_next_rad, pytest.approx(0.1 / T))]
+    for f in PlannerOutput.__slots__:
+        assert _same_bits(getattr(free, f), getattr(kept, f)), f
+    moved = started().update(est(t_in_step_s=0.1), cmd(), terrain, lambda x, y, h, s: (x - 0.07, y + 0.01))
+    assert moved.swing_target_world_m[:2] - free.swing_target_world_m[:2] == pytest.approx([-0.07, 0.01])
+    # p_sw (CoM minus swing contact at touchdown) moves the other way, in world and heading axes
+    assert moved.p_sw_des_world_m - free.p_sw_des_world_m == pytest.approx([0.07, -0.01])
+    assert moved.p_sw_des_heading_m - free.p_sw_des_heading_m == pytest.approx([0.07, -0.01])
+    i = started().output_names.index("com_x_over_swing")
+    assert moved.h_d[i] > free.h_d[i]  # the swing foot aims shorter

@@ -127,3 +127,41 @@ def test_a_clearance_too_high_for_the_step_is_lowered_to_keep_the_swing_apex_bel
     assert fit_clearance(up, small) is small
     deep = TerrainPrediction(dz_next_m=0.25, dz_sw_m=0.25, dz_sw0_m=-0.7)
     assert fit_clearance(deep, small).clearance_m == 0.0
+
+
+def stairs_up(x_m: float, y_m: float) -> float:
+    """Stairs of 0.1 m rise and 0.3 m run up along +x from x = 1 m."""
+    return 0.0 if x_m < 1.0 else 0.1 * (1 + math.floor((x_m - 1.0) / 0.3))
+
+
+def test_only_the_aware_mode_has_a_foothold_hook():
+    assert GroundPredictor().foothold() is None and GroundPredictor("blind").foothold() is None
+    g = GroundPredictor("aware", stairs_up)
+    g.touchdown(np.array([0.7, 0.0, 0.0]), 0.0)
+    hook = g.foothold()
+    assert hook is not None
+    assert hook(0.98, 0.1, 0.0, 0.2) == pytest.approx((1.08, 0.1))  # off the first edge, onto the tread
+
+
+def test_a_step_over_an_edge_gets_the_rise_as_extra_clearance():
+    from amlip_qp.alip.messages import Command
+
+    cmd = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.1)
+    g = GroundPredictor("aware", stairs_up)
+    g.touchdown(np.array([0.6, 0.0, 0.0]), 0.0)
+    g.touchdown(np.array([0.85, 0.2, 0.0]), 0.0)  # the swing foot lifts off at x = 0.6 m
+    p = g.predict(np.array([0.78, 0.0]), 0.0)  # on the floor: no edge between
+    assert g.edge_rise_m == 0.0 and g.fit(p, cmd) is cmd
+    p = g.predict(np.array([1.1, 0.0]), 0.0)  # up onto the first tread
+    assert g.edge_rise_m == pytest.approx(0.1)
+    assert g.fit(p, cmd).clearance_m == pytest.approx(0.2)
+    g.touchdown(np.array([1.1, 0.0, 0.0]), math.pi)  # turned round on the first tread
+    g.touchdown(np.array([1.15, 0.2, 0.0]), math.pi)  # the swing foot lifts off at 1.1 m, to land down the riser
+    p = g.predict(np.array([0.8, 0.0]), math.pi)
+    assert p.dz_sw_m == pytest.approx(-0.1) and g.edge_rise_m == pytest.approx(0.1)
+    # a smooth slope has no edge: the clearance stays
+    s = GroundPredictor("aware", slope)
+    s.touchdown(np.array([2.0, 0.0, 0.0]), 0.0)
+    s.touchdown(np.array([2.2, 0.2, 0.0]), 0.0)
+    p = s.predict(np.array([2.5, 0.0]), 0.0)
+    assert p.dz_sw_m - p.dz_sw0_m > 0.05 and s.edge_rise_m == 0.0 and s.fit(p, cmd) is cmd

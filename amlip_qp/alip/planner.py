@@ -253,7 +253,11 @@ class Planner:
     # --- per tick ------------------------------------------------------------
 
     def update(
-        self, estimate: StateEstimate, command: Command, terrain: TerrainPrediction | None = None
+        self,
+        estimate: StateEstimate,
+        command: Command,
+        terrain: TerrainPrediction | None = None,
+        foothold: Callable[[float, float, float, float], tuple[float, float]] | None = None,
     ) -> PlannerOutput:
         """Plan the foot placement and evaluate ``h_d`` for one control tick.
 
@@ -264,6 +268,9 @@ class Planner:
             terrain: the ground heights and pitches relative to the stance contact
                 (:class:`TerrainPrediction`); ``None`` is flat ground (the same
                 numbers as all zeros). Rabbit uses its heights, not its pitches.
+            foothold: ``(x, y, heading_next, s) -> (x, y)``: the law's target (world, m) -> where the foot
+                goes instead (a terrain-aware controller moves targets off stair edges; the next step's
+                placement corrects for it). ``None``: the law's target.
 
         Returns:
             A :class:`PlannerOutput`.
@@ -357,6 +364,14 @@ class Planner:
             )
         yl = y.tolist()
         y2, y3, px_w, py_w = yl[2], yl[3], yl[6], yl[7]
+        c0, c1, c2 = estimate.com_m.tolist()
+        if foothold is not None:
+            # The target is CoM - p_st + p_hat - p_sw (world); a moved target moves p_sw the other way.
+            tx, ty = c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w
+            fx, fy = foothold(tx, ty, heading_next, s)
+            if fx != tx or fy != ty:
+                px_w, py_w = px_w - (fx - tx), py_w - (fy - ty)
+                y[6], y[7] = px_w, py_w
 
         # p_sw_des into the current heading frame D_k for the swing-x/y references.
         p_sw_h = np.array(world_to_heading_xy(px_w, py_w, math.cos(self._heading), math.sin(self._heading)))
@@ -375,7 +390,6 @@ class Planner:
             rate = float(dh_d[i]) if self._descent_landing else self._descent_rate_mps
             h_d[i], dh_d[i], ddh_d[i] = O.late_descent(h_d[i], rate, t_in - T)
 
-        c0, c1, c2 = estimate.com_m.tolist()
         target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2 + dz_sw])
         return PlannerOutput(
             s=s,

@@ -45,7 +45,7 @@ from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
-from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction, fit_clearance
+from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
 from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_signals
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
@@ -313,12 +313,12 @@ class WalkingController:
                 ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
                 # the swing target of the new step is not known yet: plan once for it
                 first = ground.predict(est.stance_contact_m, self.planner.heading_rad)
-                plan = self.planner.update(state, fit_clearance(first, command), first)
+                plan = self.planner.update(state, ground.fit(first, command), first, ground.foothold())
                 target_xy = plan.swing_target_world_m
             else:
                 target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
             prediction = ground.predict(target_xy, self.planner.heading_rad)
-            plan = self.planner.update(state, fit_clearance(prediction, command), prediction)
+            plan = self.planner.update(state, ground.fit(prediction, command), prediction, ground.foothold())
         self._last_plan = plan
         target = TrackingTarget(
             stance=stance,

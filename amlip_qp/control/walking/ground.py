@@ -16,7 +16,12 @@ the modes of :data:`GROUND_MODES`:
   plant's scene; the controller never sees the simulator), read at the swing
   target (height, and pitch: the gentler of the grades half a blade behind and
   ahead along the heading, so that a stair's edge reads as its tread) and under
-  the stance contact.
+  the stance contact. The planner's swing target is moved off the terrain's
+  edges, so that the foot's footprint lies on one tread
+  (:class:`~amlip_qp.control.walking.footprint.FootholdSelector`, the hook
+  :meth:`GroundPredictor.foothold`), and a step over an edge gets its rise (up
+  or down) as extra swing clearance (:meth:`GroundPredictor.fit`). On smooth
+  ground (slopes, waves) both change nothing.
 
 In both terrain modes the height where the swing foot lifted off is the
 previous stance contact's, as measured (blind) or read (aware). The
@@ -35,6 +40,7 @@ import numpy as np
 
 from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
 from amlip_qp.alip.messages import Command, TerrainPrediction
+from amlip_qp.control.walking.footprint import EDGE_RISE_M, FootholdSelector
 from amlip_qp.exceptions import InputError
 
 #: The ground modes of :class:`GroundPredictor` (module doc).
@@ -54,6 +60,7 @@ PITCH_HALF_BASE_M = 0.05
 APEX_MARGIN_M = 0.05
 
 HeightFunction = Callable[[float, float], float]
+FootholdPlacement = Callable[[float, float, float, float], tuple[float, float]]
 
 
 def fit_clearance(prediction: TerrainPrediction, command: Command) -> Command:
@@ -103,11 +110,16 @@ class GroundPredictor:
         self._plane = GroundPlane(0.0, 0.0, 0.0, 0.0, 0)
         self._heading = 0.0
         self._stance_xy = (math.nan, math.nan)  # the stance contact, world m
+        self._liftoff_xy = (math.nan, math.nan)  # the previous stance contact, world m
+        #: The rise of the step being planned over an edge between lift-off and target, m ("aware"; else 0).
+        self.edge_rise_m = 0.0
         self._stance_z = math.nan  # ground under it (aware) or its foothold (blind), m
         self._liftoff_dz = 0.0  # ground where the swing foot lifted off minus the stance's, m
         #: Ground pitch under the stance foot along the heading, rad (positive = descending ahead).
         self.stance_pitch_rad = 0.0
         self._liftoff_pitch = 0.0
+        #: Moves swing targets off the terrain's edges ("aware" only; None otherwise).
+        self.selector = FootholdSelector(self._height) if mode == "aware" else None
 
     @property
     def active(self) -> bool:
@@ -119,6 +131,8 @@ class GroundPredictor:
         self.footholds.reset()
         self._plane = GroundPlane(0.0, 0.0, 0.0, 0.0, 0)
         self._stance_xy = (math.nan, math.nan)
+        self._liftoff_xy = (math.nan, math.nan)
+        self.edge_rise_m = 0.0
         self._stance_z = math.nan
         self._liftoff_dz = 0.0
         self.stance_pitch_rad = 0.0
@@ -131,13 +145,37 @@ class GroundPredictor:
             self.footholds.add(stance_contact_m, heading_rad)
             self._plane = self.footholds.plane(heading_rad)
         self._heading = heading_rad
-        if self.mode == "aware":
+        if self.selector is not None:
+            self.selector.new_step()
             z = self._height(x, y)
         previous = self._stance_z
         self._liftoff_dz = 0.0 if math.isnan(previous) else _clip(previous - z, MAX_DZ_M)
         self._liftoff_pitch = self.stance_pitch_rad
+        self._liftoff_xy = self._stance_xy
         self._stance_xy, self._stance_z = (x, y), z
         self.stance_pitch_rad = self._pitch_at(x, y, heading_rad)
+
+    def foothold(self) -> FootholdPlacement | None:
+        """The planner's foothold hook: world ``(x, y)``, heading, phase -> foothold ``(x, y)`` ("aware"; else None)."""
+        return self.selector.place if self.selector is not None else None
+
+    def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
+        """The command for a step over ``prediction``: over a rising edge ("aware") the clearance is raised by
+        the rise (:attr:`edge_rise_m`), so that the toe rises above the edge early; then :func:`fit_clearance`."""
+        if self.edge_rise_m > 0.0:
+            command = replace(command, clearance_m=command.clearance_m + self.edge_rise_m)
+        return fit_clearance(prediction, command)
+
+    def _edge_rise(self, x: float, y: float, dz: float, heading_rad: float) -> float:
+        """The height (m) the swing foot climbs or drops from lift-off to the target ``(x, y)`` m if an edge lies
+        between them; else 0."""
+        rise = abs(dz - self._liftoff_dz)
+        lx, ly = self._liftoff_xy
+        if not rise > EDGE_RISE_M or not math.isfinite(lx):
+            return 0.0
+        assert self.selector is not None
+        reach = math.cos(heading_rad) * (x - lx) + math.sin(heading_rad) * (y - ly)
+        return rise if self.selector.edges(lx, ly, heading_rad, 0.0, reach) else 0.0
 
     def _height(self, x: float, y: float) -> float:
         """The height function at ``(x, y)`` m; where it has no ground (NaN), the stance's (or 0 before any)."""
@@ -172,6 +210,8 @@ class GroundPredictor:
             # the plane's grades (fitted at the touchdown) times the offset in the step's heading frame
             dz = self._plane.rise_m(x - self._stance_xy[0], y - self._stance_xy[1], self._heading)
         dz = _clip(dz, MAX_DZ_M)
+        if self.selector is not None:
+            self.edge_rise_m = self._edge_rise(x, y, dz, heading_rad)
         return TerrainPrediction(
             dz_next_m=dz,
             dz_sw_m=dz,
