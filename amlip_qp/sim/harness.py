@@ -241,15 +241,9 @@ class Simulation:
         # Hoisted lookups: views into MjData stay valid across mj_step.
         plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
         read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
-        # The same read as generated C, made after each tick's plant steps for the next tick (None: no C compiler
-        # or a base it does not read; read_state reads at each tick's start)
-        read_next = plant.compiled_reader(d)
+        read_next = plant.compiled_reader(d)  # as generated C, after each tick's steps for the next (or None)
         add_noise = None if self.noise is None else self._add_noise
-        write_ctrl, ctrl_from_tau, apply_ctrl = (
-            plant.ctrl_writer(d, compiled=True),
-            plant.ctrl_from_tau,
-            plant.apply_ctrl,
-        )
+        write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d, True), plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
         later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
