@@ -36,6 +36,7 @@ import numpy as np
 
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.exceptions import CodegenError
+from amlip_qp.robots.state import rotation_entries
 from amlip_qp.robots.state_reader import FreeJointPlan
 
 SOURCE_FILE = "amlip_state_read.c"
@@ -72,13 +73,10 @@ def read_function(plan: FreeJointPlan, nq: int, nv: int) -> ca.Function:
     x, y, z, w = x / norm, y / norm, z / norm, w / norm
     q[plan.pq : plan.pq + 4] = [x, y, z, w]
     n = ca.sqrt(w * w + x * x + y * y + z * z)
-    rw, rx, ry, rz = w / n, x / n, y / n, z / n  # u / 1.0 is u: the reference's shortcut gives the same
-    xx, yy, zz = rx * rx, ry * ry, rz * rz
-    xy, xz, yz = rx * ry, rx * rz, ry * rz
-    wx, wy, wz = rw * rx, rw * ry, rw * rz
-    r00, r01, r02 = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
-    r10, r11, r12 = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
-    r20, r21, r22 = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+    # The one rotation formula, on symbols. u / 1.0 is u: the reference's shortcut (no division
+    # at a norm of 1.0) gives the same numbers.
+    entries = rotation_entries(w / n, x / n, y / n, z / n)  # type: ignore[arg-type]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = entries
     l0, l1, l2 = (qvel[i] for i in plan.lin_xyz)
     lin = [r00 * l0 + r10 * l1 + r20 * l2, r01 * l0 + r11 * l1 + r21 * l2, r02 * l0 + r12 * l1 + r22 * l2]
     v[plan.pv : plan.pv + 3] = lin
