@@ -85,3 +85,19 @@ def test_bad_arguments_are_refused():
         FootholdSelector(3.0)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="margin_m"):
         FootholdSelector(stairs, margin_m=-0.01)
+
+
+def test_reset_forgets_the_samples_and_the_last_choice():
+    """After reset a selector chooses as a new one, even where its height function changed meanwhile."""
+    heights = {"z": 0.0}
+
+    def moving(x_m: float, y_m: float) -> float:
+        return stairs(x_m, y_m) + (heights["z"] if x_m > 1.5 else 0.0)
+
+    sel = FootholdSelector(moving)
+    first = sel.place(0.98, 0.0, 0.0)
+    heights["z"] = 0.05  # a new run on other ground: another edge at x = 1.5
+    sel.reset()
+    assert sel.place(1.45, 0.0, 0.0) == FootholdSelector(moving).place(1.45, 0.0, 0.0)
+    assert sel.place(1.45, 0.0, 0.0) != (1.45, 0.0)  # the new edge moved it
+    assert first != (0.98, 0.0)

@@ -157,3 +157,23 @@ def test_the_compiled_write_is_numpys_clip_bit_for_bit_and_leaves_nan_to_it():
     tau[3] = np.nan
     write(tau)
     assert used == [True] and np.isnan(ctrl[3]) and np.isnan(ctrl[:nu]).sum() == 1
+    # a zero gear: 0 / 0 is NaN, which the clip would hide; the NumPy writer writes it
+    gear[5] = 0.0
+    write_zero_gear = CompiledCtrlWrite(ctrl[:nu], gear, lo, hi, numpy_write).writer()
+    with np.errstate(invalid="ignore"):
+        write_zero_gear(np.zeros(nu))
+    assert used == [True, True] and np.isnan(ctrl[5]) and np.isnan(ctrl[:nu]).sum() == 1
+
+
+def test_without_a_compiler_the_plant_reads_and_writes_in_python(monkeypatch):
+    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.plant import load_plant
+
+    plant = load_plant("cassie", load("cassie"))
+    data = plant.new_data()
+    assert plant.compiled_reader(data) is not None
+    monkeypatch.setenv("AMLIP_QP_CC", "none")
+    assert plant.compiled_reader(data) is None
+    tau = np.linspace(-200.0, 200.0, plant.gear.size)
+    plant.ctrl_writer(data, compiled=True)(tau)  # the NumPy writer: no error without a compiler
+    assert np.array_equal(data.ctrl[: tau.size], plant.ctrl_from_tau(tau))

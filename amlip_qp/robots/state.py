@@ -172,7 +172,10 @@ def _norm(x: np.ndarray) -> float:
     its summation order and fused multiply-adds) depends on the CPU, and the per-tick
     :class:`~amlip_qp.robots.state_reader.StateReader` must give the same numbers on any machine.
     """
-    return math.sqrt(sum(t * t for t in x.tolist()))
+    total = 0.0  # not sum(): from Python 3.12 it sums floats with compensation
+    for t in x.tolist():
+        total += t * t
+    return math.sqrt(total)
 
 
 def _transposed_times(R: np.ndarray, u: np.ndarray) -> list[float]:
@@ -185,9 +188,10 @@ def _transposed_times(R: np.ndarray, u: np.ndarray) -> list[float]:
 def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
     """The rotation matrix of the unit quaternion ``(w, x, y, z)``, row by row (9 floats).
 
-    The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot` and the per-tick
-    :class:`~amlip_qp.robots.state_reader.StateReader` both use it (the reader's one-free-joint
-    path has it written out, the same operations: tested bit for bit).
+    The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot`, the per-tick
+    :class:`~amlip_qp.robots.state_reader.StateReader` (its one-free-joint path has it written
+    out, the same operations) and the harness's generated C (:mod:`amlip_qp.sim.compiled_io`,
+    on CasADi symbols) use it; tested bit for bit.
     """
     return (
         1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),

@@ -16,8 +16,9 @@ finiteness check.
 :class:`CompiledCtrlWrite` is :meth:`Plant.ctrl_writer
 <amlip_qp.sim.plant.Plant.ctrl_writer>` (``tau / gear`` clipped to the control
 range, into ``data.ctrl``) in one call: C99's ``fmax``/``fmin`` give NumPy's
-``maximum``/``minimum`` on numbers; a torque that is not finite (which the
-controller never outputs) is left to the NumPy writer, which keeps its NaN.
+``maximum``/``minimum`` on numbers; where ``tau / gear`` is not finite (a
+torque the controller never outputs, or a zero gear) the NumPy writer writes
+instead, which keeps its NaN.
 
 The sources depend only on the plant's sizes and the
 :class:`~amlip_qp.robots.state_reader.FreeJointPlan`; they are compiled once
@@ -35,7 +36,7 @@ import mujoco
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.exceptions import CodegenError
+from amlip_qp.exceptions import CodegenError, InputError
 from amlip_qp.robots.state import rotation_entries
 from amlip_qp.robots.state_reader import FreeJointPlan
 
@@ -123,7 +124,9 @@ class CompiledStateRead:
         # it from the buffer); numpy's stubs declare ndarray a Buffer only for Python >= 3.12.
         for i, arr in enumerate((data.qpos, data.qvel)):
             if fn.nnz_in(i) != arr.size or not arr.flags.c_contiguous or arr.dtype != np.float64:
-                raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} input {i} does not fit the data")
+                raise InputError(
+                    f"{FUNCTION_NAME}: data's qpos and qvel must be contiguous float64 arrays of the plan's plant"
+                )
             self._buffer.set_arg(i, memoryview(arr))  # type: ignore[call-arg]
         for i, arr in enumerate((self._q, self._v, self._root, self._checks)):
             if fn.nnz_out(i) != arr.size:
@@ -146,11 +149,13 @@ class CompiledStateRead:
 
 
 def write_function(nu: int) -> ca.Function:
-    """``(tau[nu], gear[nu], lo[nu], hi[nu]) -> (ctrl[nu], sum(tau))``: ``min(max(tau / gear, lo), hi)``."""
+    """``(tau[nu], gear[nu], lo[nu], hi[nu]) -> (ctrl[nu], sum(tau / gear))``: ``min(max(tau / gear, lo), hi)``
+    and the sum before the clip (not finite: a NaN the clip would hide)."""
     tau, gear, lo, hi = (ca.SX.sym(name, nu) for name in ("tau", "gear", "lo", "hi"))
-    ctrl = ca.fmin(ca.fmax(tau / gear, lo), hi)
+    ratio = tau / gear
+    ctrl = ca.fmin(ca.fmax(ratio, lo), hi)
     return ca.Function(
-        WRITE_FUNCTION_NAME, [tau, gear, lo, hi], [ctrl, ca.sum1(tau)], ["tau", "gear", "lo", "hi"], ["ctrl", "total"]
+        WRITE_FUNCTION_NAME, [tau, gear, lo, hi], [ctrl, ca.sum1(ratio)], ["tau", "gear", "lo", "hi"], ["ctrl", "total"]
     )
 
 
@@ -188,7 +193,7 @@ class CompiledCtrlWrite:
         )
         fn = functions[WRITE_FUNCTION_NAME]
         if not ctrl.flags.c_contiguous or ctrl.dtype != np.float64:
-            raise CodegenError(f"{WRITE_FUNCTION_NAME}: the controls must be a contiguous float64 array")
+            raise InputError(f"{WRITE_FUNCTION_NAME}: the controls must be a contiguous float64 array")
         self._tau = np.zeros(nu)
         self._constants = tuple(np.array(a, dtype=float).reshape(-1) for a in (gear, lo, hi))
         self._total = np.zeros(1)
@@ -209,6 +214,6 @@ class CompiledCtrlWrite:
             tau[:] = tau_Nm
             evaluate()
             if not isfinite(total.item()):
-                fallback(tau_Nm)  # NaN stays NaN, as NumPy's clip
+                fallback(tau_Nm)  # NaN stays NaN, as NumPy's clip (C's fmax drops it)
 
         return write

@@ -243,7 +243,8 @@ class Simulation:
         read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
         read_next = plant.compiled_reader(d)  # as generated C, after each tick's steps for the next (or None)
         add_noise = None if self.noise is None else self._add_noise
-        write_ctrl, ctrl_from_tau, apply_ctrl = plant.ctrl_writer(d, True), plant.ctrl_from_tau, plant.apply_ctrl
+        write_ctrl = plant.ctrl_writer(d, compiled=ctrl_filter is None)  # with a filter: apply_ctrl
+        ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
         ctrl_step, kin_state = ctrl.step, ctrl.kin.state
         step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
         later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
@@ -269,13 +270,15 @@ class Simulation:
         wall0 = time.perf_counter()
         sim_time = t_next = float(d.time)
         state = None  # this tick's (q, v, root) if read already (after the last tick's plant steps)
+        qpos_list = qpos.tolist()
+        total = sum(qpos_list)
         k = 0
         for k in range(n_ticks):
             t_tick = perf_ns()
             t = t_next
             cmd = command_fn(t)
             if state is None:  # read here: the first tick, no compiled read, or a state it left to read_state's checks
-                state = read_state(qpos.tolist())
+                state = read_state(qpos_list, total) if read_next is None else read_state(qpos.tolist())
             q, v, root = state  # root: the base's (q, v) as one list
             r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
             if ground is None:
@@ -347,8 +350,9 @@ class Simulation:
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
             # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            if read_next is None:
-                state, total = None, sum(qpos.tolist())
+            if read_next is None:  # the next tick's read_state takes the list and its sum
+                qpos_list = qpos.tolist()
+                state, total = None, sum(qpos_list)
             else:  # the next tick's state, and the sum of qpos and qvel
                 state, total = read_next()
             tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt

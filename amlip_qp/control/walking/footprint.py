@@ -85,6 +85,11 @@ class FootholdSelector:
         self._cache: dict[tuple[int, int], float] = {}
         self._last: tuple[float, float] | None = None
 
+    def reset(self) -> None:
+        """Forget the samples and the last choice (a new run: the same choices as a new selector's)."""
+        self._cache.clear()
+        self._last = None
+
     def new_step(self) -> None:
         """A touchdown: the next target is chosen afresh (no hysteresis towards the last step's)."""
         self._last = None

@@ -137,6 +137,8 @@ class GroundPredictor:
         self._liftoff_dz = 0.0
         self.stance_pitch_rad = 0.0
         self._liftoff_pitch = 0.0
+        if self.selector is not None:
+            self.selector.reset()
 
     def touchdown(self, stance_contact_m: np.ndarray, heading_rad: float) -> None:
         """A new stance contact (world, m) on a step of heading ``heading_rad`` (rad): a foothold."""
@@ -160,8 +162,8 @@ class GroundPredictor:
         return self.selector.place if self.selector is not None else None
 
     def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
-        """The command for a step over ``prediction``: over a rising edge ("aware") the clearance is raised by
-        the rise (:attr:`edge_rise_m`), so that the toe rises above the edge early; then :func:`fit_clearance`."""
+        """The command for a step over ``prediction``: over an edge up or down ("aware") the clearance is raised
+        by the rise (:attr:`edge_rise_m`), so that the toe clears the edge early; then :func:`fit_clearance`."""
         if self.edge_rise_m > 0.0:
             command = replace(command, clearance_m=command.clearance_m + self.edge_rise_m)
         return fit_clearance(prediction, command)
@@ -175,7 +177,7 @@ class GroundPredictor:
             return 0.0
         assert self.selector is not None
         reach = math.cos(heading_rad) * (x - lx) + math.sin(heading_rad) * (y - ly)
-        return rise if self.selector.edges(lx, ly, heading_rad, 0.0, reach) else 0.0
+        return rise if self.selector.edges(lx, ly, heading_rad, min(0.0, reach), max(0.0, reach)) else 0.0
 
     def _height(self, x: float, y: float) -> float:
         """The height function at ``(x, y)`` m; where it has no ground (NaN), the stance's (or 0 before any)."""

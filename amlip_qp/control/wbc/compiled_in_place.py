@@ -29,9 +29,9 @@ Python build to rounding, with less Python a tick:
   controller's ``kin.outputs`` of the same tick costs nothing.
 
 It is not the default because the QP's trajectories then differ from the
-default build's by rounding, and two acceptance walks are at their edge on
-rounding (docs/TUNING.md, "The compiled assembly reads Pinocchio's arrays in
-place"). A kinematics whose output map is not the robot's standard ``h_0`` (a
+default build's by rounding, and an acceptance walk (the closed-chain 2.1 m/s
+ramp) is at its edge on rounding (docs/TUNING.md, "The compiled assembly reads
+Pinocchio's arrays in place"). A kinematics whose output map is not the robot's standard ``h_0`` (a
 drop-in, :func:`~amlip_qp.robots.outputs.computes_standard_outputs`) is built by the Python build instead.
 The C source depends on the robot and the :class:`QPConfig`; it is compiled
 once into the codegen cache (about 5 s for Cassie).

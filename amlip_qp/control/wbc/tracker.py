@@ -81,8 +81,9 @@ class QPTracker(Tracker):
             :mod:`amlip_qp.control.wbc.compiled_in_place`, which reads
             Pinocchio's arrays in place (the same problem to rounding; the
             controller's tick about a quarter shorter). Off by default: the
-            trajectories then change by rounding, and two acceptance walks
-            are at their edge on rounding (docs/TUNING.md). Needs the
+            trajectories then change by rounding, and an acceptance walk
+            (the closed-chain 2.1 m/s ramp) is at its edge on rounding
+            (docs/TUNING.md). Needs the
             compiled build (not ``compiled_build=False``).
 
     Attributes:
