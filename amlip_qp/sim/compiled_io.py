@@ -108,6 +108,7 @@ class CompiledStateRead:
     Raises:
         CompilerUnavailableError: No C compiler.
         CodegenError: The compiler rejected the source or the library does not load.
+        InputError: ``data``'s arrays are not contiguous float64 arrays.
     """
 
     def __init__(self, plan: FreeJointPlan, data: mujoco.MjData, cache_dir: str | os.PathLike | None = None):
@@ -172,6 +173,7 @@ class CompiledCtrlWrite:
     Raises:
         CompilerUnavailableError: No C compiler.
         CodegenError: The compiler rejected the source or the library does not load.
+        InputError: ``ctrl`` is not a contiguous float64 array.
     """
 
     def __init__(

@@ -293,7 +293,8 @@ class Plant:
         with ``sum(qpos) + sum(qvel)``: :class:`~amlip_qp.sim.compiled_io.CompiledStateRead`.
 
         ``None`` where it does not apply (a base not floated by one free joint, a ball joint) or
-        without a C compiler: the harness then reads with :meth:`array_reader`.
+        without a C compiler: the harness then reads with :meth:`array_reader`. A
+        :class:`~amlip_qp.exceptions.CodegenError` (a compiler that fails) propagates.
         """
         plan = None if self._reader is None else self._reader.free_joint_plan
         if plan is None:
