@@ -363,3 +363,17 @@ def test_a_foothold_hook_moves_the_swing_target_and_the_placement():
     assert moved.p_sw_des_heading_m - free.p_sw_des_heading_m == pytest.approx([0.07, -0.01])
     i = started().output_names.index("com_x_over_swing")
     assert moved.h_d[i] > free.h_d[i]  # the swing foot aims shorter
+
+
+def test_a_foothold_hook_that_is_not_one_is_refused_with_the_reason():
+    from amlip_qp.alip import TerrainPrediction
+
+    terrain = TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1)
+    bad_hooks = {
+        "must be a function": "left",
+        "must return two numbers": lambda x, y, h, s: (x,),
+        "non-finite foothold": lambda x, y, h, s: (x, math.nan),
+    }
+    for reason, hook in bad_hooks.items():
+        with pytest.raises(InputError, match=reason):
+            started().update(est(t_in_step_s=0.1), cmd(), terrain, hook)

@@ -59,3 +59,16 @@ def side(name: str, value) -> str:
     if value not in ("left", "right"):
         raise InputError(f"{name} must be 'left' or 'right', got {value!r}")
     return value
+
+
+def placed_foothold(foothold, x: float, y: float, heading_rad: float, s: float) -> tuple[float, float]:
+    """``foothold(x, y, heading_rad, s)`` checked: two finite numbers (m), else :class:`InputError`."""
+    if not callable(foothold):
+        raise InputError(f"foothold must be a function (x_m, y_m, heading_rad, s) -> (x_m, y_m), got {foothold!r}")
+    try:
+        fx, fy = (float(v) for v in foothold(x, y, heading_rad, s))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"the foothold function must return two numbers (x_m, y_m): {exc}") from None
+    if not math.isfinite(fx + fy):
+        raise InputError(f"the foothold function returned a non-finite foothold ({fx!r}, {fy!r}) for ({x!r}, {y!r})")
+    return fx, fy

@@ -368,7 +368,7 @@ class Planner:
         if foothold is not None:
             # The target is CoM - p_st + p_hat - p_sw (world); a moved target moves p_sw the other way.
             tx, ty = c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w
-            fx, fy = foothold(tx, ty, heading_next, s)
+            fx, fy = C.placed_foothold(foothold, tx, ty, heading_next, s)
             if fx != tx or fy != ty:
                 px_w, py_w = px_w - (fx - tx), py_w - (fy - ty)
                 y[6], y[7] = px_w, py_w

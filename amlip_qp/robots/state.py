@@ -165,6 +165,10 @@ def _check(x, n: int, what: str) -> np.ndarray:
     return arr
 
 
+#: A quaternion whose norm is below this is a zero quaternion (refused); every state read uses it.
+ZERO_QUATERNION_NORM = 1e-9
+
+
 def _norm(x: np.ndarray) -> float:
     """Euclidean norm of a 1-D array, ``sqrt(x0 x0 + x1 x1 + ...)`` summed left to right.
 
@@ -208,7 +212,7 @@ def _quat_wxyz_to_rot(qw: np.ndarray) -> np.ndarray:
 
 def _normalized(quat: np.ndarray, what: str) -> np.ndarray:
     n = _norm(quat)
-    if n < 1e-9:
+    if n < ZERO_QUATERNION_NORM:
         raise InputError(f"{what}: zero quaternion")
     return quat / n
 

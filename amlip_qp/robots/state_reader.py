@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from amlip_qp.robots.state import StateMap, mj_to_pin, rotation_entries
+from amlip_qp.robots.state import ZERO_QUATERNION_NORM, StateMap, mj_to_pin, rotation_entries
 
 
 class FreeJointPlan(NamedTuple):
@@ -189,7 +189,7 @@ def _one_free_joint_arrays(quats: tuple, root_at: tuple | None, gather_q, gather
         v = qvel_a.copy() if gather_v is None else qvel_a[gather_v]
         w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
         n = sqrt(w * w + x * x + y * y + z * z)
-        if n < 1e-9:
+        if n < ZERO_QUATERNION_NORM:
             return checked(qpos, qvel)  # raises: a zero quaternion
         x, y, z, w = x / n, y / n, z / n, w / n
         q[pq] = x
@@ -233,7 +233,7 @@ def _write_quaternions(q, v, qpos, qvel, quats, root_at) -> list[float] | None:
     for iw, ix, iy, iz, pq, free in quats:
         w, x, y, z = qpos[iw], qpos[ix], qpos[iy], qpos[iz]
         n = sqrt(w * w + x * x + y * y + z * z)
-        if n < 1e-9:
+        if n < ZERO_QUATERNION_NORM:
             return None
         x, y, z, w = x / n, y / n, z / n, w / n
         q[pq] = x

@@ -37,7 +37,7 @@ import numpy as np
 
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.exceptions import CodegenError, InputError
-from amlip_qp.robots.state import rotation_entries
+from amlip_qp.robots.state import ZERO_QUATERNION_NORM, rotation_entries
 from amlip_qp.robots.state_reader import FreeJointPlan
 
 SOURCE_FILE = "amlip_state_read.c"
@@ -46,9 +46,6 @@ FUNCTION_NAME = "amlip_state_read"
 WRITE_SOURCE_FILE = "amlip_ctrl_write.c"
 WRITE_LIBRARY_FILE = "libamlip_ctrl_write.so"
 WRITE_FUNCTION_NAME = "amlip_ctrl_write"
-
-#: A quaternion's norm below this is a zero quaternion (as the reference's check).
-ZERO_QUATERNION_NORM = 1e-9
 
 #: ``((q, v, root), total)``: the state as :meth:`StateReader.arrays
 #: <amlip_qp.robots.state_reader.StateReader.arrays>` returns it (``None`` when
