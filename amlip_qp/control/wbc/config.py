@@ -172,6 +172,7 @@ CASSIE_CONFIG = QPConfig(
     stance_foot_torque_max_Nm=0.01,  # passive stance toe, a band for active-set solvers (TUNING.md)
     stance_yaw_moment_weight=3.0,  # the stance foot creeps in yaw without it (TUNING.md)
     stance_coupling_kd=150.0,  # least stance-foot bounce of the gains tried (TUNING.md)
+    coupling_kd=100.0,  # damps the swing leg's spring mode on the closed-chain plant (TUNING.md)
     friction_mu=0.9,  # forces sat on the 0.7 pyramid at speed; the plant has 1.0 (TUNING.md)
     hip_yaw_feedback=1.0,  # the pelvis yawed away without it (TUNING.md)
     touchdown_blend=0.0,  # no forces on the landing foot before its touchdown (TUNING.md)
