@@ -63,17 +63,17 @@ from amlip_qp.sim.factory import build_simulation
 from amlip_qp.sim.scenarios import get_scenario
 
 scenario, tracker_name, duration, log = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
-yardstick, in_place = sys.argv[5], sys.argv[6] == "1"
+yardstick, gathered = sys.argv[5], sys.argv[6] == "1"
 sc = get_scenario(scenario).with_(duration_s=duration)
 
 def tracker():
-    if not in_place:
+    if not gathered:
         return tracker_name
     from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.sim.factory import load
-    made = QPTracker(load(sc.robot), in_place_assembly=True)
-    if made.build_backend != "c-in-place":
-        raise SystemExit(f"no in-place assembly: {made.build_backend}")
+    made = QPTracker(load(sc.robot), in_place_assembly=False)
+    if made.build_backend != "c":
+        raise SystemExit(f"no compiled build that gathers its inputs: {made.build_backend}")
     return made
 
 ys = {}  # this checkout's amlip_qp/sim/mujoco_yardstick.py, the same recipe in every version
@@ -104,14 +104,15 @@ print(json.dumps({
     "ticks": n, "fell": bool(result.fell), "realtime_factor": result.sim_time_s / result.wall_time_s,
     "wall_us": wall_us, "controller_us": controller_us, "mujoco_us": mujoco_us,
     "harness_us": wall_us - controller_us - mujoco_us, "step_alone_us": step_alone_us, "package": amlip_qp.__file__,
-    "in_place": in_place, "steps_per_tick": steps_per_tick,
+    "gathered": gathered, "steps_per_tick": steps_per_tick,
 }))
 """
 
 
-def walk(tree: pathlib.Path, args: argparse.Namespace, in_place: bool = False) -> dict:
+def walk(tree: pathlib.Path, args: argparse.Namespace, gathered: bool = False) -> dict:
     """One walk of the checkout at ``tree`` in a fresh process; its timing record
-    (``in_place``: the QP tracker with ``in_place_assembly=True``)."""
+    (``gathered``: the QP tracker with ``in_place_assembly=False``, its compiled build that gathers its inputs
+    in Python)."""
     env_code = f"import sys; sys.path.insert(0, {str(tree)!r})\nWARMUP_S = {WARMUP_S!r}\n" + WALK
     out = subprocess.run(
         [
@@ -123,7 +124,7 @@ def walk(tree: pathlib.Path, args: argparse.Namespace, in_place: bool = False) -
             str(args.duration),
             args.log,
             str(YARDSTICK),
-            "1" if in_place else "0",
+            "1" if gathered else "0",
         ],  # fmt: skip
         capture_output=True,
         text=True,
@@ -162,9 +163,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--duration", type=float, default=10.0, help="simulated time per walk, s (default 10)")
     p.add_argument("--log", default="summary", help="this checkout's log mode (default summary)")
     p.add_argument(
-        "--in-place",
+        "--gathered",
         action="store_true",
-        help="this checkout's QP tracker with in_place_assembly=True (the reference's as it is)",
+        help="this checkout's QP tracker with in_place_assembly=False, the compiled build that gathers its inputs "
+        "in Python (the reference's as it is)",
     )
     p.add_argument("--json", default=None, help="write every record and the medians to this JSON file ('-': stdout)")
     args = p.parse_args(argv)
@@ -181,8 +183,8 @@ def main(argv: list[str] | None = None) -> int:
             raise InputError(f"--tracker {args.tracker}: unknown; known: {', '.join(TRACKER_MODULES)}")
         if args.log not in LOG_MODES:
             raise InputError(f"--log {args.log}: unknown; known: {', '.join(LOG_MODES)}")
-        if args.in_place and args.tracker != "qp":
-            raise InputError(f"--in-place is an option of the qp tracker, not of {args.tracker}")
+        if args.gathered and args.tracker != "qp":
+            raise InputError(f"--gathered is an option of the qp tracker, not of {args.tracker}")
         check_output_path("--json", args.json)
     except InputError as exc:
         print(f"error: {exc}")
@@ -191,9 +193,9 @@ def main(argv: list[str] | None = None) -> int:
     for i in range(args.pairs):
         # ABBA: the order alternates, so a steady drift of the machine's speed favours neither
         if i % 2 == 0:
-            pair = {"reference": walk(ref, args), "this": walk(HERE, args, args.in_place)}
+            pair = {"reference": walk(ref, args), "this": walk(HERE, args, args.gathered)}
         else:
-            this = walk(HERE, args, args.in_place)
+            this = walk(HERE, args, args.gathered)
             pair = {"reference": walk(ref, args), "this": this}
         pairs.append(pair)
         print(line("reference", pair["reference"]))

@@ -50,7 +50,8 @@ def test_source_bakes_in_the_robot_and_the_config():
 
 def test_tracker_uses_the_compiled_build_and_falls_back_without_a_compiler(monkeypatch):
     robot = load_robot("rabbit")
-    assert QPTracker(robot).build_backend == "c"
+    assert QPTracker(robot).build_backend == "c-in-place"  # the default: the in-place compiled build
+    assert QPTracker(robot, in_place_assembly=False).build_backend == "c"
     assert QPTracker(robot, compiled_build=False).build_backend == "python"
     with pytest.raises(InputError, match="compiled_build"):
         QPTracker(robot, compiled_build="yes")
@@ -72,7 +73,7 @@ def test_compiled_and_python_trackers_give_the_same_torques():
     # Solved tightly from scratch: at the tracker's eps_abs 1e-3 a degenerate
     # direction (the stance toe's +-0.01 N m band) may end anywhere within tolerance.
     opts = {"eps_abs": 1e-9, "warm_start": False}
-    fast, slow = QPTracker(robot, **opts), QPTracker(robot, compiled_build=False, **opts)
+    fast, slow = QPTracker(robot, in_place_assembly=False, **opts), QPTracker(robot, compiled_build=False, **opts)
     assert fast.build_backend == "c"
     for kin, target in random_cases(robot, 6, seed=3):
         a, b = fast.compute(kin, target), slow.compute(kin, target)

@@ -41,17 +41,17 @@ def test_a_checkout_against_itself_splits_each_walk_and_compares_the_pairs(speed
     pairs = [p["this"]["wall_per_step"] / p["reference"]["wall_per_step"] for p in report["pairs"]]
     assert ratio == pytest.approx(sorted(pairs)[0] + (sorted(pairs)[1] - sorted(pairs)[0]) / 2)  # the median
     assert "medians over 2 pairs" in capsys.readouterr().out
-    assert not any(rec["in_place"] for pair in report["pairs"] for rec in pair.values())
+    assert not any(rec["gathered"] for pair in report["pairs"] for rec in pair.values())
 
 
-def test_in_place_walks_this_checkout_with_the_in_place_assembly(speed_against, tmp_path, capsys):
+def test_gathered_walks_this_checkout_with_the_build_that_gathers_its_inputs(speed_against, tmp_path, capsys):
     out = tmp_path / "speed.json"
-    argv = ["--reference", str(ROOT), "--pairs", "1", "--duration", "0.05", "--scenario", "rabbit-0.5mps", "--in-place"]
+    argv = ["--reference", str(ROOT), "--pairs", "1", "--duration", "0.05", "--scenario", "rabbit-0.5mps", "--gathered"]
     assert speed_against.main([*argv, "--json", str(out)]) == 0
     (pair,) = json.loads(out.read_text())["pairs"]
-    assert pair["this"]["in_place"] and not pair["reference"]["in_place"]
-    assert speed_against.main(["--reference", str(ROOT), "--in-place", "--tracker", "pbc"]) == 2
-    assert "--in-place is an option of the qp tracker" in capsys.readouterr().out.splitlines()[-1]
+    assert pair["this"]["gathered"] and not pair["reference"]["gathered"]
+    assert speed_against.main(["--reference", str(ROOT), "--gathered", "--tracker", "pbc"]) == 2
+    assert "--gathered is an option of the qp tracker" in capsys.readouterr().out.splitlines()[-1]
 
 
 def test_bad_input_exits_2_in_one_line_before_any_walk(speed_against, tmp_path, capsys):

@@ -90,7 +90,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--trackers",
         default="qp,pbc",
         metavar="NAMES",
-        help="comma-separated trackers: qp, pbc, qp-in-place (the QP with its in-place assembly) (default qp,pbc)",
+        help="comma-separated trackers: qp, pbc, qp-gathered (the QP with the compiled build that gathers its "
+        "inputs in Python, the default before the in-place one) (default qp,pbc)",
     )
     b.set_defaults(func=handler("amlip_qp.sim.bench_harness:run_bench"))
 

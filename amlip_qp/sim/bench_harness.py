@@ -76,7 +76,7 @@ REFERENCE_SCENARIO, REFERENCE_TRACKER = "cassie-1mps", "qp"
 GOAL_HARNESS_PER_MUJOCO = REFERENCE_HARNESS_PER_MUJOCO / 4.0
 
 #: Tracker variants the benchmark knows besides :data:`TRACKER_MODULES`' names: ``name -> (tracker, options)``.
-VARIANTS = {"qp-in-place": ("qp", {"in_place_assembly": True})}
+VARIANTS = {"qp-gathered": ("qp", {"in_place_assembly": False})}
 
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
 WARMUP_S = 0.5
@@ -102,7 +102,7 @@ def run(
         ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (its
         figures) and the goals' verdicts, given only for the QP rows (``qp``
-        and ``qp-in-place``, :data:`VARIANTS`) of the reference's scenario
+        and ``qp-gathered``, :data:`VARIANTS`) of the reference's scenario
         (empty otherwise: the reference was measured there).
 
     Raises:

@@ -1,6 +1,6 @@
 """The whole-body QP's per-tick assembly as generated C that reads Pinocchio's arrays in place.
 
-An option of the QP tracker (``QPTracker(in_place_assembly=True)``), the same
+The QP tracker's default assembly with a C compiler, the same
 problem as :class:`~amlip_qp.control.wbc.compiled.CompiledBuild` and the
 Python build to rounding, with less Python a tick:
 
@@ -28,11 +28,11 @@ Python build to rounding, with less Python a tick:
   <amlip_qp.robots.kinematics.RobotKinematics.store_outputs>`), so the
   controller's ``kin.outputs`` of the same tick costs nothing.
 
-It is not the default because the QP's trajectories then differ from the
-default build's by rounding, and an acceptance walk (the closed-chain 2.1 m/s
-ramp) is at its edge on rounding (docs/TUNING.md, "The compiled assembly reads
-Pinocchio's arrays in place"). A kinematics whose output map is not the robot's standard ``h_0`` (a
-drop-in, :func:`~amlip_qp.robots.outputs.computes_standard_outputs`) is built by the Python build instead.
+``QPTracker(in_place_assembly=False)`` gives
+:class:`~amlip_qp.control.wbc.compiled.CompiledBuild` instead. A kinematics
+whose output map is not the robot's standard ``h_0`` (a drop-in,
+:func:`~amlip_qp.robots.outputs.computes_standard_outputs`) is built by the
+Python build instead.
 The C source depends on the robot and the :class:`QPConfig`; it is compiled
 once into the codegen cache (about 5 s for Cassie).
 """

@@ -79,12 +79,13 @@ class QPTracker(Tracker):
             optimum, about a quarter less solve time; see the module doc).
         in_place_assembly: Assemble with the generated C of
             :mod:`amlip_qp.control.wbc.compiled_in_place`, which reads
-            Pinocchio's arrays in place (the same problem to rounding; the
-            controller's tick about a quarter shorter). Off by default: the
-            trajectories then change by rounding, and an acceptance walk
-            (the closed-chain 2.1 m/s ramp) is at its edge on rounding
-            (docs/TUNING.md). Needs the
-            compiled build (not ``compiled_build=False``).
+            Pinocchio's arrays in place (the same problem as the other
+            builds to rounding; the controller's tick about a quarter shorter
+            than with :mod:`~amlip_qp.control.wbc.compiled`, which gathers
+            its inputs in Python). ``None`` (default): whenever the compiled
+            build is used; ``True``: required (not with
+            ``compiled_build=False``); ``False``: the compiled build that
+            gathers its inputs (``build_backend == "c"``).
 
     Attributes:
         last_problem: The last built :class:`QPProblem` (the builder's live
@@ -94,8 +95,8 @@ class QPTracker(Tracker):
         fallbacks: Number of ticks that used the fallback.
         cold_retries: Ticks whose warm-started solve failed and was retried
             from scratch (once) before any fallback.
-        build_backend: ``"c"`` (compiled assembly), ``"c-in-place"``
-            (``in_place_assembly``) or ``"python"``.
+        build_backend: ``"c-in-place"`` (the default with a C compiler),
+            ``"c"`` (``in_place_assembly=False``) or ``"python"``.
         build_problem: The assembly in use, ``(kin, target) -> QPProblem``
             (the builder's live arrays).
     """
@@ -114,7 +115,7 @@ class QPTracker(Tracker):
         fallback_damping_Nms: float = 5.0,
         compiled_build: bool | None = None,
         airborne_reduction: bool = False,
-        in_place_assembly: bool = False,
+        in_place_assembly: bool | None = None,
     ):
         if not 0.0 <= fallback_decay <= 1.0:
             raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
@@ -126,10 +127,10 @@ class QPTracker(Tracker):
             raise InputError(f"compiled_build must be None, True or False, got {compiled_build!r}")
         if airborne_reduction not in (True, False):
             raise InputError(f"airborne_reduction must be True or False, got {airborne_reduction!r}")
-        if in_place_assembly not in (True, False) or (in_place_assembly and compiled_build is False):
+        if in_place_assembly not in (None, True, False) or (in_place_assembly and compiled_build is False):
             raise InputError(
-                f"in_place_assembly must be True or False and needs the compiled build, got {in_place_assembly!r} "
-                f"with compiled_build={compiled_build!r}"
+                "in_place_assembly must be None, True or False (True needs the compiled build), "
+                f"got {in_place_assembly!r} with compiled_build={compiled_build!r}"
             )
         if int(max_iter) < 1:
             raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
@@ -140,7 +141,7 @@ class QPTracker(Tracker):
         self.build_backend = "python"
         if compiled_build is None or compiled_build:
             try:
-                if in_place_assembly:
+                if in_place_assembly is not False:
                     self.build_problem = InPlaceBuild(self.builder).build
                     self.build_backend = "c-in-place"
                 else:
