@@ -52,6 +52,7 @@ def test_tracker_uses_the_compiled_build_and_falls_back_without_a_compiler(monke
     robot = load_robot("rabbit")
     assert QPTracker(robot).build_backend == "c-in-place"  # the default: the in-place compiled build
     assert QPTracker(robot, in_place_assembly=False).build_backend == "c"
+    assert QPTracker(robot, in_place_assembly=0).build_backend == "c"  # falsy as False, not as None
     assert QPTracker(robot, compiled_build=False).build_backend == "python"
     with pytest.raises(InputError, match="compiled_build"):
         QPTracker(robot, compiled_build="yes")

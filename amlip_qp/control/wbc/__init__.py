@@ -13,5 +13,7 @@ control tick, solved by a persistent warm-started ProxQP.
   (the constraints' shape: :mod:`~amlip_qp.control.wbc.constraint_base`);
 - :mod:`~amlip_qp.control.wbc.builder`: :class:`WholeBodyQP`, the problem from those lists;
 - :mod:`~amlip_qp.control.wbc.compiled`: the same build as generated C;
+- :mod:`~amlip_qp.control.wbc.compiled_in_place`: the same as generated C reading Pinocchio's arrays in place
+  (the tracker's default);
 - :mod:`~amlip_qp.control.wbc.tracker`: :class:`QPTracker`, build, solve, fall back.
 """

@@ -213,8 +213,9 @@ class WholeBodyQP:
     def generalized_contact_force(self, x: np.ndarray) -> np.ndarray:
         """``J_f^T f + G^T lambda`` (nv,) of a solution of the last built problem (for checks).
 
-        Reads :attr:`inputs`' ``Jf``: after a Python or a default compiled build, not after the
-        in-place build (:class:`~amlip_qp.control.wbc.compiled_in_place.InPlaceBuild`), which leaves it.
+        Reads :attr:`inputs`' ``Jf``: after a Python build or the compiled build that gathers its inputs
+        (:class:`~amlip_qp.control.wbc.compiled.CompiledBuild`), not after the in-place build
+        (:class:`~amlip_qp.control.wbc.compiled_in_place.InPlaceBuild`), which leaves it.
         """
         out = self.inputs.Jf.T @ x[self.layout.sl_forces]
         if self.layout.n_lambda:

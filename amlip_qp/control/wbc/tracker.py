@@ -66,8 +66,9 @@ class QPTracker(Tracker):
         record: Keep a copy of every solved problem in :attr:`recorded` (bench, tests).
         fallback_decay: Factor applied to the last good torques per failed tick (0..1).
         fallback_damping_Nms: Joint damping of the fallback, N m s/rad.
-        compiled_build: Assemble the QP with the generated C of
-            :mod:`amlip_qp.control.wbc.compiled` (the same problem to rounding,
+        compiled_build: Assemble the QP with generated C
+            (:mod:`amlip_qp.control.wbc.compiled_in_place` by default, or
+            :mod:`amlip_qp.control.wbc.compiled`, see ``in_place_assembly``; the same problem to rounding,
             about 3x less time; compiled once per robot and config into the
             codegen cache, ~7 s for Cassie). ``None`` (default): when a C
             compiler is available, else the Python
@@ -82,10 +83,11 @@ class QPTracker(Tracker):
             Pinocchio's arrays in place (the same problem as the other
             builds to rounding; the controller's tick about a quarter shorter
             than with :mod:`~amlip_qp.control.wbc.compiled`, which gathers
-            its inputs in Python). ``None`` (default): whenever the compiled
-            build is used; ``True``: required (not with
-            ``compiled_build=False``); ``False``: the compiled build that
-            gathers its inputs (``build_backend == "c"``).
+            its inputs in Python). ``None`` (default) or ``True``: whenever
+            the compiled build is used (``True`` with
+            ``compiled_build=False`` is an :class:`InputError`); ``False``:
+            the compiled build that gathers its inputs
+            (``build_backend == "c"``).
 
     Attributes:
         last_problem: The last built :class:`QPProblem` (the builder's live
@@ -141,7 +143,7 @@ class QPTracker(Tracker):
         self.build_backend = "python"
         if compiled_build is None or compiled_build:
             try:
-                if in_place_assembly is not False:
+                if in_place_assembly is None or in_place_assembly:
                     self.build_problem = InPlaceBuild(self.builder).build
                     self.build_backend = "c-in-place"
                 else:
