@@ -177,15 +177,13 @@ def _ramp_from_a_raised_start(k: int) -> tuple[bool, float]:
     the last 3 s in the heading frame, m/s)."""
     from amlip_qp.sim.factory import build_simulation
     from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.summary import mean_velocity_heading
 
     sc = SCENARIOS["cassie-ramp-2.1-cc-ekf"]
     sim = build_simulation(sc, "qp")
     sim.data.qpos[2] += k * 1e-12
     res = sim.run(sc.duration_s, log="summary")
-    log = res.log
-    last = log["t"] > log["t"][-1] - 3.0
-    D, vel = log["heading"][last], log["com_vel"][last]
-    return bool(res.fell), float(np.mean(vel[:, 0] * np.cos(D) + vel[:, 1] * np.sin(D)))
+    return bool(res.fell), float(mean_velocity_heading(res, 3.0)[0])
 
 
 def test_the_qp_ramp_does_not_depend_on_rounding(results):
