@@ -156,7 +156,8 @@ def test_the_default_tracker_gives_the_same_torques_as_the_python_build():
         a, b = fast.compute(kin, target), slow.compute(kin, target)
         assert a.ok and b.ok
         np.testing.assert_allclose(a.tau_Nm, b.tau_Nm, atol=1e-6)
-    with pytest.raises(InputError, match="in_place_assembly"):
-        QPTracker(robot, in_place_assembly=True, compiled_build=False)
+    for falsy in (False, 0):  # a falsy compiled_build is the Python build, with which True is refused
+        with pytest.raises(InputError, match="in_place_assembly"):
+            QPTracker(robot, in_place_assembly=True, compiled_build=falsy)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="in_place_assembly"):
         QPTracker(robot, in_place_assembly="yes")

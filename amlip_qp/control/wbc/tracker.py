@@ -129,7 +129,8 @@ class QPTracker(Tracker):
             raise InputError(f"compiled_build must be None, True or False, got {compiled_build!r}")
         if airborne_reduction not in (True, False):
             raise InputError(f"airborne_reduction must be True or False, got {airborne_reduction!r}")
-        if in_place_assembly not in (None, True, False) or (in_place_assembly and compiled_build is False):
+        python_build = compiled_build is not None and not compiled_build
+        if in_place_assembly not in (None, True, False) or (in_place_assembly and python_build):
             raise InputError(
                 "in_place_assembly must be None, True or False (True needs the compiled build), "
                 f"got {in_place_assembly!r} with compiled_build={compiled_build!r}"
