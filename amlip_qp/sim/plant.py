@@ -27,17 +27,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
-from amlip_qp.exceptions import CompilerUnavailableError, InputError, MJCFError, ModelFileError, PlantMismatchError
-from amlip_qp.paths import MODELS_DIR
+from amlip_qp.exceptions import CompilerUnavailableError, InputError, MJCFError, PlantMismatchError
 from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.compiled_io import CompiledCtrlWrite, CompiledStateRead, ReadResult
 from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
+from amlip_qp.sim.plant_files import resolve_plant_source
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -49,43 +48,6 @@ SpecEdit = Callable[[mujoco.MjSpec], None]
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3  # mujoco.mjtJoint values
 _QPOS_SIZE = {_FREE: 7, _BALL: 4, _SLIDE: 1, _HINGE: 1}
 _DOF_SIZE = {_FREE: 6, _BALL: 3, _SLIDE: 1, _HINGE: 1}
-
-
-def plant_files(robot: Robot) -> dict[str, Path]:
-    """The named plants of ``robot``: its profile's ``plants``, or its own file for a robot without a profile."""
-    if robot.profile is None:
-        return {robot.name: Path(robot.path)}
-    return {name: MODELS_DIR / file for name, file in robot.profile.plants.items()}
-
-
-def default_plant_name(robot: Robot) -> str:
-    """The plant of ``robot`` when none is asked for: its own model (named like the robot)."""
-    return robot.name
-
-
-def resolve_plant_source(source: str | os.PathLike, robot: Robot) -> tuple[str, Path]:
-    """``(name, path)`` of a plant name of ``robot`` or an MJCF path.
-
-    Raises:
-        InputError: Neither a plant name of the robot nor something that looks like a path.
-        ModelFileError: The file does not exist.
-    """
-    named = plant_files(robot)
-    text = os.fspath(source)
-    if isinstance(source, str) and text in named:
-        name, path = text, named[text]
-    else:
-        looks_like_path = not isinstance(source, str) or text.lower().endswith(".xml") or os.sep in text
-        if not looks_like_path:
-            raise InputError(
-                f"unknown plant {text!r} for {robot.name}: known plants are {', '.join(named)}; "
-                "a path to an MJCF .xml file also works"
-            )
-        path = Path(text).expanduser()
-        name = str(path)
-    if not path.is_file():
-        raise ModelFileError(f"plant model file not found: {path}")
-    return name, path.resolve()
 
 
 def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit] = ()) -> Plant:
