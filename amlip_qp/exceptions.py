@@ -25,6 +25,11 @@ class UnknownRobotError(AmlipError, ValueError):
     """A robot name is neither a bundled robot nor a path to an MJCF file."""
 
 
+class ProfileError(InputError):
+    """A robot profile file is missing, is not TOML, or has a key that is unknown, of the wrong
+    type or out of range (the message names the file and the key)."""
+
+
 class ModelFileError(AmlipError, FileNotFoundError):
     """A robot model file does not exist."""
 

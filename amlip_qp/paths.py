@@ -13,6 +13,7 @@ installed as files on disk (any pip install is; a zip import is not).
 
 from __future__ import annotations
 
+import os
 from importlib.resources import files
 from pathlib import Path
 
@@ -54,3 +55,17 @@ def checkout_root() -> Path | None:
     except OSError:
         return None
     return root if _PROJECT_LINE in text else None
+
+
+#: Environment variable naming the cache folder (compiled generated C, edited robot models).
+CACHE_ENV = "AMLIP_QP_CACHE_DIR"
+
+
+def cache_root() -> Path:
+    """The cache folder: ``$AMLIP_QP_CACHE_DIR``, else ``$XDG_CACHE_HOME/amlip_qp``, else ``~/.cache/amlip_qp``."""
+    explicit = os.environ.get(CACHE_ENV)
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "amlip_qp"

@@ -69,3 +69,10 @@ def assert_jacobians_match_fd(robot, checks, q, v, at, tol):
         np.testing.assert_allclose(J, J_fd, atol=tol)
         jdv_fd = fd_along(robot, lambda qq, f=jac_fun: at(qq, v, f) @ v, q, v)
         np.testing.assert_allclose(jdv, jdv_fd, atol=tol * max(1.0, np.abs(jdv_fd).max(initial=0.0)))
+
+
+def tuned_config(robot_name: str, tracker: str):
+    """The bundled robot's tuned tracker configuration, from its profile file."""
+    from amlip_qp.profiles import get_profile
+
+    return get_profile(robot_name).tracker_config(tracker)

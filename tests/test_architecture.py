@@ -39,7 +39,8 @@ RULES: dict[str, Rule] = {
     "amlip_qp.exceptions": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.paths": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
-    "amlip_qp.profiles": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
+    # the robot profiles: plain data read from TOML files among the package's models
+    "amlip_qp.profiles": Rule(("amlip_qp.profiles", "amlip_qp.exceptions", "amlip_qp.paths"), HEAVY + ("numpy",)),
     # the command line stays light: handlers are imported by name when a subcommand runs
     "amlip_qp.cli": Rule(("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
     # pure math: numpy (CasADi only when handed CasADi symbols)

@@ -7,10 +7,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amlip_qp.control.pbc.gains import CASSIE_ACHILLES, CASSIE_GAINS, RABBIT_GAINS, PBCGains, default_gains
+from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import get_profile
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
+
+CASSIE_ACHILLES = tuned_config("cassie", "pbc").spring_model_linkage
+CASSIE_GAINS = tuned_config("cassie", "pbc")
+RABBIT_GAINS = tuned_config("rabbit", "pbc")
 
 
 def test_gains_validation_and_swing_schedule():
@@ -50,10 +55,13 @@ def test_a_model_without_profile_gets_the_gains_of_the_robot_it_resembles(name, 
     assert default_gains(robot) is expected
 
 
-def test_a_profile_entry_that_is_not_pbc_gains_is_a_typed_error():
+def test_a_profile_table_with_an_unknown_key_is_a_typed_error_naming_it():
     robot = load_robot("rabbit")
-    profile = dataclasses.replace(robot.profile, tracker_configs={"pbc": "amlip_qp.control.pbc.gains:default_gains"})
-    with pytest.raises(InputError, match="not PBCGains"):
+    profile = dataclasses.replace(robot.profile, trackers={"pbc": {"kp_stance": 400.0}})
+    with pytest.raises(InputError, match=r"\[trackers.pbc\]: unknown key 'kp_stance' \(known: .*kp_stance_ps2"):
+        default_gains(dataclasses.replace(robot, profile=profile))
+    profile = dataclasses.replace(robot.profile, trackers={"pbc": {"kp_stance_ps2": "stiff"}})
+    with pytest.raises(InputError, match="kp_stance_ps2 must be a number, got 'stiff'"):
         default_gains(dataclasses.replace(robot, profile=profile))
 
 

@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from amlip_qp.control.pbc.gains import CASSIE_ACHILLES, AchillesLinkage
+from amlip_qp.control.pbc.gains import AchillesLinkage
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
+from robot_states import tuned_config
+
+CASSIE_ACHILLES = tuned_config("cassie", "pbc").spring_model_linkage
 
 
 def test_spring_model_cassie_standing_numbers():

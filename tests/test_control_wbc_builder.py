@@ -4,10 +4,14 @@ import numpy as np
 import pytest
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
-from amlip_qp.control.wbc.config import CASSIE_CONFIG, RABBIT_CONFIG, default_config
+from amlip_qp.control.wbc.config import default_config
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
 from wbc_cases import FIELDS, build_and_solve, kin_at, target_for
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
+RABBIT_CONFIG = tuned_config("rabbit", "qp")
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

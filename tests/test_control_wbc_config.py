@@ -5,10 +5,14 @@ import shutil
 
 import pytest
 
-from amlip_qp.control.wbc.config import CASSIE_CONFIG, RABBIT_CONFIG, QPConfig, default_config
+from amlip_qp.control.wbc.config import QPConfig, default_config
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES, get_profile
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
+RABBIT_CONFIG = tuned_config("rabbit", "qp")
 
 
 @pytest.fixture(scope="module")

@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
-from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
+from amlip_qp.control.wbc.config import default_config
 from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
 from wbc_cases import FIELDS, build_and_solve, kin_at, solve, target_for
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
 
 #: The problem arrays of each kind of block.
 BLOCK_FIELDS = {"eq": ("A", "b"), "in": ("C", "l", "u"), "box": ("lb", "ub")}

@@ -6,10 +6,13 @@ import pytest
 
 from amlip_qp.control.wbc import costs as W
 from amlip_qp.control.wbc.builder import WholeBodyQP
-from amlip_qp.control.wbc.config import CASSIE_CONFIG, default_config
+from amlip_qp.control.wbc.config import default_config
 from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
 from wbc_cases import corrected_target, kin_at, target_for
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

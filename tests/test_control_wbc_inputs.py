@@ -9,7 +9,6 @@ import pytest
 
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.control.wbc.builder import WholeBodyQP
-from amlip_qp.control.wbc.config import CASSIE_CONFIG, RABBIT_CONFIG
 from amlip_qp.control.wbc.inputs import (
     PackedInput,
     PelvisYawFeedback,
@@ -20,7 +19,11 @@ from amlip_qp.control.wbc.inputs import (
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import CASSIE_OUTPUTS, load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
+from robot_states import tuned_config
 from wbc_cases import corrected_target, kin_at, target_for
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
+RABBIT_CONFIG = tuned_config("rabbit", "qp")
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit"])

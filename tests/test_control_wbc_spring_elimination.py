@@ -5,13 +5,15 @@ import numpy as np
 import pytest
 
 from amlip_qp.control.wbc.builder import WholeBodyQP
-from amlip_qp.control.wbc.config import CASSIE_CONFIG
 from amlip_qp.control.wbc.inputs import SymbolicInputs
 from amlip_qp.control.wbc.layout import VariableLayout
 from amlip_qp.control.wbc.spring_elimination import LegSprings, SpringElimination, springs_per_leg
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
+from robot_states import tuned_config
 from wbc_cases import build_and_solve, kin_at, target_for
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,6 @@ import pytest
 
 from amlip_qp.control.tracker import TrackingTarget
 from amlip_qp.control.walking.controller import WalkingController
-from amlip_qp.control.wbc.config import CASSIE_CONFIG
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError
 from amlip_qp.qp.solver import ProxQPSolver
@@ -13,6 +12,9 @@ from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.sim.harness import Simulation
 from amlip_qp.sim.scenarios import SCENARIOS
+from robot_states import tuned_config
+
+CASSIE_CONFIG = tuned_config("cassie", "qp")
 
 
 @pytest.fixture(

@@ -22,8 +22,8 @@ def test_registry_names_match_their_profiles_and_model_files_exist():
     assert ROBOT_NAMES == ("cassie", "rabbit")
     for name, profile in PROFILES.items():
         assert profile.name == name and get_profile(name) is profile
-        assert (MODELS_DIR / profile.model_file).is_file()
-        assert profile.output_layout == name  # the planner's robot name and the output layout
+        assert profile.source == MODELS_DIR / f"{name}.toml" and profile.model.path.is_file()
+        assert profile.output_layout in ("cassie", "rabbit")
         assert profile.planar == (name == "rabbit")
         assert profile.planar == (profile.gait.step_width_m == 0.0)
 

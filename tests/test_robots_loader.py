@@ -63,9 +63,9 @@ def test_path_and_name_are_equivalent(rabbit):
 
 
 def test_bundled_robots_are_the_profiles_and_a_copy_elsewhere_has_no_profile(rabbit, tmp_path):
-    from amlip_qp.robots import KNOWN_ROBOTS
-
-    assert {n: p.name for n, p in KNOWN_ROBOTS.items()} == {n: pr.model_file for n, pr in PROFILES.items()}
+    for name, profile in PROFILES.items():
+        robot = load_robot(name)
+        assert robot.profile is profile and robot.path == profile.model.path  # no edits: the file itself
     copy = tmp_path / "rabbit.xml"
     copy.write_text((MODELS_DIR / "rabbit.xml").read_text())
     other = load_robot(copy)

@@ -14,6 +14,7 @@ from amlip_qp.cli.parsing import (
     positive_float,
     positive_int,
 )
+from amlip_qp.cli.robot_option import robot_list, robot_name_or_path
 from amlip_qp.profiles import ROBOT_NAMES
 
 #: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
@@ -111,7 +112,14 @@ def add_walk(sub) -> None:
         "(amlip_qp.profiles.CommandBounds); output paths are checked before the run. "
         "Exit status: 0 finished standing, 1 the robot fell (outputs are still written), 2 bad input.",
     )
-    p.add_argument("--robot", choices=ROBOT_NAMES, default=None, help="robot (default cassie, or the scenario's)")
+    p.add_argument(
+        "--robot",
+        type=robot_name_or_path,
+        metavar="NAME|PATH",
+        default=None,
+        help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml); "
+        "default cassie, or the scenario's",
+    )
     p.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
     p.add_argument(
         "--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)"
@@ -187,10 +195,11 @@ def add_compare(sub) -> None:
     )
     p.add_argument(
         "--robots",
-        type=name_list(ROBOT_NAMES),
-        default=list(ROBOT_NAMES),
+        type=robot_list,
+        default=None,
         metavar="R1,R2",
-        help=f"robots (default {','.join(ROBOT_NAMES)})",
+        help="robots: bundled names or profile files (default: every bundled robot whose profile has "
+        "a [compare] table)",
     )
     p.add_argument(
         "--trackers",

@@ -50,10 +50,9 @@ import casadi as ca
 
 from amlip_qp.codegen import generate
 from amlip_qp.exceptions import CodegenError, CompilerUnavailableError
-from amlip_qp.paths import CODEGEN_DIR
+from amlip_qp.paths import CACHE_ENV, CODEGEN_DIR, cache_root
 
 #: Environment variable: cache folder for compiled libraries.
-CACHE_ENV = "AMLIP_QP_CACHE_DIR"
 #: Environment variable: C compiler command; ``none`` disables compilation.
 COMPILER_ENV = "AMLIP_QP_CC"
 #: Compiler flags (``-ffp-contract=off`` keeps a*b+c unfused, as in numpy).
@@ -84,16 +83,6 @@ class _NoCompiler(Exception):
 
 
 # --- locations ---------------------------------------------------------------
-
-
-def cache_root() -> Path:
-    """The folder holding one sub-folder per compiled library (see the module doc)."""
-    explicit = os.environ.get(CACHE_ENV)
-    if explicit:
-        return Path(explicit).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
-    return base / "amlip_qp"
 
 
 def find_compiler() -> list[str]:

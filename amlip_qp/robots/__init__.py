@@ -11,7 +11,7 @@
 """
 
 from amlip_qp.robots.kinematics import RobotKinematics
-from amlip_qp.robots.loader import KNOWN_ROBOTS, load_robot
+from amlip_qp.robots.loader import load_robot
 from amlip_qp.robots.outputs import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap
 from amlip_qp.robots.passive import coupling_constraints, passive_forces
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
@@ -34,7 +34,6 @@ from amlip_qp.robots.state import (
 __all__ = [
     "CASSIE_OUTPUTS",
     "FOOT_SIDES",
-    "KNOWN_ROBOTS",
     "PLANAR_OUTPUTS",
     "ActuatorSet",
     "Coupling",

@@ -14,13 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from amlip_qp.exceptions import MJCFError, ModelFileError, UnknownRobotError
-from amlip_qp.paths import MODELS_DIR
-from amlip_qp.profiles import PROFILES
+from amlip_qp.profiles import PROFILES, RobotProfile, bundled_names, get_profile, looks_like_profile_path
+from amlip_qp.robots.model_edits import prepared_model_path
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
-
-#: Bundled robots: name -> MJCF file (the profiles' ``model_file``).
-KNOWN_ROBOTS: dict[str, Path] = {name: MODELS_DIR / profile.model_file for name, profile in PROFILES.items()}
 
 #: Name of the keyframe used as the nominal standing configuration.
 STAND_KEYFRAME = "stand"
@@ -37,35 +34,38 @@ def _one_line(exc: BaseException) -> str:
     return "; ".join(lines) if lines else type(exc).__name__
 
 
-def resolve_model_path(name_or_path: str | os.PathLike) -> tuple[str, Path]:
-    """Turn a robot name or an MJCF path into ``(name, path)``.
+def resolve_robot(name_or_path: str | os.PathLike) -> tuple[str, Path, RobotProfile | None]:
+    """Turn a robot name, a profile path or an MJCF path into ``(name, MJCF path, profile)``.
+
+    A bundled name or a ``.toml`` path gives its profile and the model file it prepares
+    (:func:`~amlip_qp.robots.model_edits.prepared_model_path`); an MJCF path gives the file,
+    with the profile of the bundled robot whose unedited model it is, else ``None``.
 
     Raises:
         UnknownRobotError: Not a known name and does not look like a file path.
-        ModelFileError: The file does not exist.
+        ProfileError: The profile file is missing or invalid.
+        ModelFileError: The MJCF file does not exist.
     """
-    if isinstance(name_or_path, str) and name_or_path.strip().lower() in KNOWN_ROBOTS:
-        name = name_or_path.strip().lower()
-        path = KNOWN_ROBOTS[name]
+    text = os.fspath(name_or_path)
+    is_xml = text.lower().endswith(".xml") or (Path(text).suffix.lower() == ".xml")
+    if isinstance(name_or_path, str) and text.strip().lower() in bundled_names():
+        profile = get_profile(text.strip().lower())
+    elif not is_xml and looks_like_profile_path(name_or_path):
+        profile = get_profile(name_or_path)
     else:
-        text = os.fspath(name_or_path)
-        looks_like_path = (
-            not isinstance(name_or_path, str)
-            or text.lower().endswith(".xml")
-            or os.sep in text
-            or (os.altsep is not None and os.altsep in text)
-            or Path(text).exists()
-        )
-        if not looks_like_path:
-            known = ", ".join(repr(k) for k in KNOWN_ROBOTS)
+        if not (is_xml or os.sep in text or Path(text).exists()):
+            known = ", ".join(repr(k) for k in bundled_names())
             raise UnknownRobotError(
-                f"unknown robot {text!r}: known robots are {known}; a path to an MJCF .xml file also works"
+                f"unknown robot {text!r}: known robots are {known}; a path to a robot profile (.toml) "
+                "or an MJCF .xml file also works"
             )
         path = Path(text).expanduser()
-        name = path.stem
-    if not path.is_file():
-        raise ModelFileError(f"robot model file not found: {path}")
-    return name, path.resolve()
+        if not path.is_file():
+            raise ModelFileError(f"robot model file not found: {path}")
+        path = path.resolve()
+        same = [p for p in PROFILES.values() if p.model.path == path and not p.model.edits_needed]
+        return (same[0].name, path, same[0]) if same else (path.stem, path, None)
+    return profile.name, prepared_model_path(profile), profile
 
 
 def _compile(path: Path):
@@ -177,6 +177,20 @@ def _actuators(mj_model, smap, path: Path) -> ActuatorSet:
         if int(mj_model.jnt_type[j]) not in (_SLIDE, _HINGE):
             raise MJCFError(f"{path}: actuator {aname!r} must drive a hinge or slide joint")
         jname = _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        if int(mj_model.actuator_biastype[a]) != int(mujoco.mjtBias.mjBIAS_NONE) or int(
+            mj_model.actuator_gaintype[a]
+        ) != int(mujoco.mjtGain.mjGAIN_FIXED):
+            raise MJCFError(
+                f"{path}: actuator {aname!r} is a position or velocity servo "
+                f"(gain {mj_model.actuator_gainprm[a, 0]:g}, bias type "
+                f"{mujoco.mjtBias(int(mj_model.actuator_biastype[a])).name}): the controller sends joint torques; "
+                'give the robot a profile with servos = "convert" in its [model] table, or torque motors'
+            )
+        if float(mj_model.actuator_gainprm[a, 0]) != 1.0:
+            raise MJCFError(
+                f"{path}: actuator {aname!r} has gain {mj_model.actuator_gainprm[a, 0]:g}: a torque motor has gain 1 "
+                "(its transmission is the gear)"
+            )
         g = float(mj_model.actuator_gear[a, 0])
         lo, hi = -np.inf, np.inf
         if mj_model.actuator_ctrllimited[a]:
@@ -269,6 +283,27 @@ def _passive_params(mj_model, smap, path: Path):
     return stiff, ref, damp, arm
 
 
+def _leg_joints(mj_model, contact_site_ids: dict[str, int], root_joints) -> dict[str, tuple[str, ...]]:
+    """Side -> the hinge and slide joints on the tree path from the root to the body of that side's
+    contact site (MuJoCo order): the leg's joints, whatever their names."""
+    import mujoco
+
+    legs = {}
+    for side, site in contact_site_ids.items():
+        body, on_path = int(mj_model.site_bodyid[site]), set()
+        while body > 0:
+            on_path.add(body)
+            body = int(mj_model.body_parentid[body])
+        legs[side] = tuple(
+            _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            for j in range(mj_model.njnt)
+            if j not in root_joints
+            and int(mj_model.jnt_type[j]) in (_SLIDE, _HINGE)
+            and int(mj_model.jnt_bodyid[j]) in on_path
+        )
+    return legs
+
+
 def _check_sites_agree(mj_model, pin_model, smap, path: Path) -> None:
     """Both models must place every site at the same point (catches parser differences)."""
     import mujoco
@@ -305,15 +340,16 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     """Load a robot into MuJoCo and Pinocchio from one MJCF file.
 
     Args:
-        name_or_path: ``"cassie"``, ``"rabbit"`` (bundled in ``amlip_qp/models/``) or
-            a path to an MJCF ``.xml`` file following the site conventions of
-            ``docs/ARCHITECTURE.md``.
+        name_or_path: A bundled robot's name (:func:`amlip_qp.profiles.bundled_names`), the path
+            of a robot profile (``.toml``), or the path of an MJCF ``.xml`` file following the
+            model conventions of ``docs/ARCHITECTURE.md``.
 
     Returns:
         The :class:`~amlip_qp.robots.robot.Robot`.
 
     Raises:
         UnknownRobotError: An unknown name (the message lists the known names).
+        ProfileError: The profile file is missing or invalid.
         ModelFileError: The file does not exist.
         MJCFError: The file is malformed (XML syntax, MuJoCo compile error,
             Pinocchio failure), lacks the ``left-contact``/``right-contact``
@@ -321,7 +357,7 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     """
     import mujoco
 
-    name, path = resolve_model_path(name_or_path)
+    name, path, profile = resolve_robot(name_or_path)
     mj_model, pin_model = _compile(path)
     smap = build_state_map(mj_model, pin_model, source=str(path))
     contact, c_mj, c_pin, force, f_mj, f_pin = _sites(mj_model, pin_model, path)
@@ -378,5 +414,6 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
         dof_springref=ref,
         dof_damping=damp,
         dof_armature=arm,
-        profile=PROFILES[name] if name in KNOWN_ROBOTS and path == KNOWN_ROBOTS[name].resolve() else None,
+        profile=profile,
+        leg_joint_names=_leg_joints(mj_model, c_mj, root_joints),
     )

@@ -124,7 +124,7 @@ def _rotation_entry_z(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
 
 def _fitting_layout(robot: Robot) -> str | None:
     """The layout the model fits (``"cassie"``, ``"rabbit"``), or ``None``."""
-    has_yaw = all(f"{s}-hip-yaw" in robot.state_map.joint_pin_v for s in robot.foot_sides)
+    has_yaw = all(robot.role_joint("hip_yaw", s) is not None for s in robot.foot_sides)
     has_blade = all(len(robot.force_sites[s]) == 2 for s in robot.foot_sides)
     if robot.is_floating and has_yaw and has_blade:
         return "cassie"
@@ -195,8 +195,9 @@ class OutputMap:
         self.yaw_q_idx: dict[str, int] = {}
         self.yaw_v_idx: dict[str, int] = {}
         if self.layout == "cassie":
-            self.yaw_v_idx = {s: smap.joint_pin_v[f"{s}-hip-yaw"] for s in robot.foot_sides}
-            self.yaw_q_idx = {s: smap.joint_pin_q[f"{s}-hip-yaw"] for s in robot.foot_sides}
+            yaw = {s: robot.role_joint("hip_yaw", s) for s in robot.foot_sides}
+            self.yaw_v_idx = {s: smap.joint_pin_v[yaw[s]] for s in robot.foot_sides}  # type: ignore[index]
+            self.yaw_q_idx = {s: smap.joint_pin_q[yaw[s]] for s in robot.foot_sides}  # type: ignore[index]
         self._swing_of = {s: other_side(s) for s in robot.foot_sides}
         nv = robot.nv
         # Scratch (overwritten by every evaluate): J_c - J_sw, J_toe - J_heel (3 x nv each),

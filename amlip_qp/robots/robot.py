@@ -30,6 +30,17 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 #: The two foot sides, in the order used everywhere.
 FOOT_SIDES: tuple[str, str] = ("left", "right")
 
+#: Joint role -> the joint name a model without a profile uses for it (docs/ARCHITECTURE.md,
+#: "Model conventions"); a profile's ``[roles]`` table names any other.
+CONVENTION_ROLES: dict[str, str] = {
+    "hip_yaw": "{side}-hip-yaw",
+    "hip_roll": "{side}-hip-roll",
+    "hip_pitch": "{side}-hip-pitch",
+    "knee": "{side}-knee",
+    "ankle_pitch": "{side}-foot",
+    "ankle_roll": "{side}-ankle-roll",
+}
+
 
 @dataclass(frozen=True)
 class ActuatorSet:
@@ -143,9 +154,12 @@ class Robot:
             (rad or m), shape (nv,).
         dof_damping: Joint damping per Pinocchio velocity index, shape (nv,).
         dof_armature: Rotor armature per Pinocchio velocity index, shape (nv,).
-        profile: The :class:`~amlip_qp.profiles.RobotProfile` of a bundled
-            robot (loaded by name or from its bundled file), ``None`` for any
-            other model: every robot-name-dependent fact comes from it.
+        profile: The robot's :class:`~amlip_qp.profiles.RobotProfile` (loaded by
+            name, from a profile file, or from a bundled robot's unedited model
+            file), ``None`` for a bare MJCF file: every fact about the robot
+            that is not in its model comes from it.
+        leg_joint_names: Side -> the hinge and slide joints on the tree path
+            from the root to that side's contact site (MuJoCo order).
     """
 
     name: str
@@ -180,6 +194,20 @@ class Robot:
     dof_armature: np.ndarray
     foot_sides: tuple[str, str] = field(default=FOOT_SIDES)
     profile: RobotProfile | None = None
+    leg_joint_names: dict[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def role_joint(self, role: str, side: str) -> str | None:
+        """The name of ``side``'s joint with ``role`` (:data:`amlip_qp.profiles.JOINT_ROLES`), or ``None``.
+
+        The profile's ``[roles]`` name it; a robot without a profile, or a role its profile does not
+        name, follows the model conventions (``{side}-hip-yaw``, ``{side}-knee``, ``{side}-foot`` ...,
+        :data:`CONVENTION_ROLES`). ``None`` when the model has no such joint.
+        """
+        name = self.profile.joint_name(role, side) if self.profile is not None else None
+        if name is None:
+            template = CONVENTION_ROLES.get(role)
+            name = None if template is None else template.format(side=side)
+        return name if name is not None and name in self.state_map.joint_pin_v else None
 
     @property
     def nq(self) -> int:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import ROBOT_NAMES
+from amlip_qp.profiles import compared_robots
 from amlip_qp.sim.robustness import (
     PUSH_DURATION_S,
     QUICK,
@@ -317,8 +317,9 @@ def main(args: argparse.Namespace) -> int:
         from amlip_qp.sim.factory import tracker_class
 
         tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
+    robots = list(args.robots if args.robots is not None else compared_robots())
     tasks = build_tasks(
-        args.robots,
+        robots,
         args.trackers,
         args.scenario,
         settings,
@@ -374,8 +375,9 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d.update(setting_from_args(args, PlantSetting()).describe())
     # the per-robot ranges of the profiles, as (robot, value) pairs
+    robots = args.robots if args.robots is not None else compared_robots()
     d.update(
-        ramp_end_mps=tuple((r, compare_ranges(r).ramp_end_mps) for r in ROBOT_NAMES),
-        push_max_impulse_Ns=tuple((r, compare_ranges(r).push_max_impulse_Ns) for r in ROBOT_NAMES),
+        ramp_end_mps=tuple((r, compare_ranges(r).ramp_end_mps) for r in robots),
+        push_max_impulse_Ns=tuple((r, compare_ranges(r).push_max_impulse_Ns) for r in robots),
     )
     return d

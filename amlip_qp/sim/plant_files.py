@@ -1,7 +1,7 @@
 """Which MJCF file a plant name or path means: ``--plant``'s names and paths.
 
-A robot's profile names its plants (``cassie``, ``cassie-closed-chain``: the
-files of :data:`amlip_qp.paths.MODELS_DIR`); a robot without a profile has one,
+A robot's profile names its plants (its ``[plants]`` table, and its own model
+under the robot's name); a robot without a profile has one,
 its own model file. Anything else that looks like a path (a ``.xml`` name, a
 path separator, a :class:`os.PathLike`) is read as a user's MJCF file.
 """
@@ -13,17 +13,22 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from amlip_qp.exceptions import InputError, ModelFileError
-from amlip_qp.paths import MODELS_DIR
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot
 
 
 def plant_files(robot: Robot) -> dict[str, Path]:
-    """The named plants of ``robot``: its profile's ``plants``, or its own file for a robot without a profile."""
+    """The named plants of ``robot``: its profile's ``plants``, or its own file for a robot without a profile.
+
+    The robot's own plant is the file its controller model was loaded from (the profile's model
+    with its edits, :func:`amlip_qp.robots.model_edits.prepared_model_path`).
+    """
     if robot.profile is None:
         return {robot.name: Path(robot.path)}
-    return {name: MODELS_DIR / file for name, file in robot.profile.plants.items()}
+    plants = dict(robot.profile.plants)
+    plants[robot.profile.name] = Path(robot.path)
+    return plants
 
 
 def resolve_plant_source(source: str | os.PathLike, robot: Robot) -> tuple[str, Path]:

@@ -16,8 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import PROFILES, CommandShaping, GaitSettings, RobotProfile, get_profile
+from amlip_qp.exceptions import InputError, UnknownRobotError
+from amlip_qp.profiles import CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.plant_modifiers import PlantModifiers
 from amlip_qp.sim.run_types import PlantSetting, Push
 from amlip_qp.sim.speed_profile import SpeedProfile
@@ -29,7 +29,7 @@ class Scenario:
 
     Attributes:
         name: Identifier.
-        robot: A bundled robot's name (:data:`amlip_qp.profiles.PROFILES`).
+        robot: A bundled robot's name (:data:`amlip_qp.profiles.PROFILES`) or a robot profile file's path.
         duration_s: Simulated time, s.
         vx: Forward speed profile (heading frame), m/s.
         vy_mps: Lateral speed (heading frame), m/s.
@@ -60,8 +60,10 @@ class Scenario:
     description: str = ""
 
     def __post_init__(self):
-        if self.robot not in PROFILES:
-            raise InputError(f"unknown robot {self.robot!r} for a scenario; known: {', '.join(PROFILES)}")
+        try:
+            get_profile(self.robot)  # a bundled robot's name or a profile file's path
+        except UnknownRobotError as exc:
+            raise InputError(f"scenario {self.name!r}: {exc}") from None
         if not (self.duration_s > 0 and math.isfinite(self.duration_s)):
             raise InputError(f"scenario duration must be a positive number of seconds, got {self.duration_s!r}")
         for name in ("vy_mps", "turn_rate_radps", "turn_start_s"):
@@ -71,7 +73,7 @@ class Scenario:
     @property
     def gait_settings(self) -> GaitSettings:
         """The gait used (the scenario's, or the robot's profile's)."""
-        return self.gait or PROFILES[self.robot].gait
+        return self.gait or get_profile(self.robot).gait
 
     def turn_rate_at(self, t_s: float) -> float:
         """Commanded turn rate at ``t_s``, rad/s."""

@@ -1,8 +1,8 @@
 """Gains of the PBC tracker, and the tuned gains of each bundled robot.
 
-The robot profiles (:mod:`amlip_qp.profiles`) register :data:`CASSIE_GAINS`
-and :data:`RABBIT_GAINS` as their ``"pbc"`` tracker configuration;
-:func:`default_gains` reads them from there. The measured tuning behind them
+Each robot's tuned gains are a table of its profile file (``[trackers.pbc]``,
+:mod:`amlip_qp.profiles`), turned into :class:`PBCGains` by
+:func:`gains_from_table`; :func:`default_gains` looks them up. The measured tuning behind them
 is in ``docs/TUNING.md`` ("PBC tracker and walking loop").
 
 This module imports numpy only, so reading a profile's ``"pbc"``
@@ -12,8 +12,9 @@ configuration does not load the tracker.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -45,12 +46,6 @@ class AchillesLinkage:
             raise InputError(
                 f"achilles linkage: ratios must be finite, heel_ratio and heel stiffness > 0, got {self!r}"
             )
-
-
-#: Cassie's achilles rod: the moment-arm ratios of the parameter sheet's linkage at the ``stand``
-#: keyframe (knee -1.1997 rad), measured on ``cassie-closed-chain.xml`` by differentiating the
-#: rod's end-to-end distance (``tests/test_control_pbc_springs.py``); heel spring 1250 N m/rad.
-CASSIE_ACHILLES = AchillesLinkage(shin_ratio=1.3604, heel_ratio=0.8077, heel_stiffness_Nmprad=1250.0)
 
 
 #: The loads the spring model can be given (:attr:`PBCGains.spring_model_load`).
@@ -158,46 +153,66 @@ class PBCGains:
         return start * (1.0 - self.touchdown_gain_drop * w)
 
 
-#: Cassie (leg springs): stiffer stance gains (critically damped, 2 sqrt(500) = 44.72 1/s), a
-#: stiffer swing ankle, swing-leg torso compensation, pelvis-yaw feedback on the swing hip yaw, the
-#: paper's spring model (the robot's achilles linkage under the robot's weight). docs/TUNING.md
-#: ("Closed-chain plant: the stance gains") has the measurements behind the stance gains.
-CASSIE_GAINS = PBCGains(
-    kp_stance_ps2=500.0,
-    kd_stance_ps=44.72,
-    kp_swing_ps2=400.0,
-    kd_swing_ps=40.0,
-    swing_ankle_gain_scale=10.0,
-    swing_torso_compensation=1.0,
-    hip_yaw_feedback=1.0,
-    spring_model_offset=True,
-    spring_model_linkage=CASSIE_ACHILLES,
-    spring_model_load="weight",
-)
+def gains_from_table(table: Mapping[str, Any]) -> PBCGains:
+    """:class:`PBCGains` from a profile's ``[trackers.pbc]`` table (field name -> value; the
+    sub-table ``spring_model_linkage`` gives the :class:`AchillesLinkage`); every other field keeps
+    its default.
 
-#: Rabbit (rigid legs): the defaults, 400 1/s^2 and 40 1/s on both legs, no torso compensation.
-RABBIT_GAINS = PBCGains()
+    Raises:
+        InputError: An unknown key (naming the known ones), a value of the wrong type, or a value
+            :class:`PBCGains` refuses.
+    """
+    known = {f.name for f in fields(PBCGains)}
+    kwargs: dict[str, Any] = {}
+    for key, value in table.items():
+        if key not in known:
+            raise InputError(f"unknown key {key!r} (known: {', '.join(sorted(known))})")
+        if key == "spring_model_linkage":
+            link_known = {f.name for f in fields(AchillesLinkage)}
+            if not isinstance(value, Mapping) or set(value) != link_known:
+                raise InputError(f"spring_model_linkage must be a table of {', '.join(sorted(link_known))}")
+            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value.values()):
+                raise InputError(f"spring_model_linkage's values must be numbers, got {dict(value)!r}")
+            kwargs[key] = AchillesLinkage(**{k: float(v) for k, v in value.items()})
+        elif key == "spring_model_offset":
+            if not isinstance(value, bool):
+                raise InputError(f"spring_model_offset must be true or false, got {value!r}")
+            kwargs[key] = value
+        elif key == "spring_model_load":
+            kwargs[key] = value
+        elif isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"{key} must be a number, got {value!r}")
+        else:
+            kwargs[key] = float(value)
+    return PBCGains(**kwargs)
 
 
 def default_gains(robot: Robot) -> PBCGains:
     """The tuned PBC gains of ``robot``.
 
-    A bundled robot gets its profile's ``"pbc"`` configuration
+    A robot with a profile gets its ``[trackers.pbc]`` table
     (:meth:`amlip_qp.profiles.RobotProfile.tracker_config`). Any other model
-    (an MJCF file that is not a bundled robot) gets the gains of the bundled
-    robot it resembles: :data:`CASSIE_GAINS` if it has springs (a coupling or
-    a passive joint), :data:`RABBIT_GAINS` otherwise. They are a starting
-    point, not a tuning for that model.
+    (an MJCF file without a profile) gets the gains of a bundled robot it
+    resembles: one with springs if it has springs (a coupling or a passive
+    joint), one without otherwise. They are a starting point, not a tuning
+    for that model.
 
     Raises:
-        InputError: The profile's ``"pbc"`` entry is not a :class:`PBCGains`.
+        InputError: The profile's ``[trackers.pbc]`` table is invalid.
     """
+    from amlip_qp.profiles import PROFILES
+
     profile = robot.profile
-    if profile is not None and "pbc" in profile.tracker_configs:
-        gains = profile.tracker_config("pbc")
-        if not isinstance(gains, PBCGains):
-            raise InputError(f"robot {robot.name!r}: the 'pbc' tracker configuration is not PBCGains: {gains!r}")
-        return gains
-    if robot.couplings or len(robot.passive_v_idx):
-        return CASSIE_GAINS
-    return RABBIT_GAINS
+    if profile is None or "pbc" not in profile.trackers:
+        springy = bool(robot.couplings or len(robot.passive_v_idx))
+        candidates = [p for p in PROFILES.values() if "pbc" in p.trackers]
+        profile = next(
+            (p for p in candidates if _has_springs(p) == springy),
+            candidates[0],
+        )
+    return profile.tracker_config("pbc")
+
+
+def _has_springs(profile) -> bool:
+    """Whether a bundled profile's PBC gains are tuned for legs with springs (they model them)."""
+    return bool(profile.trackers["pbc"].get("spring_model_offset", False))

@@ -52,7 +52,7 @@ class KneeLimits:
     knee against ``com_x_over_swing`` (whichever outputs the robot has). The
     straight leg is the limit towards which the stance CoM height grows, read
     from the output Jacobian at the robot's standing configuration. A robot
-    without ``{side}-knee`` joints has none.
+    without knee joints (the ``knee`` role, :meth:`Robot.role_joint`) has none.
 
     Args:
         robot: The robot.
@@ -65,7 +65,9 @@ class KneeLimits:
         smap = robot.state_map
         m = robot.pin_model
         self._knees: dict[str, list[KneeEntry]] = {side: [] for side in robot.foot_sides}
-        if not all(f"{sd}-knee" in smap.joint_pin_q for sd in robot.foot_sides):
+        knees = {sd: robot.role_joint("knee", sd) for sd in robot.foot_sides}
+        knee = {sd: name for sd, name in knees.items() if name is not None}
+        if len(knee) != len(knees):
             return
         k0 = RobotKinematics(robot)
         k0.update_positions(robot.q_stand)
@@ -75,9 +77,9 @@ class KneeLimits:
             for row_name, knee_side in (("com_z_over_stance", side), ("com_x_over_swing", other)):
                 if row_name not in names:
                     continue
-                iq, iv = smap.joint_pin_q[f"{knee_side}-knee"], smap.joint_pin_v[f"{knee_side}-knee"]
+                iq, iv = smap.joint_pin_q[knee[knee_side]], smap.joint_pin_v[knee[knee_side]]
                 # straight leg = the limit towards which the stance CoM height grows
-                grow = J0[names.index("com_z_over_stance"), smap.joint_pin_v[f"{side}-knee"]]
+                grow = J0[names.index("com_z_over_stance"), smap.joint_pin_v[knee[side]]]
                 lo_, hi_ = float(m.lowerPositionLimit[iq]), float(m.upperPositionLimit[iq])
                 limit, other_end = (hi_, lo_) if grow > 0 else (lo_, hi_)
                 self._knees[side].append((names.index(row_name), iq, iv, limit, other_end))

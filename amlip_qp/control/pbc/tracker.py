@@ -112,7 +112,8 @@ class PBCTracker(Tracker):
         for side in robot.foot_sides:
             ctrl = self.ik.equations.controlled_actuated(side)
             swing_side = other_side(side)
-            swing_mask = np.array([act.joint_names[k].startswith(swing_side) for k in ctrl], dtype=bool)
+            swing_leg = set(robot.leg_joint_names[swing_side])
+            swing_mask = np.array([act.joint_names[k] in swing_leg for k in ctrl], dtype=bool)
             kp = np.where(swing_mask, g.kp_swing_ps2, g.kp_stance_ps2)
             kd = np.where(swing_mask, g.kd_swing_ps, g.kd_stance_ps)
             if g.swing_ankle_gain_scale != 1.0:

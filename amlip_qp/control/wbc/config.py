@@ -1,16 +1,17 @@
 """Weights, gains and limits of the whole-body QP, and the tuned configurations.
 
-:data:`CASSIE_CONFIG` and :data:`RABBIT_CONFIG` are the tuned
-configurations of the bundled robots; the profile registry
-(:mod:`amlip_qp.profiles`, ``tracker_configs["qp"]``) says which belongs to
-which robot, and :func:`default_config` looks it up. The measurements behind
-the tuned values are in docs/TUNING.md, section "QP tracker".
+Each robot's tuned configuration is a table of its profile file
+(``[trackers.qp]``, :mod:`amlip_qp.profiles`), turned into a :class:`QPConfig`
+by :func:`config_from_table`; :func:`default_config` looks it up. The
+measurements behind the bundled robots' values are in docs/TUNING.md,
+section "QP tracker".
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -161,55 +162,62 @@ class QPConfig:
         return replace(self, **changes)
 
 
-#: Cassie outputs: torso pitch, roll, stance/swing hip yaw, com z over stance,
-#: com x/y/z over swing, swing toe pitch. Every value that differs from the
-#: QPConfig defaults is a measured decision: docs/TUNING.md, "QP tracker".
-CASSIE_CONFIG = QPConfig(
-    output_kp=(400.0, 400.0, 200.0, 200.0, 400.0, 400.0, 400.0, 400.0, 200.0),
-    output_kd=(40.0, 40.0, 25.0, 25.0, 40.0, 40.0, 40.0, 40.0, 25.0),
-    output_weight=(10.0, 10.0, 1.0, 1.0, 10.0, 3.0, 3.0, 3.0, 0.5),
-    spring_weight=1e-2,
-    stance_foot_torque_max_Nm=0.01,  # passive stance toe, a band for active-set solvers (TUNING.md)
-    stance_yaw_moment_weight=3.0,  # the stance foot creeps in yaw without it (TUNING.md)
-    stance_coupling_kd=150.0,  # least stance-foot bounce of the gains tried (TUNING.md)
-    coupling_kd=60.0,  # damps the swing leg's spring mode on the closed-chain plant (TUNING.md)
-    friction_mu=0.9,  # forces sat on the 0.7 pyramid at speed; the plant has 1.0 (TUNING.md)
-    hip_yaw_feedback=1.0,  # the pelvis yawed away without it (TUNING.md)
-    touchdown_blend=0.0,  # no forces on the landing foot before its touchdown (TUNING.md)
-)
-#: Rabbit outputs: torso pitch, com z over stance, com x/z over swing
-#: (measured decisions: docs/TUNING.md, "QP tracker").
-RABBIT_CONFIG = QPConfig(
-    output_kp=(400.0, 400.0, 400.0, 400.0),
-    output_kd=(40.0, 40.0, 40.0, 40.0),
-    output_weight=(10.0, 10.0, 3.0, 3.0),
-    posture_weight=1e-4,
-    min_normal_force_N=10.0,
-    touchdown_blend=0.0,  # no forces on the point foot before its touchdown (TUNING.md)
-)
+def config_from_table(table: Mapping[str, Any]) -> QPConfig:
+    """A :class:`QPConfig` from a profile's ``[trackers.qp]`` table (field name -> value; lists
+    for the per-output tuples, ``inf`` for no bound); every other field keeps its default.
+
+    Raises:
+        InputError: An unknown key (naming the known ones), a value of the wrong type, or a value
+            :class:`QPConfig` refuses.
+    """
+    known = {f.name: f for f in fields(QPConfig)}
+    kwargs: dict[str, Any] = {}
+    for key, value in table.items():
+        if key not in known:
+            raise InputError(f"unknown key {key!r} (known: {', '.join(known)})")
+        if key in _PER_OUTPUT:
+            if not isinstance(value, list) or not all(_is_number(v) for v in value):
+                raise InputError(f"{key} must be a list of numbers, one per output, got {value!r}")
+            value = tuple(float(v) for v in value)
+        elif key == "rigid_springs":
+            if not isinstance(value, str):
+                raise InputError(f"{key} must be a string, got {value!r}")
+        elif not _is_number(value):
+            raise InputError(f"{key} must be a number, got {value!r}")
+        else:
+            value = float(value)
+        kwargs[key] = value
+    missing = [k for k in _PER_OUTPUT if k not in kwargs]
+    if missing:
+        raise InputError(f"{', '.join(missing)} required (one value per output)")
+    return QPConfig(**kwargs)
+
+
+_PER_OUTPUT = ("output_kp", "output_kd", "output_weight")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def default_config(robot: Robot) -> QPConfig:
-    """The tuned :class:`QPConfig` of ``robot``, from the profile registry.
+    """The tuned :class:`QPConfig` of ``robot``, from its profile's ``[trackers.qp]`` table.
 
-    A bundled robot (its name in :data:`amlip_qp.profiles.PROFILES`) gets its
-    profile's ``tracker_configs["qp"]``. A robot loaded from another MJCF file
-    gets the configuration of the bundled robot whose output layout it shares
-    (:func:`~amlip_qp.robots.outputs.output_layout`: the Cassie layout, or the
-    planar layout of Rabbit): the gains then fit its outputs one for one, but
-    they were tuned for the bundled robot; tune a ``QPConfig`` for a new robot.
+    A robot loaded from an MJCF file without a profile gets the configuration
+    of the bundled robot whose output layout it shares
+    (:func:`~amlip_qp.robots.outputs.output_layout`): the gains then fit its
+    outputs one for one, but they were tuned for the bundled robot; give the
+    robot a profile with its own table.
 
     Raises:
-        MJCFError: The robot has neither output layout.
+        MJCFError: The robot has no output layout.
+        InputError: The profile has no ``qp`` table, or an invalid one.
     """
     from amlip_qp.profiles import PROFILES
     from amlip_qp.robots.outputs import output_layout
 
     profile = robot.profile
-    if profile is None or "qp" not in profile.tracker_configs:
+    if profile is None or "qp" not in profile.trackers:
         layout = output_layout(robot)
-        profile = next(p for p in PROFILES.values() if p.output_layout == layout and "qp" in p.tracker_configs)
-    config = profile.tracker_config("qp")
-    if not isinstance(config, QPConfig):
-        raise InputError(f"profile {profile.name!r}: tracker_configs['qp'] is not a QPConfig: {config!r}")
-    return config
+        profile = next(p for p in PROFILES.values() if p.output_layout == layout and "qp" in p.trackers)
+    return profile.tracker_config("qp")

@@ -149,12 +149,22 @@ class RigidSprings(Constraint):
         return {"A": ca.horzcat(dm(rs.G), ca.MX(L.n_lambda, L.n - L.nv)), "b": b}
 
 
+def stance_passive_joints(robot: Robot, side: str) -> tuple[str, ...]:
+    """The joints of ``side``'s leg that carry no torque while it is in stance: the profile's
+    ``feet.passive_in_stance`` roles (without a profile, ``ankle_pitch``), those the model has."""
+    roles = robot.profile.feet.passive_in_stance if robot.profile is not None else ("ankle_pitch",)
+    names = (robot.role_joint(role, side) for role in roles)
+    return tuple(n for n in names if n is not None)
+
+
 class TorqueLimits(Constraint):
     """Motor torque limits on ``tau = T x + tau0``: ``lo - tau0 <= T x <= hi - tau0``.
 
-    ``lo, hi`` are ``robot.actuated.torque_limit_Nm``, with the **stance**
-    foot ("toe") motor further bounded to ``+-stance_foot_torque_max_Nm``
-    (no effect with ``inf`` or without a ``{side}-foot`` motor).
+    ``lo, hi`` are ``robot.actuated.torque_limit_Nm``, with the motors of the
+    **stance** foot's joints that are passive in stance (the profile's
+    ``feet.passive_in_stance``; without a profile, the ``ankle_pitch`` role,
+    Cassie's foot "toe") further bounded to ``+-stance_foot_torque_max_Nm``
+    (no effect with ``inf`` or without such a motor).
     """
 
     kind = "in"
@@ -168,11 +178,11 @@ class TorqueLimits(Constraint):
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for side in robot.foot_sides:
             lo, hi = tau_lim[:, 0].copy(), tau_lim[:, 1].copy()
-            foot = f"{side}-foot"
-            if foot in names and math.isfinite(lim):
-                i = names.index(foot)
-                lo[i] = max(tau_lim[i, 0], -lim)
-                hi[i] = min(tau_lim[i, 1], lim)
+            for foot in stance_passive_joints(robot, side):
+                if foot in names and math.isfinite(lim):
+                    i = names.index(foot)
+                    lo[i] = max(tau_lim[i, 0], -lim)
+                    hi[i] = min(tau_lim[i, 1], lim)
             self.bounds[side] = (lo, hi)
 
     def write(self, inputs: TickInputs, dynamics: ReducedDynamics, problem: QPProblem) -> None:
@@ -282,7 +292,8 @@ class JointLimits(Constraint):
         self.by_swing: dict[str, tuple[np.ndarray, ...]] = {}
         c = 2.0 / config.joint_limit_horizon_s**2
         for side in robot.foot_sides:
-            m = np.array([nm.startswith(side) for nm in robot.actuated.joint_names])
+            leg = set(robot.leg_joint_names[side])
+            m = np.array([nm in leg for nm in robot.actuated.joint_names], dtype=bool)
             self.by_swing[side] = (act_v[m], act_q[m], c * q_lo[m], c * q_hi[m], act_v[~m])
 
     def initialize(self, problem: QPProblem) -> None:

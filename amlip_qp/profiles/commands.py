@@ -1,0 +1,163 @@
+"""The commands a robot may be given: their physical bounds and how they are shaped.
+
+Both are data of a robot's profile (:mod:`amlip_qp.profiles`), tables
+``[bounds]`` and ``[shaping]`` of its profile file.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from amlip_qp.exceptions import InputError
+
+
+@dataclass(frozen=True)
+class CommandBounds:
+    """The physical bounds of a robot's commands (SI units; :meth:`check` names the bound it rejects).
+
+    A command outside these bounds is out of the robot's physical reach or
+    certainly a typo, so it is refused before anything is simulated. Inside
+    them a walk is not guaranteed: the step-command and acceptance tests say
+    what is verified.
+
+    Each robot's values, and why, are in its profile file (``[bounds]``).
+
+    Attributes:
+        vx_mps: ``(min, max)`` forward speed in the heading frame, m/s.
+        vy_max_mps: Largest lateral speed magnitude, m/s (0 for planar robots).
+        turn_rate_max_radps: Largest turn-rate magnitude, rad/s (0 for planar robots).
+        duration_max_s: Longest simulated run, s. The per-tick log is
+            preallocated: about 1 MB per simulated second at the 2 kHz
+            control rate for a 20-joint robot, so 600 s stay under 0.7 GB of
+            memory (and take tens of minutes of wall time).
+        push_impulse_max_Ns: Largest impulse of one push (force magnitude
+            times duration), N s. 100 N s changes the speed of a 32-33 kg
+            robot by about 3 m/s, beyond every speed it can walk at; a heavier
+            robot's profile raises it.
+        push_force_max_N: Largest force magnitude of one push, N. 3000 N is
+            about ten body weights of a 32-33 kg robot: above it a force is an
+            impact, not a push.
+    """
+
+    vx_mps: tuple[float, float]
+    vy_max_mps: float
+    turn_rate_max_radps: float
+    duration_max_s: float = 600.0
+    push_impulse_max_Ns: float = 100.0
+    push_force_max_N: float = 3000.0
+
+    def __post_init__(self) -> None:
+        lo, hi = self.vx_mps
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi):
+            raise InputError(
+                f"CommandBounds.vx_mps must be finite (min, max) with min <= 0 <= max, got {self.vx_mps!r}"
+            )
+        for name in ("vy_max_mps", "turn_rate_max_radps", "duration_max_s", "push_impulse_max_Ns", "push_force_max_N"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InputError(f"CommandBounds.{name} must be a finite number >= 0, got {value!r}")
+
+    def check(
+        self,
+        robot: str,
+        *,
+        vx_mps: Iterable[float] = (),
+        vy_mps: float = 0.0,
+        turn_rate_radps: float = 0.0,
+        duration_s: float | None = None,
+        pushes: Iterable[tuple[float, Sequence[float], float]] = (),
+    ) -> None:
+        """Raise :class:`InputError` naming the first bound a command breaks.
+
+        Args:
+            robot: The robot's name (for the message).
+            vx_mps: Every forward speed commanded, m/s (for a piecewise-linear
+                profile, its knots: the extremes are among them).
+            vy_mps: Lateral speed, m/s.
+            turn_rate_radps: Turn rate, rad/s.
+            duration_s: Simulated time, s (``None``: not checked; pushes are then
+                not checked against it).
+            pushes: ``(t_s, (fx, fy, fz) N, duration_s)`` of each push; each
+                must start and end within ``duration_s``.
+        """
+        where = "in amlip_qp.profiles"
+        lo, hi = self.vx_mps
+        for v in vx_mps:
+            if not lo <= v <= hi:
+                raise InputError(
+                    f"forward speed {v:g} m/s is outside {robot}'s bounds [{lo:g}, {hi:g}] m/s "
+                    f"(CommandBounds.vx_mps {where})"
+                )
+        if not abs(vy_mps) <= self.vy_max_mps:
+            raise InputError(
+                f"lateral speed {vy_mps:g} m/s is outside {robot}'s bound |vy| <= {self.vy_max_mps:g} m/s "
+                f"(CommandBounds.vy_max_mps {where})"
+            )
+        if not abs(turn_rate_radps) <= self.turn_rate_max_radps:
+            raise InputError(
+                f"turn rate {math.degrees(turn_rate_radps):g} deg/s is outside {robot}'s bound "
+                f"|turn rate| <= {math.degrees(self.turn_rate_max_radps):g} deg/s "
+                f"(CommandBounds.turn_rate_max_radps = {self.turn_rate_max_radps:.4g} rad/s {where})"
+            )
+        if duration_s is not None and not duration_s <= self.duration_max_s:
+            raise InputError(
+                f"duration {duration_s:g} s is above {robot}'s bound {self.duration_max_s:g} s "
+                f"(CommandBounds.duration_max_s {where}: the per-tick log is kept in memory)"
+            )
+        for t_s, force_N, push_s in pushes:
+            magnitude = math.sqrt(sum(f * f for f in force_N))
+            if not magnitude <= self.push_force_max_N:
+                raise InputError(
+                    f"push at {t_s:g} s: force {magnitude:g} N is above {robot}'s bound {self.push_force_max_N:g} N "
+                    f"(CommandBounds.push_force_max_N {where})"
+                )
+            if not magnitude * push_s <= self.push_impulse_max_Ns:
+                raise InputError(
+                    f"push at {t_s:g} s: impulse {magnitude * push_s:g} N s (force x duration) "
+                    f"is above {robot}'s bound {self.push_impulse_max_Ns:g} N s "
+                    f"(CommandBounds.push_impulse_max_Ns {where})"
+                )
+            if duration_s is not None and not t_s + push_s <= duration_s + 1e-9:  # 1 ns: rounding of t + dur
+                raise InputError(
+                    f"push at {t_s:g} s lasting {push_s:g} s ends after the run's {duration_s:g} s; "
+                    "lengthen the run or push earlier"
+                )
+
+
+@dataclass(frozen=True)
+class CommandShaping:
+    """How the command is shaped before it reaches the planner (as on the robot's radio).
+
+    Rate limits: a step of a velocity command becomes a ramp at these rates; a
+    command that already changes no faster passes through unchanged, bit for
+    bit (:mod:`amlip_qp.alip.command_shaping`). ``inf``: no limit on that axis.
+
+    Step-length cap: where the command's step time ``T`` would make steps
+    longer than ``max_step_length_m`` at the shaped forward speed ``vx``
+    (mean step length ``|vx| T``), ``T`` is shortened to
+    ``max_step_length_m / |vx|``: fast walking with a higher step frequency,
+    as the paper did at 2.1 m/s. ``inf``: ``T`` is never changed.
+
+    Attributes:
+        vx_accel_mps2: Largest rate of change of the forward-speed command, m/s².
+        vy_accel_mps2: Largest rate of change of the lateral-speed command, m/s².
+        turn_accel_radps2: Largest rate of change of the turn-rate command, rad/s².
+        max_step_length_m: Longest mean step length ``|vx| T``, m.
+    """
+
+    vx_accel_mps2: float
+    vy_accel_mps2: float
+    turn_accel_radps2: float
+    max_step_length_m: float = math.inf
+
+    def __post_init__(self) -> None:
+        for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2", "max_step_length_m"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+                raise InputError(f"CommandShaping.{name} must be a positive number (inf: no limit), got {value!r}")
+
+
+#: Command shaping that changes nothing (no rate limit, no step-length cap).
+NO_SHAPING = CommandShaping(vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf)

@@ -1,0 +1,234 @@
+"""A robot profile: every fact about one robot that is not in its MJCF file.
+
+A :class:`RobotProfile` is read from one TOML file (:mod:`amlip_qp.profiles.reader`;
+every key is documented in ``docs/NEW_ROBOT.md``). It says:
+
+- the model (:class:`ModelSpec`): the MJCF file, left as it comes, and the
+  edits made to it through ``MjSpec`` when it is loaded (a floor, a ``stand``
+  keyframe, the timestep, a name for the free joint, position servos turned
+  into torque motors);
+- the joints' roles (``joint_roles``: hip yaw, knee, ankle pitch ... -> the
+  file's joint names, with ``{side}`` for ``left``/``right``) and the feet
+  (:class:`FootSpec`: the body, the contact point, the force points, the
+  joints passive in stance);
+- where the IMU sits (``imu_pos_in_base_m``);
+- the output layout the trackers follow, and whether the robot is planar;
+- the gait (:class:`GaitSettings`), the command bounds and shaping
+  (:mod:`amlip_qp.profiles.commands`), each tracker's tuned configuration (a
+  table turned into the tracker's own configuration type on demand,
+  :meth:`RobotProfile.tracker_config`), the ``compare`` ranges and the plants
+  ``--plant`` may name.
+
+This module imports nothing but :mod:`amlip_qp.exceptions`, so every layer may
+use it (``docs/ARCHITECTURE.md``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from amlip_qp.exceptions import InputError
+from amlip_qp.profiles.commands import CommandBounds, CommandShaping
+
+#: Tracker name -> ``"module:function"`` that turns a profile's ``[trackers.NAME]`` table into that
+#: tracker's configuration object (imported only when asked for, so this module stays light).
+TRACKER_CONFIG_BUILDERS: dict[str, str] = {
+    "qp": "amlip_qp.control.wbc.config:config_from_table",
+    "pbc": "amlip_qp.control.pbc.gains:gains_from_table",
+}
+
+#: The joint roles a profile may name (per side). ``ankle_pitch`` is the joint the foot pitches
+#: about (the one the ALIP contact point hangs on).
+JOINT_ROLES: tuple[str, ...] = (
+    "hip_yaw",
+    "hip_roll",
+    "hip_pitch",
+    "knee",
+    "ankle_pitch",
+    "ankle_roll",
+)
+
+#: What the loader does with a position servo (an actuator with a position or velocity bias).
+SERVO_POLICIES: tuple[str, ...] = ("refuse", "convert")
+
+
+@dataclass(frozen=True)
+class GaitSettings:
+    """The fixed gait parameters of a robot (SI units).
+
+    Attributes:
+        step_time_s: Step duration ``T``, s.
+        com_height_m: CoM height over the stance contact ``H``, m.
+        clearance_m: Swing clearance ``z_cl``, m.
+        step_width_m: Step width ``W`` for walking in place, m (0 for planar robots).
+    """
+
+    step_time_s: float
+    com_height_m: float
+    clearance_m: float
+    step_width_m: float
+
+
+@dataclass(frozen=True)
+class CompareRanges:
+    """What ``amlip-qp compare`` runs for a robot.
+
+    Attributes:
+        nominal_scenario: Name of the nominal scenario (``amlip_qp.sim.scenarios``).
+        ramp_end_mps: Speed the ramp test reaches, m/s.
+        push_max_impulse_Ns: Upper end of the push bisection, N s.
+        relative_cost: Relative wall-time cost of one simulated second (schedules the longest first).
+    """
+
+    nominal_scenario: str
+    ramp_end_mps: float
+    push_max_impulse_Ns: float
+    relative_cost: float = 1.0
+
+
+@dataclass(frozen=True)
+class StandPose:
+    """The ``stand`` keyframe a profile adds to its model (SI units).
+
+    Attributes:
+        base_pos_m: World position of the free joint's body, m.
+        base_quat_wxyz: Its orientation, a unit quaternion (w, x, y, z).
+        joints_rad: The file's joint name -> angle, rad (m for a slide joint); every other joint at 0.
+    """
+
+    base_pos_m: tuple[float, float, float]
+    base_quat_wxyz: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    joints_rad: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """The MJCF file of a robot and the edits made to it when it is loaded.
+
+    A profile with no edits (``edits_needed`` false) loads its file as it is.
+
+    Attributes:
+        path: The MJCF file (resolved; relative paths in the profile are relative to the profile file).
+        free_joint_name: Name given to the free joint when the file leaves it unnamed (``None``: no rename).
+        timestep_s: The simulation timestep set on the model, s (``None``: the file's).
+        add_floor: Add a ground plane when the model has no plane geom.
+        stand: A ``stand`` keyframe to add (replacing the file's, if any), or ``None``.
+        servos: ``"refuse"``: a position servo is an error; ``"convert"``: it becomes a torque
+            motor whose control range is the joint's force range (gain 1, no bias).
+    """
+
+    path: Path
+    free_joint_name: str | None = None
+    timestep_s: float | None = None
+    add_floor: bool = False
+    stand: StandPose | None = None
+    servos: str = "refuse"
+
+    @property
+    def edits_needed(self) -> bool:
+        """Whether loading changes the file: a name, a timestep, a floor or a keyframe (the servo
+        policy changes only a file that has servos, and is applied by the same edit)."""
+        return (
+            self.free_joint_name is not None
+            or self.timestep_s is not None
+            or self.add_floor
+            or self.stand is not None
+            or self.servos == "convert"
+        )
+
+
+@dataclass(frozen=True)
+class FootSpec:
+    """Where each foot touches the ground.
+
+    Either the model already has the library's sites (``{side}-contact``, and
+    ``{side}-toe`` / ``{side}-heel`` for a two-point foot), or ``body`` names the
+    foot body and the loader adds them at the points given.
+
+    Attributes:
+        body: The foot body's name, with ``{side}`` (``None``: the model has the sites).
+        contact_point_m: The ALIP contact point in the foot body's frame, m.
+        force_points_m: Where the contact forces act, in the foot body's frame, m: one point (a
+            point foot, the contact point itself) or two (toe then heel, a line contact).
+        passive_in_stance: Joint roles that carry no torque while the foot is in stance.
+    """
+
+    body: str | None = None
+    contact_point_m: tuple[float, float, float] | None = None
+    force_points_m: tuple[tuple[float, float, float], ...] = ()
+    passive_in_stance: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class RobotProfile:
+    """Everything about a robot that is not in its MJCF file (see the module doc).
+
+    Attributes:
+        name: The robot's name.
+        source: The profile file.
+        model: The MJCF file and its load-time edits.
+        output_layout: The output layout the trackers follow (``robots.outputs``).
+        planar: True for a robot that walks in the sagittal plane only.
+        gait: Default gait.
+        bounds: Command bounds.
+        shaping: Command shaping (rate limits).
+        trackers: Tracker name -> its configuration table (:meth:`tracker_config` builds it).
+        compare: ``amlip-qp compare`` ranges.
+        plants: Plant name -> MJCF file: the plants ``--plant`` may name
+            (:func:`amlip_qp.sim.plant.load_plant`); the robot's own model is one of them, under
+            the robot's name.
+        imu_pos_in_base_m: Where the IMU sits in the base body's frame, m (its axes are the base body's).
+        joint_roles: Role (:data:`JOINT_ROLES`) -> the file's joint name, with ``{side}``.
+        feet: The feet.
+        description: One line for people.
+    """
+
+    name: str
+    source: Path
+    model: ModelSpec
+    output_layout: str
+    planar: bool
+    gait: GaitSettings
+    bounds: CommandBounds
+    shaping: CommandShaping
+    trackers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    compare: CompareRanges | None = None
+    plants: Mapping[str, Path] = field(default_factory=dict)
+    imu_pos_in_base_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    joint_roles: Mapping[str, str] = field(default_factory=dict)
+    feet: FootSpec = field(default_factory=FootSpec)
+    description: str = ""
+    _built: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    @property
+    def tracker_configs(self) -> tuple[str, ...]:
+        """The trackers this profile has a configuration for."""
+        return tuple(self.trackers)
+
+    def joint_name(self, role: str, side: str) -> str | None:
+        """The file's name of the ``side`` joint with ``role``, or ``None`` if the profile names none."""
+        template = self.joint_roles.get(role)
+        return None if template is None else template.format(side=side)
+
+    def tracker_config(self, tracker: str) -> Any:
+        """The tuned configuration of ``tracker`` for this robot, built from its table.
+
+        Raises:
+            InputError: No configuration for that tracker, or its table is invalid (the message
+                names the key and the profile file).
+        """
+        if tracker not in self.trackers:
+            known = ", ".join(sorted(self.trackers)) or "none"
+            raise InputError(f"robot {self.name!r} has no {tracker!r} tracker configuration; known: {known}")
+        if tracker not in self._built:  # built once: every caller shares one object
+            module_name, attr = TRACKER_CONFIG_BUILDERS[tracker].split(":")
+            build = getattr(importlib.import_module(module_name), attr)
+            try:
+                self._built[tracker] = build(self.trackers[tracker])
+            except InputError as exc:
+                raise InputError(f"{self.source}: [trackers.{tracker}]: {exc}") from None
+        return self._built[tracker]

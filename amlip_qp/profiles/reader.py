@@ -1,0 +1,355 @@
+"""Read a robot profile file (TOML) into a :class:`~amlip_qp.profiles.profile.RobotProfile`.
+
+Every key is checked as it is read: an unknown key, a value of the wrong
+type, a number out of its range or a missing file gives one
+:class:`~amlip_qp.exceptions.ProfileError` naming the file and the key
+(``docs/NEW_ROBOT.md`` documents every key). Whether the MJCF file has the
+joints, bodies and sites the profile names is checked when the robot is
+loaded (:func:`amlip_qp.robots.load_robot`), and each tracker's table when
+its configuration is built (:meth:`RobotProfile.tracker_config`).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from amlip_qp.exceptions import ProfileError
+from amlip_qp.profiles.commands import CommandBounds, CommandShaping
+from amlip_qp.profiles.profile import (
+    JOINT_ROLES,
+    SERVO_POLICIES,
+    TRACKER_CONFIG_BUILDERS,
+    CompareRanges,
+    FootSpec,
+    GaitSettings,
+    ModelSpec,
+    RobotProfile,
+    StandPose,
+)
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+#: The output layouts a profile may name (``amlip_qp.robots.outputs``).
+OUTPUT_LAYOUTS: tuple[str, ...] = ("cassie", "rabbit")
+
+
+class _Table:
+    """One TOML table being read: each key is taken once; what is left over is an unknown key."""
+
+    def __init__(self, source: Path, where: str, data: Any):
+        self.source, self.where = source, where
+        if not isinstance(data, Mapping):
+            self.fail(f"must be a table, got {type(data).__name__}")
+        self.data = dict(data)
+        self.taken: set[str] = set()
+
+    def key_path(self, key: str) -> str:
+        return f"{self.where}.{key}" if self.where else key
+
+    def fail(self, message: str, key: str | None = None) -> Any:
+        where = self.key_path(key) if key is not None else (self.where or "top level")
+        raise ProfileError(f"{self.source}: {where}: {message}")
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def raw(self, key: str, default: Any = ...) -> Any:
+        self.taken.add(key)
+        if key not in self.data:
+            if default is ...:
+                self.fail("is required", key)
+            return default
+        return self.data[key]
+
+    def table(self, key: str, required: bool = True) -> _Table | None:
+        value = self.raw(key, ... if required else None)
+        return None if value is None else _Table(self.source, self.key_path(key), value)
+
+    def string(self, key: str, default: Any = ..., choices: tuple[str, ...] = ()) -> Any:
+        value = self.raw(key, default)
+        if value is default and default is not ...:
+            return value
+        if not isinstance(value, str) or not value.strip():
+            self.fail(f"must be a non-empty string, got {value!r}", key)
+        if choices and value not in choices:
+            self.fail(f"must be one of {', '.join(choices)}, got {value!r}", key)
+        return value
+
+    def boolean(self, key: str, default: Any = ...) -> Any:
+        value = self.raw(key, default)
+        if not isinstance(value, bool):
+            self.fail(f"must be true or false, got {value!r}", key)
+        return value
+
+    def number(
+        self,
+        key: str,
+        default: Any = ...,
+        *,
+        low: float = -math.inf,
+        high: float = math.inf,
+        unit: str = "",
+        finite: bool = True,
+    ) -> Any:
+        value = self.raw(key, default)
+        if value is default and default is not ...:
+            return value
+        return _number(self, key, value, low, high, unit, finite)
+
+    def vector(self, key: str, size: int, default: Any = ..., unit: str = "") -> Any:
+        value = self.raw(key, default)
+        if value is default and default is not ...:
+            return value
+        if not isinstance(value, list) or len(value) != size:
+            self.fail(f"must be a list of {size} numbers ({unit}), got {value!r}", key)
+        return tuple(_number(self, key, v, -math.inf, math.inf, unit, True) for v in value)
+
+    def done(self) -> None:
+        unknown = sorted(set(self.data) - self.taken)
+        if unknown:
+            known = ", ".join(sorted(self.taken))
+            self.fail(f"unknown key {unknown[0]!r} (known here: {known})", None)
+
+
+def _number(t: _Table, key: str, value: Any, low: float, high: float, unit: str, finite: bool) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        t.fail(f"must be a number{f' ({unit})' if unit else ''}, got {value!r}", key)
+    value = float(value)
+    if math.isnan(value) or (finite and math.isinf(value)):
+        t.fail(f"must be a finite number, got {value!r}", key)
+    if not low <= value <= high:
+        t.fail(f"{value:g}{f' {unit}' if unit else ''} is outside [{low:g}, {high:g}]", key)
+    return value
+
+
+def _path(t: _Table, key: str, base: Path, default: Any = ...) -> Any:
+    text = t.string(key, default)
+    if text is default and default is not ...:
+        return text
+    path = (base / Path(text).expanduser()).resolve()
+    if not path.is_file():
+        t.fail(f"file not found: {path}", key)
+    return path
+
+
+def _side_template(t: _Table, key: str, default: Any = ...) -> Any:
+    text = t.string(key, default)
+    if text is default and default is not ...:
+        return text
+    if "{side}" not in text or text.replace("{side}", "").count("{") or text.replace("{side}", "").count("}"):
+        t.fail(f"must contain '{{side}}' once (for left / right), got {text!r}", key)
+    return text
+
+
+def _model(t: _Table, base: Path) -> ModelSpec:
+    stand = None
+    s = t.table("stand", required=False)
+    if s is not None:
+        joints = s.table("joints", required=False)
+        angles = {}
+        if joints is not None:
+            for name in list(joints.data):
+                angles[name] = joints.number(name, unit="rad")
+            joints.done()
+        quat = s.vector("base_quat_wxyz", 4, (1.0, 0.0, 0.0, 0.0))
+        norm = math.sqrt(sum(x * x for x in quat))
+        if not abs(norm - 1.0) < 1e-6:
+            s.fail(f"must be a unit quaternion (norm {norm:.6g})", "base_quat_wxyz")
+        stand = StandPose(base_pos_m=s.vector("base_pos_m", 3, unit="m"), base_quat_wxyz=quat, joints_rad=angles)
+        s.done()
+    spec = ModelSpec(
+        path=_path(t, "file", base),
+        free_joint_name=t.string("free_joint_name", None),
+        # Above 10 ms a 2 kHz controller would run several ticks per physics step; below 10 us
+        # the run is needlessly slow.
+        timestep_s=t.number("timestep_s", None, low=1e-5, high=1e-2, unit="s"),
+        add_floor=t.boolean("add_floor", False),
+        stand=stand,
+        servos=t.string("servos", "refuse", choices=SERVO_POLICIES),
+    )
+    t.done()
+    return spec
+
+
+def _feet(t: _Table | None) -> FootSpec:
+    if t is None:
+        return FootSpec()
+    body = _side_template(t, "body", None)
+    contact = t.vector("contact_point_m", 3, None, unit="m")
+    raw_points = t.raw("force_points_m", [])
+    if not isinstance(raw_points, list) or len(raw_points) not in (0, 1, 2):
+        t.fail(
+            f"must be a list of 1 point or 2 points (toe, heel), each 3 numbers in m, got {raw_points!r}",
+            "force_points_m",
+        )
+    points: list[tuple[float, float, float]] = []
+    for p in raw_points:
+        if not isinstance(p, list) or len(p) != 3:
+            t.fail(f"each point must be 3 numbers (m), got {p!r}", "force_points_m")
+        x, y, z = (_number(t, "force_points_m", v, -math.inf, math.inf, "m", True) for v in p)
+        points.append((x, y, z))
+    passive = t.raw("passive_in_stance", [])
+    if not isinstance(passive, list) or any(r not in JOINT_ROLES for r in passive):
+        t.fail(f"must be a list of joint roles ({', '.join(JOINT_ROLES)}), got {passive!r}", "passive_in_stance")
+    if body is not None and contact is None:
+        t.fail("is required with 'body' (the ALIP contact point in the foot body's frame)", "contact_point_m")
+    if body is None and (contact is not None or points):
+        t.fail("is required with 'contact_point_m' / 'force_points_m' (the foot body they are in)", "body")
+    t.done()
+    return FootSpec(body=body, contact_point_m=contact, force_points_m=tuple(points), passive_in_stance=tuple(passive))
+
+
+def _roles(t: _Table | None) -> dict[str, str]:
+    if t is None:
+        return {}
+    roles = {}
+    for key in list(t.data):
+        if key not in JOINT_ROLES:
+            t.fail(f"unknown joint role {key!r} (known: {', '.join(JOINT_ROLES)})")
+        roles[key] = _side_template(t, key)
+    t.done()
+    return roles
+
+
+def _dataclass_table(t: _Table, make: Callable[..., Any], fields: Mapping[str, tuple[Any, ...]]) -> Any:
+    """Read the numbers ``fields`` (key -> (default, low, high, unit[, finite])) and call ``make``."""
+    kwargs = {}
+    for key, (default, low, high, unit, *finite) in fields.items():
+        kwargs[key] = t.number(key, default, low=low, high=high, unit=unit, finite=finite[0] if finite else True)
+    t.done()
+    return make(**kwargs)
+
+
+def _bounds(t: _Table) -> CommandBounds:
+    vx = t.vector("vx_mps", 2, unit="m/s")
+    kwargs = {
+        "vy_max_mps": t.number("vy_max_mps", low=0.0, unit="m/s"),
+        "turn_rate_max_radps": math.radians(t.number("turn_rate_max_degps", low=0.0, unit="deg/s")),
+        "duration_max_s": t.number("duration_max_s", 600.0, low=0.0, unit="s"),
+        "push_impulse_max_Ns": t.number("push_impulse_max_Ns", 100.0, low=0.0, unit="N s"),
+        "push_force_max_N": t.number("push_force_max_N", 3000.0, low=0.0, unit="N"),
+    }
+    t.done()
+    try:
+        return CommandBounds(vx_mps=vx, **kwargs)
+    except Exception as exc:
+        t.fail(str(exc))
+        raise
+
+
+def _trackers(t: _Table | None) -> dict[str, dict[str, Any]]:
+    if t is None:
+        return {}
+    out = {}
+    for name in list(t.data):
+        if name not in TRACKER_CONFIG_BUILDERS:
+            t.fail(f"unknown tracker {name!r} (known: {', '.join(TRACKER_CONFIG_BUILDERS)})")
+        table = t.table(name)
+        assert table is not None
+        out[name] = table.data
+    t.done()
+    return out
+
+
+def read_profile(path: str | Path) -> RobotProfile:
+    """Read and check the profile file ``path`` (TOML).
+
+    Raises:
+        ProfileError: The file is missing, is not TOML, or a key is unknown, of the wrong type,
+            out of range or names a file that does not exist (the message names the key).
+    """
+    source = Path(path).expanduser().resolve()
+    try:
+        with open(source, "rb") as f:
+            data = tomllib.load(f)
+    except FileNotFoundError:
+        raise ProfileError(f"robot profile not found: {source}") from None
+    except OSError as exc:
+        raise ProfileError(f"{source}: cannot read the robot profile: {exc.strerror or exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ProfileError(f"{source}: not a valid TOML file: {exc}") from None
+    base = source.parent
+    top = _Table(source, "", data)
+    name = top.string("name")
+    description = top.string("description", "")
+    planar = top.boolean("planar")
+    layout = top.string("output_layout", choices=OUTPUT_LAYOUTS)
+    model_t = top.table("model")
+    assert model_t is not None
+    model = _model(model_t, base)
+    gait_t = top.table("gait")
+    assert gait_t is not None
+    gait = _dataclass_table(
+        gait_t,
+        GaitSettings,
+        {
+            "step_time_s": (..., 0.05, 2.0, "s"),
+            "com_height_m": (..., 0.05, 5.0, "m"),
+            "clearance_m": (..., 0.0, 1.0, "m"),
+            "step_width_m": (..., 0.0, 2.0, "m"),
+        },
+    )
+    bounds_t = top.table("bounds")
+    assert bounds_t is not None
+    bounds = _bounds(bounds_t)
+    shaping_t = top.table("shaping")
+    assert shaping_t is not None
+    shaping = _dataclass_table(
+        shaping_t,
+        CommandShaping,
+        {
+            "vx_accel_mps2": (..., 1e-9, math.inf, "m/s^2", False),
+            "vy_accel_mps2": (..., 1e-9, math.inf, "m/s^2", False),
+            "turn_accel_radps2": (..., 1e-9, math.inf, "rad/s^2", False),
+            "max_step_length_m": (math.inf, 1e-3, math.inf, "m", False),
+        },
+    )
+    compare_t = top.table("compare", required=False)
+    compare = None
+    if compare_t is not None:
+        compare = CompareRanges(
+            nominal_scenario=compare_t.string("nominal_scenario"),
+            ramp_end_mps=compare_t.number("ramp_end_mps", low=0.0, unit="m/s"),
+            push_max_impulse_Ns=compare_t.number("push_max_impulse_Ns", low=0.0, unit="N s"),
+            relative_cost=compare_t.number("relative_cost", 1.0, low=1e-3, high=1e3),
+        )
+        compare_t.done()
+    plants_t = top.table("plants", required=False)
+    plants = {name: model.path}
+    if plants_t is not None:
+        for plant in list(plants_t.data):
+            plants[plant] = _path(plants_t, plant, base)
+        plants_t.done()
+    imu_t = top.table("imu", required=False)
+    imu = (0.0, 0.0, 0.0)
+    if imu_t is not None:
+        imu = imu_t.vector("pos_in_base_m", 3, unit="m")
+        imu_t.done()
+    profile = RobotProfile(
+        name=name,
+        source=source,
+        model=model,
+        output_layout=layout,
+        planar=planar,
+        gait=gait,
+        bounds=bounds,
+        shaping=shaping,
+        trackers=_trackers(top.table("trackers", required=False)),
+        compare=compare,
+        plants=plants,
+        imu_pos_in_base_m=imu,
+        joint_roles=_roles(top.table("roles", required=False)),
+        feet=_feet(top.table("feet", required=False)),
+        description=description,
+    )
+    top.done()
+    if planar != (gait.step_width_m == 0.0):
+        top.fail("a planar robot has gait.step_width_m = 0, and only a planar one", "planar")
+    return profile
