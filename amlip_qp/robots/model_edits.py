@@ -133,14 +133,17 @@ def _add_stand_key(spec: mujoco.MjSpec, model: ModelSpec, path: Path) -> None:
         return
     compiled = spec.compile()
     qpos = compiled.qpos0.copy()
-    free = [j for j in range(compiled.njnt) if compiled.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+    free = [j for j in range(compiled.njnt) if int(compiled.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
     if free:
         adr = int(compiled.jnt_qposadr[free[0]])
         qpos[adr : adr + 3] = stand.base_pos_m
         qpos[adr + 3 : adr + 7] = stand.base_quat_wxyz
     for name, value in stand.joints_rad.items():
         j = mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_JOINT, name)
-        if j < 0 or compiled.jnt_type[j] not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+        if j < 0 or int(compiled.jnt_type[j]) not in (
+            int(mujoco.mjtJoint.mjJNT_HINGE),
+            int(mujoco.mjtJoint.mjJNT_SLIDE),
+        ):
             raise MJCFError(f"{path}: the profile's stand pose names {name!r}, which is no hinge or slide joint of it")
         qpos[int(compiled.jnt_qposadr[j])] = value
     for key in list(spec.keys):

@@ -1,0 +1,120 @@
+"""amlip_qp.profiles.reader: a profile file is read key by key, and every bad key is named in one line."""
+
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from amlip_qp.exceptions import InputError, ProfileError
+from amlip_qp.paths import MODELS_DIR
+from amlip_qp.profiles import get_profile, load_profile, read_profile
+
+CASSIE_TOML = (MODELS_DIR / "cassie.toml").read_text()
+
+
+def _profile_copy(tmp_path: Path, text: str, name: str = "robot.toml") -> Path:
+    """A copy of a profile whose model file is the bundled one (an absolute path)."""
+    path = tmp_path / name
+    text = text.replace('file = "cassie.xml"', f'file = "{MODELS_DIR / "cassie.xml"}"')
+    text = text.replace(
+        'cassie-closed-chain = "cassie-closed-chain.xml"',
+        f'cassie-closed-chain = "{MODELS_DIR / "cassie-closed-chain.xml"}"',
+    )
+    path.write_text(text)
+    return path
+
+
+def test_the_bundled_profile_reads_the_values_its_file_gives():
+    p = get_profile("cassie")
+    assert p.model.path == MODELS_DIR / "cassie.xml" and not p.model.edits_needed
+    assert (p.gait.step_time_s, p.gait.com_height_m, p.gait.clearance_m, p.gait.step_width_m) == (0.3, 0.8, 0.1, 0.25)
+    assert p.bounds.vx_mps == (-1.0, 2.5) and p.bounds.turn_rate_max_radps == math.radians(60.0)
+    assert p.shaping.vy_accel_mps2 == math.inf and p.shaping.max_step_length_m == 0.63
+    assert p.joint_roles["ankle_pitch"] == "{side}-foot" and p.joint_name("knee", "right") == "right-knee"
+    assert p.feet.passive_in_stance == ("ankle_pitch",) and p.feet.body is None
+    assert p.imu_pos_in_base_m == (0.03155, 0.0, -0.07996)
+    assert set(p.plants) == {"cassie", "cassie-closed-chain"}
+    qp = p.tracker_config("qp")
+    assert qp.output_kp[0] == 400.0 and qp.stance_foot_torque_max_Nm == 0.01 and qp.friction_mu == 0.9
+    assert p.tracker_config("qp") is qp  # built once
+    pbc = p.tracker_config("pbc")
+    assert pbc.kd_stance_ps == 44.72 and pbc.spring_model_linkage.heel_stiffness_Nmprad == 1250.0
+
+
+def test_a_copy_of_a_bundled_profile_reads_alike(tmp_path):
+    p = load_profile(_profile_copy(tmp_path, CASSIE_TOML))
+    b = get_profile("cassie")
+    assert (p.gait, p.bounds, p.shaping, p.feet, p.imu_pos_in_base_m) == (
+        b.gait,
+        b.bounds,
+        b.shaping,
+        b.feet,
+        b.imu_pos_in_base_m,
+    )
+    assert p.tracker_config("qp") == b.tracker_config("qp")
+    assert load_profile(tmp_path / "robot.toml") is p  # read once per process
+
+
+@pytest.mark.parametrize(
+    "old, new, message",
+    [
+        ("[gait]\n", "[gait]\nspeed = 1.0\n", "gait: unknown key 'speed' (known here: clearance_m"),
+        ("step_time_s = 0.3", 'step_time_s = "fast"', "gait.step_time_s: must be a number (s), got 'fast'"),
+        ("step_time_s = 0.3", "step_time_s = 30.0", "gait.step_time_s: 30 s is outside [0.05, 2]"),
+        ("step_time_s = 0.3", "step_time_s = nan", "gait.step_time_s: must be a finite number"),
+        ("step_time_s = 0.3\n", "", "gait.step_time_s: is required"),
+        ("vx_mps = [-1.0, 2.5]", "vx_mps = [2.5]", "bounds.vx_mps: must be a list of 2 numbers (m/s)"),
+        ("vx_mps = [-1.0, 2.5]", "vx_mps = [1.0, 2.5]", "min <= 0 <= max"),
+        ('output_layout = "cassie"', 'output_layout = "hexapod"', "output_layout: must be one of cassie, rabbit"),
+        ("planar = false", "planar = 0", "planar: must be true or false, got 0"),
+        ('hip_yaw = "{side}-hip-yaw"', 'hip_yaw = "left-hip-yaw"', "roles.hip_yaw: must contain '{side}' once"),
+        ('hip_yaw = "{side}-hip-yaw"', 'hip_spin = "{side}-hip-yaw"', "unknown joint role 'hip_spin'"),
+        (
+            'passive_in_stance = ["ankle_pitch"]',
+            'passive_in_stance = ["toe"]',
+            "feet.passive_in_stance: must be a list",
+        ),
+        ("[feet]\n", "[feet]\ncontact_point_m = [0.0, 0.0, 0.0]\n", "feet.body: is required with 'contact_point_m'"),
+        ("[model]\n", "[model]\ntimestep_s = 0.5\n", "model.timestep_s: 0.5 s is outside [1e-05, 0.01]"),
+        ("[model]\n", '[model]\nservos = "ignore"\n', "model.servos: must be one of refuse, convert"),
+        ('cassie.xml"  #', 'nothing.xml"  #', "model.file: file not found"),
+        ("[trackers.pbc]\n", "[trackers.lqr]\n", "trackers: unknown tracker 'lqr' (known: qp, pbc)"),
+        ("name = ", "nom = ", "name: is required"),
+    ],
+)
+def test_each_bad_key_is_named_in_one_line(tmp_path, old, new, message):
+    text = _profile_copy(tmp_path, CASSIE_TOML.replace("\n# ", "\n#~ ")).read_text()  # no match in comments
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(ProfileError) as info:
+        read_profile(path)
+    text = str(info.value)
+    assert "\n" not in text and text.startswith(str(path)) and message in text, text
+
+
+def test_an_invalid_tracker_table_is_named_when_the_configuration_is_built(tmp_path):
+    path = _profile_copy(tmp_path, CASSIE_TOML.replace("spring_weight = 1e-2", "spring_wieght = 1e-2"))
+    profile = read_profile(path)  # the tables are the trackers' to check
+    with pytest.raises(InputError, match=re.escape(f"{path}: [trackers.qp]: unknown key 'spring_wieght'")):
+        profile.tracker_config("qp")
+    with pytest.raises(InputError, match="no 'mpc' tracker configuration; known: pbc, qp"):
+        profile.tracker_config("mpc")
+
+
+def test_files_that_are_missing_or_not_toml_are_one_line_errors(tmp_path):
+    with pytest.raises(ProfileError, match="robot profile not found: .*nothing.toml"):
+        read_profile(tmp_path / "nothing.toml")
+    (tmp_path / "x.toml").write_text("name = [unclosed\n")
+    with pytest.raises(ProfileError, match="not a valid TOML file"):
+        read_profile(tmp_path / "x.toml")
+    (tmp_path / "y.toml").write_text(CASSIE_TOML.replace("step_width_m = 0.25", "step_width_m = 0.0"))
+    with pytest.raises(ProfileError, match="model.file: file not found"):
+        read_profile(tmp_path / "y.toml")  # relative to the profile's own folder
+
+
+def test_a_planar_flag_must_match_the_step_width(tmp_path):
+    path = _profile_copy(tmp_path, CASSIE_TOML.replace("step_width_m = 0.25", "step_width_m = 0.0"))
+    with pytest.raises(ProfileError, match="planar: a planar robot has gait.step_width_m = 0"):
+        read_profile(path)
