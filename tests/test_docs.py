@@ -28,6 +28,9 @@ EQUATIONS = ROOT / "docs" / "EQUATIONS.md"
 GUIDES = (
     "docs/ARCHITECTURE.md",
     "docs/TUNING.md",
+    "docs/RESULTS.md",
+    "docs/LIMITATIONS.md",
+    "docs/COMMANDS.md",
     "docs/EQUATIONS.md",
     "docs/ALIP_SLOPES.md",
     "docs/SUMMARY_SCHEMA.md",
