@@ -22,7 +22,7 @@ walk; independent of the code, but it swings with the machine's load). The
 real-time factors' ratio needs no yardstick; the ABBA order and the median
 over the pairs average the drift out.
 
-    git worktree add --detach /tmp/ref 82a46cd
+    git worktree add --detach /tmp/ref REVISION    # REVISION: the commit to compare with
     python examples/speed_against.py --reference /tmp/ref --pairs 5
 
 prints one line per walk and the medians over the pairs. Exit status: 0, or 2

@@ -3,7 +3,7 @@
 Usage: ``python examples/terrain_table.py [--trackers pbc,qp] [--scenarios NAME,...] [--jobs 2] [--json PATH]``
 
 Each row is one deterministic run of a terrain scenario of
-:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS` (issue #13): terrain,
+:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS`: terrain,
 tracker, mode (blind or terrain-aware), whether the robot fell, the mean
 speed over the last 3 s (horizontal, along the heading) against the command,
 and the foot placement error RMS (touchdown against the planner's target,

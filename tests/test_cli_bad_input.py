@@ -115,7 +115,7 @@ BAD_INPUTS = [
     (["compare", "--sensors", "perfect"], "argument --sensors: invalid choice"),
     (["compare", "--estimator", "kalman"], "argument --estimator: invalid choice"),
     (["compare", "--jobs", "1", "--noise", "--sensors", "robot"], "--sensors robot has its own"),
-    # plant modifiers (issue "a plant it was not built from"): nonsensical values
+    # plant modifiers: nonsensical values
     (["walk", "--plant-mass-scale", "0"], "--plant-mass-scale) must be a number in (0, 10]"),
     (["walk", "--plant-mass-scale", "nan"], "--plant-mass-scale) must be a number in (0, 10]"),
     (["walk", "--payload", "-5"], "--payload) must be a mass in [0, 100] kg"),

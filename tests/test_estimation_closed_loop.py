@@ -1,4 +1,4 @@
-"""The contact-aided invariant EKF in the closed loop: the issue's goal on the robot it was not built from.
+"""The contact-aided invariant EKF in the closed loop: its accuracy goal on a plant it was not built from.
 
 Cassie with the QP tracker walks 1 m/s for 20 s on the closed-chain plant
 (``cassie-closed-chain``) with the robot's own sensors (noisy, biased IMU;

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from amlip_qp import cli
@@ -28,7 +30,7 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
     assert r["harness_meets_goal"] == {}  # the reference's walks were QP walks: no verdict on a PBC walk
     text = bench_harness.format_report(r)
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
-    assert f"the issue's code ({bench_harness.REFERENCE_COMMIT}), cassie-1mps qp walk" in text
+    assert "a cassie-1mps qp walk of 13.20 MuJoCo steps of wall time per tick (harness 3.01) ran at 0.65x" in text
     assert "no verdict on the goals" in text
 
 
@@ -45,6 +47,21 @@ def test_the_goals_are_judged_on_the_reference_walk_only(scenario):
     goal = bench_harness.REFERENCE_HARNESS_PER_MUJOCO / 4
     assert r["harness_meets_goal"] == {k: row["harness_per_mujoco"] <= goal for k, row in r["runs"].items()}
     assert f"harness <= {goal:.2f} MuJoCo steps per tick" in text and "qp/summary walk at >= 1x real time" in text
+
+
+def test_the_verdicts_state_the_goals_as_numbers_and_name_no_commit():
+    """A reader checks a verdict against the numbers it prints: 0.75 MuJoCo steps per tick for the
+    harness, 1.0x real time (8.58 MuJoCo steps of wall time per tick) for the walk."""
+    assert bench_harness.GOAL_HARNESS_PER_MUJOCO == pytest.approx(3.01 / 4)
+    assert bench_harness.GOAL_TICK_PER_MUJOCO == pytest.approx(0.65 * 13.2)
+    r = bench_harness.run(duration_s=0.05, repeats=1, trackers=("qp",))
+    text = bench_harness.format_report(r)
+    assert "harness <= 0.75 MuJoCo steps per tick: " in text
+    assert "qp/summary walk at >= 1x real time on that machine state (<= 8.58 MuJoCo steps per tick): " in text
+    assert r["goal_tick_per_mujoco"] == pytest.approx(8.58) and r["goal_harness_per_mujoco"] == pytest.approx(0.7525)
+    assert "commit" not in r["reference"] and not hasattr(bench_harness, "REFERENCE_COMMIT")
+    assert re.search(r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b", text) is None, "a commit hash"
+    assert "commit" not in text.lower() and "issue" not in text.lower()
 
 
 def test_the_gathered_qp_variant_is_timed_and_judged_too():

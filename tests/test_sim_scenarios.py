@@ -221,7 +221,7 @@ def test_the_command_function_refuses_a_nan_time_first_or_later(turn_rate_radps)
         assert command(2.5) == sc.command(2.5)  # and it goes on
 
 
-def test_terrain_scenarios_are_the_issues_speeds_durations_and_modes():
+def test_terrain_scenarios_have_their_speeds_durations_and_modes():
     from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS
     from amlip_qp.sim.terrain import parse_terrain
 

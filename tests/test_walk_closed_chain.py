@@ -1,4 +1,4 @@
-"""Acceptance on a plant the controller was not built from (issue "a plant it was not built from", section 5).
+"""Acceptance on a plant the controller was not built from.
 
 Every Cassie acceptance scenario runs on the hardware-like setting
 :data:`~amlip_qp.sim.scenarios.CLOSED_CHAIN_EKF` -- the closed-chain plant

@@ -3,7 +3,7 @@
 Every scenario below runs once (module-scoped fixture, two worker processes,
 one per core) and several tests read its summary numbers. Mean speed = mean
 CoM velocity over the last 3 s, in the heading frame. Durations are the
-scenarios' own where the issue fixes them (20 s for walking in place and for
+scenarios' own where the check needs them whole (20 s for walking in place and for
 Rabbit); the others are shortened to what their check needs.
 
 The same scenarios as the baseline tracker's acceptance (tests/test_walk_pbc.py),

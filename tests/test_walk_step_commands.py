@@ -1,4 +1,4 @@
-"""Step commands from rest walk (issue 11, "Step commands"), with each tracker.
+"""Step commands from rest walk, with each tracker.
 
 Each case is exactly ``amlip-qp walk --robot R --tracker T --vx V``: the
 CLI's scenario (the robot's default gait, 10 s, a constant ``--vx`` from
@@ -27,7 +27,7 @@ import pytest
 
 pytestmark = pytest.mark.slow
 
-#: (robot, tracker, vx m/s), the issue's list for each tracker.
+#: (robot, tracker, vx m/s): each tracker walks these step commands.
 CASES = tuple(
     (robot, tracker, vx)
     for tracker in ("pbc", "qp")
@@ -35,7 +35,7 @@ CASES = tuple(
     for vx in speeds
 )
 
-#: Largest |mean speed - command| over the last 3 s, m/s (the issue's bound).
+#: Largest |mean speed - command| over the last 3 s, m/s.
 SPEED_TOL_MPS = 0.1
 
 

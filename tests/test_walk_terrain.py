@@ -1,7 +1,7 @@
-"""Closed-loop acceptance on uneven ground (issue #13, section 3): the QP tracker on Cassie.
+"""Closed-loop acceptance on uneven ground: the QP tracker on Cassie.
 
 Each test is one run of a named terrain scenario (:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS`,
-their durations and speeds are the issue's): slopes of 10 and 15 degrees up and down at 0.5 m/s
+with their own durations and speeds): slopes of 10 and 15 degrees up and down at 0.5 m/s
 for 15 s, blind and terrain-aware; stairs of 10 cm rise and 30 cm run up and down at 0.4 m/s
 (terrain-aware); rough ground of +-4 cm at 0.75 m/s for 20 s (blind); waves 30 cm high with a
 4 m wavelength at 0.75 m/s with 20 cm clearance (blind). "Without falling" also means the mean
@@ -30,7 +30,7 @@ REQUIRED = (
     "cassie-rough-4cm",
     "cassie-waves-30cm",
 )
-#: Largest |mean speed over the last 3 s - command|, m/s (the issue's).
+#: Largest |mean speed over the last 3 s - command|, m/s.
 SPEED_TOLERANCE_MPS = 0.15
 
 

@@ -2,7 +2,7 @@
 
 :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` is the readable
 reference (numpy). A numpy tick costs a few hundred microseconds, several
-times the 2 kHz budget (the issue's goal: at most 15 % of the QP tracker's
+times the 2 kHz budget (the goal: at most 15 % of the QP tracker's
 tick), so :class:`CompiledEkf` runs the same tick (propagation, contact
 re-initialisation at touchdown, correction, and the base pose and twist the
 controller needs) as one C function that CasADi generates from the same

@@ -1,6 +1,6 @@
 """``amlip-qp bench ekf``: the invariant EKF's cost inside the closed loop, against the QP tracker's tick.
 
-The issue's goal: the EKF runs inside the 2 kHz tick and costs at most 15 %
+The goal: the EKF runs inside the 2 kHz tick and costs at most 15 %
 of the QP tracker's tick, median. :func:`run` walks a scenario on the
 hardware-like setting (default ``cassie-1mps-cc-ekf``: closed-chain plant,
 robot sensors, the EKF) with the QP tracker and times, on every tick, the

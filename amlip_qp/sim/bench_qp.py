@@ -26,8 +26,8 @@ in ``sim``, the layer that may import both (``docs/ARCHITECTURE.md``).
 Arguments :func:`run_bench` reads from the namespace:
 
 - ``json``: ``None``, ``"-"`` (JSON on stdout, table on stderr) or a file path;
-- ``ticks``: number of recorded tracker QPs to replay (>= 1000 for the issue's
-  acceptance; default 1200 when absent);
+- ``ticks``: number of recorded tracker QPs to replay (>= 1000 for a
+  measurement; default 1200 when absent);
 - ``scenario``: optional scenario name (default ``"cassie-1mps"``).
 """
 

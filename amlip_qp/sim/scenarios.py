@@ -2,7 +2,7 @@
 
 A :class:`Scenario` is everything a run needs besides the robot and the
 tracker. The named scenarios of :data:`SCENARIOS` are the acceptance
-scenarios of the walking issues; the CLI, the examples, the comparison and
+scenarios; the CLI, the examples, the comparison and
 the tests all take them from here. Each ideal Cassie scenario also exists on
 the hardware-like setting :data:`CLOSED_CHAIN_EKF` (name suffix ``-cc-ekf``),
 and ``cassie-1mps-cc-ekf`` also under each model mismatch of
@@ -156,7 +156,7 @@ def _ramp(v_end: float, t_ramp: float, t0: float = 1.0) -> SpeedProfile:
     return SpeedProfile((0.0, t0, t0 + t_ramp), (0.0, 0.0, v_end))
 
 
-#: The acceptance scenarios (issue "walking with the baseline tracker", section 5).
+#: The acceptance scenarios: what both trackers must walk on each robot's own model.
 SCENARIOS: dict[str, Scenario] = {
     s.name: s
     for s in (
@@ -209,7 +209,7 @@ SCENARIOS: dict[str, Scenario] = {
     )
 }
 
-#: The hardware-like setting of issue "a plant it was not built from": the closed-chain Cassie plant
+#: The hardware-like setting, a plant the controller was not built from: the closed-chain Cassie plant
 #: (achilles and plantar rods closed by equality constraints), the robot's own sensors (IMU,
 #: encoders, contact switches; no base state) and the contact-aided invariant EKF.
 CLOSED_CHAIN_EKF = PlantSetting(plant="cassie-closed-chain", sensors="robot", estimator="ekf")
@@ -271,14 +271,14 @@ def _slopes() -> list[Scenario]:
     for deg in (10, 15, 22):
         for way, sign in (("up", 1), ("down", -1)):
             if deg == 22 and way == "down":
-                continue  # the issue asks for the 22 degree slope up only
+                continue  # the 22 degree slope is walked up only
             for aware in (False, True):
                 name = f"cassie-slope-{deg}-{way}" + ("-aware" if aware else "")
                 out.append(_terrain(name, f"slope:{sign * deg}", 0.5, 15.0, f"{way} a {deg} degree slope", aware))
     return out
 
 
-#: The terrain scenarios of issue #13 (section 3): slopes (both modes), stairs
+#: The terrain scenarios: slopes (both modes), stairs
 #: (terrain-aware), rough ground and waves (blind). Slopes, stairs and waves
 #: start 1 m ahead of the robot (:data:`amlip_qp.sim.terrain.START_X_M`).
 TERRAIN_SCENARIOS: dict[str, Scenario] = {
