@@ -191,10 +191,12 @@ class IterativeIK:
         npose = len(self._pose_rows)
         rates[:npose] = twist[self._pose_rows]
         rates[npose:] = rows.lin_rate @ v
+        lin = rows.lin_q @ q
+        lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
         return {
             "contact_pos": kin.frame_position(cid),
             "contact_rot": kin.frame_rotation(cid),
-            "lin": rows.lin_q @ q,
+            "lin": lin,
             "rates": rates,
         }
 

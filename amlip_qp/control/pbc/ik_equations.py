@@ -17,7 +17,11 @@ Unknown: the full configuration ``q`` (base and all joints). Equations:
    frame's parent joint is actuated and the system would otherwise be
    under-determined (Cassie's stance toe, passive in the paper), its angle
    equals the estimate.
-4. **Springs held at their estimates**: each passive joint that is not in a
+4. **Posture joints held at the stand pose**: each actuated joint outside
+   both legs (a humanoid's waist, arms and head; :attr:`Robot.leg_joint_names
+   <amlip_qp.robots.robot.Robot.leg_joint_names>`) equals its value in the
+   robot's ``stand`` keyframe, with zero rate. Cassie and Rabbit have none.
+5. **Springs held at their estimates**: each passive joint that is not in a
    coupling (Cassie's shins) equals its estimate, and each coupling length
    (Cassie's ``q_knee + q_tarsus``) equals its estimated length, so the
    tarsus moves with the knee as through a rigid achilles rod.
@@ -47,8 +51,20 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 class StanceRows:
     """Per-stance constant parts of the system (built once) and its per-tick buffers."""
 
-    def __init__(self, nv: int, n_out: int, n_pose: int, lin_q: np.ndarray, lin_v: np.ndarray, lin_rate: np.ndarray):
+    def __init__(
+        self,
+        nv: int,
+        n_out: int,
+        n_pose: int,
+        lin_q: np.ndarray,
+        lin_v: np.ndarray,
+        lin_rate: np.ndarray,
+        posture: slice = slice(0, 0),
+        posture_target: np.ndarray | None = None,
+    ):
         self.n_var = n_out + n_pose  # rows that change with q
+        self.posture = posture  # the posture rows among the linear rows
+        self.posture_target = np.zeros(0) if posture_target is None else posture_target  # their held values
         self.lin_q = lin_q  # (n_lin, nq): linear residual rows  L_q q - b
         self.lin_rate = lin_rate  # (n_lin, nv): held rates = lin_rate @ v_est
         self.A = np.zeros((nv, nv))
@@ -91,7 +107,13 @@ class IKEquations:
         self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
             r for r in springs if r.kind == "coupling"
         )
-        n_fixed = len(self.pose_rows) + len(self.held_springs)
+        # Posture joints: actuated, in neither leg; held at the stand pose.
+        legs = {name for side in robot.foot_sides for name in robot.leg_joint_names.get(side, ())}
+        act = robot.actuated
+        posture = [k for k, name in enumerate(act.joint_names) if name not in legs]
+        self.posture_v = np.array([act.pin_v_idx[k] for k in posture], dtype=int)
+        self.posture_q = np.array([act.pin_q_idx[k] for k in posture], dtype=int)
+        n_fixed = len(self.pose_rows) + len(self.posture_v) + len(self.held_springs)
         need_ankle = nv - (n_out + n_fixed)
         if need_ankle not in (0, 1):
             raise MJCFError(f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates")
@@ -121,6 +143,14 @@ class IKEquations:
                 lq.append(r_q)
                 lv.append(r_v)
                 lr.append(r_v.copy())
+            start = len(lq)
+            for iq, iv in zip(self.posture_q, self.posture_v):
+                r_q, r_v = np.zeros(nq), np.zeros(nv)
+                r_q[iq] = 1.0
+                r_v[iv] = 1.0
+                lq.append(r_q)
+                lv.append(r_v)
+                lr.append(np.zeros(nv))  # held still
             for spring in self.held_springs:
                 lq.append(spring.row_q(nq))
                 lv.append(spring.row_v(nv))
@@ -132,6 +162,8 @@ class IKEquations:
                 np.array(lq).reshape(-1, nq),
                 np.array(lv).reshape(-1, nv),
                 np.array(lr).reshape(-1, nv),
+                slice(start, start + len(self.posture_q)),
+                np.asarray(robot.q_stand, dtype=float)[self.posture_q],
             )
 
     def controlled_actuated(self, stance: str) -> np.ndarray:
