@@ -54,6 +54,9 @@ def installed(tmp_path_factory) -> Iterator[tuple[Path, Path, dict[str, str]]]:
         names = set(zf.namelist())
     data = {"amlip_qp/models/cassie.xml", "amlip_qp/models/rabbit.xml",
             "amlip_qp/codegen/generated/amlip_kernels.c", "amlip_qp/codegen/generated/amlip_kernels.h"}  # fmt: skip
+    for folder in ("unitree_h1", "unitree_g1"):  # every file of the Unitree folders (MJCF, meshes, licence, credits)
+        data |= {f"amlip_qp/models/{p.relative_to(REPO / 'amlip_qp' / 'models').as_posix()}"
+                 for p in (REPO / "amlip_qp" / "models" / folder).rglob("*") if p.is_file()}  # fmt: skip
     assert data <= names, f"package data missing from the wheel: {sorted(data - names)}"
     venv = base / "venv"
     proc = _run([sys.executable, "-m", "venv", str(venv)], base, env, 300)
