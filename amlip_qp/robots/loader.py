@@ -360,11 +360,11 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     name, path, profile = resolve_robot(name_or_path)
     mj_model, pin_model = _compile(path)
     smap = build_state_map(mj_model, pin_model, source=str(path))
+    actuated = _actuators(mj_model, smap, path)  # first: a servo is refused before anything else
     contact, c_mj, c_pin, force, f_mj, f_pin = _sites(mj_model, pin_model, path)
     root_body, root_joints, root_names, is_floating, is_planar = _root(mj_model, path)
     _check_sites_agree(mj_model, pin_model, smap, path)
 
-    actuated = _actuators(mj_model, smap, path)
     jt = mj_model.jnt_type
     joint_names = tuple(
         _name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
