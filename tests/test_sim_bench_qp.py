@@ -116,6 +116,7 @@ def test_the_report_names_every_solver_and_what_is_timed(report):
     for name in report["solvers"]:
         assert f"\n{name} " in table and f"  {name}: " in text
     assert "MuJoCo steps" in text and "not installed" not in text
+    assert report["versions"]["daqp"] in text and "pyqpmad" in report["versions"]
 
 
 def test_a_solver_that_is_not_installed_is_named_and_the_bench_goes_on(walk):

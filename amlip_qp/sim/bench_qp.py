@@ -226,8 +226,8 @@ def bench_solvers(
 
     Returns:
         ``{"solvers": {name: {"median_us", "p99_us", "n", "failures", "ratio_to_warm", "max_dx",
-        "max_violation", "max_cost_excess", "start", "timed"}}, "missing": [lines],
-        "mujoco_step_us", "reference", "reference_eps"}`` (ProxSuite entries also count
+        "max_violation", "max_cost_excess", "start", "timed"}}, "missing": [lines], "versions"
+        (pip package -> version), "mujoco_step_us", "reference", "reference_eps"}`` (ProxSuite entries also count
         ``cold_retries``: failed warm solves retried from scratch, as the tracker does, timing included).
     """
     if not problems:
@@ -265,6 +265,7 @@ def bench_solvers(
     return {
         "solvers": out,
         "missing": missing,
+        "versions": qp_solver_list.versions(present),
         "mujoco_step_us": float(np.median(steps_us)) if steps_us else None,
         "reference": f"ProxQP re-initialised at eps_abs {tightest:g}"
         + (f" ({used[tightest]} problems; up to {loosest:g} for the rest)" if loosest != tightest else ""),

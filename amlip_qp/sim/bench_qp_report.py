@@ -52,11 +52,11 @@ def format_report(report: dict) -> str:
     step = report.get("mujoco_step_us")
     lines = [f"{report['n_problems']} tracker QPs replayed from {report['scenario']}"] if "scenario" in report else []
     lines.append(
-        f"{'solver':<16}{'median µs':>10}{'p99 µs':>10}{'x warm':>8}{'steps':>7}"
+        f"{'solver':<16}{'median µs':>10}{'p99 µs':>10}{'x warm':>8}{'steps':>9}"
         f"{'max|dx|':>9}{'max viol':>10}{'cost+':>9}{'fails':>6}"
     )
     for name, s in report["solvers"].items():
-        steps = f"{s['median_us'] / step:>7.2f}" if step else f"{'-':>7}"
+        steps = f"{s['median_us'] / step:>9.2f}" if step else f"{'-':>9}"
         lines.append(
             f"{name:<16}{s['median_us']:>10.1f}{s['p99_us']:>10.1f}{s['ratio_to_warm']:>8.2f}{steps}"
             f"{_g(s['max_dx']):>9}{_g(s['max_violation']):>10}{_g(s['max_cost_excess']):>9}{s['failures']:>6d}"
@@ -69,6 +69,9 @@ def format_report(report: dict) -> str:
     lines.append("timed per problem (the solver's own format is built before the timed call):")
     for name, s in report["solvers"].items():
         lines.append(f"  {name}: {s['timed']}; start: {s['start']}")
+    versions = report.get("versions")
+    if versions:
+        lines.append("versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()))
     t = report.get("tick_us")
     if t:
         lines.append(

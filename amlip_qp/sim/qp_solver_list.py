@@ -120,6 +120,19 @@ def available(spec: SolverSpec) -> bool:
     return spec.backend in qpsolvers.available_solvers
 
 
+def versions(specs: tuple[SolverSpec, ...] | list[SolverSpec]) -> dict[str, str]:
+    """``{pip package: installed version}`` of ``specs`` (each package once)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out: dict[str, str] = {}
+    for spec in specs:
+        try:
+            out.setdefault(spec.pip, version(spec.pip))
+        except PackageNotFoundError:
+            out.setdefault(spec.pip, "unknown")
+    return out
+
+
 def missing_line(spec: SolverSpec) -> str:
     """The report's line for a solver that is not installed."""
     return f"not installed: {spec.name} (pip install {spec.pip})"
