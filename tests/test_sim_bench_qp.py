@@ -20,7 +20,7 @@ from amlip_qp.sim.qp_solver_list import SolverSpec
 #: The solvers of the `test` extra (pyproject.toml), each driven through its own interface.
 TEST_EXTRA_SOLVERS = "proxsuite-init,daqp-hot,daqp-cold,piqp,clarabel,qpalm,quadprog,qpmad,osqp"
 #: Active-set solvers: their x matches the reference's to this (the reference stops at 1e-12), and
-#: their cost exceeds the reference's by at most this (the costs are -2e3 to -4e4).
+#: their cost exceeds the reference's by at most this (the optimal costs are of order -1e3 to -1e4).
 EXACT, EXACT_DX, EXACT_COST = ("daqp-hot", "daqp-cold", "quadprog", "qpmad"), 1e-5, 1e-6
 #: Interior-point solvers (their own duality-gap tolerances): cost excess at most this.
 INTERIOR, INTERIOR_COST = ("piqp", "clarabel"), 1e-3
