@@ -106,7 +106,8 @@ class DAQPRunner(Runner):
         self.timed = "Model.update + Model.solve" if hot else "daqp.solve (set-up + solve)"
         self._model: Any = None
 
-    prepare = staticmethod(_daqp_data)  # type: ignore[assignment]
+    def prepare(self, p: QPProblem) -> tuple:
+        return _daqp_data(p)
 
     def solve(self, data: tuple) -> np.ndarray | None:
         H, f, A, bu, bl, sense = data
