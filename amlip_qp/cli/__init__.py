@@ -57,11 +57,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--calls", type=positive_int, default=20000, help="timed calls per path (default 20000)")
     b.set_defaults(func=handler("amlip_qp.codegen.cli:run_bench"))
     b = bench.add_parser(
-        "qp", help="replay recorded Cassie tracker QPs: warm ProxQP vs re-initialised vs qpsolvers backends"
+        "qp", help="replay recorded Cassie tracker QPs through every installed QP solver, against the tracker's ProxQP"
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument("--ticks", type=positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
+    b.add_argument(
+        "--solvers",
+        default=None,
+        metavar="NAMES",
+        help="comma-separated solvers to compare with the tracker's warm ProxQP (default: every one installed)",
+    )
     b.set_defaults(func=handler("amlip_qp.sim.bench_qp:run_bench"))
     b = bench.add_parser(
         "ekf", help="the invariant EKF's cost inside the closed loop, against the rest of the QP tracker's tick"
