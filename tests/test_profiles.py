@@ -19,7 +19,7 @@ from amlip_qp.sim.scenarios import SCENARIOS
 def test_registry_names_match_their_profiles_and_model_files_exist():
     from amlip_qp.paths import MODELS_DIR
 
-    assert ROBOT_NAMES == ("cassie", "rabbit")
+    assert ROBOT_NAMES == ("cassie", "g1", "h1", "rabbit")
     for name, profile in PROFILES.items():
         assert profile.name == name and get_profile(name) is profile
         assert profile.source == MODELS_DIR / f"{name}.toml" and profile.model.path.is_file()
@@ -29,7 +29,7 @@ def test_registry_names_match_their_profiles_and_model_files_exist():
 
 
 def test_unknown_robot_names_the_known_ones():
-    with pytest.raises(UnknownRobotError, match="known robots: cassie, rabbit"):
+    with pytest.raises(UnknownRobotError, match="known robots: cassie, g1, h1, rabbit"):
         get_profile("atlas")
 
 
@@ -40,10 +40,13 @@ def test_tracker_configurations_import_and_have_the_robot_layout(name):
 
     profile = get_profile(name)
     qp = profile.tracker_config("qp")
-    assert isinstance(qp, QPConfig) and isinstance(profile.tracker_config("pbc"), PBCGains)
-    n_outputs = {"cassie": 9, "rabbit": 4}[name]
+    trackers = {"g1": "qp"}.get(name, "pbc, qp")  # G1's PBC: see its profile
+    assert isinstance(qp, QPConfig) and ", ".join(sorted(profile.trackers)) == trackers
+    if "pbc" in profile.trackers:
+        assert isinstance(profile.tracker_config("pbc"), PBCGains)
+    n_outputs = {"rabbit": 4}.get(name, 9)
     assert len(qp.output_kp) == len(qp.output_kd) == len(qp.output_weight) == n_outputs
-    with pytest.raises(InputError, match="no 'mpc' tracker configuration; known: pbc, qp"):
+    with pytest.raises(InputError, match=f"no 'mpc' tracker configuration; known: {trackers}"):
         profile.tracker_config("mpc")
 
 
@@ -61,8 +64,10 @@ def test_every_named_scenario_is_inside_its_robot_bounds():
 
 
 def test_compare_ranges_are_inside_the_bounds():
-    for profile in PROFILES.values():
-        assert profile.compare is not None and profile.compare.nominal_scenario in SCENARIOS
+    compared = [p for p in PROFILES.values() if p.compare is not None]
+    assert [p.name for p in compared] == ["cassie", "h1", "rabbit"]
+    for profile in compared:
+        assert profile.compare.nominal_scenario in SCENARIOS
         assert profile.compare.ramp_end_mps <= profile.bounds.vx_mps[1]
         assert profile.compare.push_max_impulse_Ns <= profile.bounds.push_impulse_max_Ns
 

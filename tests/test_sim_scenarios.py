@@ -118,12 +118,20 @@ def test_check_scenario_names_the_bound(robot, changes, needle):
 def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_setting():
     from dataclasses import replace
 
+    from amlip_qp.sim.plant_modifiers import PlantModifiers
     from amlip_qp.sim.run_types import PlantSetting
-    from amlip_qp.sim.scenarios import CLOSED_CHAIN_EKF, MISMATCHES, TERRAIN_SCENARIOS, ideal_scenarios
+    from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS, ideal_scenarios
 
+    CLOSED_CHAIN_EKF = PlantSetting("cassie-closed-chain", "robot", "ekf")
+    MISMATCHES = {
+        "mass-0.8": PlantModifiers(mass_scale=0.8),
+        "mass-1.2": PlantModifiers(mass_scale=1.2),
+        "payload-5kg": PlantModifiers(payload_kg=5.0, payload_pos_m=(-0.10, 0.0, 0.0)),
+        "friction-0.5": PlantModifiers(friction=0.5),
+        "delay-1": PlantModifiers(actuator_delay_ticks=1),
+    }
     ideal = ideal_scenarios()
-    assert ideal == [n for n, s in SCENARIOS.items() if "-cc-ekf" not in n and n not in TERRAIN_SCENARIOS]
-    assert CLOSED_CHAIN_EKF == PlantSetting("cassie-closed-chain", "robot", "ekf")
+    assert ideal == [n for n, s in SCENARIOS.items() if "-ekf" not in n and n not in TERRAIN_SCENARIOS]
     for name in ideal:
         twin = SCENARIOS.get(f"{name}-cc-ekf")
         if SCENARIOS[name].robot != "cassie":
@@ -134,7 +142,9 @@ def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_
         assert replace(twin, name=name, setting=PlantSetting(), description="") == replace(
             SCENARIOS[name], description=""
         )
-    assert set(MISMATCHES) == {"mass-0.8", "mass-1.2", "payload-5kg", "friction-0.5", "delay-1"}
+    assert {n for n in SCENARIOS if n.startswith("cassie-1mps-cc-ekf-")} == {
+        f"cassie-1mps-cc-ekf-{key}" for key in MISMATCHES
+    }
     payload = SCENARIOS["cassie-1mps-cc-ekf-payload-5kg"].setting.modifiers
     assert (payload.payload_kg, payload.payload_pos_m) == (5.0, (-0.10, 0.0, 0.0))  # 10 cm behind the pelvis
     for key, mods in MISMATCHES.items():

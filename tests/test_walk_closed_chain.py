@@ -1,12 +1,12 @@
 """Acceptance on a plant the controller was not built from.
 
 Every Cassie acceptance scenario runs on the hardware-like setting
-:data:`~amlip_qp.sim.scenarios.CLOSED_CHAIN_EKF` -- the closed-chain plant
+Cassie's ``cc-ekf`` setting (its profile's ``[settings.cc-ekf]``) -- the closed-chain plant
 (achilles and plantar rods closed by equality constraints), the robot's own
 sensors (IMU with noise and drifting biases, quantised encoders, noisy contact
 switches; no base state) and the contact-aided invariant EKF -- with both
 trackers, and the QP tracker also walks ``cassie-1mps-cc-ekf`` for 10 s under
-each model mismatch of :data:`~amlip_qp.sim.scenarios.MISMATCHES`. The
+each model mismatch of its profile's ``[mismatches]``. The
 thresholds are those of the ideal acceptance (tests/test_walk_pbc.py and
 tests/test_walk_qp.py). Mean speed = mean CoM velocity over the last 3 s in
 the heading frame, from the simulator's truth.

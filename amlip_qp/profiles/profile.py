@@ -185,6 +185,11 @@ class RobotProfile:
         joint_roles: Role (:data:`JOINT_ROLES`) -> the file's joint name, with ``{side}``.
         feet: The feet.
         description: One line for people.
+        scenarios: Scenario name (without the robot's prefix) -> its table: the robot's named
+            scenarios (:mod:`amlip_qp.sim.scenario_tables` builds them, and checks their keys).
+        settings: Setting name -> its table: plants, sensors and estimators the robot's
+            scenarios are copied onto (each copy named ``SCENARIO-SETTING``).
+        mismatches: Name -> table of plant modifiers: copies of one scenario under model mismatch.
     """
 
     name: str
@@ -202,6 +207,9 @@ class RobotProfile:
     joint_roles: Mapping[str, str] = field(default_factory=dict)
     feet: FootSpec = field(default_factory=FootSpec)
     description: str = ""
+    scenarios: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    mismatches: Mapping[str, Any] = field(default_factory=dict)
     _built: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property

@@ -332,6 +332,10 @@ def read_profile(path: str | Path) -> RobotProfile:
     if imu_t is not None:
         imu = imu_t.vector("pos_in_base_m", 3, unit="m")
         imu_t.done()
+    raw = {}
+    for key in ("scenarios", "settings", "mismatches"):  # checked key by key by amlip_qp.sim.scenario_tables
+        t = top.table(key, required=False)
+        raw[key] = {} if t is None else t.data
     profile = RobotProfile(
         name=name,
         source=source,
@@ -348,6 +352,9 @@ def read_profile(path: str | Path) -> RobotProfile:
         joint_roles=_roles(top.table("roles", required=False)),
         feet=_feet(top.table("feet", required=False)),
         description=description,
+        scenarios=raw["scenarios"],
+        settings=raw["settings"],
+        mismatches=raw["mismatches"],
     )
     top.done()
     if planar != (gait.step_width_m == 0.0):

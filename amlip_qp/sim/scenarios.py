@@ -1,24 +1,24 @@
 """Walking scenarios: commands over time, pushes, durations, and the plant they run on.
 
 A :class:`Scenario` is everything a run needs besides the robot and the
-tracker. The named scenarios of :data:`SCENARIOS` are the acceptance
-scenarios; the CLI, the examples, the comparison and
-the tests all take them from here. Each ideal Cassie scenario also exists on
-the hardware-like setting :data:`CLOSED_CHAIN_EKF` (name suffix ``-cc-ekf``),
-and ``cassie-1mps-cc-ekf`` also under each model mismatch of
-:data:`MISMATCHES`.
+tracker. The named scenarios of :data:`SCENARIOS` are data of the robots'
+profiles (``[scenarios]`` tables, :mod:`amlip_qp.sim.scenario_tables`): the
+acceptance scenarios; the CLI, the examples, the comparison and the tests all
+take them from here. A profile's ``[settings]`` copy its scenarios onto other
+plants, sensors and estimators (Cassie's ``-cc-ekf``: the closed-chain plant,
+the robot's sensors, the invariant EKF), and its ``[mismatches]`` copy one
+scenario under model mismatch.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 
 from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError, UnknownRobotError
 from amlip_qp.profiles import CommandShaping, GaitSettings, RobotProfile, get_profile
-from amlip_qp.sim.plant_modifiers import PlantModifiers
 from amlip_qp.sim.run_types import PlantSetting, Push
 from amlip_qp.sim.speed_profile import SpeedProfile
 
@@ -152,159 +152,40 @@ class Scenario:
         return replace(self, **changes)
 
 
-def _ramp(v_end: float, t_ramp: float, t0: float = 1.0) -> SpeedProfile:
-    return SpeedProfile((0.0, t0, t0 + t_ramp), (0.0, 0.0, v_end))
+class _Scenarios(Mapping[str, "Scenario"]):
+    """Named scenarios by name, built from the bundled profiles' tables on first use (read-only).
+
+    ``only`` keeps those a predicate accepts (the terrain scenarios)."""
+
+    def __init__(self, only: Callable[[Scenario], bool] | None = None):
+        self._only = only
+        self._items: dict[str, Scenario] | None = None
+
+    def _all(self) -> dict[str, Scenario]:
+        if self._items is None:
+            from amlip_qp.profiles import bundled_names
+            from amlip_qp.sim.scenario_tables import profile_scenarios
+
+            items = {s.name: s for name in bundled_names() for s in profile_scenarios(get_profile(name))}
+            self._items = {k: v for k, v in items.items() if self._only is None or self._only(v)}
+        return self._items
+
+    def __getitem__(self, name: str) -> Scenario:
+        return self._all()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._all())
+
+    def __len__(self) -> int:
+        return len(self._all())
 
 
-#: The acceptance scenarios: what both trackers must walk on each robot's own model.
-SCENARIOS: dict[str, Scenario] = {
-    s.name: s
-    for s in (
-        Scenario("cassie-in-place", "cassie", 20.0, description="Cassie walks in place for 20 s"),
-        Scenario("cassie-1mps", "cassie", 10.0, vx=_ramp(1.0, 2.0), description="Cassie walks at 1.0 m/s"),
-        Scenario(
-            "cassie-ramp-2.1",
-            "cassie",
-            15.0,
-            vx=SpeedProfile((0.0, 10.0), (0.0, 2.1)),
-            description="Cassie ramps from 0 to 2.1 m/s over 10 s and holds it",
-        ),
-        Scenario(
-            "cassie-turn-90",
-            "cassie",
-            12.0,
-            vx=_ramp(0.75, 1.5),
-            turn_rate_radps=math.radians(18.0),
-            turn_start_s=3.0,
-            turn_angle_rad=math.radians(90.0),
-            description="Cassie turns 90 degrees at 0.75 m/s",
-        ),
-        Scenario(
-            "cassie-diagonal",
-            "cassie",
-            10.0,
-            vx=_ramp(0.5, 1.5),
-            vy_mps=0.3,
-            description="Cassie walks diagonally, 0.5 m/s forward and 0.3 m/s sideways",
-        ),
-        Scenario(
-            "cassie-push",
-            "cassie",
-            10.0,
-            vx=_ramp(1.0, 2.0),
-            pushes=(Push(6.0, (100.0, 0.0, 0.0), 0.2),),
-            description="Cassie at 1 m/s takes a 100 N sagittal push for 0.2 s",
-        ),
-        Scenario(
-            "cassie-2.5mps",
-            "cassie",
-            16.0,
-            vx=SpeedProfile((0.0, 1.0, 13.0), (0.0, 0.0, 2.5)),
-            gait=GaitSettings(step_time_s=0.25, com_height_m=0.80, clearance_m=0.10, step_width_m=0.25),
-            description="Cassie ramps from 0 to 2.5 m/s over 12 s and holds it (shorter steps, T = 0.25 s, "
-            "as the paper used a higher step frequency for fast walking)",
-        ),
-        Scenario("rabbit-0.5mps", "rabbit", 20.0, vx=_ramp(0.5, 2.0), description="Rabbit walks at 0.5 m/s"),
-        Scenario("rabbit-1mps", "rabbit", 20.0, vx=_ramp(1.0, 3.0), description="Rabbit walks at 1.0 m/s"),
-    )
-}
+#: The named scenarios of every bundled robot (each profile's ``[scenarios]``, ``[settings]`` and
+#: ``[mismatches]`` tables, :mod:`amlip_qp.sim.scenario_tables`), by name ``ROBOT-KEY``.
+SCENARIOS: Mapping[str, Scenario] = _Scenarios()
 
-#: The hardware-like setting, a plant the controller was not built from: the closed-chain Cassie plant
-#: (achilles and plantar rods closed by equality constraints), the robot's own sensors (IMU,
-#: encoders, contact switches; no base state) and the contact-aided invariant EKF.
-CLOSED_CHAIN_EKF = PlantSetting(plant="cassie-closed-chain", sensors="robot", estimator="ekf")
-
-#: Model mismatches under which the QP tracker must still walk ``cassie-1mps-cc-ekf``: name suffix -> modifiers.
-MISMATCHES: dict[str, PlantModifiers] = {
-    "mass-0.8": PlantModifiers(mass_scale=0.8),
-    "mass-1.2": PlantModifiers(mass_scale=1.2),
-    "payload-5kg": PlantModifiers(payload_kg=5.0, payload_pos_m=(-0.10, 0.0, 0.0)),
-    "friction-0.5": PlantModifiers(friction=0.5),
-    "delay-1": PlantModifiers(actuator_delay_ticks=1),
-}
-_MISMATCH_TEXT = {
-    "mass-0.8": "every plant body's mass and inertia x0.8",
-    "mass-1.2": "every plant body's mass and inertia x1.2",
-    "payload-5kg": "a 5 kg payload 10 cm behind the pelvis",
-    "friction-0.5": "foot-floor friction 0.5",
-    "delay-1": "a 1-tick (0.5 ms) actuator delay",
-}
-
-
-def _on_closed_chain(s: Scenario) -> Scenario:
-    return s.with_(
-        name=f"{s.name}-cc-ekf",
-        setting=CLOSED_CHAIN_EKF,
-        description=f"{s.description}; closed-chain plant, robot sensors, invariant EKF",
-    )
-
-
-SCENARIOS.update({c.name: c for c in [_on_closed_chain(s) for s in SCENARIOS.values() if s.robot == "cassie"]})
-SCENARIOS.update(
-    {
-        f"cassie-1mps-cc-ekf-{key}": SCENARIOS["cassie-1mps-cc-ekf"].with_(
-            name=f"cassie-1mps-cc-ekf-{key}",
-            setting=replace(CLOSED_CHAIN_EKF, modifiers=mods),
-            description=f"{SCENARIOS['cassie-1mps-cc-ekf'].description}; {_MISMATCH_TEXT[key]}",
-        )
-        for key, mods in MISMATCHES.items()
-    }
-)
-
-
-def _terrain(
-    name: str, terrain: str, vx_mps: float, duration_s: float, text: str, aware: bool = False, clearance_m=None
-) -> Scenario:
-    mode = "terrain-aware" if aware else "blind"
-    return Scenario(
-        name,
-        "cassie",
-        duration_s,
-        vx=_ramp(vx_mps, max(1.0, vx_mps / 0.5)),  # no faster than Cassie's 0.5 m/s^2 command shaping
-        setting=PlantSetting(terrain=terrain, terrain_aware=aware, clearance_m=clearance_m),
-        description=f"Cassie walks {text} at {vx_mps:g} m/s ({mode})",
-    )
-
-
-def _slopes() -> list[Scenario]:
-    out = []
-    for deg in (10, 15, 22):
-        for way, sign in (("up", 1), ("down", -1)):
-            if deg == 22 and way == "down":
-                continue  # the 22 degree slope is walked up only
-            for aware in (False, True):
-                name = f"cassie-slope-{deg}-{way}" + ("-aware" if aware else "")
-                out.append(_terrain(name, f"slope:{sign * deg}", 0.5, 15.0, f"{way} a {deg} degree slope", aware))
-    return out
-
-
-#: The terrain scenarios: slopes (both modes), stairs
-#: (terrain-aware), rough ground and waves (blind). Slopes, stairs and waves
-#: start 1 m ahead of the robot (:data:`amlip_qp.sim.terrain.START_X_M`).
-TERRAIN_SCENARIOS: dict[str, Scenario] = {
-    s.name: s
-    for s in (
-        *_slopes(),
-        _terrain(
-            "cassie-stairs-10cm",
-            "stairs:0.1:0.3",
-            0.4,
-            14.0,
-            "up 4 stairs of 10 cm rise and 30 cm run, across a 1 m landing and down 4 stairs",
-            aware=True,
-        ),
-        _terrain("cassie-rough-4cm", "rough:0.04", 0.75, 20.0, "on rough ground of +-4 cm"),
-        _terrain(
-            "cassie-waves-30cm",
-            "waves:0.3:4",
-            0.75,
-            15.0,
-            "over 30 cm high waves of 4 m wavelength with 20 cm swing clearance",
-            clearance_m=0.2,
-        ),
-    )
-}
-SCENARIOS.update(TERRAIN_SCENARIOS)
+#: The named scenarios with a terrain (slopes, stairs, rough ground, waves).
+TERRAIN_SCENARIOS: Mapping[str, Scenario] = _Scenarios(lambda s: s.setting.terrain != "flat")
 
 
 def ideal_scenarios() -> list[str]:

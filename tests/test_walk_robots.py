@@ -1,0 +1,137 @@
+"""Closed-loop acceptance of the robots beyond Cassie and Rabbit, from their profiles alone.
+
+Each bundled humanoid walks its named scenarios (its profile's ``[scenarios]``) with the
+thresholds of Cassie's acceptance (``tests/test_walk_qp.py``): no fall and no fallback tick,
+the commanded speed over the last 3 s within 0.15 m/s (0.1 m/s on the diagonal), walking in
+place with less than 0.3 m of drift, a 90 degree turn travelled along the new heading, still
+walking forward after a push. Every run happens once (module-scoped fixture, two worker
+processes) and the tests read its summary numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.slow
+
+#: key -> (scenario name, tracker, duration s or None for the scenario's own)
+RUNS: dict[str, tuple[str, str, float | None]] = {
+    "h1-in-place/qp": ("h1-in-place", "qp", None),  # 20 s
+    "h1-ramp-1.5/qp": ("h1-ramp-1.5", "qp", None),  # 15 s: 1.5 m/s from 10 s
+    "h1-turn-90/qp": ("h1-turn-90", "qp", None),  # 12 s: 90 deg done at 8 s
+    "h1-1mps-ekf/qp": ("h1-1mps-ekf", "qp", None),  # 10 s, robot sensors and the EKF
+    "h1-push/qp": ("h1-push", "qp", 8.5),  # push 6.0-6.2 s, then 2.3 s
+    "h1-diagonal/qp": ("h1-diagonal", "qp", 8.0),  # command reached at 2.5 s
+    "h1-1mps/qp": ("h1-1mps", "qp", None),  # 10 s
+    "h1-in-place/pbc": ("h1-in-place", "pbc", None),
+    "h1-ramp-1.5/pbc": ("h1-ramp-1.5", "pbc", None),
+    "h1-turn-90/pbc": ("h1-turn-90", "pbc", None),
+    "h1-1mps-ekf/pbc": ("h1-1mps-ekf", "pbc", None),
+    "h1-push/pbc": ("h1-push", "pbc", 8.5),
+    "h1-diagonal/pbc": ("h1-diagonal", "pbc", 8.0),
+    "h1-1mps/pbc": ("h1-1mps", "pbc", None),
+}
+
+
+def _run(key: str) -> dict:
+    """Run one entry of RUNS; summary numbers only (picklable)."""
+    from amlip_qp.sim.factory import build_simulation, load, tracker_class
+    from amlip_qp.sim.scenarios import SCENARIOS
+
+    name, tracker_name, duration = RUNS[key]
+    sc = SCENARIOS[name]
+    if duration is not None:
+        sc = sc.with_(duration_s=duration)
+    tracker = tracker_class(tracker_name)(load(sc.robot))
+    sim = build_simulation(sc, tracker)
+    res = sim.run(sc.duration_s)
+    log = res.log
+    last = log["t"] > log["t"][-1] - 3.0
+    D = log["heading"][last]
+    vel = log["com_vel"][last]
+    return {
+        "duration_s": float(sc.duration_s),
+        "final_vx_mps": float(sc.vx.final_mps),
+        "cmd_vy_mps": float(sc.vy_mps),
+        "fell": bool(res.fell),
+        "sim_time_s": float(res.sim_time_s),
+        "vx_mps": float(np.mean(vel[:, 0] * np.cos(D) + vel[:, 1] * np.sin(D))),
+        "vy_mps": float(np.mean(-vel[:, 0] * np.sin(D) + vel[:, 1] * np.cos(D))),
+        "drift_m": float(np.linalg.norm(log["com"][-1, :2] - log["com"][0, :2])),
+        "travel_dir_rad": float(np.arctan2(np.mean(vel[:, 1]), np.mean(vel[:, 0]))),
+        "vx_last_1_5s_mps": float(np.mean(log["com_vel"][log["t"] > log["t"][-1] - 1.5, 0])),
+        "heading_end_rad": float(log["heading"][-1]),
+        "yaw_end_rad": float(np.unwrap(log["base_yaw"])[-1]),
+        "fallback_ticks": int(res.fallback_ticks),
+        "tau_finite": bool(np.all(np.isfinite(log["tau"]))),
+        "tau_within_limits": bool(
+            np.all(np.abs(log["tau"]) <= np.max(np.abs(tracker.robot.actuated.torque_limit_Nm), axis=1) + 1e-9)
+        ),
+    }
+
+
+@pytest.fixture(scope="module")
+def results() -> dict:
+    keys = list(RUNS)
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        return dict(zip(keys, pool.map(_run, keys)))
+
+
+def _walked(r: dict) -> None:
+    assert not r["fell"], f"fell at t = {r['sim_time_s']:.2f} s"
+    assert r["sim_time_s"] >= r["duration_s"] - 1e-6
+    assert r["tau_finite"] and r["tau_within_limits"]
+    assert r["fallback_ticks"] == 0
+
+
+def _speed_ok(r: dict, tol: float = 0.15) -> None:
+    assert abs(r["vx_mps"] - r["final_vx_mps"]) < tol, f"forward {r['vx_mps']:.3f} m/s, commanded {r['final_vx_mps']}"
+    assert abs(r["vy_mps"] - r["cmd_vy_mps"]) < tol, f"lateral {r['vy_mps']:.3f} m/s, commanded {r['cmd_vy_mps']}"
+
+
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+def test_h1_walks_in_place_20s_with_small_drift(results, tracker):
+    r = results[f"h1-in-place/{tracker}"]
+    _walked(r)
+    assert r["duration_s"] == 20.0
+    assert r["drift_m"] < 0.3, f"drift {r['drift_m']:.3f} m"
+    assert abs(math.degrees(r["yaw_end_rad"])) < 10.0, f"pelvis yaw {math.degrees(r['yaw_end_rad']):.1f} deg"
+
+
+@pytest.mark.parametrize("key", ["h1-1mps", "h1-ramp-1.5", "h1-1mps-ekf"])
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+def test_h1_walks_at_the_commanded_speed(results, key, tracker):
+    """1.0 m/s for 10 s (also with the robot's sensors and the EKF); 0 -> 1.5 m/s over 10 s, held 5 s."""
+    r = results[f"{key}/{tracker}"]
+    _walked(r)
+    _speed_ok(r)
+
+
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+def test_h1_walks_diagonally(results, tracker):
+    r = results[f"h1-diagonal/{tracker}"]
+    _walked(r)
+    _speed_ok(r, tol=0.1)
+
+
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+def test_h1_turns_90_degrees_at_walking_speed(results, tracker):
+    r = results[f"h1-turn-90/{tracker}"]
+    _walked(r)
+    assert abs(math.degrees(r["heading_end_rad"]) - 90.0) < 0.5
+    err = r["travel_dir_rad"] - r["heading_end_rad"]
+    assert abs(err) < math.radians(5.0), f"travel {math.degrees(r['travel_dir_rad']):.1f} deg"
+    _speed_ok(r)
+    yaw_err = math.degrees(r["yaw_end_rad"] - r["heading_end_rad"])
+    assert abs(yaw_err) < 10.0, f"pelvis yaw {yaw_err:.1f} deg off the heading"
+
+
+@pytest.mark.parametrize("tracker", ["qp", "pbc"])
+def test_h1_survives_a_150N_sagittal_push_at_1mps(results, tracker):
+    r = results[f"h1-push/{tracker}"]
+    _walked(r)
+    assert r["vx_last_1_5s_mps"] > 0.5
