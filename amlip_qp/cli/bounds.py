@@ -47,8 +47,8 @@ MAX_ACCEL_LIMIT_MPS2 = 100.0
 
 #: Largest ``walk --video-fps``, frames per s: 240. The video plays in real time, and 240 Hz is the
 #: refresh rate of the fastest common displays: more frames are never shown, yet each is rendered and
-#: encoded, once a control tick at most (a 0.5 s walk at 1e9 frames/s rendered 1,000 frames in 97 s). A ``.gif``
-#: allows at most 100 (its frame delays are whole hundredths of a second). The same as
+#: encoded, up to one a control tick (a 0.5 s walk at 1e9 frames/s rendered 1,000 frames in 97 s).
+#: A ``.gif`` allows at most 100 (its frame delays are whole hundredths of a second). The same as
 #: ``amlip_qp.sim.video.MAX_VIDEO_FPS``.
 MAX_VIDEO_FPS = 240.0
 

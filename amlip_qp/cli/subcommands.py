@@ -84,8 +84,8 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         metavar="S",
-        help="scale the mass and inertia of every plant body (0.1 <= S <= 10: below 0.1 the closed-chain "
-        "plant's rods are lighter than the rotor inertias they drive and its simulation diverges)",
+        help="scale the mass and inertia of every plant body (0.1 <= S <= 10: at 0.01 the closed-chain "
+        "plant's simulation diverges)",
     )
     m.add_argument(
         "--payload",

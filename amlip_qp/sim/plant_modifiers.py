@@ -33,9 +33,11 @@ SpecEdit = Callable[[mujoco.MjSpec], None]
 #: plants cassie and cassie-closed-chain, MuJoCo 4.0.1:
 #:
 #: - mass scale ``[0.1, 10]``: at 0.01 the closed-chain plant diverges (mean base speed 32 m/s over
-#:   its 0.13 s; 418 m/s at 0.001): its 0.12-0.19 kg rods, cranks and spring links become far lighter
-#:   than the unscaled rotor inertias and springs they carry. From 0.1 to 10 both plants walk, or fall
-#:   at walking speeds (a mismatch the controller does not survive is a result, not an error).
+#:   its 0.13 s; 418 m/s at 0.001): the bodies of its loops (rods, cranks, spring links of 0.12-0.19 kg)
+#:   weigh grams there, while the springs and the rotor inertias keep their values. From 0.1 to 10 both
+#:   plants walk, or fall at walking speeds (a mismatch the controller does not survive is a result,
+#:   not an error); unactuated from the stand keyframe, they fall without MuJoCo's instability warning
+#:   at the bounds and with it past them (``tests/test_sim_plant_modifiers.py``).
 #: - spring scale ``[0, 10]``: 0 removes the springs (a limp plant); at 10 Cassie's knee and heel
 #:   springs (1500 and 1250 N m/rad) deflect ten times less under the body weight, near rigid.
 #:   MuJoCo's explicit springs diverge at the 0.5 ms step from 200 x on the closed chain (it falls at

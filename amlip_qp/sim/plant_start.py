@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 STAND_KEYFRAME = "stand"
 #: Largest equality residual of a settled pose: m for positional rows (a ``connect``), rad for angular ones.
 SETTLED_TOL = 1e-10
-#: Gauss-Newton iterations before the loops count as not closable (a closable pose takes about 5).
+#: Gauss-Newton iterations before the loops count as not closable (the closed-chain Cassie takes 10).
 MAX_ITERATIONS = 50
 #: Largest joint motion of one Gauss-Newton step, rad or m (keeps the first steps on the nearby branch).
 MAX_STEP = 0.5
