@@ -70,8 +70,9 @@ def test_report_names_the_backends_that_are_not_installed():
 @pytest.mark.parametrize(
     "argv, needle",
     [
-        (["bench", "qp", "--ticks", "0"], "expected a positive integer"),
-        (["bench", "qp", "--ticks", "many"], "expected a positive integer"),
+        (["bench", "qp", "--ticks", "0"], "expected a number of ticks in [1, 20000], got 0"),
+        (["bench", "qp", "--ticks", "many"], "expected a number of ticks in [1, 20000], got 'many'"),
+        (["bench", "qp", "--ticks", "20001"], "expected a number of ticks in [1, 20000], got 20001"),
         (["bench", "qp", "--scenario", "moonwalk"], "unknown scenario 'moonwalk'"),
     ],
 )
