@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -53,6 +54,34 @@ def check_output_path(option: str, path: str | None, create_folder: bool = False
             raise PermissionError(13, "Permission denied")
     except OSError as exc:
         raise InputError(f"{option} {path}: cannot write there ({exc.strerror or exc}); give a writable path") from None
+
+
+def check_output_folder(option: str, path: str) -> None:
+    """Refuse, before any work, an output folder ``path`` that cannot be written; create it if missing.
+
+    A missing folder is created with its parents; an existing one must be a
+    folder in which a file can be created (a probe file is created and removed).
+
+    Raises:
+        InputError: Naming ``option``, the path and what to do.
+    """
+    folder = Path(path).expanduser()
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{option} {path}: is a file, not a folder; give a folder path")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(
+            f"{option} {path}: cannot create the folder ({exc.strerror or exc}); give a writable folder"
+        ) from None
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".amlip-qp-probe-", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InputError(
+            f"{option} {path}: cannot write there ({exc.strerror or exc}); give a writable folder"
+        ) from None
 
 
 @contextlib.contextmanager

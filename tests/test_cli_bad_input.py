@@ -8,14 +8,18 @@ a slow test. Two cases run in a real subprocess to see stderr exactly.
 
 from __future__ import annotations
 
+import argparse
+import struct
 import subprocess
 import sys
+import zlib
 
 import numpy as np
 import pytest
 
 from amlip_qp import cli
 from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.exceptions import InputError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim import factory
 
@@ -29,9 +33,11 @@ def _simulated(*args, **kwargs):
 
 @pytest.fixture
 def no_simulation(monkeypatch):
-    """Make every way of simulating (walk, compare, bench codegen, bench qp) fail the test."""
+    """Make every way of simulating (walk, compare, the benchmarks) or generating code fail the test."""
     from amlip_qp.codegen import bench as codegen_bench
-    from amlip_qp.sim import compare
+    from amlip_qp.codegen import generate
+    from amlip_qp.sim import bench_ekf, bench_harness, compare
+    from amlip_qp.sweep import bench as sweep_bench
 
     monkeypatch.setattr(factory, "build_simulation", _simulated)
     monkeypatch.setattr(factory, "run_scenario", _simulated)
@@ -41,6 +47,19 @@ def no_simulation(monkeypatch):
 
     monkeypatch.setattr(bench_qp, "run", _simulated)
     monkeypatch.setattr(bench_qp, "format_report", _simulated)
+    monkeypatch.setattr(bench_ekf, "build_simulation", _simulated)
+    monkeypatch.setattr(bench_harness, "build_simulation", _simulated)
+    monkeypatch.setattr(sweep_bench, "bench_cells", _simulated)
+    monkeypatch.setattr(generate, "generate_files", _simulated)
+    monkeypatch.setattr(generate, "write_files", _simulated)
+
+
+def header_only_png(path, width, height):
+    """A PNG signature and an IHDR chunk of ``width`` x ``height`` 8-bit gray pixels, without image data."""
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    chunk = struct.pack(">I", len(ihdr)) + b"IHDR" + ihdr + struct.pack(">I", zlib.crc32(b"IHDR" + ihdr))
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk)
+    return path
 
 
 def _main(argv, capsys):
@@ -52,7 +71,9 @@ def _main(argv, capsys):
     return code, out, err
 
 
-#: (argv, a piece of the error line). ``{tmp}`` is a fresh folder, ``{file}`` a file in it.
+#: (argv, a piece of the error line). ``{tmp}`` is a fresh folder, ``{file}`` a file in it, ``{bigpng}``
+#: a PNG whose header says 12000 x 12000 pixels and that has no pixel data (so it cannot be decoded:
+#: the refusal comes from the header alone).
 BAD_INPUTS = [
     # outputs that cannot be written, checked before simulating
     (["walk", "--json", "/proc/x"], "--json /proc/x: cannot write"),
@@ -69,7 +90,9 @@ BAD_INPUTS = [
     (["walk", "--plot", "{tmp}/fig.xyz"], "figure file must end in .png, .pdf, .svg"),
     # physical bounds (amlip_qp.profiles)
     (["walk", "--duration", "1e12"], "CommandBounds.duration_max_s"),
-    (["walk", "--accel-limit", "0"], "--accel-limit: expected a positive number"),
+    (["walk", "--accel-limit", "0"], "--accel-limit: expected a number in (0, 100] m/s^2, got '0'"),
+    (["walk", "--accel-limit", "1e3"], "--accel-limit: expected a number in (0, 100] m/s^2, got '1e3'"),
+    (["walk", "--duration", "1e-9"], "duration 1e-09 s is shorter than one control tick (0.0005 s)"),
     (["walk", "--accel-limit", "nan"], "--accel-limit: expected a finite number"),
     (["walk", "--accel-limit", "1", "--no-command-shaping"], "not allowed with argument --accel-limit"),
     (["walk", "--vx", "1e9"], "forward speed 1e+09 m/s is outside cassie's bounds [-1, 2.5] m/s"),
@@ -116,16 +139,19 @@ BAD_INPUTS = [
     (["compare", "--estimator", "kalman"], "argument --estimator: invalid choice"),
     (["compare", "--jobs", "1", "--noise", "--sensors", "robot"], "--sensors robot has its own"),
     # plant modifiers: nonsensical values
-    (["walk", "--plant-mass-scale", "0"], "--plant-mass-scale) must be a number in (0, 10]"),
-    (["walk", "--plant-mass-scale", "nan"], "--plant-mass-scale) must be a number in (0, 10]"),
+    (["walk", "--plant-mass-scale", "0"], "--plant-mass-scale) must be a number in [0.1, 10], got 0.0"),
+    (["walk", "--plant-mass-scale", "0.01"], "--plant-mass-scale) must be a number in [0.1, 10], got 0.01"),
+    (["walk", "--plant-mass-scale", "nan"], "--plant-mass-scale) must be a number in [0.1, 10]"),
     (["walk", "--payload", "-5"], "--payload) must be a mass in [0, 100] kg"),
     (["walk", "--payload", "5@1,2"], "--payload position needs 3 coordinates"),
     (["walk", "--payload", "five"], "--payload takes KG or KG@X,Y,Z"),
-    (["walk", "--plant-spring-scale", "-1"], "--plant-spring-scale) must be a finite number >= 0"),
-    (["walk", "--friction", "0"], "--friction) must be a coefficient in (0, 10]"),
+    (["walk", "--plant-spring-scale", "-1"], "--plant-spring-scale) must be a number in [0, 10], got -1.0"),
+    (["walk", "--plant-spring-scale", "1e300"], "--plant-spring-scale) must be a number in [0, 10], got 1e+300"),
+    (["walk", "--friction", "0"], "--friction) must be a coefficient in [1e-05, 10], got 0.0"),
+    (["walk", "--friction", "1e-9"], "--friction) must be a coefficient in [1e-05, 10], got 1e-09"),
     (["walk", "--actuator-delay", "-1"], "--actuator-delay) must be a whole number of ticks in [0, 100]"),
     (["walk", "--actuator-delay", "1.5"], "argument --actuator-delay: invalid int value"),
-    (["compare", "--jobs", "1", "--friction", "-0.5"], "--friction) must be a coefficient in (0, 10]"),
+    (["compare", "--jobs", "1", "--friction", "-0.5"], "--friction) must be a coefficient in [1e-05, 10]"),
     (["bench", "ekf", "--scenario", "cassie-1mps"], "needs a scenario with the EKF estimator"),
     (["bench", "ekf", "--scenario", "nowhere"], "unknown scenario 'nowhere'"),
     (["bench", "ekf", "--duration", "0"], "--duration"),
@@ -147,6 +173,24 @@ BAD_INPUTS = [
     (["walk", "--terrain", "hfield:{file}:10:4:1"], "cannot read the height map"),
     (["walk", "--terrain", "hfield:{tmp}/x.png:10:4"], "give hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M"),
     (["walk", "--terrain", "slope:10", "--plant", RABBIT_XML], "it lacks body 'cassie-pelvis'"),
+    (
+        ["walk", "--terrain", "hfield:{bigpng}:20:8:0.1"],
+        "has 12000 x 12000 pixels; at most 16777216 pixels (4096 x 4096) are read: downsample it",
+    ),
+    # the video
+    (["walk", "--video-fps", "1e9"], "argument --video-fps: expected a number in (0, 240] frames/s, got '1e9'"),
+    (["walk", "--video-fps", "0"], "argument --video-fps: expected a number in (0, 240] frames/s, got '0'"),
+    (["walk", "--video-fps", "nan"], "argument --video-fps: expected a finite number, got 'nan'"),
+    (["walk", "--video", "{tmp}/v.gif", "--video-fps", "120"], "--video-fps must be in (0, 100] frames/s (a .gif's"),
+    # seeds, worker counts, iterations
+    (["walk", "--seed", "4294967296"], "argument --seed: expected a seed in [0, 4294967295], got 4294967296"),
+    (["walk", "--seed", "-1"], "argument --seed: expected a seed in [0, 4294967295], got -1"),
+    (["compare", "--jobs", "1000"], "argument --jobs: expected a number of worker processes in [1, 64], got 1000"),
+    (["compare", "--jobs", "0"], "argument --jobs: expected a number of worker processes in [1, 64], got 0"),
+    (
+        ["compare", "--push-iterations", "1000000000"],
+        "argument --push-iterations: expected a number of iterations in [0, 20], got 1000000000",
+    ),
     (["compare", "--jobs", "1", "--terrain", "stairs:0:0.3"], "RISE_M must be a number in (0, 1], got 0"),
     # compare and the benchmarks
     (["compare", "--jobs", "1", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
@@ -161,6 +205,17 @@ BAD_INPUTS = [
     (["compare", "--jobs", "1", "--scenario", "moonwalk"], "unknown scenario"),
     (["bench", "codegen", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
     (["bench", "qp", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
+    (["bench", "codegen", "--calls", "1000000000000"], "--calls: expected a number of calls in [1, 1000000]"),
+    (["bench", "qp", "--ticks", "1000000000"], "--ticks: expected a number of ticks in [1, 20000], got 1000000000"),
+    (["bench", "ekf", "--duration", "1e9"], "--duration: expected a number in [0.0005, 600] s, got '1e9'"),
+    (["bench", "harness", "--duration", "inf"], "--duration: expected a finite number, got 'inf'"),
+    (["bench", "harness", "--repeats", "1000"], "--repeats: expected a number of repeats in [1, 20], got 1000"),
+    (["bench", "sweep", "--cells", "1000000"], "--cells: expected a number of cells in [1, 1000], got 1000000"),
+    (["bench", "sweep", "--duration", "1e-9"], "--duration: expected a number in [0.0005, 600] s, got '1e-9'"),
+    # codegen's output folder
+    (["codegen", "--out", "/proc/x"], "--out /proc/x: cannot create the folder (No such file or directory)"),
+    (["codegen", "--out", "/sys/kernel"], "--out /sys/kernel: cannot write there (Permission denied)"),
+    (["codegen", "--out", "{file}"], "is a file, not a folder; give a folder path"),
 ]
 
 
@@ -168,8 +223,11 @@ BAD_INPUTS = [
 def test_bad_input_exits_2_with_one_line_and_simulates_nothing(argv, needle, tmp_path, capsys, no_simulation):
     a_file = tmp_path / "a_file.txt"
     a_file.write_text("not a folder\n")
-    argv = [a.format(tmp=tmp_path, file=a_file) for a in argv]
+    big_png = header_only_png(tmp_path / "big.png", 12000, 12000)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    argv = [a.format(tmp=tmp_path, file=a_file, bigpng=big_png) for a in argv]
     code, out, err = _main(argv, capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
     assert code == 2, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("amlip-qp"), err
@@ -265,3 +323,76 @@ def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
         err
         == "amlip-qp: error: /data/run.npz: No space left on device; check the path, its folder and the free space\n"
     )
+
+
+#: How each command is given the option under test (enough for it to reach its checks, nothing written).
+COMMANDS = {
+    "walk": ["walk"],
+    "compare": ["compare", "--no-plot"],
+    "sweep": ["sweep", "--grid", "vx=0.5", "--out", "{tmp}/sweep"],
+    "codegen": ["codegen", "--out", "{tmp}/gen"],
+    "bench codegen": ["bench", "codegen"],
+    "bench qp": ["bench", "qp"],
+    "bench ekf": ["bench", "ekf"],
+    "bench harness": ["bench", "harness"],
+    "bench sweep": ["bench", "sweep"],
+}
+#: Options whose error names the quantity instead of the option (the robot's CommandBounds).
+QUANTITY = {"--vx": "forward speed", "--vy": "lateral speed", "--turn-rate": "turn rate", "--duration": "duration"}
+
+
+def numeric_options(command: list[str]) -> list[tuple[str, bool]]:
+    """``(option, takes an int)`` for every option of ``command`` whose value type reads a number.
+
+    argparse keeps a parser's options in ``_actions`` and has no public accessor for them.
+    """
+    parser = cli.build_parser()
+    for word in command:
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        parser = sub.choices[word]
+    out = []
+    for action in parser._actions:
+        if not action.option_strings or action.type is None or action.nargs == 0:
+            continue
+        try:
+            value = action.type("1")
+        except (argparse.ArgumentTypeError, ValueError, TypeError, InputError):
+            continue  # a text value (a list of names, a push spec)
+        if isinstance(value, (int, float)):
+            out.append((action.option_strings[-1], isinstance(value, int)))
+    return out
+
+
+def test_the_audit_sees_every_numeric_option():
+    found = {name: [o for o, _ in numeric_options(name.split())] for name in COMMANDS}
+    assert found["walk"] == [
+        "--vx", "--vy", "--turn-rate", "--duration", "--accel-limit", "--seed", "--clearance",
+        "--plant-mass-scale", "--plant-spring-scale", "--friction", "--actuator-delay", "--video-fps",
+    ]  # fmt: skip
+    assert found["compare"] == [
+        "--push-iterations", "--seed", "--clearance", "--plant-mass-scale", "--plant-spring-scale", "--friction",
+        "--actuator-delay", "--jobs",
+    ]  # fmt: skip
+    assert found["sweep"] == ["--duration", "--workers"]
+    assert found["codegen"] == []
+    assert (found["bench codegen"], found["bench qp"], found["bench ekf"]) == (["--calls"], ["--ticks"], ["--duration"])
+    assert found["bench harness"] == ["--duration", "--repeats"]
+    assert found["bench sweep"] == ["--cells", "--duration", "--repeats"]
+
+
+CASES = [
+    (name, option, value)
+    for name, command in COMMANDS.items()
+    for option, is_int in numeric_options(name.split())
+    for value in ((str(10**30), str(-(10**30))) if is_int else ("1e300", "-1e300", "nan", "inf"))
+]
+
+
+@pytest.mark.parametrize("name, option, value", CASES, ids=[f"{n} {o} {v}" for n, o, v in CASES])
+def test_every_numeric_option_refuses_absurd_values_in_one_line(name, option, value, tmp_path, capsys, no_simulation):
+    argv = [a.format(tmp=tmp_path) for a in COMMANDS[name]]
+    code, out, err = _main([*argv, f"{option}={value}"], capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and out == "", err
+    assert (QUANTITY.get(option, option) if "argument" not in lines[0] else option) in lines[0]
+    assert not any(tmp_path.iterdir())  # nothing written (codegen's and sweep's folders not even created)

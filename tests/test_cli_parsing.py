@@ -25,6 +25,9 @@ def test_parse_push_spec():
         (P.positive_int, [("1", 1), ("40", 40)], ["0", "-3", "1.5"]),
         (P.non_negative_int, [("0", 0)], ["-1", "x"]),
         (P.name_list(("pbc", "qp")), [("qp,pbc,qp", ["qp", "pbc"]), (" pbc ", ["pbc"])], ["", "pbc,lqr"]),
+        (P.float_in(0.0, 240.0, "frames/s"), [("240", 240.0), ("1e-3", 1e-3)], ["0", "240.5", "1e9", "nan", "-inf"]),
+        (P.float_in(0.0005, 600.0, "s", low_open=False), [("0.0005", 0.0005), ("600", 600.0)], ["1e-9", "601"]),
+        (P.int_in(1, 64, "number of worker processes"), [("1", 1), ("64", 64)], ["0", "65", "1e3", "2.5"]),
     ],
 )
 def test_value_types_take_good_values_and_refuse_bad_ones_in_one_line(parse, good, bad):
@@ -56,3 +59,15 @@ def test_handler_imports_its_module_only_when_run(monkeypatch):
     with pytest.raises(TypeError):  # check_output_path(args): imported and called with the wrong arguments
         run(argparse.Namespace())
     assert "amlip_qp.output_paths" in sys.modules
+
+
+def test_bounded_types_name_the_interval_and_the_unit():
+    with pytest.raises(argparse.ArgumentTypeError) as err:
+        P.float_in(0.0, 240.0, "frames/s")("1e9")
+    assert str(err.value) == "expected a number in (0, 240] frames/s, got '1e9'"
+    with pytest.raises(argparse.ArgumentTypeError) as err:
+        P.float_in(0.0005, 600.0, "s", low_open=False)("0")
+    assert str(err.value) == "expected a number in [0.0005, 600] s, got '0'"
+    with pytest.raises(argparse.ArgumentTypeError) as err:
+        P.int_in(0, 20, "number of iterations")("1000000000")
+    assert str(err.value) == "expected a number of iterations in [0, 20], got 1000000000"

@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import casadi
+import pytest
 
 from amlip_qp import paths
 from amlip_qp.cli import main
@@ -54,11 +55,39 @@ def test_out_writes_elsewhere_then_check_passes(tmp_path, capsys):
     assert "up to date" in capsys.readouterr().out
 
 
-def test_out_onto_a_file_is_a_readable_error(tmp_path, capsys):
+def test_out_onto_a_file_is_bad_input_in_one_line(tmp_path, capsys):
     target = tmp_path / "file.txt"
     target.write_text("x")
-    assert main(["codegen", "--out", str(target)]) == 1
-    assert "not a folder" in capsys.readouterr().err
+    assert main(["codegen", "--out", str(target)]) == 2
+    assert capsys.readouterr().err == (
+        f"amlip-qp: error: --out {target}: is a file, not a folder; give a folder path\n"
+    )
+    assert target.read_text() == "x"
+
+
+def test_an_unwritable_out_is_refused_before_generating(monkeypatch, capsys):
+    from amlip_qp.codegen import generate
+
+    monkeypatch.setattr(generate, "generate_files", lambda: pytest.fail("generated although --out is unwritable"))
+    assert main(["codegen", "--out", "/proc/x"]) == 2
+    assert capsys.readouterr().err == (
+        "amlip-qp: error: --out /proc/x: cannot create the folder (No such file or directory); give a writable folder\n"
+    )
+
+
+def test_a_write_that_fails_after_the_check_exits_2_naming_out(tmp_path, monkeypatch, capsys):
+    from amlip_qp.codegen import generate
+
+    def disk_full(path, data):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(generate, "atomic_write", disk_full)
+    out = tmp_path / "gen"
+    assert main(["codegen", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (
+        f"amlip-qp: error: --out {out}: writing failed (No space left on device); give a writable path\n"
+    )
+    assert list(out.iterdir()) == []  # the folder was made by the check; nothing half-written in it
 
 
 def test_the_source_checkout_is_found():

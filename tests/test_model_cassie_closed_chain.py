@@ -2,8 +2,8 @@
 
 A MuJoCo plant only (the controller keeps Pinocchio's ``cassie.xml``): the achilles and
 plantar rods are bodies closed by ``connect`` equalities, with the knee and heel springs.
-Reference numbers are Agility Robotics' Cassie parameters (the project's parameter sheet
-``cassie_parameters.json``).
+Reference numbers are Agility Robotics' Cassie parameters (the parameter sheet
+``models/reference/cassie_parameters.json``).
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ MODEL = MODELS_DIR / "cassie-closed-chain.xml"
 LUMPED = MODELS_DIR / "cassie.xml"
 REPO = Path(__file__).resolve().parents[1]
 GENERATOR = REPO / "models" / "tools" / "build_cassie_closed_chain.py"
-# CI clones the repository with ../shared beside it.
-SHEET_PATH = REPO.parent / "shared" / "reference" / "cassie_parameters.json"
+#: The parameter sheet vendored in the repository (models/reference/, credits in NOTICE).
+SHEET_PATH = REPO / "models" / "reference" / "cassie_parameters.json"
 
 SIDES = ("left", "right")
 SHEET_TOTAL_MASS = 33.312
@@ -310,7 +310,6 @@ def test_pd_hold_on_the_floor_stays_finite_with_closed_loops(mj):
 
 
 def test_regenerates_identically(tmp_path):
-    assert SHEET_PATH.exists(), f"the parameter sheet is missing: {SHEET_PATH}"
     out = tmp_path / "cassie-closed-chain.xml"
     proc = subprocess.run(
         [sys.executable, str(GENERATOR), "--params", str(SHEET_PATH), "--out", str(out)],

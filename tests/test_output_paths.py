@@ -3,7 +3,7 @@
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.output_paths import check_output_path, writing
+from amlip_qp.output_paths import check_output_folder, check_output_path, writing
 
 
 def test_check_output_path_keeps_files_and_creates_folders_only_when_asked(tmp_path):
@@ -46,6 +46,33 @@ def test_bad_paths_name_the_option_and_the_fix(tmp_path, make, message):
 def test_a_path_under_proc_is_refused():
     with pytest.raises(InputError, match="cannot write there"):
         check_output_path("--video", "/proc/x.mp4")
+
+
+def test_check_output_folder_creates_a_missing_folder_and_leaves_an_existing_one_as_it_was(tmp_path):
+    existing = tmp_path / "gen"
+    existing.mkdir()
+    (existing / "kept.c").write_text("int x;\n")
+    check_output_folder("--out", str(existing))
+    assert [p.name for p in existing.iterdir()] == ["kept.c"]  # the probe file is removed again
+    nested = tmp_path / "a" / "b"
+    check_output_folder("--out", str(nested))
+    assert nested.is_dir() and list(nested.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "path, message",
+    [
+        ("/proc/x", "--out /proc/x: cannot create the folder (No such file or directory); give a writable folder"),
+        ("/sys/kernel", "--out /sys/kernel: cannot write there (Permission denied); give a writable folder"),
+        ("{file}", "--out {file}: is a file, not a folder; give a folder path"),
+        ("{file}/sub", "--out {file}/sub: cannot create the folder (Not a directory); give a writable folder"),
+    ],
+)
+def test_check_output_folder_refuses_in_one_line(path, message, tmp_path):
+    a_file = _file(tmp_path / "f")
+    with pytest.raises(InputError) as info:
+        check_output_folder("--out", path.format(file=a_file))
+    assert str(info.value) == message.format(file=a_file)
 
 
 def test_writing_turns_an_oserror_into_an_input_error():

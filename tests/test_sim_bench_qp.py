@@ -131,8 +131,9 @@ def test_a_solver_that_is_not_installed_is_named_and_the_bench_goes_on(walk):
 @pytest.mark.parametrize(
     "argv, needle",
     [
-        (["bench", "qp", "--ticks", "0"], "expected a positive integer"),
-        (["bench", "qp", "--ticks", "many"], "expected a positive integer"),
+        (["bench", "qp", "--ticks", "0"], "expected a number of ticks in [1, 20000], got 0"),
+        (["bench", "qp", "--ticks", "many"], "expected a number of ticks in [1, 20000], got 'many'"),
+        (["bench", "qp", "--ticks", "20001"], "expected a number of ticks in [1, 20000], got 20001"),
         (["bench", "qp", "--scenario", "moonwalk"], "unknown scenario 'moonwalk'"),
         (["bench", "qp", "--solvers", "daqp-hot,gurobbi"], "unknown solver 'gurobbi'; choose from proxsuite-warm"),
         (["bench", "qp", "--solvers", ","], "--solvers: no solver named"),

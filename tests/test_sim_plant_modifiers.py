@@ -307,6 +307,10 @@ def test_delay_checks_the_vector_length():
         ({"mass_scale": -1.0}, "mass scale"),
         ({"mass_scale": float("nan")}, "mass scale"),
         ({"mass_scale": 11.0}, "mass scale"),
+        ({"mass_scale": 0.0999}, r"mass scale \(--plant-mass-scale\) must be a number in \[0.1, 10\], got 0.0999"),
+        ({"spring_scale": 10.01}, r"spring scale \(--plant-spring-scale\) must be a number in \[0, 10\], got 10.01"),
+        ({"spring_scale": 1e300}, "spring scale"),
+        ({"friction": 9.9e-6}, r"friction \(--friction\) must be a coefficient in \[1e-05, 10\], got 9.9e-06"),
         ({"payload_kg": -1.0}, "payload"),
         ({"payload_kg": float("inf")}, "payload"),
         ({"payload_kg": 101.0}, "payload"),
@@ -329,6 +333,40 @@ def test_nonsensical_values_raise_one_line(kwargs, match):
     with pytest.raises(InputError, match=match) as err:
         PlantModifiers(**kwargs)
     assert "\n" not in str(err.value)
+
+
+def test_the_bounds_themselves_are_accepted():
+    for kwargs in ({"mass_scale": 0.1}, {"mass_scale": 10.0}, {"spring_scale": 0.0}, {"spring_scale": 10.0}):
+        PlantModifiers(**kwargs)
+    assert PlantModifiers(friction=1e-5).friction == mujoco.mjMINMU
+    assert PlantModifiers(friction=10.0).friction == 10.0
+
+
+def passive_fall(plant: str, edit) -> tuple[float, int]:
+    """Largest |qvel| (m/s, rad/s) over 0.2 s from the stand keyframe with no actuation, and MuJoCo's count of
+    unstable accelerations (``mjWARN_BADQACC``)."""
+    spec = mujoco.MjSpec.from_file(str(MODELS_DIR / f"{plant}.xml"))
+    edit(spec)
+    model = spec.compile()
+    data = stand(model)
+    fastest = 0.0
+    for _ in range(400):
+        mujoco.mj_step(model, data)
+        fastest = max(fastest, float(np.max(np.abs(data.qvel))))
+    return fastest, int(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+
+
+@pytest.mark.parametrize("plant", ["cassie", "cassie-closed-chain"])
+def test_at_the_scale_bounds_the_plant_falls_as_a_body_and_past_them_it_diverges(plant):
+    """The mass and spring scale bounds hold the plants that MuJoCo integrates stably at the 0.5 ms step."""
+    for edit in (MassScaleEdit(0.1), MassScaleEdit(10.0), SpringScaleEdit(10.0), SpringScaleEdit(0.0)):
+        fastest, unstable = passive_fall(plant, edit)
+        assert unstable == 0 and fastest < 10.0, (edit, fastest)  # a limp robot falling: measured 2.2-5.9
+    for edit in (MassScaleEdit(0.001), SpringScaleEdit(500.0)):
+        fastest, unstable = passive_fall(plant, edit)
+        assert unstable >= 1 and fastest > 1e4, (edit, fastest)  # measured 8.6e5-3.0e6
+    # The closed chain, with its light rods and loop closures, diverges already at 200 x the springs.
+    assert passive_fall("cassie-closed-chain", SpringScaleEdit(200.0))[1] >= 1
 
 
 @pytest.mark.parametrize(

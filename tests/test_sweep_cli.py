@@ -112,6 +112,10 @@ BAD = [
     (["--ray", "10.255.255.1:6379"], "--ray 10.255.255.1:6379"),
     (["--bisect", "push_impulse_Ns=0:60"], "NAME=LOW:HIGH:ITERATIONS"),
     (["--bisect", "push_impulse_Ns=0:40:3", "--set", "push_phase=0.5", "--set", "push_time_s=0.3"], "one step late"),
+    (["--bisect", "push_impulse_Ns=0:60:1000000000"], "[bisect] iterations must be at most 20"),
+    (["--workers", "1000"], "argument --workers: expected a number of worker processes in [1, 64], got 1000"),
+    (["--duration", "1e9"], "argument --duration: expected a number in [0.0005, 600] s, got '1e9'"),
+    (["--duration", "1e-9"], "argument --duration: expected a number in [0.0005, 600] s, got '1e-9'"),
 ]
 
 
@@ -131,14 +135,52 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(extra, needle, tmp_p
     snapshot = {p: p.read_bytes() for p in existing.rglob("*") if p.is_file()}
     for out in (tmp_path / "new", existing):
         argv = ["sweep", str(spec)] if extra == ["{spec}"] else [*SWEEP, *extra]
-        code = main([*argv, "--out", str(out)])
+        try:
+            code = main([*argv, "--out", str(out)])
+        except SystemExit as exc:  # refused while the command line is read
+            code = exc.code
         err = capsys.readouterr().err
         lines = err.strip().splitlines()
-        assert code == 2 and len(lines) == 1 and lines[0].startswith("amlip-qp: error:"), err
+        assert code == 2 and len(lines) == 1 and lines[0].startswith(("amlip-qp: error:", "amlip-qp sweep: error:")), (
+            err
+        )
         assert "Traceback" not in err
         assert out == existing or needle in lines[0]  # the other sweep's folder may be refused first
     assert not (tmp_path / "new").exists()
     assert {p: p.read_bytes() for p in existing.rglob("*") if p.is_file()} == snapshot
+
+
+def test_a_sweep_of_1e9_cells_is_refused_in_one_line_before_any_cell_exists(tmp_path, capsys, monkeypatch):
+    from amlip_qp.sweep import spec as spec_mod
+
+    def expanded(*args, **kwargs):
+        raise AssertionError("the cells were expanded")
+
+    monkeypatch.setattr(spec_mod.Range, "points", expanded)
+    monkeypatch.setattr(spec_mod, "cells_of", expanded)
+    spec = tmp_path / "huge.toml"
+    spec.write_text(
+        "[fixed]\nrobot = 'rabbit'\n[parameters]\nvx = { start = 0.0, stop = 1.0, num = 1000 }\n"
+        "push_phase = { start = 0.0, stop = 0.8, num = 1000 }\n"
+        "push_direction_deg = { start = 0, stop = 359, step = 0.359 }\n"
+    )
+    code = main(["sweep", str(spec), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == (
+        "amlip-qp: error: the sweep has 1.001e+09 cells (1000 x 1000 x 1001); at most 100000 cells are run "
+        "(each is checked, then walked, for seconds): split it or sample it (sampling = 'random')\n"
+    )
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_cell_shorter_than_a_control_tick_is_bad_input_not_a_failed_cell(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(backends, "run_local", lambda *a, **k: pytest.fail("a cell ran"))
+    code = main([*SWEEP[:-3], "--set", "duration=1e-9", "--no-progress", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "duration 1e-09 s is shorter than one control tick (0.0005 s)" in err
+    assert not (tmp_path / "out").exists()
 
 
 def test_a_folder_of_another_sweep_or_files_is_refused(tmp_path, capsys):

@@ -5,7 +5,9 @@ from __future__ import annotations
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sweep.spec import Range, cells_of, from_toml_text, parse_cli_value, parse_spec
+from amlip_qp.sim.robustness import MAX_BISECTION_ITERATIONS
+from amlip_qp.sweep import spec as spec_mod
+from amlip_qp.sweep.spec import MAX_CELLS, Range, cell_count, cells_of, from_toml_text, parse_cli_value, parse_spec
 
 PUSH_MAP = """
 [fixed]
@@ -88,3 +90,75 @@ def test_structural_errors_say_what_to_fix(doc, needle):
     with pytest.raises(InputError) as err:
         cells_of(parse_spec(doc))
     assert needle in str(err.value)
+
+
+def test_ranges_count_their_points_without_listing_them():
+    for r in (Range(0.0, 1.0, num=7), Range(0, 10, step=3), Range(0.0, 0.8, step=0.2), Range(0.0, 1.0, num=1)):
+        assert r.count() == len(r.points())
+    assert Range(0.0, 1.0, step=1e-12).count() == pytest.approx(1e12 + 1.0)
+    assert Range(-1e308, 1e308, step=1e-308).count() == float("inf")
+
+
+def test_the_cell_count_is_the_product_of_the_sizes_or_the_samples():
+    grid = parse_spec({"parameters": {"tracker": ["pbc", "qp"], "vx": {"start": 0.0, "stop": 1.0, "num": 5}}})
+    assert cell_count(grid) == len(cells_of(grid)) == 10
+    sampled = parse_spec(
+        {"parameters": {"vx": {"start": 0.0, "stop": 1.0}}, "sweep": {"sampling": "random", "samples": 9}}
+    )
+    assert cell_count(sampled) == 9
+
+
+@pytest.mark.parametrize(
+    "parameters, sampling, message",
+    [
+        (
+            {"vx": {"start": 0.0, "stop": 1.0, "num": 10**9}},
+            {},
+            "the sweep has 1e+09 cells (1e+09); at most 100000 cells are run",
+        ),
+        (
+            {"vx": {"start": 0.0, "stop": 1.0, "num": 1000}, "push_phase": {"start": 0.0, "stop": 0.8, "step": 0.0008}},
+            {},
+            "the sweep has 1.001e+06 cells (1000 x 1001); at most 100000 cells are run",
+        ),
+        ({"vx": {"start": 0.0, "stop": 1e308, "step": 1e-308}}, {}, "the sweep has inf cells (inf)"),
+        (
+            {"vx": {"start": 0.0, "stop": 1.0}},
+            {"sampling": "random", "samples": 10**9},
+            "the sweep has 1e+09 random samples; at most 100000 cells are run",
+        ),
+    ],
+)
+def test_a_sweep_above_the_cell_bound_is_refused_before_anything_is_expanded(
+    parameters, sampling, message, monkeypatch
+):
+    def expanded(*args, **kwargs):
+        raise AssertionError("a range was expanded")
+
+    monkeypatch.setattr(spec_mod.Range, "points", expanded)
+    doc = {"parameters": parameters, **({"sweep": sampling} if sampling else {})}
+    with pytest.raises(InputError) as err:
+        parse_spec(doc)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_the_cell_bound_itself_is_accepted():
+    doc = {
+        "parameters": {"vx": {"start": 0.0, "stop": 1.0, "num": 1000}, "vy": {"start": 0.0, "stop": 0.1, "num": 100}}
+    }
+    assert cell_count(parse_spec(doc)) == MAX_CELLS
+    doc["parameters"]["vy"]["num"] = 101
+    with pytest.raises(InputError, match="101000 cells"):
+        parse_spec(doc)
+
+
+def test_bisection_iterations_are_bounded():
+    base = {"parameters": {"vx": [0.5]}}
+    ok = {
+        **base,
+        "bisect": {"parameter": "push_impulse_Ns", "low": 0, "high": 60, "iterations": MAX_BISECTION_ITERATIONS},
+    }
+    assert parse_spec(ok).bisect.iterations == 20
+    ok["bisect"]["iterations"] = 10**9
+    with pytest.raises(InputError, match=r"\[bisect\] iterations must be at most 20 .* got 1000000000"):
+        parse_spec(ok)

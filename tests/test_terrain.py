@@ -100,6 +100,43 @@ def test_unreadable_and_tiny_pngs_are_input_errors(tmp_path):
         parse_terrain(f"hfield:{tiny}:10:4:0.5")
 
 
+def test_a_height_map_above_the_pixel_bound_is_refused_from_its_header(tmp_path, monkeypatch):
+    from amlip_qp.sim import terrain_grids as G
+
+    at_bound, above = tmp_path / "at.png", tmp_path / "above.png"
+    iio.imwrite(at_bound, np.zeros((4096, 4096), dtype=np.uint8))
+    iio.imwrite(above, np.zeros((4096, 4097), dtype=np.uint8))
+    assert G.image_size(str(above)) == (4097, 4096)
+    assert parse_terrain(f"hfield:{at_bound}:20:8:0.1").grid.data.shape == (4096, 4096)
+
+    def no_decoding(*args, **kwargs):
+        raise AssertionError("the height map was decoded")
+
+    monkeypatch.setattr(iio, "imread", no_decoding)
+    with pytest.raises(InputError) as err:
+        parse_terrain(f"hfield:{above}:20:8:0.1")
+    assert str(err.value) == (
+        f"--terrain 'hfield:{above}:20:8:0.1': height map {above} has 4097 x 4096 pixels; at most 16777216 "
+        "pixels (4096 x 4096) are read: downsample it (MuJoCo holds every pixel of a height field in memory)"
+    )
+
+
+def test_other_image_formats_are_sized_by_pillow_and_a_decompression_bomb_is_refused(tmp_path):
+    from amlip_qp.sim import terrain_grids as G
+
+    small = tmp_path / "small.bmp"
+    iio.imwrite(small, np.zeros((3, 7), dtype=np.uint8))
+    assert G.image_size(str(small)) == (7, 3)
+    bomb = tmp_path / "bomb.bmp"  # the BMP header's width and height (int32 at bytes 18 and 22) say 30000 x 30000
+    data = bytearray(small.read_bytes())
+    data[18:26] = (30000).to_bytes(4, "little") + (30000).to_bytes(4, "little")
+    bomb.write_bytes(bytes(data))
+    with pytest.raises(InputError, match="has more pixels than Pillow opens; at most 16777216 pixels"):
+        G.read_gray_png(str(bomb))
+    (tmp_path / "text.png").write_text("not an image")
+    assert G.image_size(str(tmp_path / "text.png")) is None  # unknown: the decoder says what is wrong
+
+
 # --------------------------------------------------------- analytic heights
 def test_analytic_profiles():
     k = math.tan(math.radians(10.0))

@@ -17,11 +17,19 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from amlip_qp.cli.parsing import Parser, handler, positive_float, positive_int
+from amlip_qp.cli import bounds as B
+from amlip_qp.cli.parsing import Parser, float_in, handler, int_in
 from amlip_qp.cli.subcommands import TRACKERS, add_compare, add_sweep, add_walk
 from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
 
 PROG = "amlip-qp"
+
+_DURATION = float_in(B.MIN_DURATION_S, B.MAX_DURATION_S, "s", low_open=False)
+_DURATION_HELP = (
+    f"{B.MIN_DURATION_S:g} (a control tick) to {B.MAX_DURATION_S:g} (the robots' CommandBounds.duration_max_s)"
+)
+_REPEATS = int_in(1, B.MAX_BENCH_REPEATS, "number of repeats")
+_REPEATS_HELP = f"at most {B.MAX_BENCH_REPEATS}"
 
 #: Errors that mean "the user asked for something invalid": exit status 2.
 _USAGE_ERRORS = (InputError, UnknownRobotError, ModelFileError, MJCFError)
@@ -54,13 +62,24 @@ def build_parser() -> argparse.ArgumentParser:
     bench.required = True
     b = bench.add_parser("codegen", help="generated C fast path vs CasADi Function vs numpy")
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
-    b.add_argument("--calls", type=positive_int, default=20000, help="timed calls per path (default 20000)")
+    b.add_argument(
+        "--calls",
+        type=int_in(1, B.MAX_BENCH_CALLS, "number of calls"),
+        default=20000,
+        help=f"timed calls per path, at most {B.MAX_BENCH_CALLS} (about 7 min) (default 20000)",
+    )
     b.set_defaults(func=handler("amlip_qp.codegen.cli:run_bench"))
     b = bench.add_parser(
         "qp", help="replay recorded Cassie tracker QPs through every installed QP solver, against the tracker's ProxQP"
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
-    b.add_argument("--ticks", type=positive_int, default=1200, help="recorded tracker QPs to replay (default 1200)")
+    b.add_argument(
+        "--ticks",
+        type=int_in(1, B.MAX_BENCH_TICKS, "number of ticks"),
+        default=1200,
+        help=f"recorded tracker QPs to replay, at most {B.MAX_BENCH_TICKS} (10 s of walking; each kept in memory, "
+        "about 20 kB) (default 1200)",
+    )
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
     b.add_argument(
         "--solvers",
@@ -78,7 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
         default="cassie-1mps-cc-ekf",
         help="a scenario with the EKF estimator to walk (default cassie-1mps-cc-ekf)",
     )
-    b.add_argument("--duration", type=positive_float, default=4.0, metavar="S", help="simulated time, s (default 4)")
+    b.add_argument(
+        "--duration", type=_DURATION, default=4.0, metavar="S", help=f"simulated time, s, {_DURATION_HELP} (default 4)"
+    )
     b.set_defaults(func=handler("amlip_qp.sim.bench_ekf:run_bench"))
     b = bench.add_parser(
         "harness",
@@ -87,10 +108,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument("--scenario", default="cassie-1mps", help="scenario to walk (default cassie-1mps)")
     b.add_argument(
-        "--duration", type=positive_float, default=3.0, metavar="S", help="simulated time per walk, s (default 3)"
+        "--duration",
+        type=_DURATION,
+        default=3.0,
+        metavar="S",
+        help=f"simulated time per walk, s, {_DURATION_HELP} (default 3)",
     )
     b.add_argument(
-        "--repeats", type=positive_int, default=3, help="walks per tracker and log mode, interleaved (default 3)"
+        "--repeats",
+        type=_REPEATS,
+        default=3,
+        help=f"walks per tracker and log mode, interleaved, {_REPEATS_HELP} (default 3)",
     )
     b.add_argument(
         "--trackers",
@@ -105,9 +133,22 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep", help="sweep throughput: cells per second with 1 and with 2 worker processes, interleaved"
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
-    b.add_argument("--cells", type=positive_int, default=6, help="cells per sweep (default 6)")
-    b.add_argument("--duration", type=positive_float, default=2.0, metavar="S", help="simulated s per cell (default 2)")
-    b.add_argument("--repeats", type=positive_int, default=3, help="interleaved repeats of each (default 3)")
+    b.add_argument(
+        "--cells",
+        type=int_in(1, B.MAX_BENCH_CELLS, "number of cells"),
+        default=6,
+        help=f"cells per sweep, at most {B.MAX_BENCH_CELLS} (default 6)",
+    )
+    b.add_argument(
+        "--duration",
+        type=_DURATION,
+        default=2.0,
+        metavar="S",
+        help=f"simulated s per cell, {_DURATION_HELP} (default 2)",
+    )
+    b.add_argument(
+        "--repeats", type=_REPEATS, default=3, help=f"interleaved repeats of each, {_REPEATS_HELP} (default 3)"
+    )
     b.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
     b.set_defaults(func=handler("amlip_qp.sweep.bench:run_bench"))
 

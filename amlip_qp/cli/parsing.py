@@ -91,6 +91,37 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+def float_in(low: float, high: float, unit: str, *, low_open: bool = True):
+    """Argparse type: a finite number in ``(low, high]`` (``[low, high]`` with ``low_open=False``), in ``unit``.
+
+    The error names the interval and the unit, e.g. ``expected a number in (0, 240] frames/s, got '1e9'``.
+    """
+    interval = f"{'(' if low_open else '['}{low:g}, {high:g}] {unit}".rstrip()
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not ((value > low if low_open else value >= low) and value <= high):
+            raise argparse.ArgumentTypeError(f"expected a number in {interval}, got {text!r}")
+        return value
+
+    return parse
+
+
+def int_in(low: int, high: int, what: str = "whole number"):
+    """Argparse type: an integer in ``[low, high]`` (``what`` names it in the error)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a {what} in [{low}, {high}], got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a {what} in [{low}, {high}], got {value}")
+        return value
+
+    return parse
+
+
 def name_list(allowed: tuple[str, ...]):
     """Argparse type: a comma-separated list of names from ``allowed`` (order kept, duplicates dropped)."""
 

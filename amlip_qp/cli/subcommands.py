@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import argparse
 
+from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import (
     finite_float,
+    float_in,
     handler,
+    int_in,
     name_list,
     non_negative_float,
-    non_negative_int,
     parse_push_spec,
     positive_float,
-    positive_int,
 )
 from amlip_qp.cli.robot_option import robot_list, robot_name_or_path
 from amlip_qp.profiles import ROBOT_NAMES
@@ -24,6 +25,11 @@ TRACKERS = ("pbc", "qp")
 #: ``amlip_qp.sim.factory.ESTIMATORS``, checked by the tests).
 SENSORS = ("ideal", "robot")
 ESTIMATORS = ("truth", "ekf")
+
+_SEED = int_in(0, B.MAX_SEED, "seed")
+_SEED_HELP = f"seed of the sensor noise, 0 to {B.MAX_SEED} (32 bits) (default 0)"
+_WORKERS = int_in(1, B.MAX_WORKERS, "number of worker processes")
+_WORKERS_HELP = f"1 to {B.MAX_WORKERS} (each holds its own models and log, about 0.17 GB)"
 
 
 def add_plant_options(p: argparse.ArgumentParser) -> None:
@@ -79,7 +85,8 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         metavar="S",
-        help="scale the mass and inertia of every plant body (0 < S <= 10)",
+        help="scale the mass and inertia of every plant body (0.1 <= S <= 10: at 0.01 the closed-chain "
+        "plant's simulation diverges)",
     )
     m.add_argument(
         "--payload",
@@ -89,17 +96,27 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         "(default: at its origin)",
     )
     m.add_argument(
-        "--plant-spring-scale", type=float, default=None, metavar="S", help="scale every joint and tendon spring"
+        "--plant-spring-scale",
+        type=float,
+        default=None,
+        metavar="S",
+        help="scale every joint and tendon spring (0 <= S <= 10: 0 removes them; at 10 Cassie's springs are "
+        "near rigid, and MuJoCo's explicit springs diverge from 200 x at the 0.5 ms step)",
     )
     m.add_argument(
-        "--friction", type=float, default=None, metavar="MU", help="sliding friction of every foot-floor contact"
+        "--friction",
+        type=float,
+        default=None,
+        metavar="MU",
+        help="sliding friction of every foot-floor contact (1e-05 <= MU <= 10: MuJoCo raises smaller "
+        "coefficients to its mjMINMU = 1e-5)",
     )
     m.add_argument(
         "--actuator-delay",
         type=int,
         default=None,
         metavar="TICKS",
-        help="delay the actuator commands by TICKS control ticks (0.5 ms each)",
+        help="delay the actuator commands by TICKS control ticks (0.5 ms each; 0 <= TICKS <= 100)",
     )
 
 
@@ -150,10 +167,11 @@ def add_walk(sub) -> None:
     shaping = p.add_mutually_exclusive_group()
     shaping.add_argument(
         "--accel-limit",
-        type=positive_float,
+        type=float_in(0.0, B.MAX_ACCEL_LIMIT_MPS2, "m/s^2"),
         metavar="M/S2",
         default=None,
-        help="rate limit of the forward and lateral speed commands before the planner, m/s^2 "
+        help="rate limit of the forward and lateral speed commands before the planner, m/s^2, at most "
+        f"{B.MAX_ACCEL_LIMIT_MPS2:g} (faster is no limit: --no-command-shaping) "
         "(default: the robot's, amlip_qp.profiles.CommandShaping)",
     )
     shaping.add_argument(
@@ -161,7 +179,7 @@ def add_walk(sub) -> None:
         action="store_true",
         help="give the planner the raw command (no rate limit, no step-length cap)",
     )
-    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help=_SEED_HELP)
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     add_plant_options(p)
     p.add_argument("--json", metavar="PATH", default=None, help="write the JSON summary to PATH, or '-' for stdout")
@@ -180,7 +198,13 @@ def add_walk(sub) -> None:
     )
     p.add_argument("--video", metavar="PATH", default=None, help="record the 'track' camera to PATH (.mp4 or .gif)")
     p.add_argument(
-        "--video-fps", type=positive_float, default=30.0, metavar="FPS", help="video frames per second (default 30)"
+        "--video-fps",
+        type=float_in(0.0, B.MAX_VIDEO_FPS, "frames/s"),
+        default=30.0,
+        metavar="FPS",
+        help=f"video frames per simulated second, played in real time: 0 < FPS <= {B.MAX_VIDEO_FPS:g} "
+        "(the fastest displays' refresh rate), <= 100 for a .gif (whole hundredths of a second a frame) "
+        "(default 30)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=handler("amlip_qp.sim.cli:run_walk"))
@@ -222,17 +246,20 @@ def add_compare(sub) -> None:
     )
     p.add_argument(
         "--push-iterations",
-        type=non_negative_int,
+        type=int_in(0, B.MAX_BISECTION_ITERATIONS, "number of iterations"),
         default=None,
         metavar="N",
-        help="bisection iterations per push direction",
+        help=f"bisection iterations per push direction, at most {B.MAX_BISECTION_ITERATIONS} "
+        "(each halves the interval and is one more walk)",
     )
     p.add_argument("--no-ramp", action="store_true", help="skip the speed-ramp test")
     p.add_argument("--no-push", action="store_true", help="skip the push tests")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the sensor noise (default 0)")
+    p.add_argument("--seed", type=_SEED, default=0, help=_SEED_HELP)
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise")
     add_plant_options(p)
-    p.add_argument("--jobs", type=positive_int, default=2, metavar="N", help="parallel worker processes (default 2)")
+    p.add_argument(
+        "--jobs", type=_WORKERS, default=2, metavar="N", help=f"parallel worker processes, {_WORKERS_HELP} (default 2)"
+    )
     p.add_argument("--json", metavar="PATH", default=None, help="write the table as JSON to PATH, or '-' for stdout")
     p.add_argument(
         "--plot",
@@ -265,7 +292,14 @@ def add_sweep(sub) -> None:
     p.add_argument(
         "--set", action="append", default=[], metavar="NAME=V", help="hold a parameter in every cell; repeatable"
     )
-    p.add_argument("--duration", type=positive_float, metavar="S", default=None, help="simulated time per walk, s")
+    p.add_argument(
+        "--duration",
+        type=float_in(B.MIN_DURATION_S, B.MAX_DURATION_S, "s", low_open=False),
+        metavar="S",
+        default=None,
+        help=f"simulated time per walk, s, {B.MIN_DURATION_S:g} (a control tick) to {B.MAX_DURATION_S:g} "
+        "(the robots' CommandBounds.duration_max_s)",
+    )
     p.add_argument("--metrics", metavar="M1,M2", default=None, help="the metric columns (default: the spec's)")
     p.add_argument(
         "--bisect",
@@ -277,10 +311,10 @@ def add_sweep(sub) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
-        type=positive_int,
+        type=_WORKERS,
         default=None,
         metavar="N",
-        help="local worker processes (default: one per core)",
+        help=f"local worker processes, {_WORKERS_HELP} (default: one per core)",
     )
     where.add_argument(
         "--ray",

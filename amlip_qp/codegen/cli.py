@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 
 import amlip_qp.paths as paths
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import InputError
+from amlip_qp.output_paths import check_output_folder, writing
 
 
 def _display(folder: Path, checkout: Path | None) -> str:
@@ -30,6 +31,10 @@ def run_codegen(args: argparse.Namespace) -> int:
     compares the folder's files with a fresh generation in memory and exits
     1 naming the stale or missing files in one line, 0 when they match; for
     an installed package it says that it checked the installed files.
+
+    The output folder is checked (created if missing) before anything is
+    generated, and a write that fails later names ``--out``: both exit 2 in
+    one line (:mod:`amlip_qp.output_paths`).
     """
     from amlip_qp.codegen import generate
 
@@ -41,6 +46,9 @@ def run_codegen(args: argparse.Namespace) -> int:
             "is package data and is not rewritten; pass --out DIR to write the sources elsewhere"
         )
     folder = paths.CODEGEN_DIR if packaged else Path(args.out)
+    option = "the generated folder" if packaged else "--out"
+    if not args.check:
+        check_output_folder(option, str(folder))
     shown = _display(folder, checkout)
     files = generate.generate_files()
     if args.check:
@@ -60,9 +68,8 @@ def run_codegen(args: argparse.Namespace) -> int:
         kind = " (an installed package, not a source checkout)" if packaged and checkout is None else ""
         print(f"{shown}{kind} is up to date: {', '.join(files)} equal {fresh}")
         return 0
-    if folder.exists() and not folder.is_dir():
-        raise CodegenError(f"--out {folder} is not a folder; pass a folder path")
-    generate.write_files(folder, files)
+    with writing(option, str(folder)):
+        generate.write_files(folder, files)
     print(f"wrote {', '.join(shown + name for name in files)}")
     return 0
 

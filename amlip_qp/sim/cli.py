@@ -121,11 +121,12 @@ def log_file(log_option: str | None) -> str | None:
 
 def _check_output_paths(args: argparse.Namespace) -> None:
     """Fail early (exit 2) on output paths that cannot be written, before a long run."""
-    from amlip_qp.sim.video import check_video_path
+    from amlip_qp.sim.video import check_video_fps, check_video_path
 
     if args.plot is not None and log_mode(args.log) == "summary":
         raise InputError("--plot draws the full log: drop --log summary (or give --log full)")
 
+    check_video_fps(args.video_fps, args.video)
     if args.video is not None:
         check_video_path(args.video)
     if args.plot is not None and args.plot != "-":

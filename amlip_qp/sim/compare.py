@@ -43,7 +43,7 @@ from amlip_qp.sim.robustness import (
     ramp_scenario,
 )
 from amlip_qp.sim.run_types import PlantSetting, RunResult, SensorNoise
-from amlip_qp.sim.scenarios import Scenario, get_scenario
+from amlip_qp.sim.scenarios import Scenario, check_scenario, get_scenario
 from amlip_qp.sim.summary import summarize
 
 
@@ -121,7 +121,8 @@ def build_tasks(
     """Every experiment of a comparison, longest first (better packing on the workers).
 
     Raises:
-        InputError: A plant that does not fit one of the robots (loaded here, once per robot).
+        InputError: A plant that does not fit one of the robots (loaded here, once per robot),
+            or a setting the robot's gait cannot take (a swing clearance above its CoM height).
     """
     from amlip_qp.sim.factory import load, setting_edits
     from amlip_qp.sim.plant import load_plant
@@ -130,6 +131,7 @@ def build_tasks(
     tasks = []
     for robot in robots:
         nominal = nominal_scenario(robot, scenario_names, settings)
+        check_scenario(nominal.with_(setting=setting))  # the setting's clearance against the robot's gait
         loaded = load(robot)
         planar = loaded.is_planar
         edits = setting_edits(setting, loaded)

@@ -37,6 +37,7 @@ from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.compiled_io import CompiledCtrlWrite, CompiledStateRead, ReadResult
 from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
 from amlip_qp.sim.plant_files import resolve_plant_source
+from amlip_qp.sim.plant_start import STAND_KEYFRAME, stand_qpos
 from amlip_qp.sim.sensors import imu_spec_edit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -53,12 +54,16 @@ _DOF_SIZE = {_FREE: 6, _BALL: 3, _SLIDE: 1, _HINGE: 1}
 def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit] = ()) -> Plant:
     """Load the plant ``source`` (a plant name of ``robot`` or an MJCF path) for ``robot``'s controller.
 
-    The model is read with ``mujoco.MjSpec.from_file``; every edit of ``edits``
-    is applied in order, then the IMU (:func:`amlip_qp.sim.sensors.imu_spec_edit`) and the
-    feet's contact sensors (:func:`amlip_qp.sim.contact_sensors.contact_spec_edit`), then it is compiled.
+    The model is read with ``mujoco.MjSpec.from_file``. A model without a
+    ``stand`` keyframe gets one first: the controller's stand pose mapped by
+    joint name, with its loop closures closed (:func:`amlip_qp.sim.plant_start.stand_qpos`).
+    Then every edit of ``edits`` is applied in order, then the IMU
+    (:func:`amlip_qp.sim.sensors.imu_spec_edit`) and the feet's contact sensors
+    (:func:`amlip_qp.sim.contact_sensors.contact_spec_edit`), then it is compiled.
 
     Raises:
-        InputError: An unknown plant name.
+        InputError: An unknown plant name, or a plant without a ``stand``
+            keyframe whose start pose cannot be inferred (the message says why).
         ModelFileError: The file does not exist.
         MJCFError: MuJoCo cannot load or compile it.
         PlantMismatchError: It lacks joints, actuators or bodies of the controller's model.
@@ -68,6 +73,12 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
         spec = mujoco.MjSpec.from_file(str(path))
     except Exception as exc:  # MuJoCo raises ValueError for XML errors
         raise MJCFError(f"{path}: MuJoCo cannot load the plant: {_one_line(exc)}") from exc
+    if spec.key(STAND_KEYFRAME) is None:
+        try:
+            bare = spec.copy().compile()
+        except Exception as exc:
+            raise MJCFError(f"{path}: MuJoCo cannot compile the plant: {_one_line(exc)}") from exc
+        spec.add_key(name=STAND_KEYFRAME, qpos=stand_qpos(Plant(bare, robot, name)).tolist())
     for edit in edits:
         edit(spec)
     has_base = spec.body(robot.base_body) is not None
@@ -106,6 +117,9 @@ class Plant:
         gear: Plant gear of each controller actuator, shape (nu,).
         ctrl_range: Plant control range of each controller actuator, shape (nu, 2) (+-inf: unlimited).
         free_base: True when a free joint on the base body floats it.
+        qpos_adr: Plant qpos address of each entry of the controller's MuJoCo
+            qpos, shape (controller nq,); -1 where the plant has none (the
+            controller's free joint, for a base floated by other joints).
 
     Raises:
         PlantMismatchError: The plant lacks joints, actuators or bodies (all named in one line).
@@ -123,7 +137,7 @@ class Plant:
         self.base_body_id = body_ids[0]
         self.foot_body_ids = dict(zip(robot.foot_sides, body_ids[1:]))
         # joints: the controller's, by name and type (the free root joint: the base body's free joint)
-        qsrc = np.empty(int(ctrl_model.nq), dtype=np.intp)
+        qsrc = np.full(int(ctrl_model.nq), -1, dtype=np.intp)
         vsrc = np.empty(int(ctrl_model.nv), dtype=np.intp)
         self.free_base = False
         free_on_base = [
@@ -157,6 +171,7 @@ class Plant:
                 f"plant {name} does not fit the {robot.name} controller: it lacks {', '.join(missing)} "
                 "(a plant needs the controller's actuators, measured joints and base body, by name)"
             )
+        self.qpos_adr = qsrc
         ids = self.actuator_ids
         self.gear = model.actuator_gear[ids, 0].astype(float)
         limited = model.actuator_ctrllimited[ids].astype(bool)

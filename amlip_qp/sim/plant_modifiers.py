@@ -27,10 +27,29 @@ from amlip_qp.exceptions import InputError, MJCFError
 #: Type of one edit: it changes a plant's spec in place, before compilation.
 SpecEdit = Callable[[mujoco.MjSpec], None]
 
-#: Bounds of the modifiers (beyond them the value is taken for a typo).
+#: Bounds of the modifiers: the range in which the plant is still a robot MuJoCo simulates faithfully
+#: (beyond them the value is a typo or a model that diverges). Measured with
+#: ``amlip-qp walk --duration 1 --plant P --plant-mass-scale S`` (and ``--plant-spring-scale S``) for the
+#: plants cassie and cassie-closed-chain, MuJoCo 4.0.1:
+#:
+#: - mass scale ``[0.1, 10]``: at 0.01 the closed-chain plant diverges (mean base speed 32 m/s over
+#:   its 0.13 s; 418 m/s at 0.001): the bodies of its loops (rods, cranks, spring links of 0.12-0.19 kg)
+#:   weigh grams there, while the springs and the rotor inertias keep their values. From 0.1 to 10 both
+#:   plants walk, or fall at walking speeds (a mismatch the controller does not survive is a result,
+#:   not an error); unactuated from the stand keyframe, they fall without MuJoCo's instability warning
+#:   at the bounds and with it past them (``tests/test_sim_plant_modifiers.py``).
+#: - spring scale ``[0, 10]``: 0 removes the springs (a limp plant); at 10 Cassie's knee and heel
+#:   springs (1500 and 1250 N m/rad) deflect ten times less under the body weight, near rigid.
+#:   MuJoCo's explicit springs diverge at the 0.5 ms step from 200 x on the closed chain (it falls at
+#:   0.00 s with a mean base speed of 680 m/s) and from 500 x on cassie.xml; 10 keeps a factor 20.
+#: - friction ``[1e-5, 10]``: MuJoCo raises any coefficient below ``mjMINMU`` = 1e-5 to it; 10 is an
+#:   order of magnitude above rubber on dry concrete (about 1).
+MIN_MASS_SCALE = 0.1
 MAX_MASS_SCALE = 10.0
+MAX_SPRING_SCALE = 10.0
 MAX_PAYLOAD_KG = 100.0
 MAX_PAYLOAD_OFFSET_M = 1.0
+MIN_FRICTION = float(mujoco.mjMINMU)
 MAX_FRICTION = 10.0
 MAX_DELAY_TICKS = 100
 
@@ -50,7 +69,7 @@ class PlantModifiers:
 
     Attributes:
         mass_scale: Factor on the mass and the rotational inertia of every body
-            (their CoMs stay where they are), in (0, 10]. Rotor inertias
+            (their CoMs stay where they are), in [0.1, 10]. Rotor inertias
             (joint armature) are the motors', not the bodies', and stay.
         payload_kg: Mass of a box welded to the base body, kg, in [0, 100];
             0 adds nothing. The box is 0.2 x 0.15 x 0.1 m (x, y, z in the base
@@ -59,10 +78,10 @@ class PlantModifiers:
             (each coordinate within 1 m); only with ``payload_kg > 0``.
         spring_scale: Factor on every joint and tendon stiffness (Cassie's
             knee/shin and heel springs, ``cassie.xml``'s achilles tendons,
-            whatever springs the plant has), >= 0 (0 removes the springs).
+            whatever springs the plant has), in [0, 10] (0 removes the springs).
         friction: The sliding friction coefficient of every foot-floor contact
             (sets the floor's and every geom's that can touch it; see
-            :class:`FrictionEdit`), in (0, 10]; ``None`` keeps the model's.
+            :class:`FrictionEdit`), in [1e-5, 10]; ``None`` keeps the model's.
         actuator_delay_ticks: Whole controller ticks between the controller's
             command and the plant's actuators, in [0, 100] (see
             :class:`ActuatorDelay`).
@@ -80,10 +99,10 @@ class PlantModifiers:
 
     def __post_init__(self):
         s = self.mass_scale
-        if not _finite(s) or not 0.0 < s <= MAX_MASS_SCALE:
+        if not _finite(s) or not MIN_MASS_SCALE <= s <= MAX_MASS_SCALE:
             raise InputError(
-                f"plant mass scale (--plant-mass-scale) must be a number in (0, {MAX_MASS_SCALE:g}], got {s!r}; "
-                "e.g. 0.8 or 1.2"
+                f"plant mass scale (--plant-mass-scale) must be a number in [{MIN_MASS_SCALE:g}, {MAX_MASS_SCALE:g}], "
+                f"got {s!r}; e.g. 0.8 or 1.2"
             )
         kg = self.payload_kg
         if not _finite(kg) or not 0.0 <= kg <= MAX_PAYLOAD_KG:
@@ -108,14 +127,16 @@ class PlantModifiers:
                 f"payload position {self.payload_pos_m} given with a 0 kg payload; give a mass > 0 kg or no position"
             )
         k = self.spring_scale
-        if not _finite(k) or k < 0.0:
+        if not _finite(k) or not 0.0 <= k <= MAX_SPRING_SCALE:
             raise InputError(
-                f"plant spring scale (--plant-spring-scale) must be a finite number >= 0, got {k!r}; e.g. 0.8"
+                f"plant spring scale (--plant-spring-scale) must be a number in [0, {MAX_SPRING_SCALE:g}], "
+                f"got {k!r}; e.g. 0.8"
             )
         mu = self.friction
-        if mu is not None and (not _finite(mu) or not 0.0 < mu <= MAX_FRICTION):
+        if mu is not None and (not _finite(mu) or not MIN_FRICTION <= mu <= MAX_FRICTION):
             raise InputError(
-                f"friction (--friction) must be a coefficient in (0, {MAX_FRICTION:g}], got {mu!r}; e.g. 0.5"
+                f"friction (--friction) must be a coefficient in [{MIN_FRICTION:g}, {MAX_FRICTION:g}], got {mu!r}; "
+                "e.g. 0.5"
             )
         n = self.actuator_delay_ticks
         if not isinstance(n, numbers.Integral) or isinstance(n, bool) or not 0 <= n <= MAX_DELAY_TICKS:

@@ -209,11 +209,22 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
     The CLI calls this before simulating; so may any caller that takes
     commands from people.
 
+    A run must also last at least one control tick
+    (:data:`amlip_qp.sim.factory.CONTROL_DT_S`, 0.5 ms), so that a too short
+    one is refused here rather than once its closed loop is built.
+
     Raises:
         InputError: Naming the bound and the value, e.g. a forward speed
             outside ``CommandBounds.vx_mps``, a lateral command for a planar
-            robot, or a push that ends after the run.
+            robot, a push that ends after the run, or a run shorter than a tick.
     """
+    from amlip_qp.sim.factory import CONTROL_DT_S  # the closed loop's period (a heavy import, once)
+
+    if not scenario.duration_s >= CONTROL_DT_S:
+        raise InputError(
+            f"duration {scenario.duration_s!r} s is shorter than one control tick ({CONTROL_DT_S} s); "
+            "give --duration of at least that"
+        )
     profile = profile or get_profile(scenario.robot)
     if profile.planar:
         lateral = [f"lateral speed ({scenario.vy_mps:g} m/s)"] if scenario.vy_mps != 0.0 else []

@@ -178,7 +178,9 @@ def parse_terrain(text: str) -> TerrainSpec:
     Raises:
         InputError: Anything malformed (one line saying what to give): an
             unknown kind, a wrong number of fields, non-numbers, a slope of
-            45 deg or more, heights or sizes <= 0, a missing or unreadable PNG.
+            45 deg or more, heights or sizes <= 0, a missing or unreadable PNG,
+            or one of more than :data:`~amlip_qp.sim.terrain_grids.MAX_HFIELD_PIXELS`
+            pixels (read from its header: nothing is decoded).
     """
     spec = str(text).strip()
     kind, _, rest = spec.partition(":")
@@ -191,7 +193,11 @@ def parse_terrain(text: str) -> TerrainSpec:
         sx = _positive("SIZE_X_M", parts[1], spec, 1000.0)
         sy = _positive("SIZE_Y_M", parts[2], spec, 1000.0)
         h = _positive("HEIGHT_M", parts[3], spec, 100.0)
-        grid = G.png_grid(G.read_gray_png(path), sx, sy, h, HFIELD_BACK_M)
+        try:
+            gray = G.read_gray_png(path)
+        except InputError as exc:
+            raise InputError(f"--terrain {spec!r}: {exc}") from None
+        grid = G.png_grid(gray, sx, sy, h, HFIELD_BACK_M)
         canon = f"hfield:{path}:{_num(sx)}:{_num(sy)}:{_num(h)}"
         return TerrainSpec("hfield", canon, (sx, sy, h), path, grid)
     fields = rest.split(":") if rest else []

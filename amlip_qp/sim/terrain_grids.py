@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 import os
+import struct
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +36,15 @@ FLAT_PATCH_BLEND_M = 1.5
 #: Rough ground: wavelengths of its random plane waves, m (shortest, longest) and how many.
 ROUGH_WAVELENGTHS_M = (0.6, 3.0)
 ROUGH_MODES = 24
+#: Most pixels of a height map (``hfield:PATH.png``): 4096 x 4096 = 16,777,216. MuJoCo keeps a height
+#: field as one float32 a sample and builds it from a Python list of them: loading the Cassie plant on
+#: a 4096 x 4096 map took 2.8 s and 1.0 GB of peak memory (2048 x 2048: 0.7 s, 0.37 GB); only
+#: decoding a 12000 x 12000 one took 4.5 s and 2.3 GB, with Pillow's decompression-bomb warning
+#: (its limit: 89.5 million pixels). 4096 columns over a 20 m map are 5 mm apart, finer than the
+#: 20 mm radius of Cassie's foot contacts.
+MAX_HFIELD_PIXELS = 4096 * 4096
+#: The 8-byte signature of a PNG file, followed by its IHDR chunk (width, height: big-endian uint32).
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,16 +171,57 @@ def waves_grid(height_m: float, wavelength_m: float, start_x_m: float) -> Height
     return _from_heights(start_x_m, -HALF_WIDTH_M, dx, dy, np.tile(profile, (ys.size, 1)))
 
 
+def _too_large(path: str, what: str) -> str:
+    return (
+        f"height map {path} has {what}; at most {MAX_HFIELD_PIXELS} pixels (4096 x 4096) are read: "
+        "downsample it (MuJoCo holds every pixel of a height field in memory)"
+    )
+
+
+def image_size(path: str) -> tuple[int, int] | None:
+    """``(columns, rows)`` of the image at ``path`` from its header, without decoding it; ``None`` if unknown.
+
+    A PNG's IHDR chunk is read directly; other formats through Pillow's lazy
+    ``Image.open``.
+
+    Raises:
+        InputError: Pillow refuses to open the image at all (more than twice its
+            decompression-bomb limit, far above :data:`MAX_HFIELD_PIXELS`).
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(24)
+    if head[:8] == _PNG_SIGNATURE and head[12:16] == b"IHDR":
+        cols, rows = struct.unpack(">II", head[16:24])
+        return int(cols), int(rows)
+    from PIL import Image
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as img:
+                return int(img.size[0]), int(img.size[1])
+    except Image.DecompressionBombError:
+        raise InputError(_too_large(path, "more pixels than Pillow opens")) from None
+    except Exception:  # not an image Pillow knows: the decoder below says so
+        return None
+
+
 def read_gray_png(path: str) -> np.ndarray:
     """The PNG at ``path`` as gray levels in [0, 1], shape (rows, cols), top row first.
 
-    Colour images are averaged over R, G, B (alpha ignored).
+    Colour images are averaged over R, G, B (alpha ignored). Its size is read
+    from the header first: more than :data:`MAX_HFIELD_PIXELS` pixels are
+    refused before any decoding.
 
     Raises:
-        InputError: Missing, unreadable, or smaller than 2 x 2 pixels.
+        InputError: Missing, unreadable, smaller than 2 x 2 pixels, or larger
+            than :data:`MAX_HFIELD_PIXELS` pixels.
     """
     if not os.path.isfile(path):
         raise InputError(f"height map not found: {path}; give the path of a grayscale PNG")
+    size = image_size(path)
+    if size is not None and size[0] * size[1] > MAX_HFIELD_PIXELS:
+        raise InputError(_too_large(path, f"{size[0]} x {size[1]} pixels"))
     import imageio.v3 as iio
 
     try:

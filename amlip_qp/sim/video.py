@@ -23,6 +23,14 @@ from amlip_qp.exceptions import AmlipError, InputError
 
 #: File suffixes the recorder writes.
 VIDEO_SUFFIXES = (".mp4", ".gif")
+#: Highest frame rate, frames per simulated second (the video plays in real time): 240 Hz, the refresh
+#: rate of the fastest common displays. More frames are never shown but are each rendered and encoded:
+#: libx264 warns past its level limits ("MB rate > level limit"), and above the control rate a frame
+#: is rendered every 0.5 ms tick: ``walk --duration 0.5 --video v.mp4`` took 97 s (1,000 frames) at
+#: ``--video-fps 1e9``, 21 s at 240 and 4.6 s at 30 (EGL rendering on this project's 2-core machine).
+MAX_VIDEO_FPS = 240.0
+#: Highest frame rate of a ``.gif``, frames per s: GIF frame delays are whole hundredths of a second.
+MAX_GIF_FPS = 100.0
 
 
 class RenderError(AmlipError):
@@ -41,6 +49,21 @@ def check_video_path(path: str | os.PathLike) -> Path:
     if p.suffix.lower() not in VIDEO_SUFFIXES:
         raise InputError(f"video file must end in .mp4 or .gif, got {str(path)!r}")
     return p
+
+
+def check_video_fps(fps: float, path: str | os.PathLike | None = None) -> float:
+    """``fps`` as a float if ``0 < fps <= MAX_VIDEO_FPS`` (``<= MAX_GIF_FPS`` for a ``.gif`` ``path``).
+
+    Raises:
+        InputError: One line naming ``--video-fps`` and the bound.
+    """
+    gif = path is not None and Path(path).suffix.lower() == ".gif"
+    high = MAX_GIF_FPS if gif else MAX_VIDEO_FPS
+    value = float(fps) if isinstance(fps, (int, float)) and not isinstance(fps, bool) else float("nan")
+    if not (np.isfinite(value) and 0.0 < value <= high):
+        why = "a .gif's frame delays are whole hundredths of a second" if gif else "the fastest displays' refresh rate"
+        raise InputError(f"--video-fps must be in (0, {high:g}] frames/s ({why}), got {fps!r}")
+    return value
 
 
 def _default_backend_usable() -> bool:
@@ -98,7 +121,8 @@ class VideoRecorder:
     Args:
         model: The ``mujoco.MjModel``.
         path: Output file, ``.mp4`` or ``.gif``.
-        fps: Frames per simulated second (also the playback rate: real time).
+        fps: Frames per simulated second (also the playback rate: real time), in
+            ``(0, MAX_VIDEO_FPS]`` (``(0, MAX_GIF_FPS]`` for a ``.gif``, :func:`check_video_fps`).
         width, height: Frame size, pixels.
         camera: Camera name (the robots' models define ``track``).
     """
@@ -115,8 +139,7 @@ class VideoRecorder:
         import mujoco
 
         self.path = check_video_path(path)
-        if not (fps > 0 and np.isfinite(fps)):
-            raise InputError(f"fps must be a positive number, got {fps!r}")
+        fps = check_video_fps(fps, self.path)
         if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera) < 0:
             raise InputError(f"the model has no camera named {camera!r}")
         width = min(int(width), int(model.vis.global_.offwidth))

@@ -26,6 +26,10 @@ Grid cells are the product of the parameters, the first one varying slowest.
 Random sampling draws each parameter per sample (a list: one of its values; a
 range with ``num`` or ``step``: one of its points; ``{start, stop}``: uniform)
 with ``numpy.random.default_rng(sampling_seed)``; duplicate cells are dropped.
+
+A sweep has at most :data:`MAX_CELLS` cells (the product of the grid's sizes,
+or the random samples), counted from the sizes before anything is expanded,
+and a bisection at most :data:`MAX_BISECTION_ITERATIONS` iterations.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from amlip_qp.exceptions import InputError
+from amlip_qp.sim.robustness import MAX_BISECTION_ITERATIONS
 from amlip_qp.sweep.cells import Cell
 
 if sys.version_info >= (3, 11):
@@ -46,6 +51,11 @@ else:  # pragma: no cover - Python 3.10: the same parser as a package (a depende
 
 #: Significant digits that range points are rounded to (0.6000000000000001 -> 0.6).
 RANGE_DIGITS = 12
+#: Most cells of a sweep: 100,000. Before anything runs every cell's walk options are parsed and
+#: checked, 2.8 ms a cell (10,000 Cassie cells in 28 s, measured), so 4.7 min at the bound; then each
+#: cell is a walk of seconds (about 3 days for 100,000 cells of 6 s on 2 cores, hours on a Ray
+#: cluster), and one record file in ``cells/``. A larger sweep is several sweeps, or random sampling.
+MAX_CELLS = 100_000
 _SECTIONS = ("sweep", "fixed", "parameters", "bisect")
 _SWEEP_KEYS = ("sampling", "samples", "sampling_seed", "metrics")
 _BISECT_KEYS = ("parameter", "low", "high", "iterations")
@@ -60,6 +70,15 @@ class Range:
     stop: float
     num: int | None = None
     step: float | None = None
+
+    def count(self) -> float:
+        """How many points :meth:`points` gives, without listing them (a float: a huge range may be ``inf``)."""
+        if self.num is not None:
+            return float(self.num)
+        if self.step is not None:
+            spans = (self.stop - self.start) / self.step
+            return math.floor(spans + 1e-9) + 1.0 if math.isfinite(spans) else math.inf
+        return 1.0
 
     def points(self) -> list[float | int]:
         """The range's points (ints when start and step are ints), rounded to :data:`RANGE_DIGITS` digits."""
@@ -202,6 +221,11 @@ def parse_spec(doc: dict[str, Any]) -> SweepSpec:
             raise InputError("[bisect] needs a parameter name and numbers low < high")
         if b["low"] >= b["high"] or isinstance(it, bool) or not isinstance(it, int) or it < 0:
             raise InputError(f"[bisect] needs low < high and iterations >= 0, got {b['low']}, {b['high']}, {it!r}")
+        if it > MAX_BISECTION_ITERATIONS:
+            raise InputError(
+                f"[bisect] iterations must be at most {MAX_BISECTION_ITERATIONS} (each halves the interval and is "
+                f"one more walk per cell), got {it}"
+            )
         bisect = Bisect(b["parameter"], float(b["low"]), float(b["high"]), it)
     spec = SweepSpec(
         parameters={k: _swept(k, v) for k, v in doc.get("parameters", {}).items()},
@@ -238,6 +262,28 @@ def check_structure(spec: SweepSpec) -> None:
         raise InputError(f"parameter {both[0]!r} is given twice (swept, fixed or bisected): give it once")
     if spec.bisect is not None and spec.metrics is not None:
         raise InputError("a bisection cell reports max_<parameter>; leave [sweep] metrics out with [bisect]")
+    count = cell_count(spec)
+    if count > MAX_CELLS:
+        sizes = " x ".join(f"{_count(v):g}" for v in spec.parameters.values())
+        what = f"{count:g} random samples" if spec.sampling == "random" else f"{count:g} cells ({sizes})"
+        raise InputError(
+            f"the sweep has {what}; at most {MAX_CELLS} cells are run (each is checked, then walked, for "
+            "seconds): split it or sample it (sampling = 'random')"
+        )
+
+
+def _count(v: list[Any] | Range) -> float:
+    return v.count() if isinstance(v, Range) else float(len(v))
+
+
+def cell_count(spec: SweepSpec) -> float:
+    """The number of cells before duplicates are dropped: the product of the grid's sizes, or the samples.
+
+    Nothing is expanded, so a spec of 1e9 cells is counted at once (a float: ``inf`` past 1e308).
+    """
+    if spec.sampling == "random":
+        return float(spec.samples or 0)
+    return math.prod(_count(v) for v in spec.parameters.values())
 
 
 def parse_cli_value(text: str) -> Any:

@@ -23,7 +23,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 MODELS_DIR = REPO / "amlip_qp" / "models"
-DEFAULT_PARAMS = Path(__file__).resolve().parents[3] / "shared" / "reference" / "cassie_parameters.json"
+#: The parameter sheet vendored in the repository (models/reference/, MIT licence, credits in NOTICE).
+DEFAULT_PARAMS = REPO / "models" / "reference" / "cassie_parameters.json"
 
 SIDES = ("left", "right")
 #: Per-leg joints of the sheet's 35-element standing qpos, in its order, with qpos widths.
