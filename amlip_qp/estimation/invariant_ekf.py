@@ -111,6 +111,22 @@ class EkfNoise:
                 raise InputError(f"EkfNoise.{name} must be a positive finite number, got {value!r}")
 
 
+def noise_from_table(table) -> EkfNoise:
+    """:class:`EkfNoise` from a profile's ``[estimator]`` table (field name -> number); every other
+    field keeps its default.
+
+    Raises:
+        InputError: An unknown key (naming the known ones) or a value :class:`EkfNoise` refuses.
+    """
+    known = tuple(EkfNoise.__dataclass_fields__)
+    for key, value in table.items():
+        if key not in known:
+            raise InputError(f"[estimator]: unknown key {key!r} (known: {', '.join(known)})")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"[estimator]: {key} must be a number, got {value!r}")
+    return EkfNoise(**{k: float(v) for k, v in table.items()})
+
+
 @dataclass(frozen=True)
 class EkfState:
     """A copy of the filter state (see :class:`InvariantEKF` for the fields)."""

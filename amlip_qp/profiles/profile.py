@@ -190,6 +190,8 @@ class RobotProfile:
         settings: Setting name -> its table: plants, sensors and estimators the robot's
             scenarios are copied onto (each copy named ``SCENARIO-SETTING``).
         mismatches: Name -> table of plant modifiers: copies of one scenario under model mismatch.
+        estimator: The invariant EKF's settings that differ from their defaults (field name ->
+            number, :class:`~amlip_qp.estimation.invariant_ekf.EkfNoise`).
     """
 
     name: str
@@ -210,6 +212,7 @@ class RobotProfile:
     scenarios: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     mismatches: Mapping[str, Any] = field(default_factory=dict)
+    estimator: Mapping[str, Any] = field(default_factory=dict)
     _built: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property

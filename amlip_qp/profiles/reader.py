@@ -333,7 +333,9 @@ def read_profile(path: str | Path) -> RobotProfile:
         imu = imu_t.vector("pos_in_base_m", 3, unit="m")
         imu_t.done()
     raw = {}
-    for key in ("scenarios", "settings", "mismatches"):  # checked key by key by amlip_qp.sim.scenario_tables
+    # scenarios, settings, mismatches: checked key by key by amlip_qp.sim.scenario_tables;
+    # estimator: by amlip_qp.estimation.invariant_ekf.noise_from_table
+    for key in ("scenarios", "settings", "mismatches", "estimator"):
         t = top.table(key, required=False)
         raw[key] = {} if t is None else t.data
     profile = RobotProfile(
@@ -355,6 +357,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         scenarios=raw["scenarios"],
         settings=raw["settings"],
         mismatches=raw["mismatches"],
+        estimator=raw["estimator"],
     )
     top.done()
     if planar != (gait.step_width_m == 0.0):

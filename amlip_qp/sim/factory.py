@@ -178,8 +178,12 @@ def build_simulation(
     if estimator != "truth":  # the truth needs no estimator object: the harness gives the true base
         from amlip_qp.estimation import make_base_estimator
 
+        from amlip_qp.estimation.invariant_ekf import noise_from_table
+
         imu_pos = robot.profile.imu_pos_in_base_m if robot.profile else (0.0, 0.0, 0.0)
-        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu_pos)
+        table = robot.profile.estimator if robot.profile is not None else {}
+        ekf_noise = noise_from_table(table) if table else None
+        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu_pos, ekf_noise)
     if setting.terrain_aware:
         from amlip_qp.sim.terrain import ground_height_function
 
