@@ -177,7 +177,6 @@ def build_simulation(
     options: dict = {}
     if estimator != "truth":  # the truth needs no estimator object: the harness gives the true base
         from amlip_qp.estimation import make_base_estimator
-
         from amlip_qp.estimation.invariant_ekf import noise_from_table
 
         imu_pos = robot.profile.imu_pos_in_base_m if robot.profile else (0.0, 0.0, 0.0)
