@@ -201,6 +201,7 @@ BAD_INPUTS = [
     (["compare", "--robots", "cassie,atlas"], "argument --robots: unknown robot 'atlas'"),
     (["compare", "--robots", ","], "expected a comma-separated list of robots"),
     (["walk", "--robot", "{tmp}/nothing.toml"], "robot profile not found"),
+    (["walk", "--robot", "g1", "--tracker", "pbc"], "the pbc tracker does not run on g1: its IK needs one output"),
     (["walk", "--robot", "{file}.toml"], "robot profile not found"),
     (["compare", "--jobs", "1", "--scenario", "moonwalk"], "unknown scenario"),
     (["bench", "codegen", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),

@@ -103,6 +103,17 @@ def test_an_invalid_tracker_table_is_named_when_the_configuration_is_built(tmp_p
         profile.tracker_config("mpc")
 
 
+def test_a_tracker_the_profile_says_cannot_run_is_refused_with_its_reason(tmp_path):
+    path = _profile_copy(tmp_path, CASSIE_TOML + '\n[unsupported]\npbc = "no knees"\n')
+    profile = read_profile(path)
+    with pytest.raises(InputError, match="the pbc tracker does not run on cassie: no knees"):
+        profile.tracker_config("pbc")
+    profile.check_supported("qp")  # the others still run
+    bad = _profile_copy(tmp_path, CASSIE_TOML + '\n[unsupported]\nlqr = "no"\n', "bad.toml")
+    with pytest.raises(ProfileError, match="unsupported: unknown tracker 'lqr'"):
+        read_profile(bad)
+
+
 def test_files_that_are_missing_or_not_toml_are_one_line_errors(tmp_path):
     with pytest.raises(ProfileError, match="robot profile not found: .*nothing.toml"):
         read_profile(tmp_path / "nothing.toml")

@@ -190,6 +190,8 @@ class RobotProfile:
         settings: Setting name -> its table: plants, sensors and estimators the robot's
             scenarios are copied onto (each copy named ``SCENARIO-SETTING``).
         mismatches: Name -> table of plant modifiers: copies of one scenario under model mismatch.
+        unsupported: Tracker name -> why it cannot run on this robot (a structural reason, said
+            in one line when the tracker is asked for; never a silent fallback).
         estimator: The invariant EKF's settings that differ from their defaults (field name ->
             number, :class:`~amlip_qp.estimation.invariant_ekf.EkfNoise`).
     """
@@ -213,6 +215,7 @@ class RobotProfile:
     settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     mismatches: Mapping[str, Any] = field(default_factory=dict)
     estimator: Mapping[str, Any] = field(default_factory=dict)
+    unsupported: Mapping[str, str] = field(default_factory=dict)
     _built: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
@@ -225,13 +228,20 @@ class RobotProfile:
         template = self.joint_roles.get(role)
         return None if template is None else template.format(side=side)
 
+    def check_supported(self, tracker: str) -> None:
+        """Raise :class:`InputError` with the profile's reason if ``tracker`` cannot run on this robot."""
+        if tracker in self.unsupported:
+            raise InputError(f"the {tracker} tracker does not run on {self.name}: {self.unsupported[tracker]}")
+
     def tracker_config(self, tracker: str) -> Any:
         """The tuned configuration of ``tracker`` for this robot, built from its table.
 
         Raises:
-            InputError: No configuration for that tracker, or its table is invalid (the message
-                names the key and the profile file).
+            InputError: No configuration for that tracker, the profile says why it does not run on
+                this robot (``[unsupported]``), or its table is invalid (the message names the key
+                and the profile file).
         """
+        self.check_supported(tracker)
         if tracker not in self.trackers:
             known = ", ".join(sorted(self.trackers)) or "none"
             raise InputError(f"robot {self.name!r} has no {tracker!r} tracker configuration; known: {known}")

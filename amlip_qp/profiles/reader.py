@@ -327,6 +327,14 @@ def read_profile(path: str | Path) -> RobotProfile:
         for plant in list(plants_t.data):
             plants[plant] = _path(plants_t, plant, base)
         plants_t.done()
+    unsupported_t = top.table("unsupported", required=False)
+    unsupported = {}
+    if unsupported_t is not None:
+        for tracker in list(unsupported_t.data):
+            if tracker not in TRACKER_CONFIG_BUILDERS:
+                unsupported_t.fail(f"unknown tracker {tracker!r} (known: {', '.join(TRACKER_CONFIG_BUILDERS)})")
+            unsupported[tracker] = unsupported_t.string(tracker)
+        unsupported_t.done()
     imu_t = top.table("imu", required=False)
     imu = (0.0, 0.0, 0.0)
     if imu_t is not None:
@@ -358,6 +366,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         settings=raw["settings"],
         mismatches=raw["mismatches"],
         estimator=raw["estimator"],
+        unsupported=unsupported,
     )
     top.done()
     if planar != (gait.step_width_m == 0.0):

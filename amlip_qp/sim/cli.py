@@ -198,6 +198,7 @@ def run_walk(args: argparse.Namespace) -> int:
     from amlip_qp.sim import factory, summary
 
     scenario = scenario_from_args(args)
+    get_profile(scenario.robot).check_supported(args.tracker)
     _check_output_paths(args)
     check_plant(scenario)
     noise = SensorNoise() if args.noise else None

@@ -198,11 +198,14 @@ def default_gains(robot: Robot) -> PBCGains:
     for that model.
 
     Raises:
-        InputError: The profile's ``[trackers.pbc]`` table is invalid.
+        InputError: The profile's ``[trackers.pbc]`` table is invalid, or its ``[unsupported]``
+            table says why the PBC does not run on this robot.
     """
     from amlip_qp.profiles import PROFILES
 
     profile = robot.profile
+    if profile is not None:
+        profile.check_supported("pbc")
     if profile is None or "pbc" not in profile.trackers:
         springy = bool(robot.couplings or len(robot.passive_v_idx))
         candidates = [p for p in PROFILES.values() if "pbc" in p.trackers]

@@ -99,6 +99,8 @@ class PBCTracker(Tracker):
 
     def __init__(self, robot: Robot, gains: PBCGains | None = None, ik_settings: IKSettings | None = None):
         self.robot = robot
+        if robot.profile is not None:
+            robot.profile.check_supported("pbc")  # the profile's reason, before the IK's own check
         self.gains = gains or default_gains(robot)
         self.ik = IterativeIK(robot, ik_settings)
         nv = robot.nv

@@ -217,6 +217,8 @@ def default_config(robot: Robot) -> QPConfig:
     from amlip_qp.robots.outputs import output_layout
 
     profile = robot.profile
+    if profile is not None:
+        profile.check_supported("qp")
     if profile is None or "qp" not in profile.trackers:
         layout = output_layout(robot)
         profile = next(p for p in PROFILES.values() if p.output_layout == layout and "qp" in p.trackers)
