@@ -44,3 +44,12 @@ def test_generated_code_is_prepared_once_per_robot_and_tracker(monkeypatch):
     assert len(tasks) > 4  # nominal, ramp and push runs per pair
     compare.prepare_generated_code(tasks)
     assert sorted(built) == [("cassie", "pbc"), ("cassie", "qp"), ("rabbit", "pbc"), ("rabbit", "qp")]
+
+
+def test_a_tracker_a_profile_says_cannot_run_is_skipped_with_its_reason():
+    from amlip_qp.profiles import get_profile
+    from amlip_qp.sim.compare import unsupported_pairs
+
+    reason = get_profile("g1").unsupported["pbc"]
+    assert unsupported_pairs(["cassie", "g1"], ["pbc", "qp"]) == [("g1", "pbc", reason)]
+    assert unsupported_pairs(["cassie", "h1", "rabbit"], ["pbc", "qp"]) == []

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import compared_robots
+from amlip_qp.profiles import compared_robots, get_profile
 from amlip_qp.sim.robustness import (
     PUSH_DURATION_S,
     QUICK,
@@ -107,6 +107,16 @@ def _execute(task: _Task) -> dict[str, Any]:
     return out
 
 
+def unsupported_pairs(robots: list[str], trackers: list[str]) -> list[tuple[str, str, str]]:
+    """``(robot, tracker, reason)`` of every pair a comparison skips: the robot's profile says the
+    tracker cannot run on it (``[unsupported]``)."""
+    out = []
+    for robot in robots:
+        reasons = get_profile(robot).unsupported
+        out += [(robot, trk, reasons[trk]) for trk in trackers if trk in reasons]
+    return out
+
+
 def build_tasks(
     robots: list[str],
     trackers: list[str],
@@ -139,6 +149,8 @@ def build_tasks(
             # fail fast (exit 2) on a plant that does not fit or cannot take the modifiers or the terrain
             load_plant(setting.plant or robot, loaded, edits=edits)
         for trk in trackers:
+            if trk in get_profile(robot).unsupported:
+                continue  # said by the handler (unsupported_pairs)
             tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise, setting))
             if ramp:
                 tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), settings, seed, noise, setting))
@@ -345,6 +357,8 @@ def main(args: argparse.Namespace) -> int:
         sys.stderr.write(msg + "\n")
         sys.stderr.flush()
 
+    for robot, trk, reason in unsupported_pairs(robots, list(args.trackers)):
+        log(f"compare: {robot}/{trk} skipped: the {trk} tracker does not run on {robot}: {reason}")
     log(f"compare: {len(tasks)} experiments on {args.jobs} process(es)...")
     t0 = time.perf_counter()
     if args.jobs > 1:
