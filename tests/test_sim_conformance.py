@@ -82,6 +82,7 @@ def test_every_bundled_profile_passes_the_model_checks(bundled_results, robot):
     # every site of the library (contact and force sites of both feet) is among those compared
     n_sites = int(re.search(r"over (\d+) sites", results[C.SITES_NAME].detail).group(1))
     assert n_sites >= len({*loaded.contact_sites.values(), *(s for f in loaded.force_sites.values() for s in f)})
+    assert results[C.NAMES_NAME].value == 0
     assert results[C.ROLES_NAME].value == 2 * len(loaded.profile.joint_roles)
     lo, hi = C.STAND_GAP_M
     assert lo <= results[C.FLOOR_NAME].value <= hi
@@ -127,7 +128,7 @@ def test_the_command_prints_one_line_per_check_and_writes_the_json(capsys, tmp_p
     assert code == 0, err
     lines = _lines(out)
     assert list(lines) == MODEL_AND_TICK_NAMES and {s for s, _ in lines.values()} == {"PASS"}
-    assert out.splitlines()[-1] == "rabbit: 8 passed, 0 failed, 0 skipped"
+    assert out.splitlines()[-1] == "rabbit: 9 passed, 0 failed, 0 skipped"
     report = json.loads(path.read_text())
     assert report["robot"] == "rabbit" and report["passed"] is True
     assert [c["name"] for c in report["checks"]] == MODEL_AND_TICK_NAMES
@@ -172,6 +173,16 @@ def test_straight_legs_fail_the_rank_check(capsys, tmp_path):
     assert abs(results[C.FLOOR_NAME].value) < 1e-9
     code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1 and C.RANK_NAME in _failed(out)
+
+
+def test_an_unnamed_free_joint_fails_the_joint_name_check(capsys, tmp_path):
+    """Menagerie's H1 leaves its free joint unnamed; without ``free_joint_name`` the plant cannot be mapped."""
+    profile = _profile_copy(tmp_path, "h1", {'free_joint_name = "floating_base"\n': ""})
+    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    assert code == 1
+    failed = _failed(out)
+    assert list(failed) == [C.NAMES_NAME]
+    assert failed[C.NAMES_NAME] == "1 of 20 joints have no name (the free joint: set free_joint_name in [model])"
 
 
 def test_a_role_naming_no_joint_fails_the_role_check(capsys, tmp_path):

@@ -6,6 +6,7 @@ check is one function returning a :class:`CheckResult` with one measured
 number:
 
 - :func:`check_mass`: MuJoCo and Pinocchio give the robot the same mass;
+- :func:`check_joint_names`: every joint has a name (the plant is mapped by name);
 - :func:`check_site_positions`, :func:`check_body_positions`: they place every
   site and every body alike at a few seeded random configurations;
 - :func:`check_joint_roles`: the profile's ``[roles]`` name joints of the model;
@@ -55,6 +56,7 @@ STAND_GAP_M = (-0.002, 0.01)
 
 #: The checks' names, as printed.
 MASS_NAME = "model loads in MuJoCo and Pinocchio"
+NAMES_NAME = "every joint has a name"
 SITES_NAME = "site positions agree"
 BODIES_NAME = "body positions agree"
 ROLES_NAME = "joint roles name joints of the model"
@@ -127,6 +129,21 @@ def check_mass(robot: Robot) -> CheckResult:
         else f"MuJoCo {m_mj:.9g} kg, Pinocchio {m_pin:.9g} kg"
     )
     return result(MASS_NAME, ok, diff, "kg", detail)
+
+
+def check_joint_names(robot: Robot) -> CheckResult:
+    """Every joint of the model has a name: the plant is mapped to the controller's model by joint name."""
+    import mujoco
+
+    m = robot.mj_model
+    unnamed = [j for j in range(m.njnt) if not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)]
+    if not unnamed:
+        return result(NAMES_NAME, True, 0.0, "", f"{m.njnt} joints, all named")
+    free = [j for j in unnamed if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
+    hint = "the free joint: set free_joint_name in [model]" if free else "name them in the MJCF"
+    return result(
+        NAMES_NAME, False, float(len(unnamed)), "", f"{len(unnamed)} of {m.njnt} joints have no name ({hint})"
+    )
 
 
 def random_configurations(robot: Robot, count: int = RANDOM_CONFIGURATIONS, seed: int = 0) -> list[np.ndarray]:
@@ -324,6 +341,7 @@ def check_output_rank(robot: Robot) -> CheckResult:
 #: The kinematic checks, in the order they run.
 MODEL_CHECKS: tuple[tuple[str, Callable[[Robot], CheckResult]], ...] = (
     (MASS_NAME, check_mass),
+    (NAMES_NAME, check_joint_names),
     (SITES_NAME, check_site_positions),
     (BODIES_NAME, check_body_positions),
     (ROLES_NAME, check_joint_roles),
