@@ -243,15 +243,24 @@ def test_tiny_torque_limits_fail_the_walk(capsys, tmp_path):
         (["check-robot", "{tmp}/missing.toml"], "robot profile not found"),
         (["check-robot", "{bad_key}"], "unknown key 'stride'"),
         (["check-robot", "{bad_joint}"], "the profile's stand pose names 'left_shin'"),
+        (["check-robot", "{bad_gain}"], "[trackers.qp]: unknown key 'output_gain'"),
         (["check-robot", "rabbit", "--json", "/proc/x"], "--json /proc/x: cannot write"),
     ],
-    ids=["unknown-robot", "missing-profile", "unknown-key", "stand-names-no-joint", "unwritable-json"],
+    ids=[
+        "unknown-robot",
+        "missing-profile",
+        "unknown-key",
+        "stand-names-no-joint",
+        "bad-tracker-key",
+        "unwritable-json",
+    ],
 )
 def test_bad_input_exits_2_with_one_line_before_any_check(capsys, tmp_path, argv, message):
     fill = {
         "tmp": str(tmp_path),
         "bad_key": _profile_copy(tmp_path, "h1", {"[gait]\n": "[gait]\nstride = 1.0\n"}),
         "bad_joint": _profile_copy(tmp_path, "h1", {"left_knee = 0.8": "left_shin = 0.8"}),
+        "bad_gain": _profile_copy(tmp_path, "h1", {"output_weight = ": "output_gain = "}),
     }
     code, out, err = _main([a.format(**fill) for a in argv], capsys)
     assert code == 2

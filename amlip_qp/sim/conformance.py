@@ -361,7 +361,8 @@ def _guarded(name: str, run: Callable[[], CheckResult]) -> CheckResult:
 def conformance_checks(robot_arg: str, walk: bool = True) -> Iterator[CheckResult]:
     """The checks of the robot ``robot_arg`` (a bundled name or a profile path), run one by one.
 
-    The robot is loaded first, so bad input raises here, before any check runs; the results
+    The robot is loaded and its profile's tracker tables are read first, so bad input raises
+    here, before any check runs; the results
     are then produced as the checks finish (the walk takes the longest).
 
     Args:
@@ -370,11 +371,15 @@ def conformance_checks(robot_arg: str, walk: bool = True) -> Iterator[CheckResul
 
     Raises:
         UnknownRobotError, ProfileError, ModelFileError, MJCFError: The robot cannot be loaded.
+        InputError: A ``[trackers.NAME]`` table of its profile is invalid.
     """
     from amlip_qp.sim import conformance_control as control
     from amlip_qp.sim import factory
 
     robot = factory.load(robot_arg)
+    if robot.profile is not None:
+        for tracker in robot.profile.tracker_configs:  # an invalid [trackers.NAME] table is bad input too
+            robot.profile.tracker_config(tracker)
 
     def run() -> Iterator[CheckResult]:
         for name, check in MODEL_CHECKS:
