@@ -27,11 +27,18 @@ TICK_TRACKERS: tuple[str, ...] = ("qp", "pbc")
 WALK_TRACKER = "qp"
 #: Simulated time of the walk in place, s.
 WALK_DURATION_S = 3.0
-#: The walk check's name.
-WALK_NAME = f"{WALK_DURATION_S:g} s walk in place ({WALK_TRACKER.upper()})"
 #: How far a torque may lie outside its limit and still count as inside, N m (N for a slide joint):
 #: ten times the QP tracker's ProxQP tolerance (1e-3), which bounds its torque-limit rows' residual.
 TORQUE_LIMIT_TOL_NM = 1e-2
+
+
+def walk_name(duration_s: float) -> str:
+    """The name of the walk check of ``duration_s``."""
+    return f"walk in place for {duration_s:g} s ({WALK_TRACKER.upper()})"
+
+
+#: The walk check's name.
+WALK_NAME = walk_name(WALK_DURATION_S)
 
 
 def tick_name(tracker: str) -> str:
@@ -143,7 +150,7 @@ def check_walk(robot_arg: str, robot: Robot, duration_s: float = WALK_DURATION_S
     from amlip_qp.sim import factory
     from amlip_qp.sim.scenarios import Scenario, check_scenario
 
-    name = WALK_NAME if duration_s == WALK_DURATION_S else f"{duration_s:g} s walk in place (QP)"
+    name = walk_name(duration_s)
     if robot.profile is None or WALK_TRACKER not in robot.profile.trackers:
         return _skip(name, WALK_TRACKER)
     scenario = Scenario("check-robot-in-place", robot_arg, duration_s, description="walk in place")
