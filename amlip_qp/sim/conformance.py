@@ -362,8 +362,8 @@ def conformance_checks(robot_arg: str, walk: bool = True) -> Iterator[CheckResul
     """The checks of the robot ``robot_arg`` (a bundled name or a profile path), run one by one.
 
     The robot is loaded and its profile's tracker tables are read first, so bad input raises
-    here, before any check runs; the results
-    are then produced as the checks finish (the walk takes the longest).
+    here, before any check runs; the results are then produced as the checks finish (the walk
+    takes the longest).
 
     Args:
         robot_arg: A bundled robot's name or a robot profile file's path.

@@ -74,7 +74,7 @@ def stand_tick(robot: Robot, tracker: str) -> TrackerResult:
     commanded to walk in place with the profile's gait.
 
     Raises:
-        InputError: The robot has no profile.
+        InputError: The robot has no profile, or its stand pose is not finite.
     """
     from amlip_qp.alip.messages import Command
     from amlip_qp.control.walking.controller import WalkingController
@@ -102,7 +102,8 @@ def stand_tick(robot: Robot, tracker: str) -> TrackerResult:
     )
     contact = dict.fromkeys(robot.foot_sides, True)
     controller.step(Measurement(0.0, robot.q_stand.copy(), np.zeros(robot.nv), contact), command)
-    assert recorder.last is not None  # the tick ran the tracker (a finite stand state)
+    if recorder.last is None:  # the controller's safe mode: it runs no tracker on a non-finite state
+        raise InputError(f"{robot.name}: the stand pose is not finite; check [model.stand]")
     return recorder.last
 
 
