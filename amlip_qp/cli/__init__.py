@@ -1,7 +1,7 @@
 """The ``amlip-qp`` command line.
 
 The parser is built here (``codegen`` and ``bench`` here; ``walk``,
-``compare`` and ``sweep`` in :mod:`~amlip_qp.cli.subcommands`; the parser
+``compare``, ``sweep`` and ``check-robot`` in :mod:`~amlip_qp.cli.subcommands`; the parser
 class and the value types in :mod:`~amlip_qp.cli.parsing`). Each
 subcommand's work lives in the module it names, imported only when the
 subcommand runs (so ``amlip-qp --help`` stays fast).
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import Parser, float_in, handler, int_in
-from amlip_qp.cli.subcommands import TRACKERS, add_compare, add_sweep, add_walk
+from amlip_qp.cli.subcommands import TRACKERS, add_check_robot, add_compare, add_sweep, add_walk
 from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
 
 PROG = "amlip-qp"
@@ -155,6 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_walk(sub)
     add_compare(sub)
     add_sweep(sub)
+    add_check_robot(sub)
     return parser
 
 

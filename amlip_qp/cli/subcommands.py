@@ -1,4 +1,5 @@
-"""The ``walk``, ``compare`` and ``sweep`` subcommands' options (their handlers live in the modules they name)."""
+"""The ``walk``, ``compare``, ``sweep`` and ``check-robot`` subcommands' options (their handlers live in the
+modules they name)."""
 
 from __future__ import annotations
 
@@ -328,3 +329,27 @@ def add_sweep(sub) -> None:
     p.add_argument("--no-figures", action="store_true", help="do not draw the figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=handler("amlip_qp.sweep.cli:run_sweep"))
+
+
+def add_check_robot(sub) -> None:
+    p = sub.add_parser(
+        "check-robot",
+        help="conformance checks of a robot profile: its two models agree, its stand pose, one tick per "
+        "tracker, a walk in place",
+        description="Check a robot profile, one line per check with its measured number: MuJoCo and Pinocchio "
+        "give the same mass and place every site and body alike; the joint roles name joints of the model; "
+        "the stand pose puts the feet on the floor; the output Jacobian has full rank at the stand pose; one "
+        "QP and one PBC tick at the stand pose solve with torques inside the limits (a tracker the profile "
+        "has no configuration for is skipped); a 3 s walk in place with the QP tracker does not fall "
+        "(docs/NEW_ROBOT.md). Exit status: 0 no check failed, 1 a check failed (every check still runs), "
+        "2 bad input.",
+    )
+    p.add_argument(
+        "robot",
+        type=robot_name_or_path,
+        metavar="NAME|PATH",
+        help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml)",
+    )
+    p.add_argument("--no-walk", action="store_true", help="skip the walk in place (faster)")
+    p.add_argument("--json", metavar="FILE", default=None, help="write the checks as JSON to FILE, or '-' for stdout")
+    p.set_defaults(func=handler("amlip_qp.sim.conformance_cli:run_check_robot"))

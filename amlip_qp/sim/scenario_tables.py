@@ -177,6 +177,9 @@ def _setting(profile: RobotProfile, name: str, value: Any) -> tuple[PlantSetting
 
 
 def _modifiers(profile: RobotProfile, name: str, value: Any) -> tuple[PlantModifiers, str]:
+    if not isinstance(value, Mapping):
+        known = ", ".join(("scenario", *_MODIFIER_KEYS, "description"))
+        _Where(profile, "mismatches").fail(f"{name} must be a table of plant modifiers (known: {known})")
     w = _Where(profile, f"mismatches.{name}")
     t = w.table(value, (*_MODIFIER_KEYS, "description"))
     kwargs: dict[str, Any] = {}
