@@ -117,7 +117,9 @@ def test_cassie_description():
 
 # ------------------------------------------------------------------ bad input
 def test_unknown_robot_name():
-    with pytest.raises(UnknownRobotError, match=r"unknown robot 'atlas'.*'cassie', 'g1', 'h1', 'rabbit'.*\.toml.*\.xml"):
+    with pytest.raises(
+        UnknownRobotError, match=r"unknown robot 'atlas'.*'cassie', 'g1', 'h1', 'rabbit'.*\.toml.*\.xml"
+    ):
         load_robot("atlas")
 
 
