@@ -17,6 +17,7 @@ import amlip_qp
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import InputError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
+from amlip_qp.robots import RobotKinematics
 from amlip_qp.sim import factory
 from amlip_qp.sim.scenarios import Scenario
 from amlip_qp.sim.speed_profile import SpeedProfile
@@ -116,6 +117,7 @@ def test_a_model_without_an_actuator_or_a_joint_is_named_in_one_line(cassie):
 def test_bad_data_timesteps_and_controllers_are_refused_in_one_line(cassie, rabbit):
     model = cassie.mj_model
     tracker = NaNTracker(cassie)
+    controller = amlip_qp.WalkingController(cassie, tracker, RobotKinematics(cassie))
     cases = [
         ((cassie, tracker, model, rabbit.new_mj_data()), "data was not made for model"),
         ((cassie, tracker, model, mujoco.MjData(mujoco.MjModel.from_xml_path(str(cassie.path)))), "not made for"),
@@ -123,6 +125,7 @@ def test_bad_data_timesteps_and_controllers_are_refused_in_one_line(cassie, rabb
         ((cassie, NaNTracker(rabbit), model, cassie.new_mj_data()), "tracker 'nan' was built for another robot"),
         ((cassie, "qp", model, cassie.new_mj_data()), "controller must be a tracker"),
         ((rabbit, tracker, model, cassie.new_mj_data()), "tracker 'nan' was built for another robot"),
+        ((rabbit, controller, rabbit.mj_model, rabbit.new_mj_data()), "controller was built for another robot"),
     ]
     for args, message in cases:
         with pytest.raises(InputError, match=message) as err:

@@ -77,11 +77,8 @@ class MujocoLoop:
                 f"MujocoLoop needs a mujoco.MjModel and its mujoco.MjData, got {type(model).__name__} "
                 f"and {type(data).__name__}"
             )
-        if getattr(data, "model", model) is not model or (data.qpos.size, data.qvel.size, data.ctrl.size) != (
-            model.nq,
-            model.nv,
-            model.nu,
-        ):
+        sizes = (data.qpos.size, data.qvel.size, data.ctrl.size, data.sensordata.size)
+        if getattr(data, "model", model) is not model or sizes != (model.nq, model.nv, model.nu, model.nsensordata):
             raise InputError("data was not made for model: make it with mujoco.MjData(model)")
         if isinstance(controller, Tracker):
             if getattr(controller, "robot", robot) is not robot:
@@ -93,7 +90,7 @@ class MujocoLoop:
                 f"got {type(controller).__name__}"
             )
         if controller.robot is not robot:
-            raise InputError(f"the controller was built for another robot object than {robot.name}")
+            raise InputError(f"the controller was built for another robot than {robot.name}")
         if not (contact_threshold_N >= 0 and math.isfinite(contact_threshold_N)):
             raise InputError(f"contact_threshold_N must be a finite force >= 0 N, got {contact_threshold_N!r}")
         model_name = model.names[: model.names.index(b"\0")].decode() or "unnamed"
