@@ -34,8 +34,20 @@ CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.co
 
 #: unit (a package, or a top-level module) -> its rule (docs/ARCHITECTURE.md, "Layers").
 RULES: dict[str, Rule] = {
-    # the package's own __init__: re-exports the exceptions, load_robot lazily
-    "amlip_qp": Rule(("amlip_qp.exceptions", "amlip_qp.robots"), HEAVY + ("numpy",)),
+    # the package's own __init__: re-exports the exceptions, and lazily the robot, the controller,
+    # its trackers and messages and the MuJoCo loop (so `import amlip_qp` stays light)
+    "amlip_qp": Rule(
+        (
+            "amlip_qp.exceptions",
+            "amlip_qp.robots",
+            "amlip_qp.alip.messages",
+            "amlip_qp.control.walking",
+            "amlip_qp.control.wbc.tracker",
+            "amlip_qp.control.pbc.tracker",
+            "amlip_qp.sim.mujoco_loop",
+        ),
+        HEAVY + ("numpy",),
+    ),
     "amlip_qp.exceptions": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.paths": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
@@ -198,3 +210,21 @@ def test_the_command_line_imports_nothing_heavy():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=PKG.parent)
     assert out.stdout.strip() == ""
+
+
+def test_the_top_level_exports_are_lazy_and_from_the_allowed_modules():
+    """``import amlip_qp`` loads nothing heavy; each name of ``__all__`` then comes from a module its rule allows."""
+    code = (
+        "import sys, amlip_qp; "
+        "print(','.join(m for m in ('numpy', 'mujoco', 'pinocchio', 'casadi') if m in sys.modules)); "
+        "print(' '.join(f'{n}:{getattr(amlip_qp, n).__module__}' for n in amlip_qp.__all__ if n != '__version__'))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=PKG.parent)
+    heavy, exports = out.stdout.splitlines()
+    assert heavy == ""
+    modules = dict(item.split(":") for item in exports.split())
+    assert {"load_robot", "Robot", "WalkingController", "QPTracker", "PBCTracker", "Command", "Measurement"} <= set(
+        modules
+    )
+    assert modules["MujocoLoop"] == "amlip_qp.sim.mujoco_loop"
+    assert all(_matches(m, RULES["amlip_qp"].may) for m in modules.values()), modules

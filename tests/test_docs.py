@@ -44,6 +44,7 @@ GUIDES = (
     "amlip_qp/models/README.md",
     "amlip_qp/codegen/generated/README.md",
     "models/README.md",
+    "examples/README.md",
     "README.md",
 )
 #: Top-level folders of the repository whose paths the guides name.

@@ -14,7 +14,7 @@ import pytest
 from amlip_qp.exceptions import InputError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim import factory
-from amlip_qp.sim.plant import load_plant
+from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.sensors import IMU_SITE
 from plant_cases import CASSIE_XML, extra_joint_spec, slide_ball_spec, write_plant
 
@@ -259,3 +259,24 @@ def test_contact_switches_are_the_summed_forces_above_the_threshold(cassie):
         for threshold in forces.values():  # at the forces themselves
             assert plant.contact_switcher(data, threshold)() == {side: f > threshold for side, f in forces.items()}
     assert {(False, False), (True, True)} <= seen and len(seen) >= 3
+
+
+def test_a_position_servo_is_not_a_torque_motor(cassie):
+    spec = mujoco.MjSpec.from_file(str(CASSIE_XML))
+    knee = spec.actuator("left-knee")
+    knee.set_to_position(kp=100.0)  # gain 100, bias -100 q: ctrl would be a joint angle, not tau / gear
+    with pytest.raises(PlantMismatchError) as err:
+        Plant(spec.compile(), cassie, "servo")
+    assert str(err.value).startswith("plant servo: actuator 'left-knee' (of 1) is not a torque motor")
+    spec = mujoco.MjSpec.from_file(str(CASSIE_XML))
+    spec.actuator("right-knee").gainprm[0] = 2.0  # a motor of gain 2 would apply twice the torque
+    with pytest.raises(PlantMismatchError, match="actuator 'right-knee' .* ctrl = tau / gear"):
+        Plant(spec.compile(), cassie, "gain")
+
+
+def test_plant_steps_per_control_tick_are_a_whole_number(cassie):
+    plant = load_plant("cassie", cassie)  # 0.5 ms steps
+    assert plant.substeps(0.0005) == 1 and plant.substeps(0.002) == 4
+    for period in (0.00075, 0.0002):
+        with pytest.raises(InputError, match=rf"control period \({period} s\) must be a whole multiple"):
+            plant.substeps(period)

@@ -254,3 +254,21 @@ def test_the_base_is_the_first_free_joint_or_refused(cassie):
         )  # fmt: skip
         with pytest.raises(InputError, match="is not the first free joint"):
             base_indices(other)
+
+
+def test_a_plant_without_the_imu_gives_ideal_measurements_without_a_reading(cassie):
+    from amlip_qp.sim.plant import Plant
+
+    bare = Plant(cassie.mj_model, cassie, "bare")  # the robot's own model: no IMU sensors
+    d = cassie.new_mj_data("stand")  # a little above the floor
+    for _ in range(100):  # 50 ms: the feet land
+        mujoco.mj_step(cassie.mj_model, d)
+    sens = PlantSensors(bare, "ideal", dt_s=DT)
+    assert not sens.has_imu and sens.exact_imu(d) is None
+    q, v = bare.read_state(d)
+    meas, bound = sens.measure(d, q.copy(), v.copy(), True), sens.bind(d, True)(float(d.time), q.copy(), v.copy())
+    for m in (meas, bound):  # on both feet, the exact state
+        assert m.imu is None and m.foot_contact == {"left": True, "right": True}
+        assert np.array_equal(m.q, q) and np.array_equal(m.v, v) and m.base_known
+    with pytest.raises(InputError, match="plant bare has no sensor 'amlip-imu-quat'"):
+        PlantSensors(bare, "robot", dt_s=DT)

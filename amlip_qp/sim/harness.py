@@ -116,12 +116,7 @@ class Simulation:
         self.model = self.plant.model
         self.data = self.plant.new_data(keyframe)
         self.dt_s = float(self.model.opt.timestep)
-        ratio = controller.dt_s / self.dt_s
-        self.substeps = int(round(ratio))
-        if self.substeps < 1 or abs(ratio - self.substeps) > 1e-9:
-            raise InputError(
-                f"the control period ({controller.dt_s} s) must be a whole multiple of the plant step ({self.dt_s} s)"
-            )
+        self.substeps = self.plant.substeps(controller.dt_s)
         self._base_body = self.plant.base_body_id
         self.sensors = PlantSensors(
             self.plant, sensors, dt_s=controller.dt_s, seed=self.seed, settings=sensor_settings,

@@ -33,6 +33,7 @@ import mujoco
 import numpy as np
 
 from amlip_qp.exceptions import CompilerUnavailableError, InputError, MJCFError, PlantMismatchError
+from amlip_qp.robots.model_edits import is_servo
 from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.compiled_io import CompiledCtrlWrite, CompiledStateRead, ReadResult
 from amlip_qp.sim.contact_sensors import contact_spec_edit, sensor_switcher
@@ -171,6 +172,12 @@ class Plant:
                 f"plant {name} does not fit the {robot.name} controller: it lacks {', '.join(missing)} "
                 "(a plant needs the controller's actuators, measured joints and base body, by name)"
             )
+        servos = [n for n, a in zip(act.names, self.actuator_ids.tolist()) if not self._is_motor(a)]
+        if servos:
+            raise PlantMismatchError(
+                f"plant {name}: actuator {servos[0]!r} (of {len(servos)}) is not a torque motor (gain 1, "
+                "no bias): the controller's joint torques are written as ctrl = tau / gear"
+            )
         self.qpos_adr = qsrc
         ids = self.actuator_ids
         self.gear = model.actuator_gear[ids, 0].astype(float)
@@ -221,6 +228,10 @@ class Plant:
         body = int(robot.mj_model.site_bodyid[robot.contact_site_ids[side]])
         return mujoco.mj_id2name(robot.mj_model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
 
+    def _is_motor(self, actuator: int) -> bool:
+        """Whether the plant's ``actuator`` applies ``gear * ctrl``: gain 1, no bias (not a servo)."""
+        return not is_servo(self.model.actuator(actuator)) and self.model.actuator_gainprm[actuator, 0] == 1.0
+
     def _base_moves(self) -> bool:
         """True when joints between the world and the base body give it 6 degrees of freedom."""
         m, b, ndof = self.model, self.base_body_id, 0
@@ -228,6 +239,15 @@ class Plant:
             ndof += int(m.body_dofnum[b])
             b = int(m.body_parentid[b])
         return ndof >= 6
+
+    def substeps(self, control_dt_s: float) -> int:
+        """Plant steps per control tick of ``control_dt_s`` s: a whole number, or InputError."""
+        dt_s = float(self.model.opt.timestep)
+        n = int(round(control_dt_s / dt_s))
+        if n < 1 or abs(control_dt_s / dt_s - n) > 1e-9:
+            msg = f"the control period ({control_dt_s} s) must be a whole multiple of the plant step ({dt_s} s)"
+            raise InputError(msg)
+        return n
 
     # ----------------------------------------------------------------- data
     def new_data(self, keyframe: str | None = "stand") -> mujoco.MjData:

@@ -16,6 +16,8 @@ Two sensor models (``--sensors``):
 The IMU is a site ``amlip-imu`` on the base body (axes those of the base
 body) with MuJoCo sensors ``amlip-imu-quat`` (framequat), ``amlip-imu-gyro``
 and ``amlip-imu-accel``; :func:`imu_spec_edit` adds them to a plant's model.
+A plant without them (a user's own model, :class:`~amlip_qp.sim.mujoco_loop.MujocoLoop`)
+has only the ``ideal`` model, whose measurements then carry no IMU reading.
 MuJoCo computes sensors at the start of each plant step, so after the step a
 sample describes the state the step started from and the acceleration of the
 step (a sample-and-hold, one plant step old); sensors change no trajectory.
@@ -124,7 +126,7 @@ class PlantSensors:
     """The sensors of a :class:`~amlip_qp.sim.plant.Plant`, read once per control tick.
 
     Args:
-        plant: The plant (with the IMU of :func:`imu_spec_edit`).
+        plant: The plant (with the IMU of :func:`imu_spec_edit` for the ``robot`` model).
         model: ``"ideal"`` or ``"robot"``.
         dt_s: Sampling period (the control period), s.
         seed: Seed of the ``robot`` model's noise (its own stream: the run's seed).
@@ -155,12 +157,16 @@ class PlantSensors:
         adr = {}
         for name in (IMU_QUAT_SENSOR, IMU_GYRO_SENSOR, IMU_ACCEL_SENSOR):
             sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)
-            if sid < 0:
+            if sid < 0 and model == "robot":
                 raise InputError(f"plant {plant.name} has no sensor {name!r}; load it with sim.plant.load_plant")
-            adr[name] = int(m.sensor_adr[sid])
+            adr[name] = int(m.sensor_adr[sid]) if sid >= 0 else -1
         q, g, c = adr[IMU_QUAT_SENSOR], adr[IMU_GYRO_SENSOR], adr[IMU_ACCEL_SENSOR]
-        # sensordata indices of (quat xyzw, gyro, accel): one gather per sample
-        self._imu_idx = np.array([q + 1, q + 2, q + 3, q, g, g + 1, g + 2, c, c + 1, c + 2], dtype=np.intp)
+        #: Whether the plant has the IMU of :func:`imu_spec_edit` (without it, ``ideal`` measurements have none).
+        self.has_imu = min(q, g, c) >= 0
+        # sensordata indices of (quat xyzw, gyro, accel): one gather per sample (none without the IMU)
+        imu_idx = [q + 1, q + 2, q + 3, q, g, g + 1, g + 2, c, c + 1, c + 2] if self.has_imu else []
+        self._imu_idx = np.array(imu_idx, dtype=np.intp)
+        self._imu_of: Callable[..., ImuReading | None] = ImuReading.of_packed if self.has_imu else _no_imu
         robot = plant.robot
         smap = robot.state_map
         self._enc_q = np.array([smap.joint_pin_q[n] for n in robot.joint_names], dtype=np.intp)
@@ -182,13 +188,13 @@ class PlantSensors:
         self._forces = dict.fromkeys(plant.foot_body_ids, 0.0)
 
     # ------------------------------------------------------------------ IMU
-    def exact_imu(self, data: mujoco.MjData) -> ImuReading:
-        """The IMU sample without noise (MuJoCo's sensors)."""
-        return ImuReading.of_packed(data.sensordata[self._imu_idx])
+    def exact_imu(self, data: mujoco.MjData) -> ImuReading | None:
+        """The IMU sample without noise (MuJoCo's sensors); ``None`` for a plant without the IMU."""
+        return self._imu_of(data.sensordata[self._imu_idx])
 
     def robot_imu(self, data: mujoco.MjData) -> ImuReading:
         """The IMU sample with white noise and the random-walk biases (advanced by one sample)."""
-        exact = self.exact_imu(data)
+        exact = ImuReading.of_packed(data.sensordata[self._imu_idx])  # the robot model has the IMU (checked)
         s, rng, dt = self.settings, self.rng, self.dt_s
         rdt = math.sqrt(dt)
         self.gyro_bias_radps += s.gyro_bias_walk_radps_rts * rdt * rng.standard_normal(3)
@@ -251,7 +257,7 @@ class PlantSensors:
             return lambda t_s, q, v: self.measure(data, q, v, base_known)
         sensordata, imu_idx, plant = data.sensordata, self._imu_idx, self.plant
         switches = plant.contact_switcher(data, self.contact_threshold_N)
-        imu_of = ImuReading.of_packed
+        imu_of = self._imu_of
         contacts = contact_sensor_indices(plant.model, plant.foot_body_ids)
         if contacts is None:  # the switches contact by contact
 
@@ -269,6 +275,11 @@ class PlantSensors:
             return Measurement(t_s, q, v, switches_of(values.tolist()), imu_of(values, at_imu), True)
 
         return measure_sensors
+
+
+def _no_imu(packed: np.ndarray, start: int = 0) -> None:
+    """The IMU reading of a plant without the IMU: none."""
+    return None
 
 
 def base_indices(robot) -> tuple[slice | np.ndarray, slice | np.ndarray]:
