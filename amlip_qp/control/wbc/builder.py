@@ -224,8 +224,9 @@ class WholeBodyQP:
 
 
 def _joint_tasks(robot: Robot, config: QPConfig) -> tuple[JointTask, JointTask | None]:
-    """The posture task (actuated joints toward ``robot.q_stand``) and the
-    passive-spring damping task (``None`` without passive joints or weight)."""
+    """The posture task (actuated joints toward ``robot.q_stand``; the joints outside both legs
+    with the ``upper_posture_*`` gains when set) and the passive-spring damping task (``None``
+    without passive joints or weight)."""
     nv = robot.nv
     act_v = np.asarray(robot.actuated.pin_v_idx, dtype=int)
     act_q = np.asarray(robot.actuated.pin_q_idx, dtype=int)
@@ -235,7 +236,19 @@ def _joint_tasks(robot: Robot, config: QPConfig) -> tuple[JointTask, JointTask |
     nu = act_v.size
     sel = np.zeros((nu, nv))
     sel[np.arange(nu), act_v] = 1.0
-    gains = Gains.of(nu, config.posture_kp, config.posture_kd, config.posture_weight)
+    legs = {name for side in robot.foot_sides for name in robot.leg_joint_names.get(side, ())}
+    upper = np.array([name not in legs for name in robot.actuated.joint_names], dtype=bool)
+    per_joint = []
+    for value, upper_value in (
+        (config.posture_kp, config.upper_posture_kp),
+        (config.posture_kd, config.upper_posture_kd),
+        (config.posture_weight, config.upper_posture_weight),
+    ):
+        arr = np.full(nu, value)
+        if upper_value is not None:
+            arr[upper] = upper_value
+        per_joint.append(arr)
+    gains = Gains.of(nu, *per_joint)
     posture = JointTask("posture", sel, qmap, robot.q_stand[act_q], gains)
     if not (pv.size and config.spring_weight > 0):
         return posture, None

@@ -33,6 +33,13 @@ class QPConfig:
         posture_kp: Posture task (actuated joints toward ``robot.q_stand``) kp, 1/s^2.
         posture_kd: Posture task kd, 1/s.
         posture_weight: Posture task weight (keep small: a null-space regulariser).
+        upper_posture_kp: Posture kp of the actuated joints outside both legs (a
+            humanoid's waist and arms), 1/s^2; ``None``: ``posture_kp``. The
+            legs' joints are held by the outputs, these only by the posture
+            task: without a stiffer hold the QP swings them to help track
+            the torso and CoM outputs.
+        upper_posture_kd: Their posture kd, 1/s; ``None``: ``posture_kd``.
+        upper_posture_weight: Their posture weight; ``None``: ``posture_weight``.
         spring_kd: Damping gain of the passive-spring task, 1/s.
         spring_weight: Weight of the passive-spring damping task (0 disables).
         friction_mu: Friction coefficient of the pyramid (below the plant's 1.0).
@@ -113,6 +120,9 @@ class QPConfig:
     posture_kp: float = 20.0
     posture_kd: float = 8.0
     posture_weight: float = 1e-2
+    upper_posture_kp: float | None = None
+    upper_posture_kd: float | None = None
+    upper_posture_weight: float | None = None
     spring_kd: float = 40.0
     spring_weight: float = 0.0
     friction_mu: float = 0.7
@@ -142,7 +152,11 @@ class QPConfig:
         n = len(self.output_kp)
         if len(self.output_kd) != n or len(self.output_weight) != n:
             raise InputError("output_kp, output_kd and output_weight need one entry per output")
-        scalars = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in ("rigid_springs",)}
+        scalars = {
+            k: getattr(self, k)
+            for k in self.__dataclass_fields__
+            if k != "rigid_springs" and getattr(self, k) is not None  # None: an upper_posture_* left unset
+        }
         for name, val in scalars.items():
             arr = np.asarray(val, dtype=float)
             may_be_inf = name == "stance_foot_torque_max_Nm"
