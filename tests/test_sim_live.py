@@ -243,6 +243,29 @@ def test_a_frame_steps_no_more_simulated_time_than_wall_time(sim):
     assert 0.0 < live.realtime_factor() < 0.05  # the last frame stepped 0.1 s in 5 s
 
 
+def test_the_viewers_push_in_xfrc_applied_acts_on_the_robot_and_is_counted(sim):
+    """MuJoCo's viewer writes the mouse's push into xfrc_applied at each sync; the loop's ticks keep it."""
+    base = sim.plant.base_body_id
+    ys = []
+    for force_N in (0.0, 60.0):
+        live = _loop(sim)
+        sim.data.xfrc_applied[base, :3] = (0.0, force_N, 0.0)  # to the left, as a sync would leave it
+        live.notice_plant()
+        live.step_ticks(400)  # 0.2 s
+        ys.append(float(sim.data.xpos[base, 1]))
+        assert (live.push_frames, live.max_push_N) == ((0, 0.0) if force_N == 0.0 else (1, force_N))
+        sim.data.xfrc_applied[:] = 0.0
+    assert ys[1] - ys[0] > 0.02  # 60 N for 0.2 s on the 33-kg robot: 0.5 F t^2 / m = 3.6 cm (4.2 cm measured)
+
+
+def test_the_session_ends_after_its_duration_over_every_start(sim):
+    live = _loop(sim, duration_s=0.1)
+    assert live.step_ticks(150) == 150 and not live.finished
+    live.key(BACKSPACE)  # a reset does not start the session's clock over
+    assert live.step_ticks(150) == 50 and live.finished and live.resets == 1
+    assert live.step_ticks(10) == 0 and live.summary()["total_sim_time_s"] == pytest.approx(0.1, abs=1e-15)
+
+
 def test_a_fall_stops_the_loop_until_a_reset(sim):
     fall = sim.fall
     sim.fall = FallCriteria(max_tilt_rad=0.02)  # the base's tilt at the first steps counts as a fall

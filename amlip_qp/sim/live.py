@@ -26,6 +26,8 @@ from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import replace
 
+import numpy as np
+
 from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import CommandBounds
@@ -169,6 +171,8 @@ class LiveLoop:
             the loop drops the rest rather than run faster than real time.
         window_s: Simulated time over which the speed is measured, s; the real-time factor
             is measured over the same samples (at most three times as long in wall time).
+        duration_s: The session's simulated time, s, over every start (then :attr:`finished`);
+            ``None``: no end.
     """
 
     def __init__(
@@ -180,15 +184,18 @@ class LiveLoop:
         max_frame_s: float = 1.0 / 30.0,
         max_lag_s: float = 0.1,
         window_s: float = 1.0,
+        duration_s: float | None = None,
     ):
         self.sim, self.command = sim, command
         sim.command_fn = self._command_at
         self.script = tuple(script)
         self.clock, self.max_frame_s, self.max_lag_s, self.window_s = clock, max_frame_s, max_lag_s, window_s
         self.dt_s = sim.controller.dt_s
+        self.end_ticks = None if duration_s is None else int(round(duration_s / self.dt_s))
         self._keys: deque[int] = deque()  # appended by the viewer's thread, drained by the loop's
         self.paused = False
-        self.falls = self.resets = self.keys_handled = 0
+        self.falls = self.resets = self.keys_handled = self.frames = self.push_frames = 0
+        self.max_push_N = 0.0  # the largest push of the mouse seen (notice_plant), N
         self.wall_s = 0.0  # wall time the loop ran (not paused)
         self.ticks = 0  # control ticks over every start
         self._next_event = 0  # the script's next key press
@@ -217,6 +224,11 @@ class LiveLoop:
         if self._reset_pending:
             self.reset()
 
+    @property
+    def finished(self) -> bool:
+        """The session's ``duration_s`` has been simulated."""
+        return self.end_ticks is not None and self.ticks >= self.end_ticks
+
     def _command_at(self, t_s: float) -> Command:
         return self.command.command()
 
@@ -241,9 +253,19 @@ class LiveLoop:
         self._start()
 
     def notice_plant(self) -> None:
-        """After the viewer touched the plant (its ``sync``): a reset of its own (its "Reset" button,
-        Backspace, a keyframe) changed the plant's time, and the loop resets to the stand keyframe.
-        (After a fall the plant stays as it is until a reset key.)"""
+        """After the viewer touched the plant (its ``sync``): its push, and any reset of its own.
+
+        The viewer writes the mouse's push (MuJoCo's perturbation of the selected body) into
+        ``xfrc_applied``: its largest force is kept (:attr:`max_push_N`, frames with one in
+        :attr:`push_frames`). A reset of its own (its "Reset" button, Backspace, a keyframe)
+        changes the plant's time: the loop resets to the stand keyframe (after a fall the
+        plant stays as it is until a reset key).
+        """
+        forces = self.sim.data.xfrc_applied[:, :3]
+        push = float(np.sqrt((forces * forces).sum(axis=1).max())) if forces.size else 0.0
+        if push > 0.0:
+            self.push_frames += 1
+            self.max_push_N = max(self.max_push_N, push)
         if not self.fell and float(self.sim.data.time) != self.t_s:
             self._reset_pending = True
 
@@ -253,6 +275,8 @@ class LiveLoop:
         self._drain()
         script, clock, dt = self.script, self.clock, self.dt_s
         done = 0
+        if self.end_ticks is not None:
+            n = min(n, self.end_ticks - self.ticks)
         while done < n and not (self.fell or self.paused):
             while self._next_event < len(script) and script[self._next_event][0] <= self.ticks * dt:
                 self.key(script[self._next_event][1])
@@ -279,6 +303,7 @@ class LiveLoop:
         and drops what it could not step.
         """
         now = self.clock() if now_s is None else now_s
+        self.frames += 1
         self._drain()
         elapsed = 0.0 if self._last_frame_s is None else max(0.0, now - self._last_frame_s)
         self._last_frame_s = now
@@ -342,7 +367,9 @@ class LiveLoop:
         return line + " | PAUSED (Space)" if self.paused else line
 
     def summary(self) -> dict:
-        """What the session did: the final command, the distance walked since the last start, the counts."""
+        """What the session did: the final command (and the shaped one), the distance walked since the last start,
+        the simulated and wall times, the counts of steps, falls, resets, keys handled and frames, and the
+        mouse's pushes (frames with one, the largest force in N)."""
         vx, vy, turn = self.command.values
         svx, svy, sturn = self.sim.controller.shaper.value
         ctrl = self.sim.controller
@@ -361,4 +388,7 @@ class LiveLoop:
             "falls": self.falls,
             "resets": self.resets,
             "keys": self.keys_handled,
+            "frames": self.frames,
+            "push_frames": self.push_frames,
+            "max_push_N": self.max_push_N,
         }

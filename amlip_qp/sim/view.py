@@ -91,8 +91,8 @@ def read_key_script(path: str) -> tuple[tuple[float, int], ...]:
     return parse_key_script(text, f"--script {path}")
 
 
-def show(live: LiveLoop, duration_s: float | None = None, clock=time.perf_counter) -> None:
-    """Run ``live`` in MuJoCo's passive viewer until its window closes or ``duration_s`` simulated s have run."""
+def show(live: LiveLoop, clock=time.perf_counter) -> None:
+    """Run ``live`` in MuJoCo's passive viewer until its window closes or the loop has :attr:`~LiveLoop.finished`."""
     import mujoco
     import mujoco.viewer
 
@@ -116,7 +116,7 @@ def show(live: LiveLoop, duration_s: float | None = None, clock=time.perf_counte
             if clock() >= next_overlay:
                 viewer.set_texts((None, None, live.overlay(), None))
                 next_overlay = clock() + OVERLAY_PERIOD_S
-            if duration_s is not None and live.ticks * live.dt_s >= duration_s - 0.5 * live.dt_s:
+            if live.finished:
                 break
             time.sleep(max(0.0, frame_start + FRAME_S - clock()))
     finally:
@@ -145,8 +145,8 @@ def run_view(args: argparse.Namespace) -> int:
     command = LiveCommand(
         scenario.command(0.0), profile.bounds, scenario.vx(0.0), scenario.vy_mps, math.degrees(scenario.turn_rate_radps)
     )
-    live = LiveLoop(sim, command, script=script)
-    show(live, args.view_duration_s)
+    live = LiveLoop(sim, command, script=script, duration_s=args.view_duration_s)
+    show(live)
     summary = live.summary()
     if args.json is not None:
         text = json.dumps(summary, indent=2)
