@@ -217,6 +217,37 @@ def test_a_reset_of_the_viewers_own_is_turned_into_the_keyframe(sim):
     np.testing.assert_array_equal(sim.data.qpos, _keyframe_qpos(sim))
 
 
+def _viewers_reset(sim) -> None:
+    """What the viewer's sync does after its Backspace: MuJoCo's default state, forwarded."""
+    mujoco.mj_resetData(sim.model, sim.data)
+    mujoco.mj_forward(sim.model, sim.data)
+
+
+@pytest.mark.parametrize("order", ["viewer first", "loop first", "loop first, paused"])
+def test_backspace_and_the_viewers_own_reset_make_one_reset_in_either_order(sim, order):
+    live = _loop(sim)
+    live.step_ticks(50)
+    if order.endswith("paused"):
+        live.key(SPACE)
+    live.key(BACKSPACE)  # the key reaches the loop's queue and the viewer at once
+    if order == "viewer first":  # the viewer's sync comes before the loop reads its keys
+        _viewers_reset(sim)
+        live.notice_plant()
+        live.step_ticks(10)
+    else:  # the loop reads the key first, then the viewer's sync resets (even with the same time, paused)
+        live.step_ticks(0 if order.endswith("paused") else 10)
+        _viewers_reset(sim)
+        live.notice_plant()
+        live.step_ticks(0)
+    assert live.resets == 1
+    key = _keyframe_qpos(sim)
+    assert np.abs(sim.model.qpos0 - key).max() > 0.1  # MuJoCo's default state is far from the keyframe
+    assert np.abs(sim.data.qpos - key).max() < 0.01  # at the keyframe, or 10 ticks (5 ms) from it
+    live.notice_plant()  # the next syncs change nothing
+    live.step_ticks(0)
+    assert live.resets == 1
+
+
 def test_script_keys_come_at_their_simulated_times(sim):
     live = _loop(sim, script=parse_key_script("0.05 up\n0.05 up\n0.1 left\n"))
     live.step_ticks(100)  # ticks 0..99: before 0.05 s

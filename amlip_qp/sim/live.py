@@ -200,6 +200,7 @@ class LiveLoop:
         self.ticks = 0  # control ticks over every start
         self._next_event = 0  # the script's next key press
         self._last_frame_s: float | None = None  # the wall clock at the last frame, s
+        self._viewer_reset_due = False  # a Backspace carried out, the viewer's sync not yet come
         self._base = sim.plant.base_body_id
         self._start()
 
@@ -219,10 +220,11 @@ class LiveLoop:
                 self.paused = not self.paused
             elif action == "reset":
                 self._reset_pending = True
+                self._viewer_reset_due = True  # Backspace is the viewer's own reset too: at its next sync
             else:
                 self.command.apply(action)
-        if self._reset_pending:
-            self.reset()
+        if self._reset_pending or self._echo_pending:
+            self._reset(count=self._reset_pending)
 
     @property
     def finished(self) -> bool:
@@ -238,8 +240,9 @@ class LiveLoop:
         self._tick = self.sim.ticker()
         self.t_s = self.t0_s = float(self.sim.data.time)
         self.fell, self.fall_time_s = False, math.nan
-        self._reset_pending = False
+        self._reset_pending = self._echo_pending = False  # a reset to do; the echo of one done
         self._budget_s = 0.0
+        self._qpos_seen = self.sim.data.qpos.copy()  # the plant as the loop left it
         x, y = self._base_xy()
         self._start_xy = (x, y)
         self._samples: deque[tuple[float, float, float, float]] = deque()  # (wall s, sim s, x m, y m)
@@ -247,9 +250,12 @@ class LiveLoop:
 
     def reset(self) -> None:
         """Back to the stand keyframe with the starting command; the controller starts over."""
+        self._reset(count=True)
+
+    def _reset(self, count: bool) -> None:
         self.sim.reset_to_keyframe()
         self.command.reset()
-        self.resets += 1
+        self.resets += int(count)
         self._start()
 
     def notice_plant(self) -> None:
@@ -258,16 +264,23 @@ class LiveLoop:
         The viewer writes the mouse's push (MuJoCo's perturbation of the selected body) into
         ``xfrc_applied``: its largest force is kept (:attr:`max_push_N`, frames with one in
         :attr:`push_frames`). A reset of its own (its "Reset" button, Backspace, a keyframe)
-        changes the plant's time: the loop resets to the stand keyframe (after a fall the
-        plant stays as it is until a reset key).
+        changes the plant's state: the loop resets to the stand keyframe (after a fall the plant
+        stays as it is until a reset key). The viewer's reset that echoes a Backspace the loop
+        has carried out already is undone without counting a second reset.
         """
-        forces = self.sim.data.xfrc_applied[:, :3]
+        data = self.sim.data
+        forces = data.xfrc_applied[:, :3]
         push = float(np.sqrt((forces * forces).sum(axis=1).max())) if forces.size else 0.0
         if push > 0.0:
             self.push_frames += 1
             self.max_push_N = max(self.max_push_N, push)
-        if not self.fell and float(self.sim.data.time) != self.t_s:
-            self._reset_pending = True
+        changed = float(data.time) != self.t_s or not np.array_equal(data.qpos, self._qpos_seen)
+        if changed and not self.fell:
+            if self._viewer_reset_due:
+                self._echo_pending = True
+            else:
+                self._reset_pending = True
+        self._viewer_reset_due = False  # the sync after the key has come
 
     # --------------------------------------------------------------- stepping
     def step_ticks(self, n: int, deadline_s: float = math.inf) -> int:
@@ -292,6 +305,7 @@ class LiveLoop:
                 self.falls += 1
             elif deadline_s != math.inf and clock() >= deadline_s:
                 break
+        self._qpos_seen[:] = self.sim.data.qpos
         self._sample(clock())
         return done
 
