@@ -11,8 +11,8 @@ import pytest
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import get_profile
 from amlip_qp.sim import factory
-from amlip_qp.sim.live import LiveCommand, LiveLoop, parse_key_script
-from amlip_qp.sim.live_keys import ACTIONS, BINDINGS, CODE_OF_NAME, VX_STEP_MPS, keys_help
+from amlip_qp.sim.live import LiveCommand, LiveLoop
+from amlip_qp.sim.live_keys import ACTIONS, BINDINGS, CODE_OF_NAME, VX_STEP_MPS, keys_help, parse_key_script
 from amlip_qp.sim.run_types import FallCriteria
 from amlip_qp.sim.scenarios import Scenario
 
@@ -178,6 +178,20 @@ def test_the_live_loop_walks_at_the_keyed_command(sim):
     line = live.overlay()
     assert line.startswith(f"v fwd {vx:+.2f} lat {vy:+.2f} m/s | cmd fwd +0.50 lat +0.00 m/s turn +0 deg/s | step ")
     assert "FELL" not in line and "PAUSED" not in line
+
+
+def test_each_key_reaches_the_command_through_the_loop(sim):
+    live = _loop(sim)
+    expected = (
+        (UP, (0.1, 0.0, 0.0)), (UP, (0.2, 0.0, 0.0)), (DOWN, (0.1, 0.0, 0.0)), (LEFT, (0.1, 0.0, 10.0)),
+        (RIGHT, (0.1, 0.0, 0.0)), (RIGHT, (0.1, 0.0, -10.0)), (HOME, (0.1, 0.05, -10.0)), (END, (0.1, 0.0, -10.0)),
+        (END, (0.1, -0.05, -10.0)), (ENTER, (0.0, 0.0, 0.0)), (32000, (0.0, 0.0, 0.0)),  # a key of the viewer's own
+    )  # fmt: skip
+    for code, values in expected:
+        live.key(code)
+        live.step_ticks(0)  # the keys are carried out before any tick
+        assert live.command.values == values
+    assert live.keys_handled == len(expected) - 1 and live.ticks == 0
 
 
 def test_space_pauses_and_resumes_the_loop(sim):

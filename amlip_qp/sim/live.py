@@ -32,7 +32,7 @@ from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import CommandBounds
 from amlip_qp.sim.harness import TICK_OK, Simulation
-from amlip_qp.sim.live_keys import ACTION_OF_CODE, CODE_OF_NAME, TURN_STEP_DEGPS, VX_STEP_MPS, VY_STEP_MPS
+from amlip_qp.sim.live_keys import ACTION_OF_CODE, TURN_STEP_DEGPS, VX_STEP_MPS, VY_STEP_MPS
 
 #: Digits kept of a command value (m/s, deg/s): sums of key steps are exact to this.
 _DIGITS = 9
@@ -129,41 +129,13 @@ class LiveCommand:
         return self._command
 
 
-def parse_key_script(text: str, source: str = "key script") -> tuple[tuple[float, int], ...]:
-    """``(t_s, key code)`` pairs, in time order, from lines ``T KEY`` (simulated s, a key name; ``#`` comments).
-
-    Raises:
-        InputError: A line that is not a time >= 0 and one of the keys' names, saying which.
-    """
-    events = []
-    for number, raw in enumerate(text.splitlines(), 1):
-        line = raw.split("#", 1)[0].strip()
-        if not line:
-            continue
-        parts = line.split()
-        names = ", ".join(CODE_OF_NAME)
-        if len(parts) != 2:
-            raise InputError(f"{source} line {number}: expected 'T KEY' (simulated s, one of {names}), got {raw!r}")
-        try:
-            t_s = float(parts[0])
-        except ValueError:
-            t_s = math.nan
-        if not (math.isfinite(t_s) and t_s >= 0.0):
-            raise InputError(f"{source} line {number}: the time must be a number of seconds >= 0, got {parts[0]!r}")
-        code = CODE_OF_NAME.get(parts[1].lower())
-        if code is None:
-            raise InputError(f"{source} line {number}: unknown key {parts[1]!r}; known: {names}")
-        events.append((t_s, code))
-    return tuple(sorted(events, key=lambda e: e[0]))
-
-
 class LiveLoop:
     """A :class:`Simulation` driven by keys and stepped no faster than the wall clock.
 
     Args:
         sim: The closed loop (its ``command_fn`` is replaced by the live command's).
         command: The live command.
-        script: ``(t_s, key code)`` key presses at simulated times (:func:`parse_key_script`),
+        script: ``(t_s, key code)`` key presses at simulated times (:func:`~amlip_qp.sim.live_keys.parse_key_script`),
             counted over the whole session (every start's ticks).
         clock: The wall clock, s (for the frame's stepping deadline).
         max_frame_s: Longest wall time one :meth:`frame` steps, s (the viewer then redraws).

@@ -1,4 +1,4 @@
-"""The keys of ``amlip-qp view``: which key does what, and by how much (plain data, no imports).
+"""The keys of ``amlip-qp view``: which key does what, and by how much; a key script (light: no numpy, no MuJoCo).
 
 The codes are GLFW's key codes, what MuJoCo's viewer hands its ``key_callback``
 (``mujoco.viewer.launch_passive``). The keys are chosen among those the viewer
@@ -9,12 +9,16 @@ none is used here. Backspace is also the viewer's own "Reset" (MuJoCo's
 default state, not the stand keyframe); the live loop sees that reset and puts
 the robot back at its keyframe (:mod:`amlip_qp.sim.live`).
 
-The command parser (``--help``) and :mod:`amlip_qp.sim.live` read the same table.
+The command parser (``--help``) and :mod:`amlip_qp.sim.live` read the same table;
+:func:`parse_key_script` reads ``view --script``'s key presses at simulated times.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+from amlip_qp.exceptions import InputError
 
 #: Step of the forward-speed command per key press, m/s.
 VX_STEP_MPS = 0.1
@@ -69,3 +73,31 @@ def keys_help() -> str:
     lines.append(f"  {'mouse':<{width}}  double-click a body to select it, Ctrl + right-drag to push it")
     lines.append(f"  {'F1':<{width}}  MuJoCo's own help (camera, selection); Tab, Shift+Tab: its panels")
     return "\n".join(lines)
+
+
+def parse_key_script(text: str, source: str = "key script") -> tuple[tuple[float, int], ...]:
+    """``(t_s, key code)`` pairs, in time order, from lines ``T KEY`` (simulated s, a key name; ``#`` comments).
+
+    Raises:
+        InputError: A line that is not a time >= 0 and one of the keys' names, saying which.
+    """
+    events = []
+    for number, raw in enumerate(text.splitlines(), 1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = line.split()
+        names = ", ".join(CODE_OF_NAME)
+        if len(parts) != 2:
+            raise InputError(f"{source} line {number}: expected 'T KEY' (simulated s, one of {names}), got {raw!r}")
+        try:
+            t_s = float(parts[0])
+        except ValueError:
+            t_s = math.nan
+        if not (math.isfinite(t_s) and t_s >= 0.0):
+            raise InputError(f"{source} line {number}: the time must be a number of seconds >= 0, got {parts[0]!r}")
+        code = CODE_OF_NAME.get(parts[1].lower())
+        if code is None:
+            raise InputError(f"{source} line {number}: unknown key {parts[1]!r}; known: {names}")
+        events.append((t_s, code))
+    return tuple(sorted(events, key=lambda e: e[0]))

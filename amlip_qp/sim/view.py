@@ -27,7 +27,8 @@ from pathlib import Path
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.output_paths import check_output_path, writing
-from amlip_qp.sim.live import LiveCommand, LiveLoop, parse_key_script
+from amlip_qp.sim.live import LiveCommand, LiveLoop
+from amlip_qp.sim.live_keys import parse_key_script
 
 #: The viewer's frame period, s (the loop steps the ticks of one frame between two syncs).
 FRAME_S = 1.0 / 60.0
@@ -78,7 +79,7 @@ def _glfw_error(glfw) -> str:
 
 
 def read_key_script(path: str) -> tuple[tuple[float, int], ...]:
-    """The key presses of ``--script PATH`` (:func:`~amlip_qp.sim.live.parse_key_script`).
+    """The key presses of ``--script PATH`` (:func:`~amlip_qp.sim.live_keys.parse_key_script`).
 
     Raises:
         InputError: The file cannot be read, or a line is not ``T KEY``.
