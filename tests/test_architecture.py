@@ -54,7 +54,10 @@ RULES: dict[str, Rule] = {
     # the robot profiles: plain data read from TOML files among the package's models
     "amlip_qp.profiles": Rule(("amlip_qp.profiles", "amlip_qp.exceptions", "amlip_qp.paths"), HEAVY + ("numpy",)),
     # the command line stays light: handlers are imported by name when a subcommand runs
-    "amlip_qp.cli": Rule(("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
+    # (view's keys for its --help: a leaf module of plain data)
+    "amlip_qp.cli": Rule(
+        ("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.sim.live_keys"), HEAVY + ("numpy",)
+    ),
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
     "amlip_qp.alip": Rule(

@@ -1,6 +1,6 @@
 """The ``amlip-qp`` command line.
 
-The parser is built here (``codegen`` and ``bench`` here; ``walk``,
+The parser is built here (``codegen`` and ``bench`` here; ``walk``, ``view``,
 ``compare``, ``sweep`` and ``check-robot`` in :mod:`~amlip_qp.cli.subcommands`; the parser
 class and the value types in :mod:`~amlip_qp.cli.parsing`). Each
 subcommand's work lives in the module it names, imported only when the
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import Parser, float_in, handler, int_in
-from amlip_qp.cli.subcommands import TRACKERS, add_check_robot, add_compare, add_sweep, add_walk
+from amlip_qp.cli.subcommands import TRACKERS, add_check_robot, add_compare, add_sweep, add_view, add_walk
 from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
 
 PROG = "amlip-qp"
@@ -153,6 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.set_defaults(func=handler("amlip_qp.sweep.bench:run_bench"))
 
     add_walk(sub)
+    add_view(sub)
     add_compare(sub)
     add_sweep(sub)
     add_check_robot(sub)

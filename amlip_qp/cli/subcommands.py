@@ -1,5 +1,5 @@
-"""The ``walk``, ``compare``, ``sweep`` and ``check-robot`` subcommands' options (their handlers live in the
-modules they name)."""
+"""The ``walk``, ``view``, ``compare``, ``sweep`` and ``check-robot`` subcommands' options (their handlers
+live in the modules they name)."""
 
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from amlip_qp.cli.parsing import (
 )
 from amlip_qp.cli.robot_option import robot_list, robot_name_or_path
 from amlip_qp.profiles import ROBOT_NAMES
+from amlip_qp.sim.live_keys import keys_help
 
 #: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
 #: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
@@ -121,6 +122,52 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_command_options(p: argparse.ArgumentParser, speed_profile: bool) -> None:
+    """``--vx`` (or ``--speed-profile`` instead, with ``speed_profile``; without, the starting command), ``--vy``,
+    ``--turn-rate``."""
+    speed = p.add_mutually_exclusive_group() if speed_profile else p
+    what = "" if speed_profile else "starting "
+    speed.add_argument(
+        "--vx",
+        type=finite_float,
+        metavar="M/S",
+        default=None,
+        help=f"{'constant' if speed_profile else 'starting'} forward speed, m/s (default 0)",
+    )
+    if speed_profile:
+        speed.add_argument(
+            "--speed-profile",
+            metavar="T:V,...",
+            default=None,
+            help="piecewise-linear forward speed, e.g. '0:0,5:2.1' (s:m/s)",
+        )
+    p.add_argument(
+        "--vy", type=finite_float, metavar="M/S", default=None, help=f"{what}lateral speed, m/s (left positive)"
+    )
+    p.add_argument(
+        "--turn-rate", type=finite_float, metavar="DEG/S", default=None, help=f"{what}turn rate, deg/s (left positive)"
+    )
+
+
+def add_shaping_options(p: argparse.ArgumentParser) -> None:
+    """``--accel-limit`` or ``--no-command-shaping``: the rate limit of the command before the planner."""
+    shaping = p.add_mutually_exclusive_group()
+    shaping.add_argument(
+        "--accel-limit",
+        type=float_in(0.0, B.MAX_ACCEL_LIMIT_MPS2, "m/s^2"),
+        metavar="M/S2",
+        default=None,
+        help="rate limit of the forward and lateral speed commands before the planner, m/s^2, at most "
+        f"{B.MAX_ACCEL_LIMIT_MPS2:g} (faster is no limit: --no-command-shaping) "
+        "(default: the robot's, amlip_qp.profiles.CommandShaping)",
+    )
+    shaping.add_argument(
+        "--no-command-shaping",
+        action="store_true",
+        help="give the planner the raw command (no rate limit, no step-length cap)",
+    )
+
+
 def add_walk(sub) -> None:
     p = sub.add_parser(
         "walk",
@@ -142,20 +189,7 @@ def add_walk(sub) -> None:
     p.add_argument(
         "--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)"
     )
-    speed = p.add_mutually_exclusive_group()
-    speed.add_argument(
-        "--vx", type=finite_float, metavar="M/S", default=None, help="constant forward speed, m/s (default 0)"
-    )
-    speed.add_argument(
-        "--speed-profile",
-        metavar="T:V,...",
-        default=None,
-        help="piecewise-linear forward speed, e.g. '0:0,5:2.1' (s:m/s)",
-    )
-    p.add_argument("--vy", type=finite_float, metavar="M/S", default=None, help="lateral speed, m/s (left positive)")
-    p.add_argument(
-        "--turn-rate", type=finite_float, metavar="DEG/S", default=None, help="turn rate, deg/s (left positive)"
-    )
+    add_command_options(p, speed_profile=True)
     p.add_argument("--duration", type=positive_float, metavar="S", default=None, help="simulated time, s (default 10)")
     p.add_argument(
         "--push",
@@ -165,21 +199,7 @@ def add_walk(sub) -> None:
         default=[],
         help="push the base with a world force (N) from T for DUR seconds; repeatable",
     )
-    shaping = p.add_mutually_exclusive_group()
-    shaping.add_argument(
-        "--accel-limit",
-        type=float_in(0.0, B.MAX_ACCEL_LIMIT_MPS2, "m/s^2"),
-        metavar="M/S2",
-        default=None,
-        help="rate limit of the forward and lateral speed commands before the planner, m/s^2, at most "
-        f"{B.MAX_ACCEL_LIMIT_MPS2:g} (faster is no limit: --no-command-shaping) "
-        "(default: the robot's, amlip_qp.profiles.CommandShaping)",
-    )
-    shaping.add_argument(
-        "--no-command-shaping",
-        action="store_true",
-        help="give the planner the raw command (no rate limit, no step-length cap)",
-    )
+    add_shaping_options(p)
     p.add_argument("--seed", type=_SEED, default=0, help=_SEED_HELP)
     p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
     add_plant_options(p)
@@ -209,6 +229,55 @@ def add_walk(sub) -> None:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=handler("amlip_qp.sim.cli:run_walk"))
+
+
+def add_view(sub) -> None:
+    p = sub.add_parser(
+        "view",
+        help="watch and drive the closed loop live in MuJoCo's viewer (keys steer, the mouse pushes)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Run the closed loop live in MuJoCo's viewer, no faster than real time. The keys\n"
+        "change the command (inside the robot's bounds, amlip_qp.profiles.CommandBounds;\n"
+        "the controller's command shaping ramps it), the mouse pushes the robot with\n"
+        "MuJoCo's own perturbation. The overlay shows the measured speed (heading frame),\n"
+        "the command, the step count and the real-time factor. It needs a display.\n\n"
+        f"keys:\n{keys_help()}\n\n"
+        "Exit status: 0 the window closed (or --duration ran out) with the robot up,\n"
+        "1 with it down, 2 bad input or no display ($DISPLAY), before anything runs.",
+    )
+    p.add_argument(
+        "--robot",
+        type=robot_name_or_path,
+        metavar="NAME|PATH",
+        default=None,
+        help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml); default cassie",
+    )
+    p.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
+    add_command_options(p, speed_profile=False)
+    add_shaping_options(p)
+    p.add_argument("--seed", type=_SEED, default=0, help=_SEED_HELP)
+    p.add_argument("--noise", action="store_true", help="add Gaussian sensor noise (default: exact measurements)")
+    add_plant_options(p)
+    p.add_argument(
+        "--duration",
+        dest="view_duration_s",
+        type=positive_float,
+        metavar="S",
+        default=None,
+        help="close the viewer after S simulated seconds (default: when its window is closed)",
+    )
+    p.add_argument(
+        "--script",
+        metavar="PATH",
+        default=None,
+        help="press keys at simulated times: a text file of 'T KEY' lines (s, a key name above, e.g. '2 up')",
+    )
+    p.add_argument(
+        "--json", metavar="PATH", default=None, help="write the session's summary as JSON to PATH, or '-' for stdout"
+    )
+    # what walk's scenario builder reads and view does not take
+    p.set_defaults(scenario=None, speed_profile=None, duration=None, push=[])
+    p.set_defaults(func=handler("amlip_qp.sim.view:run_view"))
 
 
 def add_compare(sub) -> None:

@@ -28,17 +28,16 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.plant import Plant, load_plant
 from amlip_qp.sim.pushes import PushSchedule
-from amlip_qp.sim.run_log import (
-    BLOCK_ROWS,
-    LOG_MODES,
-    SCALAR_KEYS,
-    SCALAR_KEYS_FULL,
-    VECTOR_GROUPS_FULL,
-    RowBlocks,
-    unpack_log,
-    vector_groups,
+from amlip_qp.sim.run_log import BLOCK_ROWS, LOG_MODES, RowBlocks, TickLog
+from amlip_qp.sim.run_types import (
+    FallCriteria,
+    Push,
+    RunResult,
+    SensorNoise,
+    TickCallback,
+    TickRecord,
+    quat_mul_small_rotation,
 )
-from amlip_qp.sim.run_types import FallCriteria, Push, RunResult, SensorNoise, TickCallback, quat_mul_small_rotation
 from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
 
 #: MuJoCo warnings that mean the simulation diverged (it then resets the state).
@@ -47,6 +46,8 @@ _DIVERGENCE_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
     mujoco.mjtWarning.mjWARN_BADQVEL,
 )
+#: The status of a :meth:`Simulation.ticker` tick: standing, diverged (MuJoCo reset an unstable state), fallen.
+TICK_OK, TICK_DIVERGED, TICK_FELL = 0, 1, 2
 
 
 class Simulation:
@@ -61,7 +62,7 @@ class Simulation:
         seed: Seed of the noise generators (``noise`` and the ``robot`` sensors).
         contact_threshold_N: Normal force above which a foot's contact switch is on, N.
         fall: Fall criteria.
-        keyframe: Initial keyframe name (of the plant).
+        keyframe: Initial keyframe name (of the plant); ``None``: MuJoCo's default state.
         plant: The plant (default: the robot's own model, :func:`~amlip_qp.sim.plant.load_plant`).
         sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensors`).
         estimator: The controller's base estimator (its name, ``--estimator``): with
@@ -87,7 +88,7 @@ class Simulation:
         seed: int = 0,
         contact_threshold_N: float = 20.0,
         fall: FallCriteria | None = None,
-        keyframe: str = "stand",
+        keyframe: str | None = "stand",
         plant: Plant | None = None,
         sensors: str = "ideal",
         estimator: str = "truth",
@@ -115,6 +116,7 @@ class Simulation:
             raise InputError("--noise adds Gaussian noise to the ideal sensors; the robot sensors have their own")
         self.model = self.plant.model
         self.data = self.plant.new_data(keyframe)
+        self._keyframe_id = -1 if keyframe is None else mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
         self.dt_s = float(self.model.opt.timestep)
         self.substeps = self.plant.substeps(controller.dt_s)
         self._base_body = self.plant.base_body_id
@@ -184,20 +186,7 @@ class Simulation:
                 (:data:`~amlip_qp.sim.summary.SUMMARY_LOG_KEYS`). The trajectory is
                 the same in both modes.
 
-        The log holds, per control tick: ``t``, ``com`` (3), ``com_vel`` (3),
-        ``base_pos`` (3), ``base_tilt``, ``base_yaw`` (rad, wrapped to (-pi, pi]),
-        ``stance_left`` (1 if left stance), ``phase``, ``t_remaining`` (the
-        planner's prediction horizon, s), ``heading``, ``p_st`` (3, CoM minus
-        stance contact, m), ``L_meas`` (3), ``L`` (3, filtered),
-        ``L_hat`` (2), ``L_des`` (2), ``p_sw_des`` (2), ``swing_target`` (3),
-        ``h`` and ``h_d`` (outputs), ``tau`` (joint side, N m),
-        ``tracker_ok``, ``push`` (3, N) and the command ``cmd_vx``, ``cmd_vy``,
-        ``cmd_turn_rate``. ``base_pos`` and ``base_yaw`` are MuJoCo's body pose of
-        the last plant step's start. For a floating-base robot, the base state
-        the controller used against the truth at the measurement:
-        ``base_pos_true``, ``base_vel_true`` (3, world, m/s), ``base_yaw_true``,
-        and ``base_pos_est``, ``base_vel_est``, ``base_yaw_est`` (equal to the
-        truth with ``--estimator truth`` and exact sensors).
+        The log's entries are those of :class:`~amlip_qp.sim.run_log.TickLog`.
 
         Per tick, the result also has the wall times (µs) of the controller
         (``tick_time_us``), of MuJoCo's plant steps (``mujoco_time_us``) and of
@@ -207,160 +196,37 @@ class Simulation:
             raise InputError(f"log must be one of {', '.join(LOG_MODES)}, got {log!r}")
         if not (duration_s > 0 and math.isfinite(duration_s)):
             raise InputError(f"duration must be a positive number of seconds, got {duration_s!r}")
-        m, d, ctrl = self.model, self.data, self.controller
-        ctrl.reset()
-        self.push_schedule.reset()
+        ctrl = self.controller
         n_ticks = int(round(duration_s / ctrl.dt_s))
         if n_ticks < 1:
             raise InputError(f"duration {duration_s!r} s is shorter than one control tick ({ctrl.dt_s} s)")
-        full = log == "full"
-        n_out = ctrl.planner.n_outputs
-        # One row per tick: the Python scalars and the base states go to row blocks (flat lists turned
-        # into arrays every BLOCK_ROWS ticks), the vectors to one preallocated row (one np.concatenate).
-        scalar_keys = SCALAR_KEYS + (SCALAR_KEYS_FULL if full else ())
-        vector_keys = vector_groups(n_out, self.robot.nu) + (VECTOR_GROUPS_FULL if full else ())
-        vectors = np.zeros((n_ticks, sum(w for _, w in vector_keys)))
-        scalars = RowBlocks(len(scalar_keys))
         floating = self.robot.is_floating
-        bq, bv = cast(slice, self._base_q), cast(slice, self._base_v)  # used with a floating base: slices
-        base_true = RowBlocks(sum(self._base_size))  # the measured base state's (q, v)
-        # The controller's: with the true base and no --noise, the measured one itself (the
-        # controller's kinematics take the measurement as it is; tested), not logged twice.
-        est_is_true = self.true_base and self.noise is None
-        base_est = base_true if est_is_true else RowBlocks(sum(self._base_size))
-        # each tick extends these flat lists by its row
-        scalar_rows, true_rows, est_rows = scalars.rows.extend, base_true.rows.extend, base_est.rows.extend
+        tick_log = TickLog(
+            n_ticks, ctrl.planner.n_outputs, self.robot.nu, log == "full", floating, self._base_size,
+            self.true_base and self.noise is None, self.data.xpos[self._base_body], ctrl.kin.state,
+            self._base_q, self._base_v,
+        )  # fmt: skip
         # per tick, ns: its start, the controller's start and end, MuJoCo's start and end, its end
         stamps = RowBlocks(6, np.int64)
-        stamp_rows = stamps.rows.extend
-        # Hoisted lookups: views into MjData stay valid across mj_step.
-        plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
-        read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
-        read_next = plant.compiled_reader(d)  # as generated C, after each tick's steps for the next (or None)
-        add_noise = None if self.noise is None else self._add_noise
-        write_ctrl = plant.ctrl_writer(d, compiled=ctrl_filter is None)  # with a filter: apply_ctrl
-        ctrl_from_tau, apply_ctrl = plant.ctrl_from_tau, plant.apply_ctrl
-        ctrl_step, kin_state = ctrl.step, ctrl.kin.state
-        step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
-        later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
-        xpos_b, xmat_b, xfrc_b = d.xpos[self._base_body], d.xmat[self._base_body], d.xfrc_applied[self._base_body, :3]
-        pushes, no_push = bool(self.pushes), np.zeros(3)
-        if not pushes:
-            xfrc_b[:] = no_push  # and so it stays
-        warn_number, warn_idx = d.warning.number, [int(w) for w in _DIVERGENCE_WARNINGS]
-        warn_number[warn_idx] = 0  # an earlier run's divergence on this data must not hide one of this run
-        warn_all0 = warn_number.tolist()
-        concatenate, perf_ns = np.concatenate, time.perf_counter_ns
-        acos, atan2, isfinite = math.acos, math.atan2, math.isfinite
-        ground = self.ground_height_m  # None on flat ground: the height is z itself
-        z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
-        min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
-        # Above this cosine the tilt is surely not over max_tilt (acos decreases; its error << the margin).
-        upright_cos = math.cos(min(max(max_tilt, 0.0), math.pi)) + 1e-12
+        tick = self.ticker(tick_log.record, on_tick, stamps.rows.extend)
         fell, fall_time, bar = False, float("nan"), None
         if progress:
             from tqdm import tqdm
 
             bar = tqdm(total=n_ticks, unit="tick", desc=f"{self.robot.name}/{ctrl.tracker.name}", leave=False)
         wall0 = time.perf_counter()
-        sim_time = t_next = float(d.time)
-        state = None  # this tick's (q, v, root) if read already (after the last tick's plant steps)
-        qpos_list = qpos.tolist()
-        total = sum(qpos_list)
+        sim_time = float(self.data.time)
         k = 0
         for k in range(n_ticks):
-            t_tick = perf_ns()
-            t = t_next
-            cmd = command_fn(t)
-            if state is None:  # read here: the first tick, no compiled read, or a state it left to read_state's checks
-                state = read_state(qpos_list, total) if read_next is None else read_state(qpos.tolist())
-            q, v, root = state  # root: the base's (q, v) as one list
-            r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
-            if ground is None:
-                z = xpos_b.item(2)
-            else:  # height above the ground under the base
-                x, y, z = xpos_b.tolist()
-                z -= ground(x, y)
-            if floating:
-                true_rows(root)
-            if add_noise is not None:
-                add_noise(q, v)
-            meas = sense(t, q, v)
-            t_c0 = perf_ns()
-            tick = ctrl_step(meas, cmd)
-            t_c1 = perf_ns()
-            if floating and not est_is_true:
-                q_est, v_est = kin_state()
-                est_rows(q_est.tolist()[bq] + v_est.tolist()[bv])
-            tau = tick.tau_Nm
-            if ctrl_filter is None:
-                write_ctrl(tau)
-            else:  # e.g. an actuator delay
-                apply_ctrl(d, ctrl_filter(ctrl_from_tau(tau)))
-            if pushes:
-                push = push_force(t, tick.phase)
-                xfrc_b[:] = push
-            else:
-                push = no_push
-            est, plan = tick.estimate, tick.plan
-            ok = 1.0 if tick.tracker_ok else 0.0
-            if full:
-                tilt = acos(max(-1.0, min(1.0, r22)))
-                scalar_rows(
-                    (
-                        t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok,
-                        tilt, 1.0 if tick.stance == "left" else 0.0, tick.phase, plan.t_remaining_s,
-                        cmd.turn_rate_radps,
-                    )
-                )  # fmt: skip
-                concatenate(
-                    (
-                        est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau,
-                        xpos_b, est.p_st_m, est.L_meas_Nms, est.L_Nms, plan.L_hat_Nms, plan.L_des_Nms,
-                        plan.p_sw_des_world_m, plan.swing_target_world_m, push,
-                    ),
-                    out=vectors[k],
-                )  # fmt: skip
-            else:
-                scalar_rows((t, cmd.vx_mps, cmd.vy_mps, plan.heading_rad, atan2(r10, r00), ok))
-                concatenate((est.com_m, est.com_vel_mps, tick.h, plan.h_d, tau), out=vectors[k])
-            t_m0 = perf_ns()
-            for _ in plant_steps:
-                step(m, d)
-            t_m1 = perf_ns()
-            t_next = t + dt_s  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
-            for _ in later_steps:
-                t_next += dt_s
-            # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
-            # warning; that is a divergence, reported as a fall.
-            warn_all = warn_number.tolist()
-            if warn_all != warn_all0 and any(warn_all[i] for i in warn_idx):
-                fell, fall_time, sim_time = True, t, t
-                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+            status, t, sim_time = tick()
+            if status:
+                fell, fall_time = True, t
                 break
-            warn_all0 = warn_all
-            sim_time = t_next
-            if on_tick is not None:
-                on_tick(sim_time, d)
             if bar is not None and (k + 1) % 200 == 0:
                 bar.update(200)
-            # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
-            if read_next is None:  # the next tick's read_state takes the list and its sum
-                qpos_list = qpos.tolist()
-                state, total = None, sum(qpos_list)
-            else:  # the next tick's state, and the sum of qpos and qvel
-                state, total = read_next()
-            tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
-            if z < min_z or tilted or (not isfinite(total) and not np.all(np.isfinite(qpos))):
-                fell, fall_time = True, t
-                stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
-                break
-            stamp_rows((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
             if k % BLOCK_ROWS == BLOCK_ROWS - 1:
                 stamps.flush()
-                scalars.flush()
-                base_true.flush()
-                base_est.flush()
+                tick_log.flush()
         wall = time.perf_counter() - wall0
         n = k + 1
         if bar is not None:
@@ -368,7 +234,6 @@ class Simulation:
             bar.close()
         ns = stamps.array()
         tick_us, mujoco_us = (ns[:, 2] - ns[:, 1]) * 1e-3, (ns[:, 4] - ns[:, 3]) * 1e-3
-        base_rows = base_true.array(), base_est.array()
         return RunResult(
             robot=self.robot.name,
             tracker=ctrl.tracker.name,
@@ -377,7 +242,7 @@ class Simulation:
             wall_time_s=wall,
             fell=fell,
             fall_time_s=fall_time,
-            log=unpack_log(scalars.array(), scalar_keys, vectors[:n], vector_keys, *base_rows, floating, full),
+            log=tick_log.log(n),
             steps=list(ctrl.steps),
             tick_time_us=tick_us,
             mujoco_time_us=mujoco_us,
@@ -400,3 +265,133 @@ class Simulation:
                 "log": log,
             },
         )
+
+    # -------------------------------------------------------------- tick
+    def ticker(
+        self,
+        record: TickRecord | None = None,
+        on_tick: TickCallback | None = None,
+        stamp: Callable[[tuple[int, ...]], object] | None = None,
+    ) -> Callable[[], tuple[int, float, float]]:
+        """Start a run from the plant's state now (the controller and pushes start over); return its tick.
+
+        Each call of the tick is one control tick: the sensors, the controller on
+        ``command_fn(t)``, the controls and the push, the plant steps, the fall checks. It
+        returns ``(status, t_s, t_after_s)``: :data:`TICK_OK`, :data:`TICK_DIVERGED` (MuJoCo reset
+        an unstable state; ``t_after_s`` is then ``t_s``) or :data:`TICK_FELL`, the tick's time and
+        the simulated time after its plant steps, s. After a status other than :data:`TICK_OK`
+        the run is over. :meth:`reset_to_keyframe` puts the plant back at the start.
+
+        Args:
+            record: ``record(t_s, command, tick_info, push_N, root, r00, r10, r22)`` after the
+                controller, before the plant steps (:class:`~amlip_qp.sim.run_log.TickLog`): ``root``
+                the measured base's ``(q, v)`` (a list, empty without a floating base), ``r00, r10,
+                r22`` the base's rotation entries at the last plant step's start.
+            on_tick: ``on_tick(t_after_s, data)`` after the plant steps unless they diverged; it
+                must not modify ``data``.
+            stamp: Takes the tick's clock stamps (ns): its start, the controller's start and end,
+                MuJoCo's start and end, its end.
+        """
+        m, d, ctrl = self.model, self.data, self.controller
+        ctrl.reset()
+        self.push_schedule.reset()
+        # Hoisted lookups: views into MjData stay valid across mj_step.
+        plant, ctrl_filter, command_fn = self.plant, self.ctrl_filter, self.command_fn
+        read_state, sense, push_force = plant.array_reader(d), self.sensors.bind(d, self.true_base), self.push_force
+        read_next = plant.compiled_reader(d)  # as generated C, after each tick's steps for the next (or None)
+        add_noise = None if self.noise is None else self._add_noise
+        write_ctrl = plant.ctrl_writer(d, compiled=ctrl_filter is None)  # with a filter: apply_ctrl
+        ctrl_from_tau, apply_ctrl, ctrl_step = plant.ctrl_from_tau, plant.apply_ctrl, ctrl.step
+        step, plant_steps, dt_s, qpos = mujoco.mj_step, range(self.substeps), self.dt_s, d.qpos
+        later_steps = range(self.substeps - 1)  # the plant steps after a tick's first
+        xpos_b, xmat_b, xfrc_b = d.xpos[self._base_body], d.xmat[self._base_body], d.xfrc_applied[self._base_body, :3]
+        pushes, no_push = bool(self.pushes), np.zeros(3)
+        if not pushes:
+            xfrc_b[:] = no_push  # and so it stays
+        warn_number, warn_idx = d.warning.number, [int(w) for w in _DIVERGENCE_WARNINGS]
+        warn_number[warn_idx] = 0  # an earlier run's divergence on this data must not hide one of this run
+        warn_all0 = warn_number.tolist()
+        perf_ns, acos, isfinite = time.perf_counter_ns, math.acos, math.isfinite
+        stamp_row = stamp or (lambda row: None)
+        ground = self.ground_height_m  # None on flat ground: the height is z itself
+        z0 = float(xpos_b[2]) if ground is None else float(xpos_b[2]) - ground(float(xpos_b[0]), float(xpos_b[1]))
+        min_z, max_tilt = self.fall.min_height_fraction * z0, self.fall.max_tilt_rad
+        # Above this cosine the tilt is surely not over max_tilt (acos decreases; its error << the margin).
+        upright_cos = math.cos(min(max(max_tilt, 0.0), math.pi)) + 1e-12
+        t_next = float(d.time)
+        state = None  # this tick's (q, v, root) if read already (after the last tick's plant steps)
+        qpos_list = qpos.tolist()
+        total = sum(qpos_list)
+
+        def tick() -> tuple[int, float, float]:
+            nonlocal t_next, state, qpos_list, total, warn_all0
+            t_tick = perf_ns()
+            t = t_next
+            cmd = command_fn(t)
+            if state is None:  # read here: the first tick, no compiled read, or a state it left to read_state's checks
+                state = read_state(qpos_list, total) if read_next is None else read_state(qpos.tolist())
+            q, v, root = state  # root: the base's (q, v) as one list
+            r00, _, _, r10, _, _, _, _, r22 = xmat_b.tolist()  # the last plant step's start, read while cached
+            if ground is None:
+                z = xpos_b.item(2)
+            else:  # height above the ground under the base
+                x, y, z = xpos_b.tolist()
+                z -= ground(x, y)
+            if add_noise is not None:
+                add_noise(q, v)
+            meas = sense(t, q, v)
+            t_c0 = perf_ns()
+            info = ctrl_step(meas, cmd)
+            t_c1 = perf_ns()
+            tau = info.tau_Nm
+            if ctrl_filter is None:
+                write_ctrl(tau)
+            else:  # e.g. an actuator delay
+                apply_ctrl(d, ctrl_filter(ctrl_from_tau(tau)))
+            if pushes:
+                push = push_force(t, info.phase)
+                xfrc_b[:] = push
+            else:
+                push = no_push
+            if record is not None:
+                record(t, cmd, info, push, root, r00, r10, r22)
+            t_m0 = perf_ns()
+            for _ in plant_steps:
+                step(m, d)
+            t_m1 = perf_ns()
+            t_next = t + dt_s  # MuJoCo's clock, time += timestep a step (d.time, a slow property: tested)
+            for _ in later_steps:
+                t_next += dt_s
+            # MuJoCo resets an unstable state to qpos0 (and its clock) and counts a
+            # warning; that is a divergence, reported as a fall.
+            warn_all = warn_number.tolist()
+            if warn_all != warn_all0 and any(warn_all[i] for i in warn_idx):
+                stamp_row((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+                return TICK_DIVERGED, t, t
+            warn_all0 = warn_all
+            if on_tick is not None:
+                on_tick(t_next, d)
+            # A finite sum implies finite entries (NaN and inf propagate); only if not, look closer.
+            if read_next is None:  # the next tick's read_state takes the list and its sum
+                qpos_list = qpos.tolist()
+                state, total = None, sum(qpos_list)
+            else:  # the next tick's state, and the sum of qpos and qvel
+                state, total = read_next()
+            tilted = r22 < upright_cos and acos(max(-1.0, min(1.0, r22))) > max_tilt
+            fallen = z < min_z or tilted or (not isfinite(total) and not np.all(np.isfinite(qpos)))
+            stamp_row((t_tick, t_c0, t_c1, t_m0, t_m1, perf_ns()))
+            return (TICK_FELL if fallen else TICK_OK), t, t_next
+
+        return tick
+
+    def reset_to_keyframe(self) -> None:
+        """Put the plant back at its start: :attr:`data` (the same object) to the keyframe, forwarded.
+
+        The next run (:meth:`run`, or a new :meth:`ticker`) starts from it as from a new
+        :class:`Simulation`'s. The sensors' and the actuator delay's own state go on.
+        """
+        if self._keyframe_id < 0:
+            mujoco.mj_resetData(self.model, self.data)
+        else:
+            mujoco.mj_resetDataKeyframe(self.model, self.data, self._keyframe_id)
+        mujoco.mj_forward(self.model, self.data)

@@ -26,6 +26,9 @@ if TYPE_CHECKING:
 #: ``on_tick(t_s, data)`` with the simulated time after the tick's plant steps
 #: (s) and MuJoCo's ``MjData`` (read only: do not modify it).
 TickCallback = Callable[[float, "mujoco.MjData"], None]
+#: Signature of the ``record`` hook of :meth:`~amlip_qp.sim.harness.Simulation.ticker`:
+#: ``record(t_s, command, tick_info, push_N, root, r00, r10, r22)``, called between the controller and the plant steps.
+TickRecord = Callable[..., None]
 
 
 @dataclass(frozen=True)
