@@ -65,7 +65,7 @@ def test_every_named_scenario_is_inside_its_robot_bounds():
 
 def test_compare_ranges_are_inside_the_bounds():
     compared = [p for p in PROFILES.values() if p.compare is not None]
-    assert [p.name for p in compared] == ["cassie", "h1", "rabbit"]
+    assert [p.name for p in compared] == ["cassie", "g1", "h1", "rabbit"]
     for profile in compared:
         assert profile.compare.nominal_scenario in SCENARIOS
         assert profile.compare.ramp_end_mps <= profile.bounds.vx_mps[1]

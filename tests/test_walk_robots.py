@@ -34,6 +34,14 @@ RUNS: dict[str, tuple[str, str, float | None]] = {
     "h1-push/pbc": ("h1-push", "pbc", 8.5),
     "h1-diagonal/pbc": ("h1-diagonal", "pbc", 8.0),
     "h1-1mps/pbc": ("h1-1mps", "pbc", None),
+    # G1: the QP tracker (its profile says why the PBC does not run on it)
+    "g1-in-place/qp": ("g1-in-place", "qp", None),
+    "g1-ramp-1.2/qp": ("g1-ramp-1.2", "qp", None),
+    "g1-turn-90/qp": ("g1-turn-90", "qp", None),
+    "g1-1mps-ekf/qp": ("g1-1mps-ekf", "qp", None),
+    "g1-push/qp": ("g1-push", "qp", 8.5),
+    "g1-diagonal/qp": ("g1-diagonal", "qp", 8.0),
+    "g1-1mps/qp": ("g1-1mps", "qp", None),
 }
 
 
@@ -93,34 +101,40 @@ def _speed_ok(r: dict, tol: float = 0.15) -> None:
     assert abs(r["vy_mps"] - r["cmd_vy_mps"]) < tol, f"lateral {r['vy_mps']:.3f} m/s, commanded {r['cmd_vy_mps']}"
 
 
-@pytest.mark.parametrize("tracker", ["qp", "pbc"])
-def test_h1_walks_in_place_20s_with_small_drift(results, tracker):
-    r = results[f"h1-in-place/{tracker}"]
+#: (robot, tracker) pairs judged: H1 with both trackers, G1 with the QP.
+PAIRS = [("h1", "qp"), ("h1", "pbc"), ("g1", "qp")]
+
+
+@pytest.mark.parametrize("robot, tracker", PAIRS)
+def test_walks_in_place_20s_with_small_drift(results, robot, tracker):
+    r = results[f"{robot}-in-place/{tracker}"]
     _walked(r)
     assert r["duration_s"] == 20.0
     assert r["drift_m"] < 0.3, f"drift {r['drift_m']:.3f} m"
     assert abs(math.degrees(r["yaw_end_rad"])) < 10.0, f"pelvis yaw {math.degrees(r['yaw_end_rad']):.1f} deg"
 
 
-@pytest.mark.parametrize("key", ["h1-1mps", "h1-ramp-1.5", "h1-1mps-ekf"])
-@pytest.mark.parametrize("tracker", ["qp", "pbc"])
-def test_h1_walks_at_the_commanded_speed(results, key, tracker):
-    """1.0 m/s for 10 s (also with the robot's sensors and the EKF); 0 -> 1.5 m/s over 10 s, held 5 s."""
-    r = results[f"{key}/{tracker}"]
+@pytest.mark.parametrize("key", ["1mps", "ramp", "1mps-ekf"])
+@pytest.mark.parametrize("robot, tracker", PAIRS)
+def test_walks_at_the_commanded_speed(results, robot, tracker, key):
+    """1.0 m/s for 10 s (also with the robot's sensors and the EKF); the ramp over 10 s to 1.5 m/s
+    (H1) or 1.2 m/s (G1), held 5 s."""
+    key = {"ramp": {"h1": "ramp-1.5", "g1": "ramp-1.2"}[robot]}.get(key, key)
+    r = results[f"{robot}-{key}/{tracker}"]
     _walked(r)
     _speed_ok(r)
 
 
-@pytest.mark.parametrize("tracker", ["qp", "pbc"])
-def test_h1_walks_diagonally(results, tracker):
-    r = results[f"h1-diagonal/{tracker}"]
+@pytest.mark.parametrize("robot, tracker", PAIRS)
+def test_walks_diagonally(results, robot, tracker):
+    r = results[f"{robot}-diagonal/{tracker}"]
     _walked(r)
     _speed_ok(r, tol=0.1)
 
 
-@pytest.mark.parametrize("tracker", ["qp", "pbc"])
-def test_h1_turns_90_degrees_at_walking_speed(results, tracker):
-    r = results[f"h1-turn-90/{tracker}"]
+@pytest.mark.parametrize("robot, tracker", PAIRS)
+def test_turns_90_degrees_at_walking_speed(results, robot, tracker):
+    r = results[f"{robot}-turn-90/{tracker}"]
     _walked(r)
     assert abs(math.degrees(r["heading_end_rad"]) - 90.0) < 0.5
     err = r["travel_dir_rad"] - r["heading_end_rad"]
@@ -130,8 +144,9 @@ def test_h1_turns_90_degrees_at_walking_speed(results, tracker):
     assert abs(yaw_err) < 10.0, f"pelvis yaw {yaw_err:.1f} deg off the heading"
 
 
-@pytest.mark.parametrize("tracker", ["qp", "pbc"])
-def test_h1_survives_a_150N_sagittal_push_at_1mps(results, tracker):
-    r = results[f"h1-push/{tracker}"]
+@pytest.mark.parametrize("robot, tracker", PAIRS)
+def test_survives_a_sagittal_push_at_1mps(results, robot, tracker):
+    """H1 (51 kg): 150 N for 0.2 s; G1 (33 kg): 60 N for 0.2 s."""
+    r = results[f"{robot}-push/{tracker}"]
     _walked(r)
     assert r["vx_last_1_5s_mps"] > 0.5
