@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from concurrent.futures import ProcessPoolExecutor
 
-import numpy as np
 import pytest
 
 pytestmark = pytest.mark.slow
@@ -41,6 +40,7 @@ def _run(key: str) -> dict:
     from amlip_qp.sim.factory import build_simulation, load
     from amlip_qp.sim.run_types import SensorNoise
     from amlip_qp.sim.scenarios import SCENARIOS
+    from walk_numbers import walk_numbers
 
     name, duration, seed, noise = RUNS[key]
     sc = SCENARIOS[name]
@@ -49,28 +49,8 @@ def _run(key: str) -> dict:
     tracker = QPTracker(load(sc.robot))
     sim = build_simulation(sc, tracker, seed=seed, noise=SensorNoise() if noise else None)
     res = sim.run(sc.duration_s)
-    log = res.log
-    last = log["t"] > log["t"][-1] - 3.0
-    D = log["heading"][last]
-    vel = log["com_vel"][last]
-    return {
-        "duration_s": float(sc.duration_s),
-        "final_vx_mps": float(sc.vx.final_mps),
-        "cmd_vy_mps": float(sc.vy_mps),
-        "fell": bool(res.fell),
-        "sim_time_s": float(res.sim_time_s),
-        "vx_mps": float(np.mean(vel[:, 0] * np.cos(D) + vel[:, 1] * np.sin(D))),
-        "vy_mps": float(np.mean(-vel[:, 0] * np.sin(D) + vel[:, 1] * np.cos(D))),
-        "drift_m": float(np.linalg.norm(log["com"][-1, :2] - log["com"][0, :2])),
-        "travel_dir_rad": float(np.arctan2(np.mean(vel[:, 1]), np.mean(vel[:, 0]))),
-        "world_speed_mps": float(np.linalg.norm(np.mean(vel[:, :2], axis=0))),
-        "vx_last_1_5s_mps": float(np.mean(log["com_vel"][log["t"] > log["t"][-1] - 1.5, 0])),
-        "heading_end_rad": float(log["heading"][-1]),
-        "yaw_end_rad": float(np.unwrap(log["base_yaw"])[-1]),
-        "fallback_ticks": int(res.fallback_ticks),
+    return walk_numbers(sc, res) | {
         "tracker_fallbacks": int(tracker.fallbacks),
-        "ticks": int(len(log["t"])),
-        "tau_finite": bool(np.all(np.isfinite(log["tau"]))),
         "speed_correction_x_mps": float(sim.controller.steps[-1].speed_correction_mps[0]),
     }
 

@@ -49,6 +49,7 @@ def _run(key: str) -> dict:
     """Run one entry of RUNS; summary numbers only (picklable)."""
     from amlip_qp.sim.factory import build_simulation, load, tracker_class
     from amlip_qp.sim.scenarios import SCENARIOS
+    from walk_numbers import walk_numbers
 
     name, tracker_name, duration = RUNS[key]
     sc = SCENARIOS[name]
@@ -57,29 +58,8 @@ def _run(key: str) -> dict:
     tracker = tracker_class(tracker_name)(load(sc.robot))
     sim = build_simulation(sc, tracker)
     res = sim.run(sc.duration_s)
-    log = res.log
-    last = log["t"] > log["t"][-1] - 3.0
-    D = log["heading"][last]
-    vel = log["com_vel"][last]
-    return {
-        "duration_s": float(sc.duration_s),
-        "final_vx_mps": float(sc.vx.final_mps),
-        "cmd_vy_mps": float(sc.vy_mps),
-        "fell": bool(res.fell),
-        "sim_time_s": float(res.sim_time_s),
-        "vx_mps": float(np.mean(vel[:, 0] * np.cos(D) + vel[:, 1] * np.sin(D))),
-        "vy_mps": float(np.mean(-vel[:, 0] * np.sin(D) + vel[:, 1] * np.cos(D))),
-        "drift_m": float(np.linalg.norm(log["com"][-1, :2] - log["com"][0, :2])),
-        "travel_dir_rad": float(np.arctan2(np.mean(vel[:, 1]), np.mean(vel[:, 0]))),
-        "vx_last_1_5s_mps": float(np.mean(log["com_vel"][log["t"] > log["t"][-1] - 1.5, 0])),
-        "heading_end_rad": float(log["heading"][-1]),
-        "yaw_end_rad": float(np.unwrap(log["base_yaw"])[-1]),
-        "fallback_ticks": int(res.fallback_ticks),
-        "tau_finite": bool(np.all(np.isfinite(log["tau"]))),
-        "tau_within_limits": bool(
-            np.all(np.abs(log["tau"]) <= np.max(np.abs(tracker.robot.actuated.torque_limit_Nm), axis=1) + 1e-9)
-        ),
-    }
+    limits = np.max(np.abs(tracker.robot.actuated.torque_limit_Nm), axis=1)
+    return walk_numbers(sc, res) | {"tau_within_limits": bool(np.all(np.abs(res.log["tau"]) <= limits + 1e-9))}
 
 
 @pytest.fixture(scope="module")
