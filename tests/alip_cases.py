@@ -17,3 +17,11 @@ def est(**kw) -> StateEstimate:
                 com_m=[1.0, 0.5, H])  # fmt: skip
     base.update(kw)
     return StateEstimate(**base)
+
+
+#: A 3-D robot's outputs (hip yaws and a toe) and a planar robot's, in their order.
+OUT3 = (
+    "torso_pitch", "torso_roll", "stance_hip_yaw", "swing_hip_yaw", "com_z_over_stance",
+    "com_x_over_swing", "com_y_over_swing", "com_z_over_swing", "swing_toe_pitch",
+)  # fmt: skip
+OUT2 = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")

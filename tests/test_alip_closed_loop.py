@@ -10,6 +10,7 @@ transfer L_2 = L_1 + (r_1 - r_2) x m v against the recomputed value.
 import numpy as np
 import pytest
 
+from alip_cases import OUT2, OUT3
 from amlip_qp.alip import Command, Planner, StateEstimate, desired
 from amlip_qp.alip.heading import world_to_heading
 
@@ -90,7 +91,7 @@ def _perturbed_sim(rng, stance="left"):
 def test_converges_to_commanded_forward_speed(seed):
     rng = np.random.default_rng(seed)
     sim = _perturbed_sim(rng)
-    planner = Planner("cassie", M, G)
+    planner = Planner(OUT3, M, G)
     cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, vx_mps=0.6, step_width_m=0.2)
     rec = walk(sim, planner, [cmd] * 8)
     v_mean = np.array([(r["c_end"] - r["c_start"])[:2] / T for r in rec])
@@ -115,7 +116,7 @@ def test_walking_in_place_gives_the_step_width_and_no_drift():
     rng = np.random.default_rng(3)
     sim = _perturbed_sim(rng)
     W = 0.24
-    planner = Planner("cassie", M, G)
+    planner = Planner(OUT3, M, G)
     cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, step_width_m=W)
     rec = walk(sim, planner, [cmd] * 10)
     contacts = np.array([r["r_st"] for r in rec])
@@ -134,7 +135,7 @@ def test_walking_in_place_gives_the_step_width_and_no_drift():
 def test_diagonal_walking_reaches_vx_vy():
     rng = np.random.default_rng(4)
     sim = _perturbed_sim(rng)
-    planner = Planner("cassie", M, G)
+    planner = Planner(OUT3, M, G)
     cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, vx_mps=0.4, vy_mps=0.2, step_width_m=0.2)
     rec = walk(sim, planner, [cmd] * 10)
     stride = (rec[-1]["c_end"] - rec[-3]["c_end"])[:2] / (2 * T)
@@ -145,7 +146,7 @@ def test_diagonal_walking_reaches_vx_vy():
 def test_turning_90_degrees():
     rng = np.random.default_rng(5)
     sim = _perturbed_sim(rng)
-    planner = Planner("cassie", M, G)
+    planner = Planner(OUT3, M, G)
     n_turn = 10
     rate = (np.pi / 2) / (n_turn * T)  # ~28 deg/s
     turn = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, vx_mps=0.5, step_width_m=0.2, turn_rate_radps=rate)
@@ -169,7 +170,7 @@ def test_turning_90_degrees():
 def test_rabbit_planar_walk_converges():
     rng = np.random.default_rng(6)
     sim = PointMassLIP([rng.uniform(-0.1, 0.0), 0.0, H], [0.1, 0.0, 0.0], [0.0, 0.0, 0.0], "left")
-    planner = Planner("rabbit", M, G)
+    planner = Planner(OUT2, M, G)
     cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.05, vx_mps=0.8, step_width_m=0.2, vy_mps=0.3)
     t = 0.0
     r_prev = sim.r - np.array([0.2, 0.0, 0.0])
@@ -244,7 +245,7 @@ def walk_on_slope(slope_deg, full_transfer, n_steps=8, seed=7):
     k = np.tan(np.radians(slope_deg))
     rng = np.random.default_rng(seed)
     sim = PointMassOnSlope(k, [rng.uniform(-0.05, 0.05), rng.uniform(-0.12, -0.02)], [0.1, 0.1], "left")
-    planner = Planner("cassie", M, G)
+    planner = Planner(OUT3, M, G)
     cmd = Command(step_time_s=T, com_height_m=H, clearance_m=0.08, vx_mps=0.6, step_width_m=0.2)
     t, records = 0.0, []
     r_prev = sim.r - np.array([0.0, 0.2, 0.0])

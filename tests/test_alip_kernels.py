@@ -5,6 +5,9 @@ import pytest
 
 from amlip_qp.alip import kernels
 
+#: Outputs per block of SWING_REFERENCE (values, first and second time derivatives).
+N = kernels.N_REFERENCE_OUTPUTS
+
 M, H, G, T = 32.0, 0.8, 9.81, 0.35
 
 
@@ -19,7 +22,7 @@ def _plan_input(**kw):
 
 def test_layout_sizes():
     assert len(kernels.ALIP_PLAN_INPUTS) == 16 and len(kernels.ALIP_PLAN_OUTPUTS) == 8
-    assert len(kernels.SWING_REFERENCE_INPUTS) == 15 and kernels.SWING_REFERENCE_N_OUT == 27
+    assert len(kernels.SWING_REFERENCE_INPUTS) == 15 and kernels.SWING_REFERENCE_N_OUT == 30
 
 
 def test_alip_plan_matches_hand_derived_values():
@@ -64,19 +67,19 @@ def _ref_input(s, **kw):
 def test_swing_reference_start_mid_and_end_values():
     u0, b = _ref_input(0.0)
     y0 = kernels.swing_reference(u0)
-    np.testing.assert_allclose(y0[:9], [0, 0, 0.05, -0.08, H, -0.2, 0.15, H, 0], atol=1e-15)
+    np.testing.assert_allclose(y0[:N], [0, 0, 0.05, -0.08, H, -0.2, 0.15, H, 0, 0], atol=1e-15)
     y1 = kernels.swing_reference(_ref_input(1.0)[0])
-    np.testing.assert_allclose(y1[:9], [0, 0, -0.15, 0.15, H, 0.18, -0.12, H, 0], atol=1e-15)
+    np.testing.assert_allclose(y1[:N], [0, 0, -0.15, 0.15, H, 0.18, -0.12, H, 0, 0], atol=1e-15)
     # Velocities of the cosine blend vanish at both ends; the z parabola has slope -+4 z_cl / T.
-    np.testing.assert_allclose(y0[9 + 5 : 9 + 7], 0.0, atol=1e-15)
-    np.testing.assert_allclose(y1[9 + 5 : 9 + 7], 0.0, atol=1e-15)
-    assert y0[9 + 7] == pytest.approx(-4 * 0.1 / T) and y1[9 + 7] == pytest.approx(4 * 0.1 / T)
+    np.testing.assert_allclose(y0[N + 5 : 9 + 7], 0.0, atol=1e-15)
+    np.testing.assert_allclose(y1[N + 5 : 9 + 7], 0.0, atol=1e-15)
+    assert y0[N + 7] == pytest.approx(-4 * 0.1 / T) and y1[N + 7] == pytest.approx(4 * 0.1 / T)
     ym = kernels.swing_reference(_ref_input(0.5)[0])
     assert ym[7] == pytest.approx(H - 0.1)
     assert ym[5] == pytest.approx(0.5 * (-0.2 + 0.18))
     # Hip-yaw lines: constant slope (target - start) / T, zero acceleration.
-    assert ym[9 + 2] == pytest.approx((-0.15 - 0.05) / T) and ym[9 + 3] == pytest.approx((0.15 + 0.08) / T)
-    assert ym[18 + 2] == 0.0 and ym[18 + 3] == 0.0
+    assert ym[N + 2] == pytest.approx((-0.15 - 0.05) / T) and ym[N + 3] == pytest.approx((0.15 + 0.08) / T)
+    assert ym[2 * N + 2] == 0.0 and ym[2 * N + 3] == 0.0
 
 
 def test_swing_reference_derivatives_match_finite_differences_in_time():
@@ -87,9 +90,9 @@ def test_swing_reference_derivatives_match_finite_differences_in_time():
         y = kernels.swing_reference(_ref_input(s)[0])
         yp = kernels.swing_reference(_ref_input((t + dt) / T)[0])
         ym = kernels.swing_reference(_ref_input((t - dt) / T)[0])
-        np.testing.assert_allclose(y[9:18], (yp[:9] - ym[:9]) / (2 * dt), atol=1e-6)
-        np.testing.assert_allclose(y[18:], (yp[:9] - 2 * y[:9] + ym[:9]) / dt**2, atol=2e-3)
-        np.testing.assert_allclose(y[18:], (yp[9:18] - ym[9:18]) / (2 * dt), atol=1e-5)
+        np.testing.assert_allclose(y[N : 2 * N], (yp[:N] - ym[:N]) / (2 * dt), atol=1e-6)
+        np.testing.assert_allclose(y[2 * N :], (yp[:N] - 2 * y[:N] + ym[:N]) / dt**2, atol=2e-3)
+        np.testing.assert_allclose(y[2 * N :], (yp[N : 2 * N] - ym[N : 2 * N]) / (2 * dt), atol=1e-5)
 
 
 def _old_flat_plan(u):
@@ -127,7 +130,7 @@ def test_flat_ground_inputs_give_the_old_numbers_bit_for_bit():
         v, _ = _ref_input(rng.uniform(0, 1), z_cl=rng.uniform(0, 0.2))
         h = kernels.swing_reference(v)
         for k, (stance, swing, toe) in enumerate(_old_flat_reference(v)):
-            got = h[9 * k + np.array([4, 7, 8])]
+            got = h[N * k + np.array([4, 7, 8])]
             assert list(got) == [stance, swing, toe]
             assert list(np.signbit(got)) == list(np.signbit([stance, swing, toe]))
 
@@ -166,9 +169,9 @@ def test_swing_reference_ground_heights_and_pitches(dz0, dz1):
     # CoM over stance from H + dz0 to H; CoM over swing from H to H - dz1; toe from pitch0 to pitch.
     np.testing.assert_allclose(y0[[4, 7, 8]], [H + dz0, H, -0.2], atol=1e-15)
     np.testing.assert_allclose(y1[[4, 7, 8]], [H, H - dz1, 0.25], atol=1e-15)
-    np.testing.assert_allclose(y0[9 + np.array([4, 8])], 0.0, atol=1e-15)  # blends start and end at rest
-    np.testing.assert_allclose(y1[9 + np.array([4, 8])], 0.0, atol=1e-15)
-    assert y1[9 + 7] > 0.0 and y0[9 + 7] < 0.0  # the foot rises at lift-off and descends at touchdown
+    np.testing.assert_allclose(y0[N + np.array([4, 8])], 0.0, atol=1e-15)  # blends start and end at rest
+    np.testing.assert_allclose(y1[N + np.array([4, 8])], 0.0, atol=1e-15)
+    assert y1[N + 7] > 0.0 and y0[N + 7] < 0.0  # the foot rises at lift-off and descends at touchdown
     # The foot over the stance contact (CoM height minus CoM over swing) clears the higher end by z_cl.
     ys = np.array([kernels.swing_reference(_ref_input(s, **base)[0]) for s in np.linspace(0, 1, 2001)])
     foot = ys[:, 4] - ys[:, 7]
@@ -186,6 +189,6 @@ def test_swing_reference_ground_derivatives_match_finite_differences(ground):
         y = kernels.swing_reference(_ref_input(s, **ground)[0])
         yp = kernels.swing_reference(_ref_input((t + dt) / T, **ground)[0])
         ym = kernels.swing_reference(_ref_input((t - dt) / T, **ground)[0])
-        np.testing.assert_allclose(y[9:18], (yp[:9] - ym[:9]) / (2 * dt), atol=1e-6)
-        np.testing.assert_allclose(y[18:], (yp[9:18] - ym[9:18]) / (2 * dt), atol=1e-5)
-        assert np.max(np.abs(y[9 + np.array([4, 8])])) > (0.05 if ground else -1.0)  # the ground terms move
+        np.testing.assert_allclose(y[N : 2 * N], (yp[:N] - ym[:N]) / (2 * dt), atol=1e-6)
+        np.testing.assert_allclose(y[2 * N :], (yp[N : 2 * N] - ym[N : 2 * N]) / (2 * dt), atol=1e-5)
+        assert np.max(np.abs(y[N + np.array([4, 8])])) > (0.05 if ground else -1.0)  # the ground terms move

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from alip_cases import H, T, cmd, est
+from alip_cases import OUT2, OUT3, H, T, cmd, est
 from amlip_qp.alip import Planner, PlannerOutput, StepClock, desired, kernels, lip
 from amlip_qp.exceptions import InputError
 
@@ -13,7 +13,7 @@ M, G = 31.0, 9.81
 H0 = np.array([0.01, -0.02, 0.03, -0.04, 0.9, -0.15, 0.12, 0.88, 0.0])
 
 
-def started(robot="cassie", h0=H0, **kw):
+def started(robot=OUT3, h0=H0, **kw):
     p = Planner(robot, M, G, **kw)
     p.start_step("left", 2.0, h0)
     return p
@@ -59,7 +59,7 @@ def test_injected_kernels_receive_the_dense_layouts_and_outputs_are_unpacked():
 
     def reference_fn(u):
         seen["ref"] = np.array(u)
-        return np.arange(27.0)
+        return np.arange(30.0)
 
     p = started(plan_fn=plan_fn, reference_fn=reference_fn)
     e = est()
@@ -74,7 +74,7 @@ def test_injected_kernels_receive_the_dense_layouts_and_outputs_are_unpacked():
     np.testing.assert_allclose(out.L_des_Nms, [4, 5])
     np.testing.assert_allclose(out.p_sw_des_world_m, [6, 7])
     np.testing.assert_allclose(out.h_d, np.arange(9.0))
-    np.testing.assert_allclose(out.ddh_d, np.arange(18.0, 27.0))
+    np.testing.assert_allclose(out.ddh_d, np.arange(20.0, 29.0))
     r = dict(zip(kernels.SWING_REFERENCE_INPUTS, seen["ref"]))
     assert (r["stance_yaw0"], r["swing_yaw0"], r["x0"], r["y0"]) == (0.03, -0.04, -0.15, 0.12)
     assert (r["p_sw_des_x"], r["p_sw_des_y"], r["dD"]) == (6.0, 7.0, pytest.approx(0.15))
@@ -82,7 +82,7 @@ def test_injected_kernels_receive_the_dense_layouts_and_outputs_are_unpacked():
 
 
 def test_heading_advances_at_start_step_and_targets_are_in_the_step_frame():
-    p = Planner("cassie", M, G, heading_rad=0.4)
+    p = Planner(OUT3, M, G, heading_rad=0.4)
     p.start_step("left", 0.0, H0)
     c = cmd(turn_rate_radps=1.0)
     out = p.update(est(t_in_step_s=T), c)
@@ -105,7 +105,7 @@ def test_heading_advances_at_start_step_and_targets_are_in_the_step_frame():
 def test_the_planner_starts_its_steps_on_the_clock_it_is_given():
     """One step clock: the planner keeps no stance or step start of its own."""
     clock = StepClock()
-    p = Planner("cassie", M, G, clock=clock)
+    p = Planner(OUT3, M, G, clock=clock)
     assert p.clock is clock and p.stance is None
     p.start_step("right", 1.5, H0)
     assert (clock.stance, clock.t_start_s) == ("right", 1.5) and p.stance == "right"
@@ -114,7 +114,7 @@ def test_the_planner_starts_its_steps_on_the_clock_it_is_given():
     assert out.heading_next_rad == pytest.approx(0.1 + (T - 0.1))
     p.reset()
     assert clock.stance is None and clock.t_start_s == 0.0
-    assert Planner("cassie", M).clock is not Planner("cassie", M).clock
+    assert Planner(OUT3, M).clock is not Planner(OUT3, M).clock
 
 
 @pytest.mark.parametrize("early", [0.9, 1.0, 1.07])
@@ -122,7 +122,7 @@ def test_a_turn_command_turns_by_its_time_integral_whatever_the_step_timing(earl
     """Steps that end early (or late) must not add or lose heading: after the
     command stops, the heading is the integral of the commanded rate (a per-step
     increment of rate * T would give n_steps * rate * T instead)."""
-    p = Planner("cassie", M, G, heading_rad=0.2)
+    p = Planner(OUT3, M, G, heading_rad=0.2)
     dt, rate, t_turn_end = 0.0005, 0.6, 1.234
     stance, t_start = "left", 0.0
     p.start_step(stance, t_start, H0)
@@ -142,7 +142,7 @@ def test_a_turn_command_turns_by_its_time_integral_whatever_the_step_timing(earl
 
 
 def test_reset_starts_a_new_walk_and_a_new_turn_integral():
-    p = Planner("cassie", M, G)
+    p = Planner(OUT3, M, G)
     p.start_step("left", 5.0, H0)
     p.update(est(t_in_step_s=0.2), cmd(turn_rate_radps=1.0))
     p.start_step("right", 5.3, H0)
@@ -184,7 +184,7 @@ def test_vz_clamp_and_switch():
 
 def test_rabbit_ignores_lateral_terms():
     h0 = np.array([0.02, 0.9, -0.15, 0.88])
-    p = Planner("rabbit", 32.0, G, heading_rad=1.0)
+    p = Planner(OUT2, 32.0, G, heading_rad=1.0)
     p.start_step("left", 0.0, h0, heading_rad=0.7)
     out = p.update(est(), cmd(turn_rate_radps=2.0, vy_mps=0.4, step_width_m=0.3))
     assert p.output_names == ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
@@ -201,21 +201,27 @@ def test_rabbit_ignores_lateral_terms():
 
 
 def test_bad_planner_use_raises_input_error():
-    with pytest.raises(InputError, match="unknown robot 'atlas'"):
-        Planner("atlas", M)
+    with pytest.raises(InputError, match="unknown output 'atlas'"):
+        Planner((*OUT3, "atlas"), M)
+    with pytest.raises(InputError, match="a sequence of output names"):
+        Planner("torso_pitch", M)
+    with pytest.raises(InputError, match="must include com_x_over_swing"):
+        Planner(("torso_pitch", "com_z_over_stance", "com_z_over_swing"), M)
+    with pytest.raises(InputError, match="planar robot has no lateral output: drop torso_roll"):
+        Planner((*OUT2, "torso_roll"), M)
     with pytest.raises(InputError, match="mass_kg must be > 0"):
-        Planner("cassie", 0.0)
+        Planner(OUT3, 0.0)
     with pytest.raises(InputError, match="mass_kg must be finite"):
-        Planner("cassie", float("nan"))
+        Planner(OUT3, float("nan"))
     with pytest.raises(InputError, match=r"g \(gravity magnitude\) must be > 0"):
-        Planner("cassie", M, g=-9.81)
+        Planner(OUT3, M, g=-9.81)
     with pytest.raises(InputError, match="speed_reference must be one of"):
-        Planner("cassie", M, speed_reference="avg")
+        Planner(OUT3, M, speed_reference="avg")
     with pytest.raises(InputError, match="plan_fn must be callable"):
-        Planner("cassie", M, plan_fn=3)
+        Planner(OUT3, M, plan_fn=3)
     with pytest.raises(InputError, match="clock must be a StepClock, got str"):
-        Planner("cassie", M, clock="left")
-    p = Planner("cassie", M)
+        Planner(OUT3, M, clock="left")
+    p = Planner(OUT3, M)
     with pytest.raises(InputError, match="before start_step"):
         p.update(est(), cmd())
     with pytest.raises(InputError, match="stance must be 'left' or 'right'"):
@@ -235,15 +241,15 @@ def test_bad_planner_use_raises_input_error():
 
 def test_outputs_are_independent_of_the_kernels_shared_buffers():
     """The generated kernels return one shared output buffer; each PlannerOutput owns its data."""
-    shared8, shared27 = np.zeros(8), np.zeros(27)
+    shared8, shared30 = np.zeros(8), np.zeros(30)
 
     def plan_fn(u):
         shared8[:] = kernels.alip_plan(u)
         return shared8
 
     def reference_fn(u):
-        shared27[:] = kernels.swing_reference(u)
-        return shared27
+        shared30[:] = kernels.swing_reference(u)
+        return shared30
 
     p = started(plan_fn=plan_fn, reference_fn=reference_fn)
     first = p.update(est(), cmd())
@@ -252,7 +258,7 @@ def test_outputs_are_independent_of_the_kernels_shared_buffers():
     p.update(est(t_in_step_s=0.2, L_Nms=[-3.0, 5.0, 0.0]), cmd(vx_mps=-0.4))
     for k, value in kept.items():
         np.testing.assert_array_equal(getattr(first, k), value)
-        assert not np.shares_memory(getattr(first, k), shared8) and not np.shares_memory(getattr(first, k), shared27)
+        assert not np.shares_memory(getattr(first, k), shared8) and not np.shares_memory(getattr(first, k), shared30)
 
 
 def test_kernels_with_the_wrong_output_size_are_input_errors():
@@ -267,7 +273,7 @@ def _same_bits(a, b):
     return np.array_equal(a, b) and np.array_equal(np.signbit(a), np.signbit(b))
 
 
-@pytest.mark.parametrize("robot, h0", [("cassie", H0), ("rabbit", np.array([0.02, 0.9, -0.15, 0.88]))])
+@pytest.mark.parametrize("robot, h0", [(OUT3, H0), (OUT2, np.array([0.02, 0.9, -0.15, 0.88]))])
 def test_no_terrain_and_flat_terrain_give_the_same_bits(robot, h0):
     from amlip_qp.alip import TerrainPrediction
 
@@ -302,7 +308,7 @@ def test_terrain_reaches_the_kernels_and_the_swing_target():
     assert out.swing_target_world_m[2] == pytest.approx(stance_z + 0.1)
     # Stepping up: the placement with the height transfer differs from the flat one (the v_z law is unchanged).
     assert not np.allclose(out.p_sw_des_world_m, flat.p_sw_des_world_m, atol=1e-4)
-    rabbit = Planner("rabbit", 32.0, G)
+    rabbit = Planner(OUT2, 32.0, G)
     rabbit.start_step("left", 0.0, np.array([0.02, 0.9, -0.15, 0.88]))
     h_end = rabbit.update(est(t_in_step_s=T), cmd(), terrain).h_d
     assert h_end[3] == pytest.approx(H - 0.1)  # CoM over swing ends at H - dz_sw
@@ -337,7 +343,7 @@ def test_bad_terrain_raises_input_error():
         started().update(est(), cmd(), TerrainPrediction(dz_sw_m=0.85))
     for bad in ("up", -0.1, 0.0, True):
         with pytest.raises(InputError, match="late_descent"):
-            Planner("cassie", M, late_descent=bad)
+            Planner(OUT3, M, late_descent=bad)
 
 
 def test_a_foothold_hook_moves_the_swing_target_and_the_placement():

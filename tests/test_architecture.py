@@ -65,7 +65,14 @@ RULES: dict[str, Rule] = {
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy"),
     ),
     "amlip_qp.codegen": Rule(
-        ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.exceptions", "amlip_qp.output_paths", "amlip_qp.paths"),
+        (
+            "amlip_qp.alip",
+            "amlip_qp.codegen",
+            "amlip_qp.exceptions",
+            "amlip_qp.output_paths",
+            "amlip_qp.paths",
+            "amlip_qp.profiles",
+        ),
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers"),
     ),
     # robots may import the pure alip package (output names, side flip, heading rotation)

@@ -115,7 +115,7 @@ def test_compile_and_load_announces_once_per_process_and_cache(tmp_path, capsys)
     lib, functions = runtime.compile_and_load(src + b"/* another */\n", ["swing_reference"], cache_dir=tmp_path)
     runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=tmp_path)
     assert capsys.readouterr().err == ""
-    assert lib.is_file() and functions["swing_reference"].nnz_out(0) == 27
+    assert lib.is_file() and functions["swing_reference"].nnz_out(0) == 30
 
 
 def test_compile_and_load_without_compiler_is_a_typed_error(tmp_path, monkeypatch, capsys):

@@ -17,12 +17,13 @@ from amlip_qp.control.wbc.inputs import (
     swing_force_weight,
 )
 from amlip_qp.exceptions import InputError
-from amlip_qp.robots import CASSIE_OUTPUTS, load_robot
+from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from robot_states import tuned_config
 from wbc_cases import corrected_target, kin_at, target_for
 
 CASSIE_CONFIG = tuned_config("cassie", "qp")
+CASSIE_OUTPUTS = load_robot("cassie").profile.outputs
 RABBIT_CONFIG = tuned_config("rabbit", "qp")
 
 

@@ -13,6 +13,7 @@ from amlip_qp.profiles import (
     CommandShaping,
     get_profile,
 )
+from amlip_qp.robots import OutputMap, load_robot
 from amlip_qp.sim.scenarios import SCENARIOS
 
 
@@ -23,7 +24,7 @@ def test_registry_names_match_their_profiles_and_model_files_exist():
     for name, profile in PROFILES.items():
         assert profile.name == name and get_profile(name) is profile
         assert profile.source == MODELS_DIR / f"{name}.toml" and profile.model.path.is_file()
-        assert profile.output_layout in ("cassie", "rabbit")
+        assert profile.outputs == OutputMap(load_robot(name)).names
         assert profile.planar == (name == "rabbit")
         assert profile.planar == (profile.gait.step_width_m == 0.0)
 

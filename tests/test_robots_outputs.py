@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 
 from amlip_qp.alip import other_side
 from amlip_qp.exceptions import InputError, MJCFError
-from amlip_qp.robots import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap, RobotKinematics, load_robot
-from amlip_qp.robots.outputs import check_output_map, output_layout
+from amlip_qp.robots import OutputMap, RobotKinematics, load_robot, output_names
+from amlip_qp.robots.outputs import DEFAULT_OUTPUTS_3D, DEFAULT_OUTPUTS_PLANAR, check_output_map
 from robot_states import ROBOTS
 
 
@@ -36,25 +36,67 @@ def random_state(robot, rng):
     return q, rng.normal(size=robot.nv)
 
 
-def test_layout(robot):
+def test_the_outputs_are_the_profiles_declaration(robot):
     omap = OutputMap(robot)
-    expect = CASSIE_OUTPUTS if robot.is_floating else PLANAR_OUTPUTS
-    assert omap.names == expect and omap.size == len(expect)
-    # the layout is the robot profile's, also the planner's robot name
-    assert omap.layout == output_layout(robot) == robot.profile.output_layout == robot.name
-    if omap.layout == "cassie":
-        assert omap.yaw_q_idx["left"] == robot.state_map.joint_pin_q["left-hip-yaw"]
-        assert omap.yaw_v_idx["right"] == robot.state_map.joint_pin_v["right-hip-yaw"]
-    else:
-        assert omap.yaw_q_idx == omap.yaw_v_idx == {}
+    assert omap.names == output_names(robot) == robot.profile.outputs and omap.size == len(omap.names)
+    assert [p.name for p in omap.primitives] == list(omap.names)
+    rows = [omap.names.index(n) for n in ("stance_hip_yaw", "swing_hip_yaw") if n in omap.names]
+    assert omap.joint_rows == tuple(rows)
+    if rows:
+        q_idx, v_idx = omap.joint_indices("left")
+        assert q_idx == (robot.state_map.joint_pin_q["left-hip-yaw"], robot.state_map.joint_pin_q["right-hip-yaw"])
+        assert v_idx[1] == robot.state_map.joint_pin_v["right-hip-yaw"]
 
 
-def test_a_model_without_profile_gets_the_layout_it_fits_and_a_profile_must_fit(robot):
-    assert output_layout(dataclasses.replace(robot, profile=None)) == robot.name
-    other = "rabbit" if robot.name == "cassie" else "cassie"
-    wrong = dataclasses.replace(robot.profile, output_layout=other)
-    with pytest.raises(MJCFError, match=f"names the output layout '{other}'"):
-        output_layout(dataclasses.replace(robot, profile=wrong))
+def test_a_model_without_a_profile_gets_the_default_outputs_it_fits(robot):
+    bare = dataclasses.replace(robot, profile=None)
+    assert output_names(bare) == (DEFAULT_OUTPUTS_PLANAR if robot.is_planar else DEFAULT_OUTPUTS_3D)
+    assert output_names(bare) == robot.profile.outputs  # the bundled ones declare the same
+
+
+def test_an_output_the_model_cannot_compute_is_refused_at_load():
+    cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
+    lateral = dataclasses.replace(rabbit.profile, outputs=(*rabbit.profile.outputs, "com_y_over_swing"))
+    with pytest.raises(MJCFError, match="planar robot has no lateral output: drop com_y_over_swing"):
+        OutputMap(dataclasses.replace(rabbit, profile=lateral))
+    no_yaw = dataclasses.replace(cassie.profile, joint_roles={"hip_yaw": "{side}-no-such-joint"})
+    with pytest.raises(MJCFError, match="'stance_hip_yaw' needs a hip_yaw joint on each leg"):
+        OutputMap(dataclasses.replace(cassie, profile=no_yaw))
+    one_point = dataclasses.replace(cassie, force_sites={s: cassie.force_sites[s][:1] for s in cassie.foot_sides})
+    with pytest.raises(MJCFError, match="'swing_toe_pitch' needs two force points on each foot"):
+        OutputMap(one_point)
+
+
+def with_foot_roll(robot):
+    """``robot`` with a ``swing_foot_roll`` output declared after its own."""
+    profile = dataclasses.replace(robot.profile, outputs=(*robot.profile.outputs, "swing_foot_roll"))
+    return dataclasses.replace(robot, profile=profile)
+
+
+def test_swing_foot_roll_is_the_contact_frames_roll_with_its_derivatives():
+    robot = with_foot_roll(load_robot("cassie"))
+    rng = np.random.default_rng(24)
+    kin, probe, omap = RobotKinematics(robot), RobotKinematics(robot), OutputMap(robot)
+    assert omap.names[-1] == "swing_foot_roll" and omap.size == 10
+    h = 1e-6
+    for _ in range(2):
+        q, v = random_state(robot, rng)
+        kin.update(q, v)
+        for st in robot.foot_sides:
+            y, J, jdv = omap.evaluate(kin, st, 0.7)
+            R = kin.frame_rotation(robot.contact_frame_ids[other_side(st)])
+            assert y[-1] == pytest.approx(Rotation.from_matrix(R).as_euler("ZYX")[2], abs=1e-12)
+
+            def roll(qq, k=0):
+                probe.update(qq, v)
+                return omap.evaluate(probe, st, 0.7)[k][-1]
+
+            fd = [(roll(pin.integrate(robot.pin_model, q, e)) - roll(pin.integrate(robot.pin_model, q, -e))) / (2 * h)
+                  for e in np.eye(robot.nv) * h]  # fmt: skip
+            np.testing.assert_allclose(J[-1], fd, atol=1e-6)
+            jv = [roll(pin.integrate(robot.pin_model, q, sign * v * h), 1) @ v for sign in (1, -1)]
+            assert jdv[-1] == pytest.approx((jv[0] - jv[1]) / (2 * h), abs=1e-5)
+            assert abs(jdv[-1]) > 1e-3  # the check is not vacuous
 
 
 def test_values_follow_the_definitions(robot):

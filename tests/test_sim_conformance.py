@@ -195,14 +195,14 @@ def test_a_role_naming_no_joint_fails_the_role_check(capsys, tmp_path):
 
 
 def test_a_check_that_raises_fails_with_its_reason_and_the_others_still_run(capsys, tmp_path):
-    """Without hip-yaw joints the model fits no output layout: the checks that need the outputs raise."""
+    """Without hip-yaw joints the hip-yaw outputs have no joint: the checks that need the outputs raise."""
     profile = _profile_copy(tmp_path, "h1", {'hip_yaw = "{side}_hip_yaw"': 'hip_yaw = "{side}_yaw"'})
     code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1
     lines = _lines(out)
     assert list(lines) == MODEL_AND_TICK_NAMES
     status, detail = lines[C.RANK_NAME]
-    assert status == "FAIL" and detail.startswith("raised MJCFError: ") and "does not fit" in detail
+    assert status == "FAIL" and detail.startswith("raised MJCFError: ") and "needs a hip_yaw joint" in detail
     assert lines[C.MASS_NAME][0] == lines[C.FLOOR_NAME][0] == "PASS"
 
 

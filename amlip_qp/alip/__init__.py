@@ -35,7 +35,7 @@ from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
 from amlip_qp.alip.formulas import GRAVITY_MPS2
 from amlip_qp.alip.heading import heading_to_world, hip_yaw_targets, rotation, world_to_heading, yaw_of
 from amlip_qp.alip.kalman import AngularMomentumFilter, MomentumFilter1D
-from amlip_qp.alip.kernels import RABBIT_FROM_CASSIE, alip_plan, swing_reference
+from amlip_qp.alip.kernels import alip_plan, swing_reference
 from amlip_qp.alip.lip import (
     flow,
     foot_placement,
@@ -47,15 +47,13 @@ from amlip_qp.alip.lip import (
     vz_limit,
 )
 from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
-from amlip_qp.alip.outputs import CASSIE_OUTPUTS, RABBIT_OUTPUTS, output_names, reference_outputs
+from amlip_qp.alip.outputs import REFERENCE_OUTPUTS, OutputSet, reference_outputs
 from amlip_qp.alip.phase import step_phase, step_phase_clipped, time_remaining
 from amlip_qp.alip.planner import Planner
 
 __all__ = [
-    "CASSIE_OUTPUTS",
     "GRAVITY_MPS2",
-    "RABBIT_FROM_CASSIE",
-    "RABBIT_OUTPUTS",
+    "REFERENCE_OUTPUTS",
     "AngularMomentumFilter",
     "Command",
     "FootholdPlane",
@@ -64,6 +62,7 @@ __all__ = [
     "Lx_from_step_width",
     "Ly_from_forward_speed",
     "MomentumFilter1D",
+    "OutputSet",
     "Planner",
     "PlannerOutput",
     "StateEstimate",
@@ -82,7 +81,6 @@ __all__ = [
     "mean_to_end_factor",
     "omega",
     "other_side",
-    "output_names",
     "predict_end_of_step",
     "reference_outputs",
     "rotation",

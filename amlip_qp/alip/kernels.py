@@ -53,9 +53,10 @@ at least ``z_cl`` above the higher end, and ``swing_toe_pitch`` from
 :func:`~amlip_qp.alip.formulas.stance_height`,
 :func:`~amlip_qp.alip.formulas.ground_pitch_blend`).
 
-``SWING_REFERENCE`` outputs (27): ``h_d`` (9), ``dh_d/dt`` (9), ``d2h_d/dt2`` (9)
-in Cassie's output order (``amlip_qp.alip.outputs.CASSIE_OUTPUTS``). Rabbit's
-four outputs are entries ``RABBIT_FROM_CASSIE = (0, 4, 5, 7)`` of that layout.
+``SWING_REFERENCE`` outputs (30): ``h_d`` (10), ``dh_d/dt`` (10), ``d2h_d/dt2`` (10)
+of every output a robot may declare, in the order of
+``amlip_qp.alip.outputs.REFERENCE_OUTPUTS``; each robot takes the entries of
+its own outputs (``amlip_qp.alip.outputs.OutputSet``).
 """
 
 from __future__ import annotations
@@ -76,12 +77,9 @@ SWING_REFERENCE_INPUTS = (
     "s", "T", "H", "z_cl", "stance_yaw0", "swing_yaw0", "x0", "y0", "p_sw_des_x", "p_sw_des_y", "dD",
     "dz_sw0", "dz_sw", "slope_pitch0", "slope_pitch",
 )  # fmt: skip
-N_CASSIE_OUTPUTS = 9
-SWING_REFERENCE_N_OUT = 3 * N_CASSIE_OUTPUTS
-
-#: Rabbit's outputs (torso pitch, CoM z over stance, CoM x and z over swing)
-#: as indices into Cassie's output layout.
-RABBIT_FROM_CASSIE = (0, 4, 5, 7)
+#: Outputs of the reference kernel (``amlip_qp.alip.outputs.REFERENCE_OUTPUTS``).
+N_REFERENCE_OUTPUTS = 10
+SWING_REFERENCE_N_OUT = 3 * N_REFERENCE_OUTPUTS
 
 
 def alip_plan_terms(u: Sequence) -> list:
@@ -100,7 +98,7 @@ def alip_plan_terms(u: Sequence) -> list:
 
 
 def swing_reference_terms(u: Sequence) -> list:
-    """Cassie's ``h_d(s)`` and its first two time derivatives (layout in the module doc)."""
+    """``h_d(s)`` of every output and its first two time derivatives (layout in the module doc)."""
     s, T, H, z_cl, st_yaw0, sw_yaw0, x0, y0, x_des, y_des, dD, dz0, dz1, pitch0, pitch1 = u
     st_yaw1, sw_yaw1 = F.hip_yaw_split(dD)
     shapes = [
@@ -113,6 +111,7 @@ def swing_reference_terms(u: Sequence) -> list:
         F.cosine_blend(s, y0, y_des),  # CoM y over swing
         F.swing_height(s, H, z_cl, dz0, dz1),  # CoM z over swing
         F.ground_pitch_blend(s, pitch0, pitch1),  # swing toe pitch
+        F.constant(s, 0.0),  # swing foot roll: level
     ]
     derivs = [F.to_time_derivatives(y, dy_ds, d2y_ds2, T) for y, dy_ds, d2y_ds2 in shapes]
     return [d[0] for d in derivs] + [d[1] for d in derivs] + [d[2] for d in derivs]
@@ -124,5 +123,5 @@ def alip_plan(u: np.ndarray) -> np.ndarray:
 
 
 def swing_reference(u: np.ndarray) -> np.ndarray:
-    """numpy reference of ``SWING_REFERENCE``: 15 inputs -> 27 outputs (no validation)."""
+    """numpy reference of ``SWING_REFERENCE``: 15 inputs -> 30 outputs (no validation)."""
     return np.array([float(v) for v in swing_reference_terms([float(v) for v in u])])

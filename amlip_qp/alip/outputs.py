@@ -1,9 +1,10 @@
 """Reference outputs ``h_d(s)`` with their first and second time derivatives.
 
-The output names and orders are those of ``docs/ARCHITECTURE.md``. The shapes
-come from :func:`amlip_qp.alip.kernels.swing_reference` (Cassie's nine
-outputs); Rabbit's four are the entries ``kernels.RABBIT_FROM_CASSIE`` of that
-layout, so there is one copy of the shapes.
+The reference kernel (:func:`amlip_qp.alip.kernels.swing_reference`) gives
+the references of every output a robot may declare
+(:data:`REFERENCE_OUTPUTS`, :mod:`amlip_qp.profiles.outputs`); a robot takes
+the entries of its own outputs (:class:`OutputSet`), in its order, so there
+is one copy of the shapes and it does not depend on the robot.
 
 The swing targets ``com_x_over_swing`` / ``com_y_over_swing`` are expressed in
 the current step's heading frame ``D_k`` (ARCHITECTURE.md): pass the desired
@@ -16,14 +17,17 @@ second and accelerations per second squared (``d/dt = (1/T) d/ds``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import kernels
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles.outputs import output_primitives
 
-#: Cassie's nine outputs, in the order of ``h_0``, ``h_d`` and the SWING_REFERENCE layout.
-CASSIE_OUTPUTS = (
+#: Every output the reference kernel gives, in its order (``SWING_REFERENCE``'s ``h_d`` block).
+REFERENCE_OUTPUTS = (
     "torso_pitch",
     "torso_roll",
     "stance_hip_yaw",
@@ -33,30 +37,123 @@ CASSIE_OUTPUTS = (
     "com_y_over_swing",
     "com_z_over_swing",
     "swing_toe_pitch",
+    "swing_foot_roll",
 )
 
-#: Rabbit's four outputs, in order.
-RABBIT_OUTPUTS = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
-
-#: Output names of each supported robot.
-ROBOT_OUTPUTS = {"cassie": CASSIE_OUTPUTS, "rabbit": RABBIT_OUTPUTS}
-
-_RABBIT_IDX = np.asarray(kernels.RABBIT_FROM_CASSIE)
-
-assert len(CASSIE_OUTPUTS) == kernels.N_CASSIE_OUTPUTS
-assert tuple(CASSIE_OUTPUTS[i] for i in kernels.RABBIT_FROM_CASSIE) == RABBIT_OUTPUTS
+assert len(REFERENCE_OUTPUTS) == kernels.N_REFERENCE_OUTPUTS
 
 
-def check_robot(robot: str) -> str:
-    """Return ``robot`` if it is ``"cassie"`` or ``"rabbit"``, else raise InputError."""
-    if robot not in ROBOT_OUTPUTS:
-        raise InputError(f"unknown robot {robot!r}; the ALIP planner supports {sorted(ROBOT_OUTPUTS)}")
-    return robot
+def _position(names: tuple[str, ...], name: str) -> int:
+    """Index of ``name`` in ``names``, -1 if it is not there."""
+    return names.index(name) if name in names else -1
 
 
-def output_names(robot: str) -> tuple[str, ...]:
-    """Output names of ``robot`` (``"cassie"`` or ``"rabbit"``), in order."""
-    return ROBOT_OUTPUTS[check_robot(robot)]
+class OutputSet:
+    """A robot's outputs as the planner sees them: names, order and what the kernels need of them.
+
+    A set without ``com_y_over_swing`` is planar (and then has no lateral
+    output at all, :attr:`OutputPrimitive.lateral
+    <amlip_qp.profiles.outputs.OutputPrimitive.lateral>`): its robot walks
+    in the sagittal plane, heading 0.
+
+    Args:
+        names: The robot's output names, in its order (:mod:`amlip_qp.profiles.outputs`).
+
+    Raises:
+        InputError: An unknown or repeated name, or a set no walking robot can have.
+    """
+
+    def __init__(self, names: Sequence[str]):
+        if isinstance(names, OutputSet):
+            names = names.names
+        if isinstance(names, str):
+            raise InputError(f"outputs must be a sequence of output names, got the string {names!r}")
+        names = tuple(names)
+        planar = "com_y_over_swing" not in names
+        output_primitives(names, planar)
+        #: Output names, in order.
+        self.names: tuple[str, ...] = names
+        #: True for a set without lateral outputs (the sagittal plane only).
+        self.planar = planar
+        #: Each output's index in :data:`REFERENCE_OUTPUTS`.
+        self.reference_index = np.array([REFERENCE_OUTPUTS.index(n) for n in names], dtype=int)
+        # Where the kernel's step-start and command inputs come from (-1: not an output; its input is 0).
+        self._i_stance_yaw = _position(names, "stance_hip_yaw")
+        self._i_swing_yaw = _position(names, "swing_hip_yaw")
+        self._i_x = _position(names, "com_x_over_swing")
+        self._i_y = _position(names, "com_y_over_swing")
+        self._turns = self._i_stance_yaw >= 0 or self._i_swing_yaw >= 0
+        self._toe = "swing_toe_pitch" in names
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, OutputSet) and other.names == self.names
+
+    def __hash__(self) -> int:
+        return hash(self.names)
+
+    def __repr__(self) -> str:
+        return f"OutputSet({list(self.names)!r})"
+
+    def index(self, name: str) -> int:
+        """Index of the output ``name``; :class:`InputError` if the set has none."""
+        if name not in self.names:
+            raise InputError(f"no output {name!r}; the outputs are {', '.join(self.names)}")
+        return self.names.index(name)
+
+    def pack_swing_reference_input(
+        self,
+        s,
+        T_s,
+        H_m,
+        z_cl_m,
+        h0_start,
+        p_sw_des_heading_m,
+        turn_rad,
+        out: np.ndarray | None = None,
+        ground: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
+    ) -> np.ndarray:
+        """Fill the dense SWING_REFERENCE input vector (15,) without validation.
+
+        Args:
+            s: phase in [0, 1]; T_s: step duration, s; H_m: CoM height, m; z_cl_m: clearance, m.
+            h0_start: the robot's measured outputs at the step start, in its output order.
+            p_sw_des_heading_m: (2,) target ``p_sw->CoM`` at touchdown in the heading frame
+                ``D_k`` (x, y), m; y only with a ``com_y_over_swing`` output.
+            turn_rad: ``dD = D_{k+1} - D_k``, rad (only with hip-yaw outputs).
+            out: optional (15,) float array to fill in place (no allocation).
+            ground: ``(dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)``, the
+                ground at lift-off and at the target relative to the stance contact
+                (layout in :mod:`amlip_qp.alip.kernels`; zeros on flat ground). The
+                pitches only with a ``swing_toe_pitch`` output.
+
+        An input that none of the set's outputs uses is 0.
+        """
+        u = np.empty(len(kernels.SWING_REFERENCE_INPUTS)) if out is None else out
+        h0, p, (dz0, dz1, pitch0, pitch1) = h0_start, p_sw_des_heading_m, ground
+        i_st, i_sw, i_x, i_y = self._i_stance_yaw, self._i_swing_yaw, self._i_x, self._i_y
+        lateral, turns, toe = i_y >= 0, self._turns, self._toe
+        # One slice assignment per call (a control-rate hot path), in the layout of the kernels module doc.
+        u[:] = (
+            s, T_s, H_m, z_cl_m,
+            h0[i_st] if i_st >= 0 else 0.0, h0[i_sw] if i_sw >= 0 else 0.0,
+            h0[i_x], h0[i_y] if lateral else 0.0,
+            p[0], p[1] if lateral else 0.0, turn_rad if turns else 0.0,
+            dz0, dz1, pitch0 if toe else 0.0, pitch1 if toe else 0.0,
+        )  # fmt: skip
+        return u
+
+    def split_reference(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Split a SWING_REFERENCE output into this set's ``(h_d, dh_d, ddh_d)`` (new arrays)."""
+        n, idx = kernels.N_REFERENCE_OUTPUTS, self.reference_index
+        return y[idx], y[n + idx], y[2 * n + idx]
+
+
+def output_set(outputs: Sequence[str] | OutputSet) -> OutputSet:
+    """``outputs`` as an :class:`OutputSet` (itself if it is one)."""
+    return outputs if isinstance(outputs, OutputSet) else OutputSet(outputs)
 
 
 def check_clearance(z_cl_m, H_m) -> None:
@@ -96,45 +193,8 @@ def check_ground(ground, H_m, z_cl_m) -> None:
             raise InputError(f"{name}={v!r} rad must be within (-pi/2, pi/2); pass the ground's pitch in radians")
 
 
-def pack_swing_reference_input(
-    robot: str,
-    s,
-    T_s,
-    H_m,
-    z_cl_m,
-    h0_start,
-    p_sw_des_heading_m,
-    turn_rad,
-    out: np.ndarray | None = None,
-    ground: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
-) -> np.ndarray:
-    """Fill the dense SWING_REFERENCE input vector (15,) without validation.
-
-    Args:
-        robot: ``"cassie"`` or ``"rabbit"`` (already checked).
-        s: phase in [0, 1]; T_s: step duration, s; H_m: CoM height, m; z_cl_m: clearance, m.
-        h0_start: the robot's measured outputs at the step start, in its output order.
-        p_sw_des_heading_m: (2,) target ``p_sw->CoM`` at touchdown in the heading frame
-            ``D_k`` (x, y), m; for Rabbit only x is used.
-        turn_rad: ``dD = D_{k+1} - D_k``, rad (0 for Rabbit).
-        out: optional (15,) float array to fill in place (no allocation).
-        ground: ``(dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)``, the
-            ground at lift-off and at the target relative to the stance contact
-            (layout in :mod:`amlip_qp.alip.kernels`; zeros on flat ground).
-            Rabbit has no toe: its pitches are not used.
-    """
-    u = np.empty(len(kernels.SWING_REFERENCE_INPUTS)) if out is None else out
-    h0, p, (dz0, dz1, pitch0, pitch1) = h0_start, p_sw_des_heading_m, ground
-    # One slice assignment per call (a control-rate hot path), in the layout of the kernels module doc.
-    if robot == "cassie":
-        u[:] = (s, T_s, H_m, z_cl_m, h0[2], h0[3], h0[5], h0[6], p[0], p[1], turn_rad, dz0, dz1, pitch0, pitch1)
-    else:
-        u[:] = (s, T_s, H_m, z_cl_m, 0.0, 0.0, h0[2], 0.0, p[0], 0.0, 0.0, dz0, dz1, 0.0, 0.0)
-    return u
-
-
 def reference_outputs(
-    robot: str,
+    outputs: Sequence[str] | OutputSet,
     s,
     T_s,
     H_m,
@@ -149,26 +209,26 @@ def reference_outputs(
     slope_pitch0_rad=0.0,
     slope_pitch_rad=0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``h_d(s)``, ``dh_d/dt`` and ``d^2h_d/dt^2`` of ``robot`` in its output order.
+    """``h_d(s)``, ``dh_d/dt`` and ``d^2h_d/dt^2`` of ``outputs``, in their order.
 
     Args:
-        robot: ``"cassie"`` (9 outputs) or ``"rabbit"`` (4 outputs).
+        outputs: The robot's output names (or their :class:`OutputSet`).
         s: phase in [0, 1] (dimensionless; see :mod:`amlip_qp.alip.phase`).
         T_s: step duration, s (> 0).
         H_m: desired CoM height over the stance contact, m (> 0).
         z_cl_m: swing-foot clearance at mid-step, m (0 <= z_cl < H).
         h0_start: measured outputs at the step start, the robot's order and units.
         p_sw_des_heading_m: (2,) desired CoM minus swing contact at touchdown in the
-            current step's heading frame, m (Rabbit: only x is used).
-        turn_rad: turn of this step ``D_{k+1} - D_k``, rad (split +/- half to the hip yaws; Cassie only).
-        reference_fn: the SWING_REFERENCE implementation (15 -> 27); default
+            current step's heading frame, m (only x without a ``com_y_over_swing`` output).
+        turn_rad: turn of this step ``D_{k+1} - D_k``, rad (split +/- half to the hip yaws).
+        reference_fn: the SWING_REFERENCE implementation (15 -> 30); default
             :func:`kernels.swing_reference`.
         dz_sw0_m: ground height where the swing foot lifted off (the previous
             stance contact) minus the stance contact, m.
         dz_sw_m: ground height at the swing target minus the stance contact, m.
         slope_pitch0_rad, slope_pitch_rad: ground pitch along the heading at
             lift-off and at the target, rad (rotation about the heading's y
-            axis, positive = ground descending ahead; Cassie's toe only).
+            axis, positive = ground descending ahead; ``swing_toe_pitch`` only).
             All four ground values are 0 on flat ground; see
             :func:`check_ground` for their limits.
 
@@ -176,7 +236,8 @@ def reference_outputs(
         Three float arrays of the robot's output count: values (rad or m), first
         time derivatives (per s) and second time derivatives (per s^2).
     """
-    names = output_names(robot)
+    outputs = output_set(outputs)
+    names = outputs.names
     C.finite("s", s)
     if not 0.0 <= s <= 1.0:
         raise InputError(f"phase s={s!r} must be in [0, 1]; clip it with amlip_qp.alip.phase.step_phase_clipped")
@@ -187,9 +248,9 @@ def reference_outputs(
     C.finite("turn_rad", turn_rad)
     ground = (dz_sw0_m, dz_sw_m, slope_pitch0_rad, slope_pitch_rad)
     check_ground(ground, H_m, z_cl_m)
-    u = pack_swing_reference_input(robot, s, T_s, H_m, z_cl_m, h0, target, turn_rad, ground=ground)
+    u = outputs.pack_swing_reference_input(s, T_s, H_m, z_cl_m, h0, target, turn_rad, ground=ground)
     y = np.asarray((reference_fn or kernels.swing_reference)(u), dtype=float).reshape(-1)
-    return split_reference(robot, y)
+    return outputs.split_reference(y)
 
 
 def late_descent(h_end, rate_mps, tau_s) -> tuple[float, float, float]:
@@ -204,12 +265,3 @@ def late_descent(h_end, rate_mps, tau_s) -> tuple[float, float, float]:
     ``late_descent="landing"``).
     """
     return h_end + rate_mps * tau_s, rate_mps, 0.0
-
-
-def split_reference(robot: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split a SWING_REFERENCE output (27,) into the robot's ``(h_d, dh_d, ddh_d)`` (new arrays)."""
-    n = kernels.N_CASSIE_OUTPUTS
-    if robot == "cassie":
-        y = y.copy()  # one copy (the kernels may return a shared buffer), three views of it
-        return y[:n], y[n : 2 * n], y[2 * n :]
-    return y[_RABBIT_IDX], y[n + _RABBIT_IDX], y[2 * n + _RABBIT_IDX]

@@ -26,7 +26,7 @@ which use identical dense layouts.
 
 Use::
 
-    planner = Planner("cassie", mass_kg=31.0)
+    planner = Planner(robot.output_names, mass_kg=31.0)
     planner.start_step("left", t_s, h0)          # at every touchdown
     out = planner.update(estimate, command)       # every control tick (flat ground)
     out = planner.update(estimate, command, TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1))
@@ -50,8 +50,9 @@ descending (``com_z_over_swing`` grows at a constant rate,
 which is :attr:`Planner.heading_next_rad` just before ``start_step`` (or the
 ``heading_rad`` passed to it).
 
-Rabbit is planar (sagittal plane x-z): its lateral terms (``vy``, step width,
-turn rate, ``p_st,y``, ``L_x``) are ignored and its heading stays 0.
+A planar output set (no ``com_y_over_swing``: a robot in the sagittal plane
+x-z) has its lateral terms (``vy``, step width, turn rate, ``p_st,y``,
+``L_x``) ignored and its heading held at 0.
 
 Velocity command: ``Command.vx_mps`` / ``vy_mps`` are by default the *mean*
 CoM velocity over a step (what a user means by "walk at 1 m/s"). The paper's
@@ -64,7 +65,7 @@ periodic LIP gait is larger by ``(lT/2)/tanh(lT/2)``; the planner converts
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -93,12 +94,15 @@ class Planner:
     """ALIP foot-placement planner and reference generator (module doc).
 
     Args:
-        robot: ``"cassie"`` (3-D, 9 outputs) or ``"rabbit"`` (planar, 4 outputs).
+        outputs: The robot's output names, in its order (``Robot.output_names``; the names of
+            :mod:`amlip_qp.profiles.outputs`), or their :class:`~amlip_qp.alip.outputs.OutputSet`.
+            A set without ``com_y_over_swing`` is planar: the planner keeps heading 0 and
+            plans the sagittal plane only.
         mass_kg: total robot mass, kg (> 0).
         g: gravity magnitude, m/s^2 (> 0).
         plan_fn: ``ALIP_PLAN`` implementation, 16 floats -> 8 floats (default
             :func:`kernels.alip_plan`).
-        reference_fn: ``SWING_REFERENCE`` implementation, 15 floats -> 27 floats
+        reference_fn: ``SWING_REFERENCE`` implementation, 15 floats -> 30 floats
             (default :func:`kernels.swing_reference`).
         heading_rad: heading of the first step, rad.
         speed_reference: ``"mean"`` (default) if ``Command.vx_mps``/``vy_mps`` are
@@ -118,7 +122,7 @@ class Planner:
 
     def __init__(
         self,
-        robot: str,
+        outputs: Sequence[str] | O.OutputSet,
         mass_kg: float,
         g: float = GRAVITY_MPS2,
         plan_fn: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -130,7 +134,8 @@ class Planner:
         clock: StepClock | None = None,
         late_descent: str | float | None = None,
     ):
-        self.robot = O.check_robot(robot)
+        #: The outputs the references are for (:class:`~amlip_qp.alip.outputs.OutputSet`).
+        self.outputs = O.output_set(outputs)
         C.positive("mass_kg", mass_kg, "kg")
         C.positive("g (gravity magnitude)", g, "m/s^2")
         if speed_reference not in _SPEED_REFERENCES:
@@ -140,7 +145,7 @@ class Planner:
         if clock is not None and not isinstance(clock, StepClock):
             raise InputError(f"clock must be a StepClock, got {type(clock).__name__}")
         if reference_fn is not None and not callable(reference_fn):
-            raise InputError(f"reference_fn must be callable (15 floats -> 27 floats), got {reference_fn!r}")
+            raise InputError(f"reference_fn must be callable (15 floats -> 30 floats), got {reference_fn!r}")
         if late_descent is not None and late_descent != "landing":
             if isinstance(late_descent, (bool, str)) or not isinstance(late_descent, (int, float)):
                 raise InputError(f"late_descent must be None, 'landing' or a rate in m/s, got {late_descent!r}")
@@ -157,9 +162,9 @@ class Planner:
         self.vz_correction = bool(vz_correction)
         #: Stance side and start of the current step (the walk's one step clock).
         self.clock = StepClock() if clock is None else clock
-        #: Output names in order (Cassie's nine or Rabbit's four).
-        self.output_names = O.output_names(robot)
-        self._planar = robot == "rabbit"
+        #: Output names in order.
+        self.output_names = self.outputs.names
+        self._planar = self.outputs.planar
         self._u_plan = np.zeros(len(kernels.ALIP_PLAN_INPUTS))
         self._u_ref = np.zeros(len(kernels.SWING_REFERENCE_INPUTS))
         self._h0 = np.zeros(len(self.output_names))
@@ -168,7 +173,7 @@ class Planner:
 
     def reset(self, heading_rad: float = 0.0) -> None:
         """Forget the walk (a new run): no step yet, first heading ``heading_rad``
-        (rad; Rabbit: 0), the step clock reset and the commanded-heading integral restarted."""
+        (rad; a planar set: 0), the step clock reset and the commanded-heading integral restarted."""
         C.finite("heading_rad", heading_rad)
         self._heading = 0.0 if self._planar else float(heading_rad)
         self._heading_next = self._heading
@@ -185,7 +190,7 @@ class Planner:
 
     @property
     def n_outputs(self) -> int:
-        """Number of reference outputs (9 for Cassie, 4 for Rabbit)."""
+        """Number of reference outputs."""
         return len(self.output_names)
 
     @property
@@ -227,7 +232,7 @@ class Planner:
                 (rad / m; ``com_x_over_swing``/``com_y_over_swing`` in the new
                 step's heading frame, see :attr:`heading_next_rad`).
             heading_rad: the new step's heading ``D_k`` (rad); by default the
-                ``D_{k+1}`` of the step that just ended (Rabbit: always 0).
+                ``D_{k+1}`` of the step that just ended (a planar set: always 0).
                 Given, it also resets the commanded heading (the turn-rate
                 integral) to it.
         """
@@ -267,7 +272,7 @@ class Planner:
             command: the current :class:`Command`.
             terrain: the ground heights and pitches relative to the stance contact
                 (:class:`TerrainPrediction`); ``None`` is flat ground (the same
-                numbers as all zeros). Rabbit uses its heights, not its pitches.
+                numbers as all zeros). The pitches matter only to ``swing_toe_pitch``.
             foothold: ``(x, y, heading_next, s) -> (x, y)``: the law's target (world, m) -> where the foot
                 goes instead (a terrain-aware controller moves targets off stair edges; the next step's
                 placement corrects for it). ``None``: the law's target.
@@ -376,15 +381,15 @@ class Planner:
         # p_sw_des into the current heading frame D_k for the swing-x/y references.
         p_sw_h = np.array(world_to_heading_xy(px_w, py_w, math.cos(self._heading), math.sin(self._heading)))
         turn = heading_next - self._heading
-        ur = O.pack_swing_reference_input(
-            self.robot, s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref, ground=ground
+        ur = self.outputs.pack_swing_reference_input(
+            s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref, ground=ground
         )
         yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
         if yr.size != kernels.SWING_REFERENCE_N_OUT:
             raise InputError(
                 f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}"
             )
-        h_d, dh_d, ddh_d = O.split_reference(self.robot, yr)
+        h_d, dh_d, ddh_d = self.outputs.split_reference(yr)
         if self.late_descent is not None and t_in > T:
             i = self._i_swing_z
             rate = float(dh_d[i]) if self._descent_landing else self._descent_rate_mps

@@ -6,7 +6,7 @@ Use::
 
     kernels = load_kernels()          # compiles on first use, then cached
     y = kernels.alip_plan(u16)        # 16 inputs -> 8 outputs
-    h = kernels.swing_reference(u15)  # 15 inputs -> 27 outputs
+    h = kernels.swing_reference(u15)  # 15 inputs -> 30 outputs
     kernels.backend                   # "c" (compiled) or "casadi" (fallback)
 
 Layouts and units are those of :mod:`amlip_qp.alip.kernels`. The library is
@@ -118,7 +118,7 @@ class Kernels:
 
     Attributes:
         alip_plan: :class:`FastFunction` ``u[16] -> y[8]``.
-        swing_reference: :class:`FastFunction` ``u[15] -> y[27]``.
+        swing_reference: :class:`FastFunction` ``u[15] -> y[30]``.
         backend: ``"c"`` or ``"casadi"``.
         library_path: the compiled library, or ``None`` on the fallback.
         fallback_reason: why the fallback is used, or ``None``.

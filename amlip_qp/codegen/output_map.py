@@ -5,24 +5,77 @@ The symbolic form shared by the generated output map
 in-place assembly (:mod:`amlip_qp.control.wbc.compiled_in_place`), which
 composes it with the frame terms it reads from Pinocchio's data. The readable reference is
 :class:`~amlip_qp.robots.outputs.OutputMap`; the chain rule is described in
-:mod:`amlip_qp.control.walking.outputs_compiled`.
+:mod:`amlip_qp.control.walking.outputs_compiled`. Both are built from the
+same declaration, the robot's outputs (:mod:`amlip_qp.profiles.outputs`) and
+what they read (:class:`OutputInputs`).
 
-Arguments of the function: ``JT`` (nv x n_jac): the transposed Jacobians of the
-base's angular velocity, the CoM and the frames (stance contact, swing
-contact, and for Cassie the swing toe and heel), world-aligned; ``packed``: the
-base rotation (row-major), its angular drift, the CoM and its drift, each
-frame's position and drift, the two hip-yaw angles (Cassie), the heading and
-``v``. Outputs: ``y``, ``JyT`` (without the hip-yaw rows' ones, which the
-callers set) and ``jdv``. SI units: m, rad, m/s^2, rad/s^2.
+Arguments of the function: ``JT`` (nv x n_jac): the transposed Jacobians,
+world-aligned, of the base's angular velocity, the CoM, the points (the
+stance contact, the swing contact, then the swing foot's first and last
+force points if a ``swing_toe_pitch`` output reads them) and the angular
+velocity of the rotating frames (the swing contact frame if a
+``swing_foot_roll`` output reads it); ``packed``: the base rotation
+(row-major) and its angular drift, the CoM and its drift, each point's
+position and drift, each rotating frame's rotation (row-major) and angular
+drift, the joint outputs' angles (in output order), the heading and ``v``.
+Outputs: ``y``, ``JyT`` (without the joint outputs' ones, which the callers
+set) and ``jdv``. SI units: m, rad, m/s^2, rad/s^2.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import casadi as ca
 
 from amlip_qp.alip.formulas import world_to_heading_xy
+from amlip_qp.profiles.outputs import OutputPrimitive
 
 FUNCTION_NAME = "output_map"
+
+
+@dataclass(frozen=True)
+class OutputInputs:
+    """What a list of outputs reads, in the function's argument order (module doc).
+
+    Attributes:
+        points: The points, each ``"stance_contact"``, ``"swing_contact"``, ``"swing_toe"``
+            (the swing foot's first force point) or ``"swing_heel"`` (its last).
+        rotations: The rotating frames besides the base: ``"swing_contact"`` or none.
+        joints: Index of each joint output among the outputs, in order.
+        base_columns: The base rotation's columns the base angles read.
+    """
+
+    points: tuple[str, ...]
+    rotations: tuple[str, ...]
+    joints: tuple[int, ...]
+    base_columns: tuple[int, ...]
+
+    @property
+    def n_jacobian_rows(self) -> int:
+        """Rows of ``JT``'s transpose: base angular, CoM, each point, each rotating frame's angular."""
+        return 3 * (2 + len(self.points) + len(self.rotations))
+
+    def n_packed(self, nv: int) -> int:
+        """Size of ``packed`` for ``nv`` velocities."""
+        return 9 + 3 + 6 + 6 * len(self.points) + 12 * len(self.rotations) + len(self.joints) + 1 + nv
+
+
+def output_inputs(primitives: Sequence[OutputPrimitive], planar: bool) -> OutputInputs:
+    """What ``primitives`` read (:class:`OutputInputs`); ``planar``: the root moves in the x-z plane."""
+    points = ["stance_contact", "swing_contact"]
+    if any(p.kind == "foot_angle" and p.axis == "pitch" for p in primitives):
+        points += ["swing_toe", "swing_heel"]
+    rotations = ("swing_contact",) if any(p.kind == "foot_angle" and p.axis == "roll" for p in primitives) else ()
+    columns: set[int] = set()
+    for p in primitives:
+        if p.kind == "base_angle":
+            # pitch: atan2(R_02, R_22) about a planar root's y axis, else z-y-x Euler (column 0);
+            # roll: z-y-x Euler (columns 1 and 2). A planar root keeps column 0 beside (its x axis).
+            columns |= {0, 2} if planar else ({0} if p.axis == "pitch" else {1, 2})
+    joints = tuple(i for i, p in enumerate(primitives) if p.kind == "joint")
+    return OutputInputs(tuple(points), rotations, joints, tuple(sorted(columns)))
 
 
 def skew(r):
@@ -34,14 +87,24 @@ def skew(r):
     )
 
 
-def output_map_function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
-    """The symbolic output map; returns ``(function, n_jacobian_rows, n_packed)``."""
-    cassie = layout == "cassie"
-    n_frames = 4 if cassie else 2  # stance contact, swing contact[, toe, heel]
-    n_jac = 3 * (2 + n_frames)  # base angular, CoM, frames
-    n_packed = 9 + 3 + 6 + 6 * n_frames + 3 + nv
-    JT = ca.SX.sym("JT", nv, n_jac)
-    p = ca.SX.sym("packed", n_packed)
+def _euler_pitch(R0):
+    """Pitch of z-y-x Euler angles from a rotation's column 0."""
+    return ca.atan2(-R0[2], ca.hypot(R0[0], R0[1]))
+
+
+def _euler_roll(R1, R2):
+    """Roll of z-y-x Euler angles from a rotation's columns 1 and 2."""
+    return ca.atan2(R1[2], R2[2])
+
+
+def output_map_function(
+    primitives: Sequence[OutputPrimitive], planar: bool, nv: int
+) -> tuple[ca.Function, OutputInputs]:
+    """The symbolic output map of ``primitives``; returns ``(function, what it reads)``."""
+    reads = output_inputs(primitives, planar)
+    n_points, n_rot = len(reads.points), len(reads.rotations)
+    JT = ca.SX.sym("JT", nv, reads.n_jacobian_rows)
+    p = ca.SX.sym("packed", reads.n_packed(nv))
     J = JT.T
     Rv, alpha = p[0:9], p[9:12]
     R = ca.reshape(Rv, 3, 3).T  # row-major
@@ -49,47 +112,72 @@ def output_map_function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
     com, com_drift = p[at : at + 3], p[at + 3 : at + 6]
     at += 6
     pos, drifts = [], []
-    for _ in range(n_frames):
+    for _ in range(n_points):
         pos.append(p[at : at + 3])
         drifts.append(p[at + 3 : at + 6])
         at += 6
-    q_yaw_st, q_yaw_sw, heading = p[at], p[at + 1], p[at + 2]
-    v = p[at + 3 : at + 3 + nv]
+    frame_R, frame_alpha = [], []
+    for _ in range(n_rot):
+        frame_R.append(ca.reshape(p[at : at + 9], 3, 3).T)
+        frame_alpha.append(p[at + 9 : at + 12])
+        at += 12
+    joint_values = [p[at + k] for k in range(len(reads.joints))]
+    at += len(reads.joints)
+    heading = p[at]
+    v = p[at + 1 : at + 1 + nv]
     Jw, Jc = J[0:3, :], J[3:6, :]
-    Jf = [J[6 + 3 * i : 9 + 3 * i, :] for i in range(n_frames)]
+    Jf = [J[6 + 3 * i : 9 + 3 * i, :] for i in range(n_points)]
+    Jrot = [J[6 + 3 * (n_points + i) : 9 + 3 * (n_points + i), :] for i in range(n_rot)]
     w = ca.mtimes(Jw, v)
 
     # Primitives x (values as fresh symbols for differentiation), their Jacobians and drifts.
-    cols = [0, 2] if not cassie else [0, 1, 2]
     X_parts, Jx_parts, dx_parts, val_parts = [], [], [], []
-    for j in cols:
-        r = R[:, j]
-        X_parts.append(ca.SX.sym(f"R{j}", 3))
+
+    def rotation_column(Rm, j, Jang, w_ang, alpha_ang, label):
+        r = Rm[:, j]
+        X_parts.append(ca.SX.sym(f"{label}{j}", 3))
         val_parts.append(r)
-        Jx_parts.append(-ca.mtimes(skew(r), Jw))
-        dx_parts.append(ca.cross(alpha, r) + ca.cross(w, ca.cross(w, r)))
-    for value, jac, drift in [(com, Jc, com_drift)] + list(zip(pos, Jf, drifts)):
+        Jx_parts.append(-ca.mtimes(skew(r), Jang))
+        dx_parts.append(ca.cross(alpha_ang, r) + ca.cross(w_ang, ca.cross(w_ang, r)))
+        return X_parts[-1]
+
+    base_cols = {j: rotation_column(R, j, Jw, w, alpha, "R") for j in reads.base_columns}
+    point_sym = {}
+    for name, value, jac, drift in [("com", com, Jc, com_drift)] + list(zip(reads.points, pos, Jf, drifts)):
         X_parts.append(ca.SX.sym("p", 3))
         val_parts.append(value)
         Jx_parts.append(jac)
         dx_parts.append(drift)
+        point_sym[name] = X_parts[-1]
+    frame_cols = {}
+    for name, Rm, Jang, alpha_ang in zip(reads.rotations, frame_R, Jrot, frame_alpha):
+        w_ang = ca.mtimes(Jang, v)
+        frame_cols[name] = (rotation_column(Rm, 1, Jang, w_ang, alpha_ang, "F"),
+                            rotation_column(Rm, 2, Jang, w_ang, alpha_ang, "F"))  # fmt: skip
     X = ca.vertcat(*X_parts)
-    c, r_st, r_sw = X_parts[len(cols)], X_parts[len(cols) + 1], X_parts[len(cols) + 2]
+    c = point_sym["com"]
     cD, sD = ca.cos(heading), ca.sin(heading)
-    p_sw = c - r_sw
-    p_sw_x, p_sw_y = world_to_heading_xy(p_sw[0], p_sw[1], cD, sD)
-    if cassie:
-        R0, R1, R2 = X_parts[0], X_parts[1], X_parts[2]  # columns 0, 1, 2
-        pitch = ca.atan2(-R0[2], ca.hypot(R0[0], R0[1]))
-        roll = ca.atan2(R1[2], R2[2])
-        toe, heel = X_parts[len(cols) + 3], X_parts[len(cols) + 4]
-        d = toe - heel
-        toe_pitch = ca.atan2(-d[2], ca.hypot(d[0], d[1]))
-        y = ca.vertcat(pitch, roll, 0, 0, c[2] - r_st[2], p_sw_x, p_sw_y, p_sw[2], toe_pitch)
-    else:
-        R0, R2 = X_parts[0], X_parts[1]  # columns 0 and 2
-        pitch = ca.atan2(R2[0], R2[2])
-        y = ca.vertcat(pitch, c[2] - r_st[2], p_sw_x, p_sw[2])
+    y_parts = []
+    rel_to: dict[str, tuple] = {}  # contact -> (CoM minus it, its heading-frame x and y), built once
+    for prim in primitives:
+        if prim.kind == "base_angle" and prim.axis == "pitch":
+            y_parts.append(ca.atan2(base_cols[2][0], base_cols[2][2]) if planar else _euler_pitch(base_cols[0]))
+        elif prim.kind == "base_angle":
+            y_parts.append(_euler_roll(base_cols[1], base_cols[2]))
+        elif prim.kind == "joint":
+            y_parts.append(0)  # the joint's angle, set below
+        elif prim.kind == "com_over_contact":
+            if prim.side not in rel_to:
+                rel = c - point_sym[f"{prim.side}_contact"]
+                rel_to[prim.side] = (rel, *world_to_heading_xy(rel[0], rel[1], cD, sD))
+            rel, rel_x, rel_y = rel_to[prim.side]
+            y_parts.append(rel[2] if prim.axis == "z" else rel_x if prim.axis == "x" else rel_y)
+        elif prim.axis == "pitch":  # the swing foot's pitch, toe minus heel
+            d = point_sym["swing_toe"] - point_sym["swing_heel"]
+            y_parts.append(ca.atan2(-d[2], ca.hypot(d[0], d[1])))
+        else:  # the swing foot's roll, its contact frame's columns 1 and 2
+            y_parts.append(_euler_roll(*frame_cols["swing_contact"]))
+    y = ca.vertcat(*y_parts)
     grad = ca.jacobian(y, X)
     xdot_sym = ca.SX.sym("xdot", X.shape[0])
     curv = ca.vertcat(*[ca.mtimes([xdot_sym.T, ca.hessian(y[i], X)[0], xdot_sym]) for i in range(y.shape[0])])
@@ -99,10 +187,10 @@ def output_map_function(layout: str, nv: int) -> tuple[ca.Function, int, int]:
     jdv = ca.mtimes(grad, dx) + curv
     subst = ca.substitute([y, Jy, jdv], [X, xdot_sym], [xval, xdot])
     y_out, Jy_out, jdv_out = subst
-    if cassie:
-        y_out[2], y_out[3] = q_yaw_st, q_yaw_sw
+    for i, value in zip(reads.joints, joint_values):
+        y_out[i] = value
     fn = ca.Function(
         FUNCTION_NAME, [JT, p], [ca.densify(y_out), ca.densify(Jy_out.T), ca.densify(jdv_out)],
         ["JT", "packed"], ["y", "JyT", "jdv"],
     )  # fmt: skip
-    return fn, n_jac, n_packed
+    return fn, reads

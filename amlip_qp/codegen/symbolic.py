@@ -10,7 +10,7 @@ vector) and one dense output ``y``:
 
 - ``alip_plan``: ``u[16] -> y[8]`` (layout: ``kernels.ALIP_PLAN_INPUTS`` /
   ``kernels.ALIP_PLAN_OUTPUTS``; SI units, see :mod:`amlip_qp.alip.kernels`).
-- ``swing_reference``: ``u[15] -> y[27]`` (layout:
+- ``swing_reference``: ``u[15] -> y[30]`` (layout:
   ``kernels.SWING_REFERENCE_INPUTS``; ``h_d``, ``dh_d/dt``, ``d2h_d/dt2``).
 
 Physical parameters (mass, CoM height, step time, width, gravity, clearance)

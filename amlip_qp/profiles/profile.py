@@ -12,7 +12,7 @@ every key is documented in ``docs/NEW_ROBOT.md``). It says:
   (:class:`FootSpec`: the body, the contact point, the force points, the
   joints passive in stance);
 - where the IMU sits (``imu_pos_in_base_m``);
-- the output layout the trackers follow, and whether the robot is planar;
+- the outputs the trackers follow (:mod:`amlip_qp.profiles.outputs`), and whether the robot is planar;
 - the gait (:class:`GaitSettings`), the command bounds and shaping
   (:mod:`amlip_qp.profiles.commands`), each tracker's tuned configuration (a
   table turned into the tracker's own configuration type on demand,
@@ -171,7 +171,7 @@ class RobotProfile:
         name: The robot's name.
         source: The profile file.
         model: The MJCF file and its load-time edits.
-        output_layout: The output layout the trackers follow (``robots.outputs``).
+        outputs: The outputs the trackers follow, in order (:mod:`amlip_qp.profiles.outputs`).
         planar: True for a robot that walks in the sagittal plane only.
         gait: Default gait.
         bounds: Command bounds.
@@ -199,7 +199,7 @@ class RobotProfile:
     name: str
     source: Path
     model: ModelSpec
-    output_layout: str
+    outputs: tuple[str, ...]
     planar: bool
     gait: GaitSettings
     bounds: CommandBounds

@@ -17,8 +17,9 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from amlip_qp.exceptions import ProfileError
+from amlip_qp.exceptions import InputError, ProfileError
 from amlip_qp.profiles.commands import CommandBounds, CommandShaping
+from amlip_qp.profiles.outputs import output_primitives
 from amlip_qp.profiles.profile import (
     JOINT_ROLES,
     SERVO_POLICIES,
@@ -35,9 +36,6 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
-
-#: The output layouts a profile may name (``amlip_qp.robots.outputs``).
-OUTPUT_LAYOUTS: tuple[str, ...] = ("cassie", "rabbit")
 
 
 class _Table:
@@ -178,6 +176,17 @@ def _model(t: _Table, base: Path) -> ModelSpec:
     return spec
 
 
+def _outputs(t: _Table, planar: bool) -> tuple[str, ...]:
+    names = t.raw("outputs")
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        t.fail(f"must be a list of output names, got {names!r}", "outputs")
+    try:
+        output_primitives(names, planar)
+    except InputError as exc:
+        t.fail(str(exc), "outputs")
+    return tuple(names)
+
+
 def _feet(t: _Table | None) -> FootSpec:
     if t is None:
         return FootSpec()
@@ -280,7 +289,7 @@ def read_profile(path: str | Path) -> RobotProfile:
     name = top.string("name")
     description = top.string("description", "")
     planar = top.boolean("planar")
-    layout = top.string("output_layout", choices=OUTPUT_LAYOUTS)
+    outputs = _outputs(top, planar)
     model_t = top.table("model")
     assert model_t is not None
     model = _model(model_t, base)
@@ -350,7 +359,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         name=name,
         source=source,
         model=model,
-        output_layout=layout,
+        outputs=outputs,
         planar=planar,
         gait=gait,
         bounds=bounds,

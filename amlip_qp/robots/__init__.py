@@ -12,7 +12,7 @@
 
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.loader import load_robot
-from amlip_qp.robots.outputs import CASSIE_OUTPUTS, PLANAR_OUTPUTS, OutputMap
+from amlip_qp.robots.outputs import OutputMap, output_names
 from amlip_qp.robots.passive import coupling_constraints, passive_forces
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import (
@@ -32,9 +32,7 @@ from amlip_qp.robots.state import (
 )
 
 __all__ = [
-    "CASSIE_OUTPUTS",
     "FOOT_SIDES",
-    "PLANAR_OUTPUTS",
     "ActuatorSet",
     "Coupling",
     "OutputMap",
@@ -48,6 +46,7 @@ __all__ = [
     "load_robot",
     "mass_matrix_mj_to_pin",
     "mj_to_pin",
+    "output_names",
     "passive_forces",
     "pin_to_mj",
     "q_to_qpos",

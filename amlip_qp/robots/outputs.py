@@ -1,15 +1,13 @@
 """The output map ``h_0(q)`` of docs/ARCHITECTURE.md, with its Jacobian and drift.
 
-Two layouts (:func:`output_layout`: a bundled robot's profile names it, any
-other model gets the one it fits), named like the planner's references
-(:data:`amlip_qp.alip.outputs.ROBOT_OUTPUTS`):
-
-- ``cassie`` (9 outputs; needs a free root, ``{side}-hip-yaw`` joints and
-  toe/heel sites): ``torso_pitch, torso_roll, stance_hip_yaw, swing_hip_yaw,
-  com_z_over_stance, com_x_over_swing, com_y_over_swing, com_z_over_swing,
-  swing_toe_pitch``.
-- ``rabbit`` (4 outputs; a planar root moving in the x-z plane):
-  ``torso_pitch, com_z_over_stance, com_x_over_swing, com_z_over_swing``.
+The outputs are the robot's declared primitives (:func:`output_names`: its
+profile's ``outputs`` key, or a default a model without a profile fits; the
+names and what each is in :mod:`amlip_qp.profiles.outputs`), in their order:
+base angles, joint angles, CoM components over a contact, and the swing
+foot's pitch and roll. The generated forms (the compiled output map, the QP
+tracker's in-place assembly) are built from the same declaration
+(:func:`amlip_qp.codegen.output_map.output_map_function`) and tested against
+this one.
 
 Angles in rad, distances in m. ``heading_rad`` is the step's heading ``D``;
 ``x_D = (cos D, sin D, 0)``, ``y_D = (-sin D, cos D, 0)``.
@@ -35,19 +33,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amlip_qp.alip import other_side
-from amlip_qp.alip import outputs as _alip_outputs
 from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError, MJCFError
+from amlip_qp.profiles.outputs import OutputPrimitive, output_primitives
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
-
-# One definition of the output names, shared with the planner's references.
-#: Cassie's nine outputs, in order.
-CASSIE_OUTPUTS: tuple[str, ...] = _alip_outputs.CASSIE_OUTPUTS
-#: The planar (Rabbit) layout's four outputs, in order.
-PLANAR_OUTPUTS: tuple[str, ...] = _alip_outputs.RABBIT_OUTPUTS
 
 
 # A "chain scalar" is a tuple ``(val, rate, c0, c1, c2, jdv)``: a scalar
@@ -122,39 +114,58 @@ def _rotation_entry_z(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
     return (r2, w0 * r1 - w1 * r0, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0))
 
 
-def _fitting_layout(robot: Robot) -> str | None:
-    """The layout the model fits (``"cassie"``, ``"rabbit"``), or ``None``."""
-    has_yaw = all(robot.role_joint("hip_yaw", s) is not None for s in robot.foot_sides)
-    has_blade = all(len(robot.force_sites[s]) == 2 for s in robot.foot_sides)
-    if robot.is_floating and has_yaw and has_blade:
-        return "cassie"
-    if robot.is_planar:
-        return "rabbit"
+#: The outputs of a 3-D model without a profile that has hip-yaw joints and toe/heel force points.
+DEFAULT_OUTPUTS_3D: tuple[str, ...] = (
+    "torso_pitch", "torso_roll", "stance_hip_yaw", "swing_hip_yaw", "com_z_over_stance",
+    "com_x_over_swing", "com_y_over_swing", "com_z_over_swing", "swing_toe_pitch",
+)  # fmt: skip
+#: The outputs of a planar model (a root moving in the x-z plane) without a profile.
+DEFAULT_OUTPUTS_PLANAR: tuple[str, ...] = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+
+
+def _missing_for(robot: Robot, primitive: OutputPrimitive) -> str | None:
+    """What the model lacks for ``primitive`` (one phrase), or ``None``."""
+    if primitive.kind == "joint":
+        if any(robot.role_joint(primitive.role, s) is None for s in robot.foot_sides):
+            return f"a {primitive.role} joint on each leg (the profile's [roles] table names it)"
+    elif primitive.kind == "foot_angle" and primitive.axis == "pitch":
+        if any(len(robot.force_sites[s]) < 2 for s in robot.foot_sides):
+            return "two force points on each foot, toe then heel ([feet] force_points_m)"
+    if primitive.lateral and robot.is_planar:
+        return "a 3-D root (the model's root is planar)"
+    if primitive.kind == "base_angle" and not (robot.is_floating or robot.is_planar):
+        return "a free or planar root"
     return None
 
 
-def output_layout(robot: Robot) -> str:
-    """The output layout of ``robot``, ``"cassie"`` or ``"rabbit"`` (also the planner's robot name).
+def output_names(robot: Robot) -> tuple[str, ...]:
+    """The outputs ``robot``'s trackers follow, in order (:mod:`amlip_qp.profiles.outputs`).
 
-    A bundled robot's comes from its profile (:mod:`amlip_qp.profiles`) and
-    must fit its model; any other model gets the layout it fits (module doc).
+    A profile declares them (its ``outputs`` key); a model without one gets
+    :data:`DEFAULT_OUTPUTS_3D` if it has a free root, hip-yaw joints and two
+    force points per foot, or :data:`DEFAULT_OUTPUTS_PLANAR` for a planar root.
 
     Raises:
-        MJCFError: The model fits no layout, or not its profile's.
+        MJCFError: The model lacks what an output reads, or (without a profile) fits neither default.
     """
-    fits = _fitting_layout(robot)
     profile = robot.profile
-    if profile is not None and profile.output_layout != fits:
-        raise MJCFError(
-            f"{robot.path}: the {profile.name!r} profile names the output layout {profile.output_layout!r}, "
-            f"which this model does not fit (it fits {fits!r})"
-        )
-    if fits is None:
-        raise MJCFError(
-            f"{robot.path}: no output map: need a free root with {{side}}-hip-yaw joints and "
-            "toe/heel sites (Cassie layout), or a planar root (Rabbit layout)"
-        )
-    return fits
+    if profile is not None:
+        names = tuple(profile.outputs)
+        where = f"the {profile.name!r} profile's output"
+    elif robot.is_planar:
+        names, where = DEFAULT_OUTPUTS_PLANAR, "output"
+    else:
+        names, where = DEFAULT_OUTPUTS_3D, "output"
+    try:
+        primitives = output_primitives(names, robot.is_planar)
+    except InputError as exc:
+        raise MJCFError(f"{robot.path}: {exc}") from None
+    for primitive in primitives:
+        missing = _missing_for(robot, primitive)
+        if missing is not None:
+            hint = "" if profile is not None else " (a model without a profile gets the default outputs: write one)"
+            raise MJCFError(f"{robot.path}: {where} {primitive.name!r} needs {missing}{hint}")
+    return names
 
 
 def computes_standard_outputs(output_map) -> bool:
@@ -171,10 +182,10 @@ class OutputMap:
     between threads.
 
     Attributes:
-        layout: ``"cassie"`` or ``"rabbit"`` (:func:`output_layout`).
-        names: Output names, in order.
-        yaw_q_idx: Side -> Pinocchio ``q`` index of its hip-yaw joint (``cassie`` layout; empty otherwise).
-        yaw_v_idx: Side -> Pinocchio ``v`` index of its hip-yaw joint (``cassie`` layout; empty otherwise).
+        names: Output names, in order (:func:`output_names`).
+        primitives: Their :class:`~amlip_qp.profiles.outputs.OutputPrimitive`, in order.
+        planar: The model's root is planar (the pitch is about the world y axis).
+        joint_rows: Index of each joint output among the outputs, in order.
     """
 
     #: This map evaluates the robot's standard ``h_0`` (docs/ARCHITECTURE.md), which generated code
@@ -183,26 +194,30 @@ class OutputMap:
     standard_outputs = True
 
     def __init__(self, robot: Robot):
-        """Pick the layout (:func:`output_layout`).
+        """Read the robot's outputs (:func:`output_names`).
 
         Raises:
-            MJCFError: The model fits no layout, or not its profile's.
+            MJCFError: The model lacks what an output reads.
         """
         self.robot = robot
         smap = robot.state_map
-        self.layout = output_layout(robot)
-        self.names = _alip_outputs.ROBOT_OUTPUTS[self.layout]
-        self.yaw_q_idx: dict[str, int] = {}
-        self.yaw_v_idx: dict[str, int] = {}
-        if self.layout == "cassie":
-            yaw = {s: robot.role_joint("hip_yaw", s) for s in robot.foot_sides}
-            self.yaw_v_idx = {s: smap.joint_pin_v[yaw[s]] for s in robot.foot_sides}  # type: ignore[index]
-            self.yaw_q_idx = {s: smap.joint_pin_q[yaw[s]] for s in robot.foot_sides}  # type: ignore[index]
+        self.names = output_names(robot)
+        self.primitives = output_primitives(self.names, robot.is_planar)
+        self.planar = bool(robot.is_planar)
+        self.joint_rows = tuple(i for i, p in enumerate(self.primitives) if p.kind == "joint")
         self._swing_of = {s: other_side(s) for s in robot.foot_sides}
+        self._joints: dict[str, tuple[tuple[int, ...], tuple[int, ...]]] = {}
+        for stance, swing in self._swing_of.items():
+            legs = {"stance": stance, "swing": swing}
+            joints = [robot.role_joint(self.primitives[i].role, legs[self.primitives[i].side]) for i in self.joint_rows]
+            self._joints[stance] = (
+                tuple(smap.joint_pin_q[j] for j in joints),  # type: ignore[index]
+                tuple(smap.joint_pin_v[j] for j in joints),  # type: ignore[index]
+            )
         nv = robot.nv
-        # Scratch (overwritten by every evaluate): J_c - J_sw, J_toe - J_heel (3 x nv each),
+        # Scratch (overwritten by every evaluate): J_c - J_contact and J_toe - J_heel (3 x nv each),
         # the heading rotation [[cD, sD], [-sD, cD]] and its products with the first two rows of J_c - J_sw.
-        self._J_csw = np.empty((3, nv))
+        self._J_rel = {side: np.empty((3, nv)) for side in ("stance", "swing")}
         self._J_blade = np.empty((3, nv))
         self._rot = np.empty((2, 2, 1))
         self._rot_products = np.empty((2, 2, nv))
@@ -211,6 +226,28 @@ class OutputMap:
     def size(self) -> int:
         """Number of outputs."""
         return len(self.names)
+
+    def joint_indices(self, stance: str) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """Pinocchio ``q`` and ``v`` indices of the joint outputs' joints (:attr:`joint_rows`) for ``stance``."""
+        return self._joints[stance]
+
+    def points(self, stance: str) -> tuple[int, ...]:
+        """Pinocchio frame ids of the points the outputs read for ``stance``, in the order of
+        :class:`~amlip_qp.codegen.output_map.OutputInputs` (``points``): the stance contact, the
+        swing contact[, the swing foot's first and last force points]."""
+        swing = self._swing_of[stance]
+        robot = self.robot
+        ids = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
+        if any(p.kind == "foot_angle" and p.axis == "pitch" for p in self.primitives):
+            ids += [robot.force_frame_ids[swing][0], robot.force_frame_ids[swing][-1]]
+        return tuple(ids)
+
+    def rotating_frames(self, stance: str) -> tuple[int, ...]:
+        """Pinocchio frame ids of the rotating frames the outputs read for ``stance`` (the swing
+        contact frame for a ``swing_foot_roll`` output), in the order of ``OutputInputs.rotations``."""
+        if any(p.kind == "foot_angle" and p.axis == "roll" for p in self.primitives):
+            return (self.robot.contact_frame_ids[self._swing_of[stance]],)
+        return ()
 
     def checked_swing(self, stance: str, heading_rad: float) -> str:
         """The swing side of ``stance``; :class:`InputError` for a bad side or a non-finite heading."""
@@ -241,7 +278,9 @@ class OutputMap:
         robot = self.robot
         q, v = kin.state()
         jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
-        J = np.zeros((len(self.names), v.shape[0]))
+        n = len(self.names)
+        J = np.zeros((n, v.shape[0]))
+        y, jdv = np.zeros(n), np.zeros(n)
 
         # Base orientation: R, world angular velocity w = Jw v (rad/s), drift alpha (rad/s^2).
         base = robot.base_frame_id
@@ -249,77 +288,82 @@ class OutputMap:
         w = tuple((Jw @ v).tolist())
         alpha = tuple(kin.frame_jdot_v6(base)[3:].tolist())
         R = kin.frame_rotation_view(base).tolist()
-
-        # CoM relative to the two contact points (m) and the drifts (m/s^2).
-        fid_st, fid_sw = robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]
-        c0, c1, c2 = kin.com_view.tolist()
-        dc0, dc1, dc2 = kin.com_jdot_v().tolist()
-        r0, r1, r2 = kin.frame_translation_view(fid_st).tolist()
-        p_st_z = c2 - r2
-        d_st_z = dc2 - kin.frame_jdot_v6(fid_st).tolist()[2]
-        r0, r1, r2 = kin.frame_translation_view(fid_sw).tolist()
-        p_sw = (c0 - r0, c1 - r1, c2 - r2)
-        a_sw = kin.frame_jdot_v6(fid_sw).tolist()
-        d_sw = (dc0 - a_sw[0], dc1 - a_sw[1], dc2 - a_sw[2])
-        cD, sD = math.cos(heading_rad), math.sin(heading_rad)
-        p_sw_x, p_sw_y = world_to_heading_xy(p_sw[0], p_sw[1], cD, sD)
-        d_sw_x, d_sw_y = world_to_heading_xy(d_sw[0], d_sw[1], cD, sD)
-        ys = [p_st_z, p_sw_x]
-        ds = [d_st_z, d_sw_x]
-
-        # Their Jacobian rows: c_z - r_st,z; (c - r_sw) . x_D; [(c - r_sw) . y_D]; c_z - r_sw,z.
-        cassie = self.layout == "cassie"
-        r_z, r_x, r_zs = (4, 5, 7) if cassie else (1, 2, 3)
+        c = kin.com_view.tolist()
+        dc = kin.com_jdot_v().tolist()
         Jc = np.ascontiguousarray(kin.com_jacobian())  # Pinocchio's is column-major; rows are used here
-        np.subtract(Jc[2], jac(fid_st)[2], out=J[r_z])
-        J_csw = np.subtract(Jc, jac(fid_sw)[:3], out=self._J_csw)
-        J[r_zs] = J_csw[2]
-        rot, prod = self._rot, self._rot_products
-        rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
-        np.multiply(rot, J_csw[:2], out=prod)  # prod[i, j] = rot[i, j] * J_csw[j]
-        if cassie:
-            np.add(prod[:, 0], prod[:, 1], out=J[r_x : r_x + 2])  # x_D and y_D rows
-            ys.append(p_sw_y)
-            ds.append(d_sw_y)
-        else:
-            np.add(prod[0, 0], prod[0, 1], out=J[r_x])
-        ys.append(p_sw[2])
-        ds.append(d_sw[2])
+        cD, sD = math.cos(heading_rad), math.sin(heading_rad)
+        legs = {"stance": stance, "swing": swing}
+        rel: dict[str, tuple] = {}  # contact -> (CoM minus it, its drift, its Jacobian)
+        q_idx, v_idx = self._joints[stance]
+        joint_k = 0
+        for i, prim in enumerate(self.primitives):
+            if prim.kind == "base_angle":
+                if prim.axis == "pitch" and self.planar:
+                    R02, _, R22 = _rotation_column(R, 2, w, alpha)
+                    chain = _atan2(R02, R22)
+                elif prim.axis == "pitch":  # z-y-x Euler angles of the base
+                    R00, R10, R20 = _rotation_column(R, 0, w, alpha)
+                    chain = _atan2(_neg(R20), _hypot(R00, R10))
+                else:
+                    chain = _atan2(_rotation_entry_z(R, 1, w, alpha), _rotation_entry_z(R, 2, w, alpha))
+                np.dot(chain[2:5], Jw, out=J[i])
+                y[i], jdv[i] = chain[0], chain[5]
+            elif prim.kind == "joint":  # a joint coordinate
+                y[i] = q[q_idx[joint_k]]
+                J[i, v_idx[joint_k]] = 1.0
+                joint_k += 1
+            elif prim.kind == "com_over_contact":
+                if prim.side not in rel:
+                    fid = robot.contact_frame_ids[legs[prim.side]]
+                    r, a = kin.frame_translation_view(fid).tolist(), kin.frame_jdot_v6(fid).tolist()
+                    J_rel = np.subtract(Jc, jac(fid)[:3], out=self._J_rel[prim.side])
+                    p_rel = (c[0] - r[0], c[1] - r[1], c[2] - r[2])
+                    rel[prim.side] = (p_rel, (dc[0] - a[0], dc[1] - a[1], dc[2] - a[2]), J_rel)
+                p_rel, d_rel, J_rel = rel[prim.side]
+                if prim.axis == "z":
+                    y[i], jdv[i] = p_rel[2], d_rel[2]
+                    J[i] = J_rel[2]
+                else:  # the step's heading frame: x_D = (cos D, sin D), y_D = (-sin D, cos D)
+                    k = 0 if prim.axis == "x" else 1
+                    y[i] = world_to_heading_xy(p_rel[0], p_rel[1], cD, sD)[k]
+                    jdv[i] = world_to_heading_xy(d_rel[0], d_rel[1], cD, sD)[k]
+                    rot, prod = self._rot, self._rot_products
+                    rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
+                    np.multiply(rot, J_rel[:2], out=prod)  # prod[i, j] = rot[i, j] * J_rel[j]
+                    np.add(prod[k, 0], prod[k, 1], out=J[i])
+            elif prim.axis == "pitch":
+                chain = self._toe_pitch(kin, swing)
+                np.dot(chain[2:5], self._J_blade, out=J[i])
+                y[i], jdv[i] = chain[0], chain[5]
+            else:  # the swing foot's roll, from its contact frame's rotation (z-y-x Euler angles)
+                fid = robot.contact_frame_ids[swing]
+                Jf = jac(fid)[3:]
+                wf = tuple((Jf @ v).tolist())
+                af = tuple(kin.frame_jdot_v6(fid)[3:].tolist())
+                Rf = kin.frame_rotation_view(fid).tolist()
+                chain = _atan2(_rotation_entry_z(Rf, 1, wf, af), _rotation_entry_z(Rf, 2, wf, af))
+                np.dot(chain[2:5], Jf, out=J[i])
+                y[i], jdv[i] = chain[0], chain[5]
+        return y, J, jdv
 
-        if not cassie:
-            R02, _, R22 = _rotation_column(R, 2, w, alpha)
-            pitch = _atan2(R02, R22)
-            np.dot(pitch[2:5], Jw, out=J[0])
-            return np.array([pitch[0], *ys]), J, np.array([pitch[5], *ds])
-
-        # Torso pitch and roll (intrinsic z-y-x Euler angles of the base).
-        R00, R10, R20 = _rotation_column(R, 0, w, alpha)
-        pitch = _atan2(_neg(R20), _hypot(R00, R10))
-        roll = _atan2(_rotation_entry_z(R, 1, w, alpha), _rotation_entry_z(R, 2, w, alpha))
-        np.dot(pitch[2:5], Jw, out=J[0])
-        np.dot(roll[2:5], Jw, out=J[1])
-        # Hip yaws: joint coordinates.
-        yaw_q, yaw_v = self.yaw_q_idx, self.yaw_v_idx
-        J[2, yaw_v[stance]] = 1.0
-        J[3, yaw_v[swing]] = 1.0
-        # Swing toe pitch from the blade vector d = toe - heel (m).
-        toe_id, heel_id = robot.force_frame_ids[swing]
+    def _toe_pitch(self, kin: RobotKinematics, swing: str) -> tuple:
+        """The swing foot's pitch from its blade vector ``d = toe - heel`` (m) as a chain scalar on
+        ``J_toe - J_heel`` (left in :attr:`_J_blade`)."""
+        ids = self.robot.force_frame_ids[swing]
+        toe_id, heel_id = ids[0], ids[-1]
+        jac = kin.frame_jacobian6
         t0, t1, t2 = kin.frame_translation_view(toe_id).tolist()
         h0, h1, h2 = kin.frame_translation_view(heel_id).tolist()
         d = (t0 - h0, t1 - h1, t2 - h2)
         Jd = np.subtract(jac(toe_id)[:3], jac(heel_id)[:3], out=self._J_blade)
         at, ah = kin.frame_jdot_v6(toe_id).tolist(), kin.frame_jdot_v6(heel_id).tolist()
         dd = (at[0] - ah[0], at[1] - ah[1], at[2] - ah[2])
-        rd = (Jd @ v).tolist()
+        rd = (Jd @ kin.state()[1]).tolist()
         # The components of d as chain scalars on the blade Jacobian (coefficients: unit vectors).
         dx = (d[0], rd[0], 1.0, 0.0, 0.0, dd[0])
         dy = (d[1], rd[1], 0.0, 1.0, 0.0, dd[1])
         dz = (d[2], rd[2], 0.0, 0.0, 1.0, dd[2])
-        toe = _atan2(_neg(dz), _hypot(dx, dy))
-        np.dot(toe[2:5], Jd, out=J[8])
-        y = np.array([pitch[0], roll[0], q[yaw_q[stance]], q[yaw_q[swing]], *ys, toe[0]])
-        jdv = np.array([pitch[5], roll[5], 0.0, 0.0, *ds, toe[5]])
-        return y, J, jdv
+        return _atan2(_neg(dz), _hypot(dx, dy))
 
 
 def check_output_map(robot: Robot, output_map) -> None:

@@ -81,7 +81,7 @@ CASADI_SYMBOL_EXPORT int amlip_kernels_casadi_real_size(void) { return (int) siz
 static const casadi_int casadi_s0[3] = {16, 1, 1};
 static const casadi_int casadi_s1[3] = {8, 1, 1};
 static const casadi_int casadi_s2[3] = {15, 1, 1};
-static const casadi_int casadi_s3[3] = {27, 1, 1};
+static const casadi_int casadi_s3[3] = {30, 1, 1};
 
 /* alip_plan:(u[16])->(y[8]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -254,7 +254,7 @@ CASADI_SYMBOL_EXPORT int alip_plan_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
-/* swing_reference:(u[15])->(y[27]) */
+/* swing_reference:(u[15])->(y[30]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
@@ -335,13 +335,14 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][8]=a14;
   if (res[0]!=0) res[0][9]=a00;
   if (res[0]!=0) res[0][10]=a00;
+  if (res[0]!=0) res[0][11]=a00;
   a06=(a06-a04);
   a04=arg[0]? arg[0][1] : 0;
   a06=(a06/a04);
-  if (res[0]!=0) res[0][11]=a06;
+  if (res[0]!=0) res[0][12]=a06;
   a07=(a07-a05);
   a07=(a07/a04);
-  if (res[0]!=0) res[0][12]=a07;
+  if (res[0]!=0) res[0][13]=a07;
   a07=1.5707963267948966e+00;
   a11=sin(a11);
   a01=(a01-a11);
@@ -350,16 +351,16 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=(a07*a10);
   a01=(a01-a05);
   a01=(a01/a04);
-  if (res[0]!=0) res[0][13]=a01;
+  if (res[0]!=0) res[0][14]=a01;
   a07=(a07*a11);
   a18=(a18-a15);
   a15=(a07*a18);
   a15=(a15/a04);
-  if (res[0]!=0) res[0][14]=a15;
+  if (res[0]!=0) res[0][15]=a15;
   a19=(a19-a16);
   a16=(a07*a19);
   a16=(a16/a04);
-  if (res[0]!=0) res[0][15]=a16;
+  if (res[0]!=0) res[0][16]=a16;
   a16=8.;
   a20=(a16*a20);
   a22=(a20*a22);
@@ -371,42 +372,44 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a15+a09);
   a22=(a22-a15);
   a22=(a22/a04);
-  if (res[0]!=0) res[0][16]=a22;
+  if (res[0]!=0) res[0][17]=a22;
   a22=(a23*a07);
   a07=(a21*a07);
   a22=(a22-a07);
   a22=(a22/a04);
-  if (res[0]!=0) res[0][17]=a22;
-  if (res[0]!=0) res[0][18]=a00;
+  if (res[0]!=0) res[0][18]=a22;
   if (res[0]!=0) res[0][19]=a00;
   if (res[0]!=0) res[0][20]=a00;
   if (res[0]!=0) res[0][21]=a00;
-  a00=4.9348022005446790e+00;
-  a17=(a00*a17);
+  if (res[0]!=0) res[0][22]=a00;
+  if (res[0]!=0) res[0][23]=a00;
+  a22=4.9348022005446790e+00;
+  a17=(a22*a17);
   a17=(a10*a17);
-  a22=(a00*a10);
-  a17=(a17-a22);
+  a07=(a22*a10);
+  a17=(a17-a07);
   a04=casadi_sq(a04);
   a17=(a17/a04);
-  if (res[0]!=0) res[0][22]=a17;
-  a00=(a00*a12);
-  a18=(a00*a18);
+  if (res[0]!=0) res[0][24]=a17;
+  a22=(a22*a12);
+  a18=(a22*a18);
   a18=(a18/a04);
-  if (res[0]!=0) res[0][23]=a18;
-  a19=(a00*a19);
+  if (res[0]!=0) res[0][25]=a18;
+  a19=(a22*a19);
   a19=(a19/a04);
-  if (res[0]!=0) res[0][24]=a19;
-  a10=(a10*a00);
+  if (res[0]!=0) res[0][26]=a19;
+  a10=(a10*a22);
   a13=(a13*a25);
   a10=(a10-a13);
   a20=(a20-a10);
   a20=(a20/a04);
-  if (res[0]!=0) res[0][25]=a20;
-  a23=(a23*a00);
-  a21=(a21*a00);
+  if (res[0]!=0) res[0][27]=a20;
+  a23=(a23*a22);
+  a21=(a21*a22);
   a23=(a23-a21);
   a23=(a23/a04);
-  if (res[0]!=0) res[0][26]=a23;
+  if (res[0]!=0) res[0][28]=a23;
+  if (res[0]!=0) res[0][29]=a00;
   return 0;
 }
 

@@ -207,14 +207,14 @@ def default_gains(robot: Robot) -> PBCGains:
     if profile is not None:
         profile.check_supported("pbc")
     if profile is None or "pbc" not in profile.trackers:
-        from amlip_qp.robots.outputs import output_layout
+        from amlip_qp.robots.outputs import output_names
 
         springy = bool(robot.couplings or len(robot.passive_v_idx))
-        layout = output_layout(robot)
+        names = output_names(robot)
         candidates = [p for p in PROFILES.values() if "pbc" in p.trackers]
         # the same outputs and springs, else the same springs, else any
         profile = next(
-            (p for p in candidates if _has_springs(p) == springy and p.output_layout == layout),
+            (p for p in candidates if _has_springs(p) == springy and p.outputs == names),
             next((p for p in candidates if _has_springs(p) == springy), candidates[0]),
         )
     return profile.tracker_config("pbc")

@@ -51,7 +51,7 @@ from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, Sp
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
-from amlip_qp.robots.outputs import output_layout
+from amlip_qp.robots.outputs import output_names
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -165,7 +165,7 @@ class WalkingController:
         #: held by the planner, which starts its steps.
         self.clock = StepClock()
         self.planner = Planner(
-            output_layout(robot),
+            output_names(robot),
             robot.mass_kg,
             plan_fn=plan_fn,
             reference_fn=reference_fn,

@@ -7,16 +7,18 @@ the same ``evaluate(kin, stance, heading_rad)`` interface, so it plugs into
 :attr:`RobotKinematics.output_map <amlip_qp.robots.kinematics.RobotKinematics.output_map>`.
 
 Python gathers the primitive quantities from Pinocchio (base rotation,
-angular Jacobian and drift, the CoM, the contact points and, for Cassie, the
-swing foot's toe and heel: positions, Jacobians, drifts). The generated code
+angular Jacobian and drift, the CoM, the contact points and, if the outputs
+read them, the swing foot's toe and heel and its contact frame's rotation:
+positions, Jacobians, drifts). The generated code
 applies the chain rule symbolically: with ``x`` the primitives (the base
 rotation's entries, the points), ``y = f(x)``, ``J_y = df/dx J_x`` and
 ``Jdot_v_y = df/dx Jdot_v_x + xdot^T (d2f/dx2) xdot``, where a rotation
 column ``r_j`` has ``J = -[r_j]x J_w`` and drift ``alpha x r_j + w x (w x r_j)``.
-The hip-yaw outputs are joint coordinates and stay in Python.
+The joint outputs are joint coordinates and stay in Python.
 
-The source depends only on the robot's layout and ``nv``: it is compiled
-once into the codegen cache (see :mod:`amlip_qp.codegen.runtime`).
+The source depends only on the robot's outputs, whether its root is planar,
+and ``nv``: it is compiled once into the codegen cache (see
+:mod:`amlip_qp.codegen.runtime`).
 
 It lives in the walking loop: it needs CasADi and the codegen runtime, which
 ``robots`` may not import, and the walking controller is what installs it
@@ -44,9 +46,9 @@ SOURCE_FILE = "amlip_outputs.c"
 LIBRARY_FILE = "libamlip_outputs.so"
 
 
-def generate_source(layout: str, nv: int) -> bytes:
-    """The C source of the output map for a layout (``"cassie"`` or ``"rabbit"``) and ``nv``."""
-    fn, _, _ = output_map_function(layout, nv)
+def generate_source(output_map: OutputMap) -> bytes:
+    """The C source of ``output_map``'s outputs (:class:`~amlip_qp.robots.outputs.OutputMap`)."""
+    fn, _ = output_map_function(output_map.primitives, output_map.planar, output_map.robot.nv)
     return generate.single_file_source([fn], SOURCE_FILE)
 
 
@@ -65,11 +67,10 @@ class CompiledOutputMap:
     def __init__(self, robot: Robot, cache_dir: str | os.PathLike | None = None):
         ref = OutputMap(robot)
         self.robot = robot
-        self.layout, self.names = ref.layout, ref.names
+        self.names = ref.names
         self._ref = ref
-        self._yaw_q, self._yaw_v = ref.yaw_q_idx, ref.yaw_v_idx
         nv = robot.nv
-        source = generate_source(self.layout, nv)
+        source = generate_source(ref)
         self.library_path, functions = runtime.compile_and_load(
             source, [FUNCTION_NAME], SOURCE_FILE, LIBRARY_FILE, cache_dir
         )
@@ -87,21 +88,24 @@ class CompiledOutputMap:
             if fn.nnz_out(i) != arr.size:
                 raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} output {i} has the wrong size")
             self._buffer.set_res(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
-        self._cassie = self.layout == "cassie"
         self._base = robot.base_frame_id
-        # Per stance side: the frames of the packed input (stance contact, swing contact[, swing toe, heel]).
-        self._frames = {
-            stance: (robot.contact_frame_ids[stance], robot.contact_frame_ids[swing])
-            + (tuple(robot.force_frame_ids[swing]) if self._cassie else ())
-            for stance, swing in zip(robot.foot_sides, robot.foot_sides[::-1])
-        }
+        # Per stance side: the points and rotating frames of the packed input (OutputInputs' order),
+        # and the joint outputs' q and v indices.
+        sides = robot.foot_sides
+        self._points = {stance: ref.points(stance) for stance in sides}
+        self._rotating = {stance: ref.rotating_frames(stance) for stance in sides}
+        self._joints = {stance: ref.joint_indices(stance) for stance in sides}
+        self._joint_rows = list(ref.joint_rows)
         # Views of the inputs each primitive is copied into (``view[...] = x`` is the cheapest copy).
         JT, p = self._JT, self._p
         self._in_base = (JT[0:3], JT[3:6], p[0:9].reshape(3, 3), p[9:12], p[12:15], p[15:18])
-        n_frames = len(self._frames[robot.foot_sides[0]])
-        self._in_frames = tuple((JT[6 + 3 * i : 9 + 3 * i], p[18 + 6 * i : 21 + 6 * i], p[21 + 6 * i : 24 + 6 * i])
-                                for i in range(n_frames))  # fmt: skip
-        self._at = 18 + 6 * n_frames
+        n_points, n_rot = len(self._points[sides[0]]), len(self._rotating[sides[0]])
+        self._in_points = tuple((JT[6 + 3 * i : 9 + 3 * i], p[18 + 6 * i : 21 + 6 * i], p[21 + 6 * i : 24 + 6 * i])
+                                for i in range(n_points))  # fmt: skip
+        at, row = 18 + 6 * n_points, 6 + 3 * n_points
+        self._in_rotating = tuple((JT[row + 3 * i : row + 3 + 3 * i], p[at + 12 * i : at + 9 + 12 * i].reshape(3, 3),
+                                   p[at + 9 + 12 * i : at + 12 + 12 * i]) for i in range(n_rot))  # fmt: skip
+        self._at = at + 12 * n_rot  # the joint angles, then the heading
         self._in_v = p[p.size - nv :]
 
     @property
@@ -111,7 +115,7 @@ class CompiledOutputMap:
 
     def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
-        swing = self._ref.checked_swing(stance, heading_rad)
+        self._ref.checked_swing(stance, heading_rad)
         q, v = kin.state()
         jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
         base = self._base
@@ -122,19 +126,21 @@ class CompiledOutputMap:
         alpha[...] = acc(base)[3:]
         com[...] = kin.com_view
         com_drift[...] = kin.com_jdot_v()
-        for fid, (J_in, pos_in, drift_in) in zip(self._frames[stance], self._in_frames):
+        for fid, (J_in, pos_in, drift_in) in zip(self._points[stance], self._in_points):
             J_in[...] = jac(fid)[:3]
             pos_in[...] = kin.frame_translation_view(fid)
             drift_in[...] = acc(fid)[:3]
+        for fid, (J_in, R_in, alpha_in) in zip(self._rotating[stance], self._in_rotating):
+            J_in[...] = jac(fid)[3:]
+            R_in[...] = kin.frame_rotation_view(fid)
+            alpha_in[...] = acc(fid)[3:]
         p, at = self._p, self._at
-        if self._cassie:
-            p[at] = q[self._yaw_q[stance]]
-            p[at + 1] = q[self._yaw_q[swing]]
-        p[at + 2] = heading_rad
+        q_idx, v_idx = self._joints[stance]
+        for k, qi in enumerate(q_idx):
+            p[at + k] = q[qi]
+        p[at + len(q_idx)] = heading_rad
         self._in_v[...] = v
         self._eval()
         J = self._J.copy()
-        if self._cassie:
-            J[2, self._yaw_v[stance]] = 1.0
-            J[3, self._yaw_v[swing]] = 1.0
+        J[self._joint_rows, list(v_idx)] = 1.0
         return self._y.copy(), J, self._jdv.copy()

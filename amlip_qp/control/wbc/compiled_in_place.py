@@ -81,10 +81,12 @@ def small_layout(nq: int, nv: int, n_outputs: int) -> dict:
 def frame_terms(builder: WholeBodyQP) -> FrameTerms:
     """The Pinocchio terms the tick functions read: the base, the contact points and the force points."""
     robot = builder.robot
+    outputs = OutputMap(robot)
     frames = [robot.base_frame_id]
     for side in robot.foot_sides:
         frames += [robot.contact_frame_ids[side], *robot.force_frame_ids[side]]
-    return FrameTerms(robot.pin_model, frames, [robot.base_frame_id])
+    rotating = [f for side in robot.foot_sides for f in outputs.rotating_frames(side)]
+    return FrameTerms(robot.pin_model, frames, [robot.base_frame_id, *rotating])
 
 
 def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Function:
@@ -98,7 +100,6 @@ def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Fu
     n_out = task.size
     swing = other_side(stance)
     outputs = OutputMap(robot)
-    cassie = outputs.layout == "cassie"
     Mu, nle = ca.MX.sym("M_upper", nv, nv), ca.MX.sym("nle", nv)
     sl = small_layout(nq, nv, n_out)
     u = ca.MX.sym("small", sl["size"])
@@ -106,20 +107,24 @@ def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Fu
     heading, w = u[sl["heading"]], u[sl["w"]]
     T = terms
     base = robot.base_frame_id
-    # The output map (codegen.output_map's packed order), with the hip-yaw rows' ones.
+    # The output map (codegen.output_map's packed order), with the joint outputs' ones.
     J_base = T.jacobian(base)
-    frames = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
-    frames += list(robot.force_frame_ids[swing]) if cassie else []
-    JT = ca.horzcat(J_base[3:6, :].T, T.Jcom.T, *[T.jacobian(f)[0:3, :].T for f in frames])
-    yaw = [q[outputs.yaw_q_idx[stance]], q[outputs.yaw_q_idx[swing]]] if cassie else [0.0, 0.0]
+    frames, rotating = outputs.points(stance), outputs.rotating_frames(stance)
+    JT = ca.horzcat(
+        J_base[3:6, :].T, T.Jcom.T, *[T.jacobian(f)[0:3, :].T for f in frames],
+        *[T.jacobian(f)[3:6, :].T for f in rotating],
+    )  # fmt: skip
+    q_idx, v_idx = outputs.joint_indices(stance)
     R = T.rotation(base)
     packed = ca.vertcat(
         ca.reshape(R.T, 9, 1), T.drift(base)[3:6], T.com, T.acom,
-        *[ca.vertcat(T.position(f), T.drift(f)[0:3]) for f in frames], *yaw, heading, v,
+        *[ca.vertcat(T.position(f), T.drift(f)[0:3]) for f in frames],
+        *[ca.vertcat(ca.reshape(T.rotation(f).T, 9, 1), T.drift(f)[3:6]) for f in rotating],
+        *[q[i] for i in q_idx], heading, v,
     )  # fmt: skip
-    y, JyT, jdv = output_map_function(outputs.layout, nv)[0](JT, packed)
-    if cassie:
-        rows, cols = [outputs.yaw_v_idx[stance], outputs.yaw_v_idx[swing]], [2, 3]
+    y, JyT, jdv = output_map_function(outputs.primitives, outputs.planar, nv)[0](JT, packed)
+    if q_idx:
+        rows, cols = list(v_idx), list(outputs.joint_rows)
         JyT = JyT + ca.DM(ca.Sparsity.triplet(nv, n_out, rows, cols), 1.0)  # structural zeros there
     # The output task's residual r = Jdot v - ydd_d - K_d (yd_d - J v) - K_p (y_d - y), the feedback's shift applied.
     kp, kd = dm(task.gains.kp), dm(task.gains.kd)

@@ -218,22 +218,22 @@ def default_config(robot: Robot) -> QPConfig:
     """The tuned :class:`QPConfig` of ``robot``, from its profile's ``[trackers.qp]`` table.
 
     A robot loaded from an MJCF file without a profile gets the configuration
-    of the bundled robot whose output layout it shares
-    (:func:`~amlip_qp.robots.outputs.output_layout`): the gains then fit its
+    of the bundled robot whose outputs it shares
+    (:func:`~amlip_qp.robots.outputs.output_names`): the gains then fit its
     outputs one for one, but they were tuned for the bundled robot; give the
     robot a profile with its own table.
 
     Raises:
-        MJCFError: The robot has no output layout.
+        MJCFError: The model fits no default outputs.
         InputError: The profile has no ``qp`` table, or an invalid one.
     """
     from amlip_qp.profiles import PROFILES
-    from amlip_qp.robots.outputs import output_layout
+    from amlip_qp.robots.outputs import output_names
 
     profile = robot.profile
     if profile is not None:
         profile.check_supported("qp")
     if profile is None or "qp" not in profile.trackers:
-        layout = output_layout(robot)
-        profile = next(p for p in PROFILES.values() if p.output_layout == layout and "qp" in p.trackers)
+        names = output_names(robot)
+        profile = next(p for p in PROFILES.values() if p.outputs == names and "qp" in p.trackers)
     return profile.tracker_config("qp")
