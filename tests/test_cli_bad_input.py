@@ -201,7 +201,7 @@ BAD_INPUTS = [
     (["compare", "--robots", "cassie,atlas"], "argument --robots: unknown robot 'atlas'"),
     (["compare", "--robots", ","], "expected a comma-separated list of robots"),
     (["walk", "--robot", "{tmp}/nothing.toml"], "robot profile not found"),
-    (["walk", "--robot", "g1", "--tracker", "pbc"], "the pbc tracker does not run on g1: its IK needs one output"),
+    (["walk", "--robot", "{no_pbc}", "--tracker", "pbc"], "the pbc tracker does not run on h1: a test reason"),
     (["walk", "--robot", "{file}.toml"], "robot profile not found"),
     (["compare", "--jobs", "1", "--scenario", "moonwalk"], "unknown scenario"),
     (["bench", "codegen", "--json", "/proc/x.json"], "--json /proc/x.json: cannot write"),
@@ -220,13 +220,24 @@ BAD_INPUTS = [
 ]
 
 
+def _profile_without_pbc(tmp_path):
+    """H1's profile, its model by absolute path, with an ``[unsupported]`` reason for the PBC (written
+    beside ``tmp_path``, which the test checks for files written)."""
+    text = (MODELS_DIR / "h1.toml").read_text()
+    text = text.replace('file = "unitree_h1/h1.xml"', f'file = "{MODELS_DIR / "unitree_h1" / "h1.xml"}"')
+    path = tmp_path.parent / f"{tmp_path.name}_no_pbc.toml"
+    path.write_text(text + '\n[unsupported]\npbc = "a test reason"\n')
+    return path
+
+
 @pytest.mark.parametrize("argv, needle", BAD_INPUTS, ids=[" ".join(a) for a, _ in BAD_INPUTS])
 def test_bad_input_exits_2_with_one_line_and_simulates_nothing(argv, needle, tmp_path, capsys, no_simulation):
     a_file = tmp_path / "a_file.txt"
     a_file.write_text("not a folder\n")
     big_png = header_only_png(tmp_path / "big.png", 12000, 12000)
     before = sorted(p.name for p in tmp_path.iterdir())
-    argv = [a.format(tmp=tmp_path, file=a_file, bigpng=big_png) for a in argv]
+    no_pbc = _profile_without_pbc(tmp_path)
+    argv = [a.format(tmp=tmp_path, file=a_file, bigpng=big_png, no_pbc=no_pbc) for a in argv]
     code, out, err = _main(argv, capsys)
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
     assert code == 2, err

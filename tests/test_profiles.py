@@ -35,17 +35,17 @@ def test_unknown_robot_names_the_known_ones():
 
 
 @pytest.mark.parametrize("name", ROBOT_NAMES)
-def test_tracker_configurations_import_and_have_the_robot_layout(name):
+def test_tracker_configurations_import_and_have_one_gain_per_output(name):
     from amlip_qp.control.pbc.gains import PBCGains
     from amlip_qp.control.wbc.config import QPConfig
 
     profile = get_profile(name)
     qp = profile.tracker_config("qp")
-    trackers = {"g1": "qp"}.get(name, "pbc, qp")  # G1's PBC: see its profile
+    trackers = "pbc, qp"
     assert isinstance(qp, QPConfig) and ", ".join(sorted(profile.trackers)) == trackers
     if "pbc" in profile.trackers:
         assert isinstance(profile.tracker_config("pbc"), PBCGains)
-    n_outputs = {"rabbit": 4}.get(name, 9)
+    n_outputs = {"rabbit": 4, "g1": 10}.get(name, 9)
     assert len(qp.output_kp) == len(qp.output_kd) == len(qp.output_weight) == n_outputs
     with pytest.raises(InputError, match=f"no 'mpc' tracker configuration; known: {trackers}"):
         profile.tracker_config("mpc")

@@ -67,14 +67,8 @@ def test_an_output_the_model_cannot_compute_is_refused_at_load():
         OutputMap(one_point)
 
 
-def with_foot_roll(robot):
-    """``robot`` with a ``swing_foot_roll`` output declared after its own."""
-    profile = dataclasses.replace(robot.profile, outputs=(*robot.profile.outputs, "swing_foot_roll"))
-    return dataclasses.replace(robot, profile=profile)
-
-
 def test_swing_foot_roll_is_the_contact_frames_roll_with_its_derivatives():
-    robot = with_foot_roll(load_robot("cassie"))
+    robot = load_robot("g1")  # declared last
     rng = np.random.default_rng(24)
     kin, probe, omap = RobotKinematics(robot), RobotKinematics(robot), OutputMap(robot)
     assert omap.names[-1] == "swing_foot_roll" and omap.size == 10
@@ -249,3 +243,28 @@ def test_an_output_map_stand_in_must_evaluate_the_same_outputs_of_the_same_model
     kin = RobotKinematics(cassie)
     with pytest.raises(InputError, match="output_map must evaluate"):
         kin.output_map = NoEvaluate()
+
+
+def test_a_profile_declares_one_output_per_free_leg_joint():
+    """G1: 12 actuated leg joints, the stance ankle's pitch and roll passive: 10 outputs, not 9."""
+    g1 = load_robot("g1")
+    nine = dataclasses.replace(g1.profile, outputs=tuple(n for n in g1.profile.outputs if n != "swing_foot_roll"))
+    with pytest.raises(MJCFError, match=r"declares 9 outputs; the legs need 10: .*12 actuated leg joints minus 2 "):
+        output_names(dataclasses.replace(g1, profile=nine))
+
+
+def test_the_controller_refuses_outputs_that_lose_rank_at_the_stand_pose():
+    """Rabbit with straight knees at the stand pose: the legs cannot lengthen, so an output loses its rank."""
+    from amlip_qp.control.walking.controller import WalkingController
+    from amlip_qp.robots.kinematics import RANK_TOL, stand_output_rank
+
+    rabbit = load_robot("rabbit")
+    q = rabbit.q_stand.copy()
+    for side in rabbit.foot_sides:
+        q[rabbit.state_map.joint_pin_q[f"{side}-knee"]] = 0.0
+    straight = dataclasses.replace(rabbit, q_stand=q)
+    rank, n, smallest, _ = stand_output_rank(straight)
+    assert rank < n == 4 and smallest < RANK_TOL
+    assert stand_output_rank(rabbit)[0] == 4
+    with pytest.raises(MJCFError, match=r"output Jacobian has rank \d of 4 at the stand pose"):
+        WalkingController(straight, tracker=None, kinematics=RobotKinematics(straight), dt_s=0.0005)

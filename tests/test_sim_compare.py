@@ -46,10 +46,13 @@ def test_generated_code_is_prepared_once_per_robot_and_tracker(monkeypatch):
     assert sorted(built) == [("cassie", "pbc"), ("cassie", "qp"), ("rabbit", "pbc"), ("rabbit", "qp")]
 
 
-def test_a_tracker_a_profile_says_cannot_run_is_skipped_with_its_reason():
-    from amlip_qp.profiles import get_profile
+def test_a_tracker_a_profile_says_cannot_run_is_skipped_with_its_reason(tmp_path):
+    from amlip_qp.paths import MODELS_DIR
     from amlip_qp.sim.compare import unsupported_pairs
 
-    reason = get_profile("g1").unsupported["pbc"]
-    assert unsupported_pairs(["cassie", "g1"], ["pbc", "qp"]) == [("g1", "pbc", reason)]
-    assert unsupported_pairs(["cassie", "h1", "rabbit"], ["pbc", "qp"]) == []
+    text = (MODELS_DIR / "h1.toml").read_text()
+    text = text.replace('file = "unitree_h1/h1.xml"', f'file = "{MODELS_DIR / "unitree_h1" / "h1.xml"}"')
+    no_pbc = tmp_path / "no_pbc.toml"
+    no_pbc.write_text(text + '\n[unsupported]\npbc = "no PBC here"\n')
+    assert unsupported_pairs(["cassie", str(no_pbc)], ["pbc", "qp"]) == [(str(no_pbc), "pbc", "no PBC here")]
+    assert unsupported_pairs(["cassie", "g1", "h1", "rabbit"], ["pbc", "qp"]) == []

@@ -136,8 +136,9 @@ def test_the_command_prints_one_line_per_check_and_writes_the_json(capsys, tmp_p
     assert report["checks"][0]["unit"] == "kg" and report["checks"][0]["value"] <= 1e-9
 
 
-def test_json_to_stdout_moves_the_lines_to_stderr(capsys):
-    code, out, err = _main(["check-robot", "g1", "--no-walk", "--json", "-"], capsys)
+def test_json_to_stdout_moves_the_lines_to_stderr(capsys, tmp_path):
+    profile = _profile_copy(tmp_path, "h1", {"[trackers.pbc]\n": ""})  # no PBC table: its tick is skipped
+    code, out, err = _main(["check-robot", profile, "--no-walk", "--json", "-"], capsys)
     assert code == 0
     report = json.loads(out)
     skipped = [c for c in report["checks"] if c["status"] == "skip"]

@@ -24,12 +24,45 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from amlip_qp.exceptions import InputError
+from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.robots import passive as _passive
 from amlip_qp.robots.model_kinematics import ModelKinematics
 
 if TYPE_CHECKING:
     from amlip_qp.robots.robot import Robot
+
+
+#: A singular value of the output Jacobian at or below this counts as lost rank (m or rad of output
+#: per m or rad of the velocity coordinates): tracking 1 m/s (or 1 rad/s) along it would take 100
+#: rad/s of the joints.
+RANK_TOL = 1e-2
+
+
+def stand_output_rank(robot: Robot) -> tuple[int, int, float, str]:
+    """The output Jacobian ``dh_0/dv`` at the stand pose (at rest), both stances: ``(rank, outputs,
+    smallest singular value, its stance side)``; a singular value at or below :data:`RANK_TOL`
+    counts as lost."""
+    kin = RobotKinematics(robot)
+    kin.update(robot.q_stand, np.zeros(robot.nv))
+    smallest, rank, n, side_min = np.inf, 0, 0, ""
+    for side in robot.foot_sides:
+        _, J, _ = kin.outputs(side)
+        s = np.linalg.svd(J, compute_uv=False)
+        n = J.shape[0]
+        if s[-1] < smallest:
+            smallest, rank, side_min = float(s[-1]), int(np.sum(s > RANK_TOL)), side
+    return rank, n, smallest, side_min
+
+
+def check_stand_output_rank(robot: Robot) -> None:
+    """Raise :class:`MJCFError` unless the output Jacobian has full rank at the stand pose
+    (:func:`stand_output_rank`): each output must be movable on its own there."""
+    rank, n, smallest, side = stand_output_rank(robot)
+    if rank < n:
+        raise MJCFError(
+            f"{robot.path}: the output Jacobian has rank {rank} of {n} at the stand pose (smallest singular value "
+            f"{smallest:.2g}, {side} stance): a singular pose (a straight knee?); bend the legs in [model.stand]"
+        )
 
 
 class RobotKinematics(ModelKinematics):

@@ -160,12 +160,29 @@ def output_names(robot: Robot) -> tuple[str, ...]:
         primitives = output_primitives(names, robot.is_planar)
     except InputError as exc:
         raise MJCFError(f"{robot.path}: {exc}") from None
+    hint = "" if profile is not None else " (a model without a profile gets the default outputs: write one)"
     for primitive in primitives:
         missing = _missing_for(robot, primitive)
         if missing is not None:
-            hint = "" if profile is not None else " (a model without a profile gets the default outputs: write one)"
             raise MJCFError(f"{robot.path}: {where} {primitive.name!r} needs {missing}{hint}")
+    n_leg, passive = leg_output_count(robot)
+    if len(names) != n_leg - len(passive):
+        outputs = "the profile declares" if profile is not None else "the default has"
+        raise MJCFError(
+            f"{robot.path}: {outputs} {len(names)} outputs; the legs need {n_leg - len(passive)}: one per free leg "
+            f"joint ({n_leg} actuated leg joints minus {len(passive)} passive in stance"
+            f"{': ' + ', '.join(passive) if passive else ''}){hint}"
+        )
     return names
+
+
+def leg_output_count(robot: Robot) -> tuple[int, tuple[str, ...]]:
+    """The actuated joints of both legs (:attr:`Robot.leg_joint_names`) and the stance leg's joints
+    passive in stance (:meth:`Robot.passive_in_stance`): the outputs a robot declares are the first
+    minus the second (docs/NEW_ROBOT.md)."""
+    actuated = set(robot.actuated.joint_names)
+    legs = [n for side in robot.foot_sides for n in robot.leg_joint_names.get(side, ()) if n in actuated]
+    return len(legs), robot.passive_in_stance(robot.foot_sides[0])
 
 
 def computes_standard_outputs(output_map) -> bool:

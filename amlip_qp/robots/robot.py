@@ -209,6 +209,13 @@ class Robot:
             name = None if template is None else template.format(side=side)
         return name if name is not None and name in self.state_map.joint_pin_v else None
 
+    def passive_in_stance(self, side: str) -> tuple[str, ...]:
+        """The joints of ``side``'s leg that carry no torque while it is in stance: the profile's
+        ``feet.passive_in_stance`` roles (without a profile, ``ankle_pitch``), those the model has."""
+        roles = self.profile.feet.passive_in_stance if self.profile is not None else ("ankle_pitch",)
+        names = (self.role_joint(role, side) for role in roles)
+        return tuple(n for n in names if n is not None)
+
     @property
     def nq(self) -> int:
         """Size of Pinocchio's configuration ``q``."""

@@ -32,6 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from amlip_qp.robots import kinematics
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot
 
@@ -46,10 +48,8 @@ POSITION_TOL_M = 1e-9
 ROTATION_TOL_RAD = 1e-9
 #: The seeded random configurations the positions are compared at.
 RANDOM_CONFIGURATIONS = 3
-#: A singular value of the output Jacobian at or below this counts as lost rank (m or rad of output
-#: per m or rad of the velocity coordinates): tracking 1 m/s (or 1 rad/s) along it would take 100
-#: rad/s of the joints.
-RANK_TOL = 1e-2
+#: A singular value of the output Jacobian at or below this counts as lost rank (the controller's own check).
+RANK_TOL = kinematics.RANK_TOL
 #: The range of the gap between each foot's collision geoms and the floor at the stand pose, m:
 #: a gap above it drops the robot, below it the feet start inside the floor.
 STAND_GAP_M = (-0.002, 0.01)
@@ -319,18 +319,8 @@ def check_stand_on_floor(robot: Robot) -> CheckResult:
 
 def check_output_rank(robot: Robot) -> CheckResult:
     """The rank and the smallest singular value of the output Jacobian ``dh_0/dv`` at the stand pose, both stances."""
-    from amlip_qp.robots import RobotKinematics
-
     name = RANK_NAME
-    kin = RobotKinematics(robot)
-    kin.update(robot.q_stand, np.zeros(robot.nv))
-    smallest, rank, n, side_min = math.inf, 0, 0, ""
-    for side in robot.foot_sides:
-        _, J, _ = kin.outputs(side)
-        s = np.linalg.svd(J, compute_uv=False)
-        n = J.shape[0]
-        if s[-1] < smallest:
-            smallest, rank, side_min = float(s[-1]), int(np.sum(s > RANK_TOL)), side
+    rank, n, smallest, side_min = kinematics.stand_output_rank(robot)
     ok = rank == n
     detail = f"rank {rank} of {n}, smallest singular value {smallest:.2g} ({side_min} stance)"
     if not ok:

@@ -13,10 +13,13 @@ Unknown: the full configuration ``q`` (base and all joints). Equations:
    contact frame rides on the shin, so this fixes the stance shin's absolute
    angle (the unactuated coordinate) at its estimate; for Cassie it fixes the
    foot on the ground, including its roll about the blade.
-3. **Unactuated stance ankle held at its estimate**: if the stance contact
-   frame's parent joint is actuated and the system would otherwise be
-   under-determined (Cassie's stance toe, passive in the paper), its angle
-   equals the estimate.
+3. **Unactuated stance ankle held at its estimate**: the joints of the
+   stance leg that are passive in stance (the profile's
+   ``feet.passive_in_stance``: Cassie's stance toe, passive in the paper;
+   H1's ankle; G1's ankle pitch and roll), when the system would otherwise
+   be under-determined by their number, each equal their estimate. A model
+   without a profile holds the stance contact frame's parent joint when one
+   equation is missing.
 4. **Posture joints held at the stand pose**: each actuated joint outside
    both legs (a humanoid's waist, arms and head; :attr:`Robot.leg_joint_names
    <amlip_qp.robots.robot.Robot.leg_joint_names>`) equals its value in the
@@ -87,13 +90,13 @@ class IKEquations:
         held_springs: The springs the IK holds: the passive joints outside
             couplings, then the couplings (the order of ``held_springs`` of
             :meth:`IterativeIK.solve <amlip_qp.control.pbc.ik.IterativeIK.solve>`).
-        ankle_v, ankle_q: Side -> Pinocchio ``v`` / ``q`` index of the held stance
-            ankle, or ``None`` when no ankle is held.
+        held_v, held_q: Side -> Pinocchio ``v`` / ``q`` indices of the held stance
+            ankle joints (empty when none is held).
         rows: Side -> the :class:`StanceRows` of that stance.
 
     Raises:
         MJCFError: The model does not give a square system (outputs + held
-            coordinates != nv), or the stance ankle to hold is not actuated.
+            coordinates != nv), or a stance ankle joint to hold is not actuated.
     """
 
     def __init__(self, robot: Robot, n_out: int):
@@ -114,32 +117,34 @@ class IKEquations:
         self.posture_v = np.array([act.pin_v_idx[k] for k in posture], dtype=int)
         self.posture_q = np.array([act.pin_q_idx[k] for k in posture], dtype=int)
         n_fixed = len(self.pose_rows) + len(self.posture_v) + len(self.held_springs)
-        need_ankle = nv - (n_out + n_fixed)
-        if need_ankle not in (0, 1):
-            raise MJCFError(f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates")
-        # the stance ankle: the contact frame's parent joint, if actuated and needed
-        self.ankle_v: dict[str, int | None] = {}
-        self.ankle_q: dict[str, int | None] = {}
+        n_held = nv - (n_out + n_fixed)
+        # the stance ankle joints: the ones passive in stance, if actuated and needed
+        self.held_v: dict[str, tuple[int, ...]] = {}
+        self.held_q: dict[str, tuple[int, ...]] = {}
         act_v = [int(i) for i in robot.actuated.pin_v_idx]
         for side in robot.foot_sides:
-            jid = m.frames[robot.contact_frame_ids[side]].parentJoint
-            iv, iq = m.joints[jid].idx_v, m.joints[jid].idx_q
-            if need_ankle == 1:
+            names = _stance_ankle(robot, side, n_held)
+            if len(names) != n_held:
+                raise MJCFError(
+                    f"{robot.name}: IK needs {nv} equations, has {n_out} outputs + {n_fixed} held coordinates"
+                    f" + {len(names)} stance joints passive in stance"
+                )
+            ids = [m.getJointId(name) for name in names]
+            self.held_v[side] = tuple(m.joints[j].idx_v for j in ids)
+            self.held_q[side] = tuple(m.joints[j].idx_q for j in ids)
+            for name, iv in zip(names, self.held_v[side]):
                 if iv not in act_v:
-                    raise MJCFError(f"{robot.name}: the {side} contact's parent joint is not actuated")
-                self.ankle_v[side], self.ankle_q[side] = iv, iq
-            else:
-                self.ankle_v[side] = self.ankle_q[side] = None
+                    raise MJCFError(f"{robot.name}: the {side} stance joint {name!r} to hold is not actuated")
         # linear rows per stance: ankle (held, with its estimated rate), springs and couplings (rate 0)
         self.rows: dict[str, StanceRows] = {}
         for side in robot.foot_sides:
             lq: list[np.ndarray] = []
             lv: list[np.ndarray] = []
             lr: list[np.ndarray] = []
-            if self.ankle_v[side] is not None:
+            for iq, iv in zip(self.held_q[side], self.held_v[side]):
                 r_q, r_v = np.zeros(nq), np.zeros(nv)
-                r_q[self.ankle_q[side]] = 1.0
-                r_v[self.ankle_v[side]] = 1.0
+                r_q[iq] = 1.0
+                r_v[iv] = 1.0
                 lq.append(r_q)
                 lv.append(r_v)
                 lr.append(r_v.copy())
@@ -167,11 +172,23 @@ class IKEquations:
             )
 
     def controlled_actuated(self, stance: str) -> np.ndarray:
-        """Indices into the actuator list of the joints the IK solves for (all but the stance ankle)."""
-        ankle = self.ankle_v[stance]
-        return np.array([k for k, iv in enumerate(self.robot.actuated.pin_v_idx) if iv != ankle], dtype=int)
+        """Indices into the actuator list of the joints the IK solves for (all but the held stance ankle)."""
+        held = self.held_v[stance]
+        return np.array([k for k, iv in enumerate(self.robot.actuated.pin_v_idx) if iv not in held], dtype=int)
 
     def spring_rest_values(self) -> np.ndarray:
         """Rest values (rad) of :attr:`held_springs`, in their order: the passive joints
         outside couplings (their spring reference), then each coupling's rest length."""
         return np.array([spring.rest for spring in self.held_springs], dtype=float)
+
+
+def _stance_ankle(robot: Robot, side: str, n_held: int) -> tuple[str, ...]:
+    """The joints of ``side``'s leg the IK holds in stance: none if ``n_held`` is 0; else its joints
+    passive in stance (:meth:`Robot.passive_in_stance <amlip_qp.robots.robot.Robot.passive_in_stance>`)
+    or, for a model without a profile and one missing equation, the contact frame's parent joint."""
+    if n_held <= 0:
+        return ()
+    if robot.profile is None and n_held == 1:
+        m = robot.pin_model
+        return (m.names[m.frames[robot.contact_frame_ids[side]].parentJoint],)
+    return robot.passive_in_stance(side)

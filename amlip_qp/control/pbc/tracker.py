@@ -119,7 +119,7 @@ class PBCTracker(Tracker):
             kp = np.where(swing_mask, g.kp_swing_ps2, g.kp_stance_ps2)
             kd = np.where(swing_mask, g.kd_swing_ps, g.kd_stance_ps)
             if g.swing_ankle_gain_scale != 1.0:
-                ankle = act.pin_v_idx[ctrl] == self.ik.equations.ankle_v[swing_side]
+                ankle = np.isin(act.pin_v_idx[ctrl], self.ik.equations.held_v[swing_side])
                 kp[ankle] *= g.swing_ankle_gain_scale
                 kd[ankle] *= math.sqrt(g.swing_ankle_gain_scale)
             self._layout[side] = StanceLayout(

@@ -51,6 +51,7 @@ from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, Sp
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
+from amlip_qp.robots.kinematics import check_stand_output_rank
 from amlip_qp.robots.outputs import output_names
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -96,6 +97,12 @@ class WalkingController:
             friction cone follows the ground.
         terrain_height_fn: World ``(x, y)`` m -> ground height m, for ``"aware"``
             (default mode then; given with another mode: InputError).
+
+    Raises:
+        InputError: A bad argument.
+        MJCFError: The robot's outputs do not fit its legs
+            (:func:`~amlip_qp.robots.outputs.output_names`), or their Jacobian loses rank at the
+            stand pose (:func:`~amlip_qp.robots.kinematics.check_stand_output_rank`).
     """
 
     def __init__(
@@ -122,6 +129,7 @@ class WalkingController:
             raise InputError(f"planner_backend must be 'c' or 'numpy', got {planner_backend!r}")
         if output_backend not in ("c", "python"):
             raise InputError(f"output_backend must be 'c' or 'python', got {output_backend!r}")
+        check_stand_output_rank(robot)  # each output movable on its own at the stand pose
         if output_backend == "c":
             from amlip_qp.codegen.runtime import CodegenFallbackWarning
             from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap

@@ -149,14 +149,6 @@ class RigidSprings(Constraint):
         return {"A": ca.horzcat(dm(rs.G), ca.MX(L.n_lambda, L.n - L.nv)), "b": b}
 
 
-def stance_passive_joints(robot: Robot, side: str) -> tuple[str, ...]:
-    """The joints of ``side``'s leg that carry no torque while it is in stance: the profile's
-    ``feet.passive_in_stance`` roles (without a profile, ``ankle_pitch``), those the model has."""
-    roles = robot.profile.feet.passive_in_stance if robot.profile is not None else ("ankle_pitch",)
-    names = (robot.role_joint(role, side) for role in roles)
-    return tuple(n for n in names if n is not None)
-
-
 class TorqueLimits(Constraint):
     """Motor torque limits on ``tau = T x + tau0``: ``lo - tau0 <= T x <= hi - tau0``.
 
@@ -178,7 +170,7 @@ class TorqueLimits(Constraint):
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for side in robot.foot_sides:
             lo, hi = tau_lim[:, 0].copy(), tau_lim[:, 1].copy()
-            for foot in stance_passive_joints(robot, side):
+            for foot in robot.passive_in_stance(side):
                 if foot in names and math.isfinite(lim):
                     i = names.index(foot)
                     lo[i] = max(tau_lim[i, 0], -lim)
