@@ -21,6 +21,7 @@ from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import Parser, float_in, handler, int_in
 from amlip_qp.cli.subcommands import TRACKERS, add_check_robot, add_compare, add_sweep, add_view, add_walk
 from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
+from amlip_qp.profiles import DEFAULT_EKF_SCENARIO, DEFAULT_SCENARIO
 
 PROG = "amlip-qp"
 
@@ -80,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"recorded tracker QPs to replay, at most {B.MAX_BENCH_TICKS} (10 s of walking; each kept in memory, "
         "about 20 kB) (default 1200)",
     )
-    b.add_argument("--scenario", default="cassie-1mps", help="scenario to record from (default cassie-1mps)")
+    b.add_argument("--scenario", default=DEFAULT_SCENARIO, help=f"scenario to record from (default {DEFAULT_SCENARIO})")
     b.add_argument(
         "--solvers",
         default=None,
@@ -94,8 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument(
         "--scenario",
-        default="cassie-1mps-cc-ekf",
-        help="a scenario with the EKF estimator to walk (default cassie-1mps-cc-ekf)",
+        default=DEFAULT_EKF_SCENARIO,
+        help=f"a scenario with the EKF estimator to walk (default {DEFAULT_EKF_SCENARIO})",
     )
     b.add_argument(
         "--duration", type=_DURATION, default=4.0, metavar="S", help=f"simulated time, s, {_DURATION_HELP} (default 4)"
@@ -106,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="where a closed-loop tick goes: controller, MuJoCo and the harness's own time, per tracker and log mode",
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
-    b.add_argument("--scenario", default="cassie-1mps", help="scenario to walk (default cassie-1mps)")
+    b.add_argument("--scenario", default=DEFAULT_SCENARIO, help=f"scenario to walk (default {DEFAULT_SCENARIO})")
     b.add_argument(
         "--duration",
         type=_DURATION,

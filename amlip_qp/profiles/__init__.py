@@ -33,6 +33,9 @@ from amlip_qp.profiles.profile import (
 )
 from amlip_qp.profiles.reader import read_profile
 from amlip_qp.profiles.registry import (
+    DEFAULT_EKF_SCENARIO,
+    DEFAULT_ROBOT,
+    DEFAULT_SCENARIO,
     BundledProfiles,
     bundled_names,
     compared_robots,
@@ -45,6 +48,9 @@ from amlip_qp.profiles.registry import (
 PROFILES = BundledProfiles()
 
 __all__ = [
+    "DEFAULT_EKF_SCENARIO",
+    "DEFAULT_ROBOT",
+    "DEFAULT_SCENARIO",
     "JOINT_ROLES",
     "NO_SHAPING",
     "PROFILES",

@@ -18,6 +18,15 @@ from amlip_qp.profiles.reader import read_profile
 
 _READ: dict[Path, RobotProfile] = {}
 
+#: The robot a command walks when none is named: the paper's.
+DEFAULT_ROBOT = "cassie"
+#: The default robot's nominal walk (its ``[compare] nominal_scenario``): the default scenario of
+#: ``bench qp`` and ``bench harness``.
+DEFAULT_SCENARIO = "cassie-1mps"
+#: The nominal walk on the default robot's closed-chain plant, with its own sensors and the EKF: the
+#: default scenario of ``bench ekf``.
+DEFAULT_EKF_SCENARIO = "cassie-1mps-cc-ekf"
+
 
 def bundled_names() -> tuple[str, ...]:
     """Names of the bundled robots, in alphabetical order."""

@@ -23,6 +23,7 @@ import numpy as np
 
 from amlip_qp.estimation.base_estimator import BaseStateEstimator
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import DEFAULT_EKF_SCENARIO
 from amlip_qp.sim.factory import build_simulation
 from amlip_qp.sim.scenarios import get_scenario
 
@@ -50,7 +51,7 @@ class _TimedEstimator:
         return out
 
 
-def run(scenario: str = "cassie-1mps-cc-ekf", duration_s: float = 4.0) -> dict:
+def run(scenario: str = DEFAULT_EKF_SCENARIO, duration_s: float = 4.0) -> dict:
     """Walk ``scenario`` for ``duration_s`` with the QP tracker; the EKF's and the tick's costs (µs) and their ratio.
 
     Raises:

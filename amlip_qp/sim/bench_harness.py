@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import DEFAULT_SCENARIO
 from amlip_qp.sim.factory import TRACKER_MODULES, build_simulation, load, tracker_class
 from amlip_qp.sim.mujoco_yardstick import snapshot_walk, step_time_us
 from amlip_qp.sim.run_log import LOG_MODES
@@ -71,7 +72,7 @@ REFERENCE_HARNESS_PER_MUJOCO = 3.01
 REFERENCE_REALTIME_FACTOR = 0.65
 
 #: The scenario and tracker of the reference walks: the goals are judged on those only.
-REFERENCE_SCENARIO, REFERENCE_TRACKER = "cassie-1mps", "qp"
+REFERENCE_SCENARIO, REFERENCE_TRACKER = DEFAULT_SCENARIO, "qp"
 
 #: The harness goal: at most a quarter of the reference's own cost per tick, 0.75 MuJoCo steps per tick.
 GOAL_HARNESS_PER_MUJOCO = REFERENCE_HARNESS_PER_MUJOCO / 4.0
@@ -87,7 +88,7 @@ WARMUP_S = 0.5
 
 
 def run(
-    scenario: str = "cassie-1mps",
+    scenario: str = DEFAULT_SCENARIO,
     duration_s: float = 3.0,
     repeats: int = 3,
     trackers: tuple[str, ...] = ("qp", "pbc"),

@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.profiles import DEFAULT_ROBOT, DEFAULT_SCENARIO
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.sim import qp_solver_list
@@ -92,7 +93,7 @@ def _make_qp_tracker(robot: Robot) -> QPTracker:
 
 
 def record_walk(
-    n_ticks: int = 1200, scenario: str = "cassie-1mps", t_skip_s: float = 1.0, mujoco_state: list | None = None
+    n_ticks: int = 1200, scenario: str = DEFAULT_SCENARIO, t_skip_s: float = 1.0, mujoco_state: list | None = None
 ):
     """Run ``scenario`` with a recording QP tracker.
 
@@ -137,8 +138,8 @@ def record_walk(
 
 
 def tracker_solver_options() -> dict:
-    """The ProxQP options the whole-body QP tracker uses (taken from a default tracker)."""
-    return _make_qp_tracker(load("rabbit")).solver.options
+    """The ProxQP options the whole-body QP tracker uses (taken from a tracker of the default robot)."""
+    return _make_qp_tracker(load(DEFAULT_ROBOT)).solver.options
 
 
 def reference_solutions(problems: list[QPProblem]) -> tuple[list[np.ndarray], dict[float, int]]:
@@ -287,7 +288,7 @@ def solver_output_to_stderr():
         os.close(saved)
 
 
-def run(n_ticks: int = 1200, scenario: str = "cassie-1mps", solvers: str | None = None) -> dict:
+def run(n_ticks: int = 1200, scenario: str = DEFAULT_SCENARIO, solvers: str | None = None) -> dict:
     """Record a walk, bench the solvers, and return the JSON-ready report.
 
     Returns:
@@ -315,7 +316,7 @@ def run_bench(args: argparse.Namespace) -> int:
     from amlip_qp.output_paths import check_output_path, emit_report
 
     n_ticks = int(getattr(args, "ticks", None) or 1200)
-    scenario = getattr(args, "scenario", None) or "cassie-1mps"
+    scenario = getattr(args, "scenario", None) or DEFAULT_SCENARIO
     solvers = getattr(args, "solvers", None)
     target = getattr(args, "json", None)
     check_output_path("--json", target)

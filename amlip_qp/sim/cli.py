@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 from amlip_qp.exceptions import InputError  # noqa: E402
 from amlip_qp.output_paths import check_output_path, writing  # noqa: E402
-from amlip_qp.profiles import NO_SHAPING, get_profile  # noqa: E402
+from amlip_qp.profiles import DEFAULT_ROBOT, NO_SHAPING, get_profile  # noqa: E402
 from amlip_qp.sim.plant_modifiers import parse_payload  # noqa: E402
 from amlip_qp.sim.run_log import LOG_MODES  # noqa: E402
 from amlip_qp.sim.run_types import PlantSetting, Push, RunResult, SensorNoise  # noqa: E402
@@ -47,7 +47,7 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
         if args.robot is not None and args.robot != base.robot:
             raise InputError(f"scenario {base.name!r} is for {base.robot}, but --robot {args.robot} was given")
     else:
-        base = Scenario("custom", args.robot or "cassie", DEFAULT_WALK_DURATION_S)
+        base = Scenario("custom", args.robot or DEFAULT_ROBOT, DEFAULT_WALK_DURATION_S)
     changes: dict = {}
     if args.speed_profile is not None:
         changes["vx"] = SpeedProfile.parse(args.speed_profile)

@@ -21,14 +21,15 @@ from typing import Any
 
 from amlip_qp.exceptions import AmlipError
 from amlip_qp.output_paths import check_output_path, writing
+from amlip_qp.profiles import DEFAULT_ROBOT
 from amlip_qp.sweep import backends
 from amlip_qp.sweep.cells import Cell
 from amlip_qp.sweep.run_cell import check_plants, walk_run
 
 
 def bench_cells(n: int, duration_s: float, tracker: str) -> list[Cell]:
-    """``n`` Cassie walks of ``duration_s`` s with ``tracker`` at speeds spread over 0..1 m/s."""
-    fixed = (("robot", "cassie"), ("tracker", tracker), ("duration", duration_s))
+    """``n`` walks of the default robot of ``duration_s`` s with ``tracker`` at speeds spread over 0..1 m/s."""
+    fixed = (("robot", DEFAULT_ROBOT), ("tracker", tracker), ("duration", duration_s))
     return [Cell(i, (("vx", round(i / max(n - 1, 1), 6)),), fixed) for i in range(n)]
 
 
