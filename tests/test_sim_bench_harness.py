@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import pytest
@@ -90,3 +91,27 @@ def test_the_cli_runs_it(capsys, tmp_path):
     )
     assert code == 0 and out.is_file()
     assert "pbc/full" in capsys.readouterr().out
+
+
+def test_robots_stands_for_every_bundled_robots_nominal_walk():
+    names = bench_harness.scenario_names("robots")
+    assert names == ("cassie-1mps", "g1-1mps", "h1-1mps", "rabbit-0.5mps")
+    assert bench_harness.scenario_names(" h1-1mps, robots ") == ("h1-1mps", "cassie-1mps", "g1-1mps", "rabbit-0.5mps")
+    with pytest.raises(InputError, match="expected scenario names"):
+        bench_harness.scenario_names(" , ")
+    with pytest.raises(InputError, match="nowhere"):
+        bench_harness.scenario_names("cassie-1mps,nowhere")
+
+
+def test_several_scenarios_give_one_table_each_and_one_json_list(tmp_path, capsys):
+    out = tmp_path / "h.json"
+    code = cli.main(
+        ["bench", "harness", "--scenario", "g1-1mps,h1-1mps", "--duration", "0.02", "--repeats", "1",
+         "--trackers", "qp", "--json", str(out)]
+    )  # fmt: skip
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "closed-loop tick, g1-1mps" in text and "closed-loop tick, h1-1mps" in text
+    reports = json.loads(out.read_text())["scenarios"]
+    assert [r["scenario"] for r in reports] == ["g1-1mps", "h1-1mps"]
+    assert all(r["runs"]["qp/summary"]["ticks"] == 40 for r in reports)

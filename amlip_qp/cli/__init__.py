@@ -107,7 +107,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="where a closed-loop tick goes: controller, MuJoCo and the harness's own time, per tracker and log mode",
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
-    b.add_argument("--scenario", default=DEFAULT_SCENARIO, help=f"scenario to walk (default {DEFAULT_SCENARIO})")
+    b.add_argument(
+        "--scenario",
+        default=DEFAULT_SCENARIO,
+        metavar="NAMES",
+        help="comma-separated scenarios to walk, one table each; 'robots': each bundled robot's nominal walk "
+        f"(default {DEFAULT_SCENARIO})",
+    )
     b.add_argument(
         "--duration",
         type=_DURATION,

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles import DEFAULT_SCENARIO
+from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.factory import TRACKER_MODULES, build_simulation, load, tracker_class
 from amlip_qp.sim.mujoco_yardstick import snapshot_walk, step_time_us
 from amlip_qp.sim.run_log import LOG_MODES
@@ -262,13 +262,43 @@ def format_report(r: dict) -> str:
     return "\n".join(lines)
 
 
+#: ``--scenario robots``: each bundled robot's nominal walk.
+EVERY_ROBOT = "robots"
+
+
+def scenario_names(text: str) -> tuple[str, ...]:
+    """The scenarios of ``--scenario``: a comma-separated list, where :data:`EVERY_ROBOT` stands for each
+    bundled robot's nominal walk (its profile's ``[compare] nominal_scenario``), in name order.
+
+    Raises:
+        InputError: No scenario named, or an unknown one (checked before any walk).
+    """
+    names: list[str] = []
+    for item in (t.strip() for t in text.split(",")):
+        if not item:
+            continue
+        if item == EVERY_ROBOT:
+            profiles = (get_profile(robot) for robot in bundled_names())
+            names.extend(p.compare.nominal_scenario for p in profiles if p.compare is not None)
+        else:
+            names.append(item)
+    if not names:
+        raise InputError(f"--scenario: expected scenario names or {EVERY_ROBOT!r}, got {text!r}")
+    for name in names:
+        get_scenario(name)
+    return tuple(dict.fromkeys(names))
+
+
 def run_bench(args: argparse.Namespace) -> int:
-    """``amlip-qp bench harness``: print the table (and write JSON); exit 1 if the two log modes disagree."""
+    """``amlip-qp bench harness``: print the table per scenario (and write JSON: one scenario's report,
+    or ``{"scenarios": [report, ...]}`` for several); exit 1 if the two log modes disagree on any walk."""
     from amlip_qp.output_paths import check_output_path, emit_report
 
     target = getattr(args, "json", None)
     check_output_path("--json", target)
     trackers = tuple(t.strip() for t in str(args.trackers).split(",") if t.strip())
-    report = run(scenario=args.scenario, duration_s=args.duration, repeats=args.repeats, trackers=trackers)
-    emit_report(format_report(report), report, target)
-    return 0 if all(report["same_summary"].values()) else 1
+    scenarios = scenario_names(str(args.scenario))
+    reports = [run(scenario=s, duration_s=args.duration, repeats=args.repeats, trackers=trackers) for s in scenarios]
+    text = "\n\n".join(format_report(r) for r in reports)
+    emit_report(text, reports[0] if len(reports) == 1 else {"scenarios": reports}, target)
+    return 0 if all(all(r["same_summary"].values()) for r in reports) else 1
