@@ -53,6 +53,8 @@ RULES: dict[str, Rule] = {
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
     # the robot profiles: plain data read from TOML files among the package's models
     "amlip_qp.profiles": Rule(("amlip_qp.profiles", "amlip_qp.exceptions", "amlip_qp.paths"), HEAVY + ("numpy",)),
+    # ``python -m amlip_qp``: the command line, nothing more
+    "amlip_qp.__main__": Rule(("amlip_qp.cli",), HEAVY + ("numpy",)),
     # the command line stays light: handlers are imported by name when a subcommand runs
     # (view's keys for its --help: a leaf module of plain data)
     "amlip_qp.cli": Rule(

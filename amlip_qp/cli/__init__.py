@@ -132,7 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="qp,pbc",
         metavar="NAMES",
         help="comma-separated trackers: qp, pbc, qp-gathered (the QP with the compiled build that gathers its "
-        "inputs in Python, the default before the in-place one) (default qp,pbc)",
+        "inputs in Python, the default before the in-place one), qp-daqp (the QP with the DAQP solver) "
+        "(default qp,pbc)",
     )
     b.set_defaults(func=handler("amlip_qp.sim.bench_harness:run_bench"))
 

@@ -81,7 +81,10 @@ GOAL_HARNESS_PER_MUJOCO = REFERENCE_HARNESS_PER_MUJOCO / 4.0
 GOAL_TICK_PER_MUJOCO = REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / GOAL_REALTIME_FACTOR
 
 #: Tracker variants the benchmark knows besides :data:`TRACKER_MODULES`' names: ``name -> (tracker, options)``.
-VARIANTS = {"qp-gathered": ("qp", {"in_place_assembly": False})}
+VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
+    "qp-gathered": ("qp", {"in_place_assembly": False}),
+    "qp-daqp": ("qp", {"qp_solver": "daqp"}),
+}
 
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
 WARMUP_S = 0.5

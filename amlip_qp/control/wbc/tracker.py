@@ -44,6 +44,7 @@ from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild
 from amlip_qp.control.wbc.config import QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
+from amlip_qp.qp.daqp_solver import DAQPSolver
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver, QPSolution
 
@@ -53,8 +54,12 @@ if TYPE_CHECKING:
     from amlip_qp.robots.robot import Robot
 
 
+#: The QP solvers a :class:`QPTracker` takes (``qp_solver``).
+QP_SOLVERS = ("proxqp", "daqp")
+
+
 class QPTracker(Tracker):
-    """Whole-body QP tracker (one persistent ProxQP, warm-started; two with ``airborne_reduction``).
+    """Whole-body QP tracker (one persistent QP solver, warm-started; a problem shape more with ``airborne_reduction``).
 
     Args:
         robot: The robot.
@@ -78,6 +83,13 @@ class QPTracker(Tracker):
         airborne_reduction: While the swing foot's force ramp is 0, solve the
             problem without its force variables and friction rows (same
             optimum, about a quarter less solve time; see the module doc).
+        qp_solver: ``"proxqp"`` (default: :class:`~amlip_qp.qp.solver.ProxQPSolver`,
+            ``eps_abs`` and ``max_iter`` its settings) or ``"daqp"``
+            (:class:`~amlip_qp.qp.daqp_solver.DAQPSolver`, a dual active-set
+            method, hot-started from the last working set; ``max_iter`` its
+            iteration cap, ``eps_abs`` unused). Both solve the same problem;
+            their solutions differ by the solvers' tolerances, so the walks
+            differ a little (docs/BENCH_QP.md).
         in_place_assembly: Assemble with the generated C of
             :mod:`amlip_qp.control.wbc.compiled_in_place`, which reads
             Pinocchio's arrays in place (the same problem as the other
@@ -118,6 +130,7 @@ class QPTracker(Tracker):
         compiled_build: bool | None = None,
         airborne_reduction: bool = False,
         in_place_assembly: bool | None = None,
+        qp_solver: str = "proxqp",
     ):
         if not 0.0 <= fallback_decay <= 1.0:
             raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
@@ -137,6 +150,8 @@ class QPTracker(Tracker):
             )
         if int(max_iter) < 1:
             raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
+        if qp_solver not in QP_SOLVERS:
+            raise InputError(f"qp_solver must be one of {', '.join(QP_SOLVERS)}, got {qp_solver!r}")
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
         self._n_outputs = self.builder.output_task.size
@@ -159,15 +174,20 @@ class QPTracker(Tracker):
                     stacklevel=2,
                 )
         self.config = self.builder.config
-        self.solver = ProxQPSolver(
-            eps_abs=eps_abs,
-            max_iter=max_iter,
-            warm_start=warm_start,
-            eps_primal_inf=1e-9,
-            mu_eq=1e-4,
-            mu_in=1e-3,
-            update_preconditioner=False,
-        )
+        self.qp_solver = qp_solver
+        self.solver: ProxQPSolver | DAQPSolver
+        if qp_solver == "daqp":
+            self.solver = DAQPSolver(warm_start=warm_start, iter_limit=int(max_iter))
+        else:
+            self.solver = ProxQPSolver(
+                eps_abs=eps_abs,
+                max_iter=max_iter,
+                warm_start=warm_start,
+                eps_primal_inf=1e-9,
+                mu_eq=1e-4,
+                mu_in=1e-3,
+                update_preconditioner=False,
+            )
         self.record = bool(record)
         self.fallback_decay = float(fallback_decay)
         self.fallback_kd = float(fallback_damping_Nms)

@@ -1,0 +1,7 @@
+"""``python -m amlip_qp``: the ``amlip-qp`` command."""
+
+import sys
+
+from amlip_qp.cli import main
+
+sys.exit(main())

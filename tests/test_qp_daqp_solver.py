@@ -1,0 +1,86 @@
+"""DAQPSolver: agreement with quadprog on random problems and on the tracker's own, the hot start,
+determinism, failures, and the QP tracker walking with it."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.control.wbc.tracker import QPTracker
+from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.qp import DAQPSolver, ProxQPSolver
+from amlip_qp.robots import load_robot
+from amlip_qp.sim.bench_qp import record_walk
+from amlip_qp.sim.factory import build_simulation
+from amlip_qp.sim.scenarios import get_scenario
+from amlip_qp.sim.summary import summarize
+from test_qp_problem import random_problem
+
+
+@pytest.fixture(scope="module")
+def walk_problems():
+    """80 consecutive QPs of the QP tracker walking cassie-1mps (after 0.6 s of start-up)."""
+    problems, _, fell = record_walk(n_ticks=80, scenario="cassie-1mps", t_skip_s=0.6)
+    assert not fell
+    return problems
+
+
+def test_matches_quadprog_on_random_problems():
+    solver = DAQPSolver()
+    for seed in range(10):
+        p = random_problem(seed)
+        x = solver.solve(p).x
+        assert np.max(np.abs(x - p.solve_with("quadprog"))) < 1e-8
+        assert max(p.residuals(x).values()) < 1e-9
+
+
+def test_finds_the_trackers_optimum_exactly(walk_problems):
+    """quadprog's solution (both are exact active-set methods) to 1e-7 in x (N, m/s^2), constraints held
+    to 1e-6; and never a higher cost than ProxQP even at 1e-10 (on these problems ProxQP's is up to
+    2e-6 relative above it)."""
+    daqp, prox = DAQPSolver(), ProxQPSolver(eps_abs=1e-10, max_iter=10_000, eps_primal_inf=1e-12)
+    for p in walk_problems:
+        x = daqp.solve(p).x
+        assert np.max(np.abs(x - p.solve_with("quadprog"))) < 1e-7
+        assert max(p.residuals(x).values()) < 1e-6
+        f, f_prox = p.objective(x), p.objective(prox.solve(p).x)
+        assert f <= f_prox + 1e-9 * abs(f_prox)
+    assert daqp.n_init == 1  # one set-up, every later problem hot-started
+
+
+def test_hot_and_cold_starts_find_the_same_solutions(walk_problems):
+    hot, cold = DAQPSolver(), DAQPSolver(warm_start=False)
+    for p in walk_problems:
+        assert np.max(np.abs(hot.solve(p).x - cold.solve(p).x)) < 1e-7
+    assert hot.n_init == 1 and cold.n_init == len(walk_problems)
+
+
+def test_the_same_problems_in_the_same_order_give_bit_identical_solutions(walk_problems):
+    a, b = DAQPSolver(), DAQPSolver()
+    for p in walk_problems:
+        assert np.array_equal(a.solve(p).x, b.solve(p).x)
+
+
+def test_a_failure_raises_with_the_problem_and_the_next_solve_starts_afresh():
+    ok, bad = random_problem(4), random_problem(4)
+    bad.A = np.vstack([np.eye(bad.n)[0], np.eye(bad.n)[0]])  # x0 = 0.5 and x0 = -0.5 at once
+    bad.b = np.array([0.5, -0.5])
+    solver = DAQPSolver()
+    solver.solve(ok)
+    with pytest.raises(QPError) as info:
+        solver.solve(bad)
+    assert info.value.problem is bad and info.value.status.startswith("DAQP_EXIT_")
+    solver.solve(ok)
+    assert solver.n_init == 2  # set up again after the failure
+
+
+def test_the_tracker_refuses_an_unknown_solver():
+    with pytest.raises(InputError, match="qp_solver must be one of proxqp, daqp"):
+        QPTracker(load_robot("cassie"), qp_solver="gurobi")
+
+
+def test_the_qp_tracker_walks_with_daqp_at_the_commanded_speed():
+    sc = get_scenario("cassie-1mps").with_(duration_s=6.0)
+    tracker = QPTracker(load_robot("cassie"), qp_solver="daqp")
+    assert isinstance(tracker.solver, DAQPSolver)
+    s = summarize(build_simulation(sc, tracker).run(sc.duration_s, log="summary"))
+    assert not s["fell"] and s["fallback_ticks"] == 0
+    assert s["mean_velocity"][0] == pytest.approx(s["commanded_velocity"][0], abs=0.1)
