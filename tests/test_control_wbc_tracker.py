@@ -69,14 +69,14 @@ def test_recorded_solutions_satisfy_the_constraints(walk):
     _, tracker, _ = walk
     for problem, x in tracker.recorded[::10]:
         res = problem.residuals(x)
-        tol = tracker.solver.eps_abs  # ProxQP's absolute primal tolerance
+        tol = tracker.solver.primal_tol  # the solver's absolute primal tolerance
         assert res["eq"] <= tol and res["in"] <= tol and res["box"] <= tol
 
 
 def test_swing_forces_are_zero_while_the_foot_is_in_the_air(walk):
     _, tracker, result = walk
     phase = result.log["phase"]
-    tol = tracker.solver.eps_abs  # the bound holds to the solver's tolerance, N
+    tol = tracker.solver.primal_tol  # the bound holds to the solver's tolerance, N
     seen = 0
     for k, (problem, x) in enumerate(tracker.recorded):
         if 0.2 < phase[k] < 0.8:
@@ -166,19 +166,21 @@ def test_bench_reports_every_solver_on_recorded_problems(walk):
 
 
 def test_replaying_the_recorded_problems_is_bit_identical(walk):
-    """Determinism: amlip_qp loads ProxSuite's portable build (the AVX-512 and
-    AVX2 builds gave different solutions for the same problems from one fresh
+    """Determinism, with the tracker's solver and with ProxQP: amlip_qp loads ProxSuite's portable
+    build (the AVX-512 and AVX2 builds gave different solutions for the same problems from one fresh
     solver to the next, up to 3e-6)."""
     from amlip_qp.qp import _proxsuite
 
     _, tracker, _ = walk
     assert _proxsuite.REPRODUCIBLE, f"ProxSuite build {_proxsuite.PROXSUITE_BUILD} is not reproducible"
     problems = [p for p, x in tracker.recorded]
-    runs = []
-    for _ in range(3):
-        solver = ProxQPSolver(**tracker.solver.options)
-        runs.append(np.array([solver.solve(p).x for p in problems]))
-    assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
+    proxqp = QPTracker(tracker.robot, qp_solver="proxqp").solver
+    for make in (lambda: type(tracker.solver)(**tracker.solver.options), lambda: ProxQPSolver(**proxqp.options)):
+        runs = []
+        for _ in range(3):
+            solver = make()
+            runs.append(np.array([solver.solve(p).x for p in problems]))
+        assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
 
 
 def test_bad_arguments_and_targets_are_typed_errors():

@@ -84,3 +84,14 @@ def test_the_qp_tracker_walks_with_daqp_at_the_commanded_speed():
     s = summarize(build_simulation(sc, tracker).run(sc.duration_s, log="summary"))
     assert not s["fell"] and s["fallback_ticks"] == 0
     assert s["mean_velocity"][0] == pytest.approx(s["commanded_velocity"][0], abs=0.1)
+
+
+def test_a_hot_start_on_a_contradictory_row_is_refused_not_reported_solved():
+    """0 = 1 in an equality row after a good problem of the same shape: a QPError, never that x."""
+    ok, bad = random_problem(4), random_problem(4)
+    bad.A[0] = 0.0
+    bad.b[0] = 1.0
+    solver = DAQPSolver()
+    solver.solve(ok)
+    with pytest.raises(QPError):
+        solver.solve(bad)

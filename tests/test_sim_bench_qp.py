@@ -60,10 +60,11 @@ def test_record_walk_keeps_one_distinct_problem_per_solved_tick(walk):
 
 
 def test_the_bench_times_the_solver_with_the_trackers_options():
-    from amlip_qp.sim.factory import load, make_tracker
+    from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.sim.factory import load
 
     options = tracker_solver_options()
-    assert options == make_tracker("qp", load("cassie")).solver.options
+    assert options == QPTracker(load("cassie"), qp_solver="proxqp").solver.options
     assert set(options) >= {"eps_abs", "max_iter", "warm_start"}
 
 

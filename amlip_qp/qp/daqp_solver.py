@@ -33,6 +33,12 @@ from amlip_qp.qp.solver import MAX_SHAPES, QPSolution
 BIG_BOUND = 1e30
 #: DAQP's sense flag of an equality row (active and immutable).
 SENSE_EQUALITY = 5
+#: DAQP's primal feasibility tolerance (its default, set explicitly), in the rows' units.
+PRIMAL_TOL = 1e-6
+#: Largest constraint violation a reported solution may have before it is refused (100x PRIMAL_TOL).
+RESIDUAL_CHECK = 1e-4
+#: The exit flag given to a reported solution that violates its constraints by more than RESIDUAL_CHECK.
+_VIOLATED = -100
 #: DAQP's exit flags that mean solved (1: optimal; 2: optimal, soft constraints violated, none here).
 _SOLVED = (1, 2)
 
@@ -88,6 +94,11 @@ class DAQPSolver:
         """The constructor arguments of this solver (to build another one alike)."""
         return {"warm_start": self.warm_start, "iter_limit": self.iter_limit}
 
+    @property
+    def primal_tol(self) -> float:
+        """Largest constraint violation a solution may have: DAQP's ``primal_tol`` setting (1e-6)."""
+        return PRIMAL_TOL
+
     def reset(self) -> None:
         """Forget the working sets; the next solve of each shape sets its model up afresh."""
         self._shapes.clear()
@@ -106,7 +117,7 @@ class DAQPSolver:
         if shape.model is None or not self.warm_start:
             shape.model = self._daqp.Model()
             code = shape.model.setup(H, f, shape.A, shape.bu, shape.bl, shape.sense)
-            shape.model.settings = {"iter_limit": self.iter_limit}
+            shape.model.settings = {"iter_limit": self.iter_limit, "primal_tol": PRIMAL_TOL}
             self.n_init += 1
             if code[0] < 0:
                 shape.model = None
@@ -115,6 +126,10 @@ class DAQPSolver:
             shape.model.update(H=H, f=f, A=shape.A, bupper=shape.bu, blower=shape.bl)
         x, _, flag, info = shape.model.solve()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
+        # A hot-started update skips the set-up's checks (a zero constraint row that contradicts its
+        # bound is then reported solved): the solution is checked against the constraints here.
+        if flag in _SOLVED and max(problem.residuals(np.asarray(x)).values()) > RESIDUAL_CHECK:
+            flag = _VIOLATED
         if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
             shape.model = None  # the next solve of this shape starts afresh (other shapes stay hot)
             raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")

@@ -113,6 +113,11 @@ class ProxQPSolver:
             "update_preconditioner": self.update_preconditioner,
         }
 
+    @property
+    def primal_tol(self) -> float:
+        """Largest constraint violation a solution may have: the absolute tolerance ``eps_abs``."""
+        return float(self.eps_abs)
+
     def _new_qp(self, problem: QPProblem) -> proxqp.dense.QP:
         qp = proxqp.dense.QP(problem.n, problem.n_eq, problem.n_in, True)
         qp.settings.eps_abs = self.eps_abs

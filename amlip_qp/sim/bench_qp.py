@@ -138,8 +138,11 @@ def record_walk(
 
 
 def tracker_solver_options() -> dict:
-    """The ProxQP options the whole-body QP tracker uses (taken from a tracker of the default robot)."""
-    return _make_qp_tracker(load(DEFAULT_ROBOT)).solver.options
+    """The ProxQP options of the whole-body QP tracker's ProxQP path (``QPTracker(qp_solver="proxqp")``,
+    taken from a tracker of the default robot)."""
+    from amlip_qp.control.wbc.tracker import QPTracker
+
+    return QPTracker(load(DEFAULT_ROBOT), qp_solver="proxqp").solver.options
 
 
 def reference_solutions(problems: list[QPProblem]) -> tuple[list[np.ndarray], dict[float, int]]:
