@@ -121,7 +121,8 @@ class DAQPSolver:
             self.n_init += 1
             if code[0] < 0:
                 shape.model = None
-                raise QPError(f"DAQP set-up failed with code {code[0]}", problem=problem, status=f"SETUP_{code[0]}")
+                status = f"DAQP_SETUP_{code[0]}"
+                raise QPError(f"DAQP set-up failed with code {code[0]}", problem=problem, status=status)
         else:
             shape.model.update(H=H, f=f, A=shape.A, bupper=shape.bu, blower=shape.bl)
         x, _, flag, info = shape.model.solve()
