@@ -92,7 +92,7 @@ RULES: dict[str, Rule] = {
     ),
     # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
     "amlip_qp.estimation": Rule(
-        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen"),
+        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen", "amlip_qp.profiles"),
         ("mujoco", "proxsuite", "qpsolvers", "scipy", "amlip_qp.control", "amlip_qp.sim"),
     ),
     # the paper's tracker: no QP

@@ -390,7 +390,7 @@ def test_the_new_robot_guide_names_every_profile_key(tmp_path):
     tables |= {"scenarios.KEY", "settings.KEY", "mismatches", "estimator"}
     assert set(keys) == tables  # each table was probed, in some bundled profile (none has [unsupported])
     assert sum(len(k) for k in keys.values()) > 90
-    assert {"step_time_s", "servos", "passive_in_stance", "pos_in_base_m"} <= set().union(*keys.values())
+    assert {"step_time_s", "servos", "passive_in_stance", "pos_m", "quat_wxyz"} <= set().union(*keys.values())
     text = (ROOT / "docs" / "NEW_ROBOT.md").read_text()
     missing = [
         f"[{table}] {key}" if table else key

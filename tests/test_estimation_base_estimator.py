@@ -39,7 +39,7 @@ def test_truth_returns_the_measurement_itself(cassie):
 def test_bad_names_and_settings_are_typed_errors(cassie):
     with pytest.raises(InputError, match="unknown estimator 'kalman'; choose one of truth, ekf"):
         make_base_estimator("kalman", cassie, DT)
-    with pytest.raises(InputError, match="imu_pos_in_base_m"):
+    with pytest.raises(InputError, match="needs the IMU's mounting"):
         make_base_estimator("ekf", cassie, DT)
     with pytest.raises(InputError, match="free-floating base"):
         make_base_estimator("ekf", load_robot("rabbit"), DT, IMU)

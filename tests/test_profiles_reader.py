@@ -33,7 +33,7 @@ def test_the_bundled_profile_reads_the_values_its_file_gives():
     assert p.shaping.vy_accel_mps2 == math.inf and p.shaping.max_step_length_m == 0.63
     assert p.joint_roles["ankle_pitch"] == "{side}-foot" and p.joint_name("knee", "right") == "right-knee"
     assert p.feet.passive_in_stance == ("ankle_pitch",) and p.feet.body is None
-    assert p.imu_pos_in_base_m == (0.03155, 0.0, -0.07996)
+    assert (p.imu.body, p.imu.pos_m, p.imu.quat_wxyz) == (None, (0.03155, 0.0, -0.07996), (1.0, 0.0, 0.0, 0.0))
     assert set(p.plants) == {"cassie", "cassie-closed-chain"}
     qp = p.tracker_config("qp")
     assert qp.output_kp[0] == 400.0 and qp.stance_foot_torque_max_Nm == 0.01 and qp.friction_mu == 0.9
@@ -45,15 +45,23 @@ def test_the_bundled_profile_reads_the_values_its_file_gives():
 def test_a_copy_of_a_bundled_profile_reads_alike(tmp_path):
     p = load_profile(_profile_copy(tmp_path, CASSIE_TOML))
     b = get_profile("cassie")
-    assert (p.gait, p.bounds, p.shaping, p.feet, p.imu_pos_in_base_m) == (
-        b.gait,
-        b.bounds,
-        b.shaping,
-        b.feet,
-        b.imu_pos_in_base_m,
-    )
+    assert (p.gait, p.bounds, p.shaping, p.feet, p.imu) == (b.gait, b.bounds, b.shaping, b.feet, b.imu)
     assert p.tracker_config("qp") == b.tracker_config("qp")
     assert load_profile(tmp_path / "robot.toml") is p  # read once per process
+
+
+def test_an_imu_quaternion_near_unit_norm_is_normalised_and_an_imu_body_the_model_lacks_is_refused(tmp_path):
+    text = _profile_copy(tmp_path, CASSIE_TOML).read_text()
+    near = text.replace("[imu]\n", "[imu]\nquat_wxyz = [0.0, 0.0, 0.0, 1.0000005]\n", 1)
+    (tmp_path / "near.toml").write_text(near)
+    assert read_profile(tmp_path / "near.toml").imu.quat_wxyz == (0.0, 0.0, 0.0, 1.0)
+    from amlip_qp.robots import load_robot
+
+    (tmp_path / "nobody.toml").write_text(text.replace("[imu]\n", '[imu]\nbody = "cassie-torso"\n', 1))
+    with pytest.raises(ProfileError) as info:
+        load_robot(tmp_path / "nobody.toml")
+    message = str(info.value)
+    assert "\n" not in message and "imu.body: the model cassie.xml has no body 'cassie-torso'" in message, message
 
 
 @pytest.mark.parametrize(
@@ -85,6 +93,11 @@ def test_a_copy_of_a_bundled_profile_reads_alike(tmp_path):
         ('cassie.xml"  #', 'nothing.xml"  #', "model.file: file not found"),
         ("[trackers.pbc]\n", "[trackers.lqr]\n", "trackers: unknown tracker 'lqr' (known: qp, pbc)"),
         ("name = ", "nom = ", "name: is required"),
+        ("pos_m = [0.03155, 0.0, -0.07996]", "pos_m = [0.03, 0.0]", "imu.pos_m: must be a list of 3 numbers (m)"),
+        ("[imu]\n", "[imu]\nquat_wxyz = [1.0, 0.0, 0.0]\n", "imu.quat_wxyz: must be a list of 4 numbers"),
+        ("[imu]\n", "[imu]\nquat_wxyz = [1.0, 0.0, 0.1, 0.0]\n", "imu.quat_wxyz: must be a unit quaternion"),
+        ("[imu]\n", "[imu]\nbody = 3\n", "imu.body: must be a non-empty string, got 3"),
+        ("[imu]\n", "[imu]\npos_in_base_m = [0.0, 0.0, 0.0]\n", "imu: unknown key 'pos_in_base_m' (known here: body"),
     ],
 )
 def test_each_bad_key_is_named_in_one_line(tmp_path, old, new, message):

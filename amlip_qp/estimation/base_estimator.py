@@ -9,15 +9,16 @@ both in base axes) is the estimate.
 - ``truth`` returns the measurement object itself, untouched (the harness put
   the simulator's base state in it).
 - ``ekf`` (:class:`EkfBaseEstimator`) runs
-  :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` on the IMU reading
-  and the leg kinematics of the encoder angles
+  :class:`~amlip_qp.estimation.invariant_ekf.InvariantEKF` on the IMU reading,
+  turned first into that of an IMU fixed to the base with the base's axes
+  (:class:`~amlip_qp.estimation.imu_to_base.ImuToBase`), and the leg kinematics of the encoder angles
   (:class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`), with the
   foot-contact switches of the measurement (a blade foot counts once it rests
   flat, see :mod:`~amlip_qp.estimation.invariant_ekf`).
 
 **Initialisation of the EKF** (first measurement, and after :meth:`reset`):
 the robot is assumed at rest with both feet on the ground. The orientation is
-the IMU's own quaternion; the velocity and biases are zero; the contact
+the IMU's own quaternion (turned to the base); the velocity and biases are zero; the contact
 points are placed through the leg kinematics. The world origin: the base's
 ``x, y`` are the first measurement's ``q[0:2]`` when finite (else the robot's
 ``stand`` keyframe's), and the height puts the two contact sites, on average,
@@ -34,9 +35,12 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from amlip_qp.estimation.imu_to_base import ImuToBase
 from amlip_qp.estimation.invariant_ekf import EkfNoise, InvariantEKF
 from amlip_qp.estimation.leg_kinematics import LegKinematics
+from amlip_qp.estimation.rotations import quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import ImuMount
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.estimation.ekf_compiled import CompiledEkf
@@ -81,49 +85,16 @@ class TruthBaseEstimator:
         """Nothing to forget."""
 
 
-def quat_xyzw_to_rot(quat) -> np.ndarray:
-    """Rotation matrix of a quaternion ``x y z w`` (normalised here)."""
-    x, y, z, w = (float(c) for c in quat)
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    if not (n > 0 and math.isfinite(n)):
-        raise InputError(f"the IMU quaternion must be finite and non-zero, got {list(quat)!r}")
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def rot_to_quat_xyzw(R) -> np.ndarray:
-    """Unit quaternion ``x y z w`` (``w >= 0``) of a rotation matrix (Shepperd's method)."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
-    tr = r00 + r11 + r22
-    if tr > 0:
-        s = 2.0 * math.sqrt(tr + 1.0)
-        q = (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s
-    elif r00 > r11 and r00 > r22:
-        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
-        q = 0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s
-    elif r11 > r22:
-        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
-        q = (r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s
-    else:
-        s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
-        q = (r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s
-    out = np.array(q)
-    return -out if out[3] < 0 else out
-
-
 class EkfBaseEstimator:
     """The base state from the contact-aided invariant EKF (see the module doc).
 
     Args:
         robot: A floating-base robot (the controller's model).
         dt_s: Control period, s (used when the measurement times do not advance).
-        imu_pos_in_base_m: IMU position in the base frame, m (identity orientation).
+        imu: Where the IMU sits: an :class:`~amlip_qp.profiles.ImuMount` (any body, position and
+            axes; :attr:`~amlip_qp.robots.robot.Robot.imu_mount` is the profile's), or 3 numbers:
+            its position on the base, m, with the base's axes. Each reading is turned into the
+            base IMU's (:class:`~amlip_qp.estimation.imu_to_base.ImuToBase`) before the filter.
         noise: Filter settings (:class:`~amlip_qp.estimation.invariant_ekf.EkfNoise`).
         backend: ``"c"``: the tick as generated C
             (:class:`~amlip_qp.estimation.ekf_compiled.CompiledEkf`; without a
@@ -134,19 +105,22 @@ class EkfBaseEstimator:
     Attributes:
         ekf: The numpy filter (the initialisation, and the filter itself with ``backend="numpy"``).
         compiled: The generated-C filter, or ``None``.
-        legs: The :class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`.
+        to_base: The :class:`~amlip_qp.estimation.imu_to_base.ImuToBase` of the IMU's mounting.
+        legs: The :class:`~amlip_qp.estimation.leg_kinematics.LegKinematics`, seen from the base IMU.
         diverged: True once the filter diverged (kept until :meth:`reset`).
     """
 
     def __init__(
-        self, robot: Robot, dt_s: float, imu_pos_in_base_m, noise: EkfNoise | None = None, backend: str = "c",
-        cache_dir=None,
+        self, robot: Robot, dt_s: float, imu, noise: EkfNoise | None = None, backend: str = "c", cache_dir=None,
     ):  # fmt: skip
         if not (dt_s > 0 and math.isfinite(dt_s)):
             raise InputError(f"dt_s must be a positive control period in s, got {dt_s!r}")
         if backend not in ("c", "numpy"):
             raise InputError(f"the EKF backend must be 'c' or 'numpy', got {backend!r}")
-        self.legs = LegKinematics(robot, imu_pos_in_base_m)
+        if not isinstance(imu, ImuMount):
+            imu = ImuMount(pos_m=tuple(np.asarray(imu, dtype=float).reshape(-1).tolist()))
+        self.to_base = ImuToBase(robot, imu)
+        self.legs = LegKinematics(robot, self.to_base.point_in_base_m)
         self.ekf = InvariantEKF(noise)
         self.compiled: CompiledEkf | None = None
         if backend == "c":
@@ -179,6 +153,7 @@ class EkfBaseEstimator:
         self.diverged = False
         self._t_prev = None
         self._imu_prev = None
+        self.to_base.reset()
 
     def state(self):
         """A copy of the filter state (:class:`~amlip_qp.estimation.invariant_ekf.EkfState`)."""
@@ -190,8 +165,8 @@ class EkfBaseEstimator:
             raise InputError("--estimator ekf needs the foot-contact switches in the measurement (foot_contact)")
         return bool(fc.get(self.sides[0], False)), bool(fc.get(self.sides[1], False))
 
-    def _initialise(self, measurement, y: np.ndarray) -> None:
-        R = quat_xyzw_to_rot(measurement.imu.quat_xyzw)
+    def _initialise(self, measurement, imu, y: np.ndarray) -> None:
+        R = quat_xyzw_to_rot(imu.quat_xyzw)
         xy = np.asarray(measurement.q[0:2], dtype=float)
         if not np.isfinite(xy).all():
             xy = self._q_stand[0:2]
@@ -218,12 +193,12 @@ class EkfBaseEstimator:
         t = float(measurement.t_s)
         t_prev, compiled = self._t_prev, self.compiled
         self._t_prev = t
+        dt = 0.0 if t_prev is None else (t - t_prev if t > t_prev else self.dt_s)  # none on the first tick
+        if not self.to_base.identity:  # the base IMU's reading (the base IMU's is passed on untouched)
+            imu = self.to_base.estimator_reading(imu, measurement.q, measurement.v, dt)
         if t_prev is None:
             y = self.legs.contacts_in_imu(measurement.q)
-            self._initialise(measurement, y)
-            dt = 0.0  # no propagation on the first tick
-        else:
-            dt = t - t_prev if t > t_prev else self.dt_s
+            self._initialise(measurement, imu, y)
         if compiled is not None:
             return self._fill_compiled(compiled, measurement, imu, contacts, dt)
         ekf = self.ekf
@@ -260,13 +235,13 @@ class EkfBaseEstimator:
         q[0:7] = base[0:7]
         v[0:6] = base[7:13]
         return type(measurement)(
-            t_s=measurement.t_s, q=q, v=v, foot_contact=measurement.foot_contact, imu=imu, base_known=True
+            t_s=measurement.t_s, q=q, v=v, foot_contact=measurement.foot_contact, imu=measurement.imu, base_known=True
         )
 
     def _measurement(self, measurement, gyro: np.ndarray):
         ekf, r = self.ekf, self._imu
         R = ekf.R
-        w = gyro - ekf.bg  # base axes = IMU axes
+        w = gyro - ekf.bg  # the base IMU's axes are the base's
         q = np.array(measurement.q, dtype=float)
         v = np.array(measurement.v, dtype=float)
         q[0:3] = ekf.p - R @ r
@@ -279,7 +254,7 @@ class EkfBaseEstimator:
 
 
 def make_base_estimator(
-    name: str, robot: Robot, dt_s: float, imu_pos_in_base_m=None, noise: EkfNoise | None = None, backend: str = "c"
+    name: str, robot: Robot, dt_s: float, imu=None, noise: EkfNoise | None = None, backend: str = "c"
 ) -> BaseStateEstimator:
     """The base-state estimator ``name`` (``"truth"`` or ``"ekf"``).
 
@@ -287,19 +262,21 @@ def make_base_estimator(
         name: One of :data:`ESTIMATORS`.
         robot: The controller's robot.
         dt_s: Control period, s.
-        imu_pos_in_base_m: IMU position in the base frame, m (required for ``"ekf"``).
+        imu: Where the IMU sits (required for ``"ekf"``): an :class:`~amlip_qp.profiles.ImuMount`
+            (e.g. ``robot.imu_mount``) or its position on the base, m, with the base's axes.
         noise: EKF settings (``"ekf"`` only; default :class:`EkfNoise`).
         backend: The EKF's ``"c"`` (generated C, default) or ``"numpy"`` (:class:`EkfBaseEstimator`).
 
     Raises:
-        InputError: Unknown name, or ``"ekf"`` without an IMU position or for a robot without a floating base.
+        InputError: Unknown name, or ``"ekf"`` without the IMU's mounting, with a bad one, or for a
+            robot without a floating base.
     """
     if name == "truth":
         return TruthBaseEstimator()
     if name == "ekf":
-        if imu_pos_in_base_m is None:
+        if imu is None:
             raise InputError(
-                f"{robot.name}: --estimator ekf needs the IMU position in the base frame (imu_pos_in_base_m)"
+                f"{robot.name}: --estimator ekf needs the IMU's mounting (imu: an ImuMount, e.g. robot.imu_mount)"
             )
-        return EkfBaseEstimator(robot, dt_s, imu_pos_in_base_m, noise, backend)
+        return EkfBaseEstimator(robot, dt_s, imu, noise, backend)
     raise InputError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}")

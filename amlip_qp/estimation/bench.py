@@ -61,7 +61,7 @@ def stand_in_measurements(robot: Robot, n_ticks: int, dt_s: float = 0.0005, seed
 
 def time_ekf(
     robot: Robot,
-    imu_pos_in_base_m,
+    imu,
     measurements: Sequence | None = None,
     n_ticks: int = 2000,
     backend: str = "c",
@@ -71,7 +71,8 @@ def time_ekf(
 
     Args:
         robot: The controller's robot (floating base).
-        imu_pos_in_base_m: IMU position in the base frame, m (the robot profile's).
+        imu: Where the IMU sits (:class:`~amlip_qp.profiles.ImuMount`, e.g. ``robot.imu_mount``,
+            or its position on the base, m, with the base's axes).
         measurements: Controller measurements to replay (each with ``imu`` and
             ``foot_contact``); default: :func:`stand_in_measurements` of ``n_ticks``.
         n_ticks: Ticks of the stand-in sequence, >= 1 (ignored with ``measurements``).
@@ -85,7 +86,7 @@ def time_ekf(
         if n_ticks < 1:
             raise InputError(f"n_ticks must be >= 1, got {n_ticks}")
         measurements = stand_in_measurements(robot, n_ticks, dt_s)
-    est = EkfBaseEstimator(robot, dt_s, imu_pos_in_base_m, backend=backend)
+    est = EkfBaseEstimator(robot, dt_s, imu, backend=backend)
     est.fill(measurements[0])  # initialisation (and a compiled library loaded) outside the timing
     est.reset()
     out = np.empty(len(measurements))

@@ -63,7 +63,7 @@ def _so3_exp(phi):
 
 
 def _quat_xyzw(R):
-    """Shepperd's method with ``w >= 0``, as :func:`~amlip_qp.estimation.base_estimator.rot_to_quat_xyzw`."""
+    """Shepperd's method with ``w >= 0``, as :func:`~amlip_qp.estimation.rotations.rot_to_quat_xyzw`."""
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
     r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]

@@ -1,8 +1,10 @@
 """One IMU reading, as the controller receives it.
 
-The IMU frame is rigidly attached to the base body at the robot's
-``imu_pos_in_base_m`` with the base's orientation (identity mounting), so its
-axes are the base axes.
+The IMU frame is rigidly attached to the body the robot's profile names
+(:attr:`~amlip_qp.robots.robot.Robot.imu_mount`: a body, a position and axes
+in its frame; by default the base body's origin and axes). The EKF takes the
+reading turned into that of an IMU fixed to the base with the base's axes
+(:mod:`~amlip_qp.estimation.imu_to_base`).
 """
 
 from __future__ import annotations

@@ -1,11 +1,13 @@
 """The contact points in the IMU frame from the joint encoders (forward kinematics).
 
 The contact-aided filter measures where each foot's contact site is seen from
-the IMU. That vector depends on the joint angles only: the kinematics run on
+the IMU: the base IMU, fixed to the base with the base's axes
+(:mod:`~amlip_qp.estimation.imu_to_base` turns the robot's IMU's reading into
+its). That vector depends on the joint angles only: the kinematics run on
 the controller's Pinocchio model with the base at the origin (identity pose),
 so the contact site's world position is its position in the base frame; the
-IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes, so
-the vector from the IMU to the site, in IMU axes, is that position minus
+base IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes,
+so the vector from the IMU to the site, in IMU axes, is that position minus
 ``imu_pos_in_base_m``. This object keeps its own ``pinocchio.Data``.
 
 For a blade foot (toe and heel force sites, Cassie) it also gives the blade,
@@ -31,7 +33,7 @@ class LegKinematics:
 
     Args:
         robot: A floating-base :class:`~amlip_qp.robots.robot.Robot` (free-flyer root).
-        imu_pos_in_base_m: Position of the IMU in the base frame, m, shape (3,).
+        imu_pos_in_base_m: Position of the base IMU in the base frame, m, shape (3,).
 
     Raises:
         InputError: A robot without a free-flyer base, or a bad IMU position.

@@ -11,7 +11,7 @@ every key is documented in ``docs/NEW_ROBOT.md``). It says:
   file's joint names, with ``{side}`` for ``left``/``right``) and the feet
   (:class:`FootSpec`: the body, the contact point, the force points, the
   joints passive in stance);
-- where the IMU sits (``imu_pos_in_base_m``);
+- where the IMU sits (:class:`ImuMount`: its body, position and axes);
 - the outputs the trackers follow (:mod:`amlip_qp.profiles.outputs`), and whether the robot is planar;
 - the gait (:class:`GaitSettings`), the command bounds and shaping
   (:mod:`amlip_qp.profiles.commands`), each tracker's tuned configuration (a
@@ -164,6 +164,22 @@ class FootSpec:
 
 
 @dataclass(frozen=True)
+class ImuMount:
+    """Where the IMU sits: a body of the model, a position and an orientation in that body's frame.
+
+    Attributes:
+        body: The body carrying the IMU; ``None``: the base body.
+        pos_m: The IMU's position in ``body``'s frame, m.
+        quat_wxyz: The IMU's axes in ``body``'s frame, a unit quaternion ``w x y z`` (the rotation
+            from IMU axes to body axes); ``(1, 0, 0, 0)``: the body's own axes.
+    """
+
+    body: str | None = None
+    pos_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat_wxyz: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
 class RobotProfile:
     """Everything about a robot that is not in its MJCF file (see the module doc).
 
@@ -181,7 +197,7 @@ class RobotProfile:
         plants: Plant name -> MJCF file: the plants ``--plant`` may name
             (:func:`amlip_qp.sim.plant.load_plant`); the robot's own model is one of them, under
             the robot's name.
-        imu_pos_in_base_m: Where the IMU sits in the base body's frame, m (its axes are the base body's).
+        imu: Where the IMU sits (:class:`ImuMount`; default: the base body's origin, its axes).
         joint_roles: Role (:data:`JOINT_ROLES`) -> the file's joint name, with ``{side}``.
         feet: The feet.
         description: One line for people.
@@ -207,7 +223,7 @@ class RobotProfile:
     trackers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     compare: CompareRanges | None = None
     plants: Mapping[str, Path] = field(default_factory=dict)
-    imu_pos_in_base_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    imu: ImuMount = field(default_factory=ImuMount)
     joint_roles: Mapping[str, str] = field(default_factory=dict)
     feet: FootSpec = field(default_factory=FootSpec)
     description: str = ""

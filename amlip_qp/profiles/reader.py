@@ -27,10 +27,14 @@ from amlip_qp.profiles.profile import (
     CompareRanges,
     FootSpec,
     GaitSettings,
+    ImuMount,
     ModelSpec,
     RobotProfile,
     StandPose,
 )
+
+#: How far from 1 the norm of ``[imu] quat_wxyz`` may be (it is then normalised).
+_UNIT_QUAT_TOL = 1e-6
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -114,6 +118,22 @@ class _Table:
         if unknown:
             known = ", ".join(sorted(self.taken))
             self.fail(f"unknown key {unknown[0]!r} (known here: {known})", None)
+
+
+def _imu(t: _Table | None) -> ImuMount:
+    """The ``[imu]`` table: ``body`` (default the base body), ``pos_m`` (that body's frame), ``quat_wxyz``."""
+    if t is None:
+        return ImuMount()
+    body = t.string("body", None)
+    pos = t.vector("pos_m", 3, (0.0, 0.0, 0.0), unit="m")
+    quat = t.vector("quat_wxyz", 4, (1.0, 0.0, 0.0, 0.0), unit="w x y z")
+    norm = math.sqrt(sum(c * c for c in quat))
+    if abs(norm - 1.0) > _UNIT_QUAT_TOL:
+        t.fail(
+            f"must be a unit quaternion w x y z (norm within {_UNIT_QUAT_TOL:g} of 1), got norm {norm:.9g}", "quat_wxyz"
+        )
+    t.done()
+    return ImuMount(body=body, pos_m=pos, quat_wxyz=tuple(c / norm for c in quat) if norm != 1.0 else quat)
 
 
 def _number(t: _Table, key: str, value: Any, low: float, high: float, unit: str, finite: bool) -> float:
@@ -344,11 +364,7 @@ def read_profile(path: str | Path) -> RobotProfile:
                 unsupported_t.fail(f"unknown tracker {tracker!r} (known: {', '.join(TRACKER_CONFIG_BUILDERS)})")
             unsupported[tracker] = unsupported_t.string(tracker)
         unsupported_t.done()
-    imu_t = top.table("imu", required=False)
-    imu = (0.0, 0.0, 0.0)
-    if imu_t is not None:
-        imu = imu_t.vector("pos_in_base_m", 3, unit="m")
-        imu_t.done()
+    imu = _imu(top.table("imu", required=False))
     raw = {}
     # scenarios, settings, mismatches: checked key by key by amlip_qp.sim.scenario_tables;
     # estimator: by amlip_qp.estimation.invariant_ekf.noise_from_table
@@ -367,7 +383,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         trackers=_trackers(top.table("trackers", required=False)),
         compare=compare,
         plants=plants,
-        imu_pos_in_base_m=imu,
+        imu=imu,
         joint_roles=_roles(top.table("roles", required=False)),
         feet=_feet(top.table("feet", required=False)),
         description=description,

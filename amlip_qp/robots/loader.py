@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amlip_qp.exceptions import MJCFError, ModelFileError, UnknownRobotError
+from amlip_qp.exceptions import MJCFError, ModelFileError, ProfileError, UnknownRobotError
 from amlip_qp.profiles import PROFILES, RobotProfile, bundled_names, get_profile, looks_like_profile_path
 from amlip_qp.robots.model_edits import prepared_model_path
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
@@ -349,7 +349,7 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
 
     Raises:
         UnknownRobotError: An unknown name (the message lists the known names).
-        ProfileError: The profile file is missing or invalid.
+        ProfileError: The profile file is missing or invalid, or its ``[imu] body`` is not in the model.
         ModelFileError: The file does not exist.
         MJCFError: The file is malformed (XML syntax, MuJoCo compile error,
             Pinocchio failure), lacks the ``left-contact``/``right-contact``
@@ -382,6 +382,10 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     import pinocchio as pin
 
     base_name = _name(mj_model, mujoco.mjtObj.mjOBJ_BODY, root_body)
+    imu_body = profile.imu.body if profile is not None else None
+    has_imu_body = imu_body is None or mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_BODY, imu_body) >= 0
+    if profile is not None and not has_imu_body:
+        raise ProfileError(f"{profile.source}: imu.body: the model {path.name} has no body {imu_body!r}")
     stiff, ref, damp, arm = _passive_params(mj_model, smap, path)
     return Robot(
         name=name,

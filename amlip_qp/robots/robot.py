@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     import mujoco
     import pinocchio as pin
 
-    from amlip_qp.profiles import RobotProfile
+    from amlip_qp.profiles import ImuMount, RobotProfile
     from amlip_qp.robots.state import StateMap
 
 #: The two foot sides, in the order used everywhere.
@@ -215,6 +215,17 @@ class Robot:
         roles = self.profile.feet.passive_in_stance if self.profile is not None else ("ankle_pitch",)
         names = (self.role_joint(role, side) for role in roles)
         return tuple(n for n in names if n is not None)
+
+    @property
+    def imu_mount(self) -> ImuMount:
+        """Where the IMU sits, its body named: the profile's ``[imu]`` (the base body when it names
+        none); without a profile, the base body's origin with its axes."""
+        from dataclasses import replace
+
+        from amlip_qp.profiles import ImuMount
+
+        mount = self.profile.imu if self.profile is not None else ImuMount()
+        return mount if mount.body is not None else replace(mount, body=self.base_body)
 
     @property
     def nq(self) -> int:

@@ -179,10 +179,9 @@ def build_simulation(
         from amlip_qp.estimation import make_base_estimator
         from amlip_qp.estimation.invariant_ekf import noise_from_table
 
-        imu_pos = robot.profile.imu_pos_in_base_m if robot.profile else (0.0, 0.0, 0.0)
         table = robot.profile.estimator if robot.profile is not None else {}
         ekf_noise = noise_from_table(table) if table else None
-        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu_pos, ekf_noise)
+        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, robot.imu_mount, ekf_noise)
     if setting.terrain_aware:
         from amlip_qp.sim.terrain import ground_height_function
 

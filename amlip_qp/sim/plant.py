@@ -82,10 +82,10 @@ def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit
         spec.add_key(name=STAND_KEYFRAME, qpos=stand_qpos(Plant(bare, robot, name)).tolist())
     for edit in edits:
         edit(spec)
-    has_base = spec.body(robot.base_body) is not None
-    if has_base:
-        pos = robot.profile.imu_pos_in_base_m if robot.profile is not None else (0.0, 0.0, 0.0)
-        imu_spec_edit(spec, robot.base_body, pos)
+    mount = robot.imu_mount
+    imu_body = mount.body if mount.body is not None else robot.base_body
+    if spec.body(imu_body) is not None:
+        imu_spec_edit(spec, imu_body, mount.pos_m, mount.quat_wxyz)
     feet = {side: Plant._body_name_of_site(robot, side) for side in robot.foot_sides}
     if all(spec.body(body) is not None for body in feet.values()):
         contact_spec_edit(spec, feet)

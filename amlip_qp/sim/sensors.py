@@ -13,9 +13,11 @@ Two sensor models (``--sensors``):
   estimator gives the base), unless the estimator is ``truth``: then the
   harness fills the simulator's true base state.
 
-The IMU is a site ``amlip-imu`` on the base body (axes those of the base
-body) with MuJoCo sensors ``amlip-imu-quat`` (framequat), ``amlip-imu-gyro``
-and ``amlip-imu-accel``; :func:`imu_spec_edit` adds them to a plant's model.
+The IMU is a site ``amlip-imu`` where the robot's profile puts it
+(:attr:`~amlip_qp.robots.robot.Robot.imu_mount`: any body, a position and axes
+in its frame; by default the base body's origin and axes) with MuJoCo sensors
+``amlip-imu-quat`` (framequat), ``amlip-imu-gyro`` and ``amlip-imu-accel``, in
+the site's own axes; :func:`imu_spec_edit` adds them to a plant's model.
 A plant without them (a user's own model, :class:`~amlip_qp.sim.mujoco_loop.MujocoLoop`)
 has only the ``ideal`` model, whose measurements then carry no IMU reading.
 MuJoCo computes sensors at the start of each plant step, so after the step a
@@ -54,13 +56,16 @@ _DEG = math.pi / 180.0
 _G0 = 9.80665  # standard gravity, m/s^2 (datasheets' "g")
 
 
-def imu_spec_edit(spec: mujoco.MjSpec, base_body: str, pos_m) -> None:
-    """Add the IMU site on ``base_body`` at ``pos_m`` (identity orientation) and its three sensors.
+def imu_spec_edit(spec: mujoco.MjSpec, body: str, pos_m, quat_wxyz=(1.0, 0.0, 0.0, 0.0)) -> None:
+    """Add the IMU site on ``body`` at ``pos_m`` with axes ``quat_wxyz`` (both in ``body``'s frame)
+    and its three sensors, which report in the site's axes.
 
     Nothing is added that the model already has (a site or sensor of the same name).
     """
     if spec.site(IMU_SITE) is None:
-        spec.body(base_body).add_site(name=IMU_SITE, pos=[float(x) for x in pos_m], size=[0.01, 0.01, 0.01])
+        spec.body(body).add_site(
+            name=IMU_SITE, pos=[float(x) for x in pos_m], quat=[float(x) for x in quat_wxyz], size=[0.01, 0.01, 0.01]
+        )
     kinds = (
         (IMU_QUAT_SENSOR, mujoco.mjtSensor.mjSENS_FRAMEQUAT),
         (IMU_GYRO_SENSOR, mujoco.mjtSensor.mjSENS_GYRO),
