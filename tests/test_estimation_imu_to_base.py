@@ -171,3 +171,17 @@ def test_the_ekf_with_the_imu_on_the_torso_is_about_as_good_as_with_it_on_the_pe
     # 0.0025 against 0.0029 rad
     assert v_torso < v_pelvis + 0.002 and v_torso < 0.03, (v_torso, v_pelvis)
     assert rot_torso < rot_pelvis + 0.002 and rot_torso < 0.01, (rot_torso, rot_pelvis)
+
+
+def test_the_torso_imu_scenario_puts_the_plants_imu_and_the_ekfs_on_the_torso():
+    import mujoco
+
+    sim = build_simulation(get_scenario("g1-1mps-ekf-torso-imu"), "qp")
+    m = sim.plant.model
+    site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "amlip-imu")
+    assert mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(m.site_bodyid[site])) == "torso_link"
+    np.testing.assert_allclose(m.site_pos[site], G1_TORSO_IMU_M, rtol=0, atol=1e-12)
+    to_base = sim.controller.base_estimator.to_base
+    assert to_base.body == "torso_link" and not to_base.on_base
+    nominal = build_simulation(get_scenario("g1-1mps-ekf"), "qp")
+    assert nominal.controller.base_estimator.to_base.identity  # G1's pelvis IMU: on the base, its axes

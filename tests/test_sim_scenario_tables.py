@@ -6,7 +6,7 @@ import math
 import pytest
 
 from amlip_qp.exceptions import ProfileError
-from amlip_qp.profiles import get_profile
+from amlip_qp.profiles import ImuMount, get_profile
 from amlip_qp.sim.run_types import PlantSetting
 from amlip_qp.sim.scenario_tables import profile_scenarios
 from amlip_qp.sim.scenarios import SCENARIOS
@@ -58,6 +58,17 @@ def test_a_table_gives_the_scenario_it_describes():
     assert (hill.setting.terrain, hill.setting.terrain_aware, hill.setting.clearance_m) == ("slope:5", True, 0.12)
 
 
+def test_a_setting_may_put_the_imu_elsewhere():
+    imu = {"body": "torso_link", "pos_m": [0.0, 0.0, 0.3], "quat_wxyz": [0.0, 1.0, 0.0, 0.0]}
+    profile = _with(get_profile("h1"), settings={"t": {"sensors": "robot", "estimator": "ekf", "imu": imu}})
+    out = {s.name: s for s in profile_scenarios(profile)}
+    mount = ImuMount(body="torso_link", pos_m=(0.0, 0.0, 0.3), quat_wxyz=(0.0, 1.0, 0.0, 0.0))
+    assert out["h1-1mps-t"].setting == PlantSetting(sensors="robot", estimator="ekf", imu=mount)
+    assert SCENARIOS["g1-1mps-ekf-torso-imu"].setting.imu == ImuMount(
+        body="torso_link", pos_m=(-0.03959, -0.00224, 0.14792)
+    )
+
+
 def test_a_setting_copies_only_the_scenarios_it_lists():
     names = [n for n in SCENARIOS if n.startswith("h1-") and n.endswith("-ekf")]
     assert names == ["h1-1mps-ekf"]
@@ -78,6 +89,9 @@ def test_a_setting_copies_only_the_scenarios_it_lists():
         ),
         ({"settings": {"cc": {"plant": "p", "noise": 1}}}, "settings.cc: unknown key 'noise'"),
         ({"settings": {"cc": {"scenarios": ["nothing"]}}}, "settings.cc: scenarios must be a list of the robot's"),
+        ({"settings": {"t": {"imu": {"quat_wxyz": [1.0, 0.0, 0.2, 0.0]}}}}, "settings.t.imu.quat_wxyz: must be a unit"),
+        ({"settings": {"t": {"imu": {"pos_m": [0.1]}}}}, "settings.t.imu.pos_m: must be a list of 3 numbers (m)"),
+        ({"settings": {"t": {"imu": {"frame": "x"}}}}, "settings.t.imu: unknown key 'frame' (known here: body"),
         ({"mismatches": {"scenario": "nothing"}}, "mismatches: scenario must name one of the robot's scenarios"),
         ({"mismatches": {"scenario": "1mps", "m": {"mass": 2.0}}}, "mismatches.m: unknown key 'mass'"),
     ],

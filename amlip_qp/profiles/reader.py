@@ -120,6 +120,16 @@ class _Table:
             self.fail(f"unknown key {unknown[0]!r} (known here: {known})", None)
 
 
+def read_imu_table(source: Path, where: str, data: Any) -> ImuMount:
+    """An :class:`ImuMount` from a table of the ``[imu]`` keys (a profile's ``[imu]``, or the
+    ``imu`` of one of its ``[settings]``); ``where`` names it in the errors.
+
+    Raises:
+        ProfileError: Not a table, an unknown key, or a bad value (naming ``source`` and the key).
+    """
+    return _imu(_Table(source, where, data))
+
+
 def _imu(t: _Table | None) -> ImuMount:
     """The ``[imu]`` table: ``body`` (default the base body), ``pos_m`` (that body's frame), ``quat_wxyz``."""
     if t is None:

@@ -141,7 +141,8 @@ def _check_output_paths(args: argparse.Namespace) -> None:
 
 
 def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSetting:
-    """``base`` (a scenario's setting) with ``--plant``, ``--sensors``, ``--estimator``, ``--terrain``, the modifiers.
+    """``base`` (a scenario's setting, its IMU mounting kept) with ``--plant``, ``--sensors``, ``--estimator``,
+    ``--terrain``, the modifiers.
 
     Raises:
         InputError: ``--noise`` with robot sensors, a malformed ``--payload`` or
@@ -171,6 +172,7 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
         terrain=terrain,
         terrain_aware=base.terrain_aware if args.terrain_aware is None else args.terrain_aware,
         clearance_m=base.clearance_m if args.clearance is None else args.clearance,
+        imu=base.imu,
     )
     if args.noise and setting.sensors != "ideal":
         raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")

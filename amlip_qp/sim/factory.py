@@ -86,7 +86,9 @@ def check_estimator(name: str) -> str:
 
 
 def setting_edits(setting: PlantSetting, robot: Robot) -> list[SpecEdit]:
-    """The spec edits of a plant setting, in order: the plant modifiers', then the terrain's (none on flat).
+    """The spec edits of a plant setting, in order: the plant modifiers', the terrain's (none on flat),
+    then the setting's IMU site (none without ``setting.imu``: :func:`~amlip_qp.sim.plant.load_plant`
+    then adds the profile's).
 
     Raises:
         InputError: A malformed ``setting.terrain`` (:func:`~amlip_qp.sim.terrain.parse_terrain`).
@@ -97,6 +99,10 @@ def setting_edits(setting: PlantSetting, robot: Robot) -> list[SpecEdit]:
     terrain = parse_terrain(setting.terrain)
     if not terrain.is_flat:
         edits.append(terrain_edit(terrain))
+    if setting.imu is not None:
+        from amlip_qp.sim.sensors import imu_mount_edit
+
+        edits.append(imu_mount_edit(setting.imu, robot.base_body))
     return edits
 
 
@@ -180,8 +186,9 @@ def build_simulation(
         from amlip_qp.estimation.invariant_ekf import noise_from_table
 
         table = robot.profile.estimator if robot.profile is not None else {}
+        imu = robot.imu_mount if setting.imu is None else setting.imu
         ekf_noise = noise_from_table(table) if table else None
-        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, robot.imu_mount, ekf_noise)
+        options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu, ekf_noise)
     if setting.terrain_aware:
         from amlip_qp.sim.terrain import ground_height_function
 

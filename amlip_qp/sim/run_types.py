@@ -17,6 +17,7 @@ import numpy as np
 
 from amlip_qp.control.walking.controller import StepRecord
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles import ImuMount
 from amlip_qp.sim.plant_modifiers import PlantModifiers
 
 if TYPE_CHECKING:
@@ -100,6 +101,8 @@ class PlantSetting:
             (``--terrain-aware``); ``False``: blind, it feels the ground by contact only.
         clearance_m: Swing clearance ``z_cl`` of every step, m (``--clearance``);
             ``None``: the scenario's gait's.
+        imu: Where the IMU sits in these runs (the plant's IMU site and the EKF's mounting);
+            ``None``: where the robot's profile puts it (:attr:`~amlip_qp.robots.robot.Robot.imu_mount`).
     """
 
     plant: str | None = None
@@ -109,6 +112,7 @@ class PlantSetting:
     terrain: str = "flat"
     terrain_aware: bool = False
     clearance_m: float | None = None
+    imu: ImuMount | None = None
 
     def __post_init__(self):
         c = self.clearance_m

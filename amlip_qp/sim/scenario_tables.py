@@ -9,7 +9,8 @@ A profile file holds the robot's scenarios as data (``docs/NEW_ROBOT.md``):
   duration_s, phase}]``, a ``gait`` table (every :class:`~amlip_qp.profiles.GaitSettings`
   field), and the terrain: ``terrain`` (a ``--terrain`` spec), ``terrain_aware``, ``clearance_m``.
 - ``[settings.NAME]``: a plant, sensor model and estimator (``plant``, ``sensors``,
-  ``estimator``, ``description``); every scenario on the robot's own model with ideal sensors
+  ``estimator``, ``description``), and where the IMU sits (``imu``: a table of the ``[imu]``
+  keys, in place of the profile's ``[imu]``); every scenario on the robot's own model with ideal sensors
   (or those of its ``scenarios`` list of keys) gets a copy ``ROBOT-KEY-NAME`` in that setting.
 - ``[mismatches]``: ``scenario`` names one scenario (a key, or a key with a setting suffix);
   each sub-table ``[mismatches.NAME]`` (plant modifiers: ``mass_scale``, ``payload_kg``,
@@ -30,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 from amlip_qp.exceptions import InputError, ProfileError
 from amlip_qp.profiles import GaitSettings, RobotProfile
+from amlip_qp.profiles.reader import read_imu_table
 from amlip_qp.sim.plant_modifiers import PlantModifiers
 from amlip_qp.sim.run_types import PlantSetting, Push
 from amlip_qp.sim.speed_profile import SpeedProfile
@@ -55,7 +57,7 @@ _SCENARIO_KEYS = (
     "terrain_aware",
     "clearance_m",
 )
-_SETTING_KEYS = ("plant", "sensors", "estimator", "description", "scenarios")
+_SETTING_KEYS = ("plant", "sensors", "estimator", "imu", "description", "scenarios")
 _MODIFIER_KEYS = ("mass_scale", "payload_kg", "payload_pos_m", "spring_scale", "friction", "actuator_delay_ticks")
 _PUSH_KEYS = ("t_s", "force_N", "duration_s", "phase")
 
@@ -167,9 +169,10 @@ def _setting(profile: RobotProfile, name: str, value: Any) -> tuple[PlantSetting
     keys = t.get("scenarios")
     if keys is not None and (not isinstance(keys, list) or any(k not in profile.scenarios for k in keys)):
         w.fail(f"scenarios must be a list of the robot's scenario keys, got {keys!r}")
+    imu = None if "imu" not in t else read_imu_table(profile.source, f"settings.{name}.imu", t["imu"])
     try:
         setting = PlantSetting(
-            plant=t.get("plant"), sensors=t.get("sensors", "ideal"), estimator=t.get("estimator", "truth")
+            plant=t.get("plant"), sensors=t.get("sensors", "ideal"), estimator=t.get("estimator", "truth"), imu=imu
         )
     except InputError as exc:
         return w.fail(str(exc))

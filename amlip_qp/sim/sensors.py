@@ -42,6 +42,7 @@ from amlip_qp.sim.contact_sensors import contact_sensor_indices, list_switcher
 from amlip_qp.sim.run_types import quat_mul_small_rotation
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.profiles import ImuMount
     from amlip_qp.sim.plant import Plant
 
 #: The sensor models of ``--sensors``.
@@ -74,6 +75,21 @@ def imu_spec_edit(spec: mujoco.MjSpec, body: str, pos_m, quat_wxyz=(1.0, 0.0, 0.
     for name, kind in kinds:
         if spec.sensor(name) is None:
             spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname=IMU_SITE)
+
+
+def imu_mount_edit(mount: ImuMount, base_body: str) -> Callable[[mujoco.MjSpec], None]:
+    """A plant edit: :func:`imu_spec_edit` where ``mount`` puts the IMU (``mount.body`` ``None``: ``base_body``).
+
+    The edit raises :class:`InputError` for a plant without that body.
+    """
+    body = base_body if mount.body is None else mount.body
+
+    def edit(spec: mujoco.MjSpec) -> None:
+        if spec.body(body) is None:
+            raise InputError(f"the plant has no body {body!r} for the IMU")
+        imu_spec_edit(spec, body, mount.pos_m, mount.quat_wxyz)
+
+    return edit
 
 
 @dataclass(frozen=True)
