@@ -52,13 +52,12 @@ import numpy as np
 from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.estimation.rotations import quat_wxyz_to_rot, quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.exceptions import InputError
+from amlip_qp.profiles.profile import UNIT_QUATERNION_TOL
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.profiles import ImuMount
     from amlip_qp.robots.robot import Robot
 
-#: How far from 1 the norm of a mounting's quaternion may be.
-UNIT_QUATERNION_TOL = 1e-6
 #: Name of the frame :class:`ImuToBase` adds to its copy of the Pinocchio model at the IMU.
 IMU_FRAME = "amlip-imu"
 

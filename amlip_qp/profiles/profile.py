@@ -163,6 +163,10 @@ class FootSpec:
     passive_in_stance: tuple[str, ...] = ()
 
 
+#: How far from 1 the norm of an IMU mounting's ``quat_wxyz`` may be (the profile reader then normalises it).
+UNIT_QUATERNION_TOL = 1e-6
+
+
 @dataclass(frozen=True)
 class ImuMount:
     """Where the IMU sits: a body of the model, a position and an orientation in that body's frame.

@@ -24,6 +24,7 @@ from amlip_qp.profiles.profile import (
     JOINT_ROLES,
     SERVO_POLICIES,
     TRACKER_CONFIG_BUILDERS,
+    UNIT_QUATERNION_TOL,
     CompareRanges,
     FootSpec,
     GaitSettings,
@@ -32,9 +33,6 @@ from amlip_qp.profiles.profile import (
     RobotProfile,
     StandPose,
 )
-
-#: How far from 1 the norm of ``[imu] quat_wxyz`` may be (it is then normalised).
-_UNIT_QUAT_TOL = 1e-6
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -138,10 +136,9 @@ def _imu(t: _Table | None) -> ImuMount:
     pos = t.vector("pos_m", 3, (0.0, 0.0, 0.0), unit="m")
     quat = t.vector("quat_wxyz", 4, (1.0, 0.0, 0.0, 0.0), unit="w x y z")
     norm = math.sqrt(sum(c * c for c in quat))
-    if abs(norm - 1.0) > _UNIT_QUAT_TOL:
-        t.fail(
-            f"must be a unit quaternion w x y z (norm within {_UNIT_QUAT_TOL:g} of 1), got norm {norm:.9g}", "quat_wxyz"
-        )
+    if abs(norm - 1.0) > UNIT_QUATERNION_TOL:
+        within = f"norm within {UNIT_QUATERNION_TOL:g} of 1"
+        t.fail(f"must be a unit quaternion w x y z ({within}), got norm {norm:.9g}", "quat_wxyz")
     t.done()
     return ImuMount(body=body, pos_m=pos, quat_wxyz=tuple(c / norm for c in quat) if norm != 1.0 else quat)
 
