@@ -167,6 +167,10 @@ H1_LINE = "force_points_m = [[0.14, 0.0, -0.07], [-0.035, 0.0, -0.07]]"
             "feet.force_points_m: four points go toe left, toe right, heel left, heel right",
         ),
         (
+            "force_points_m = [[0.14, 0.0, -0.07], [0.14, 0.0, -0.07], [-0.03, 0.03, -0.07], [-0.03, -0.03, -0.07]]",
+            "only the heel pair may coincide",
+        ),
+        (
             f"{H1_LINE}\nsole_rectangle_m = {{ x_front = 0.14, x_back = -0.035, half_width = 0.03, z = -0.07 }}",
             "feet.sole_rectangle_m: give either 'force_points_m' or 'sole_rectangle_m', not both",
         ),
@@ -206,3 +210,7 @@ def test_a_sole_rectangle_gives_its_four_corners_and_four_points_are_read_as_giv
     four = "force_points_m = [[0.14, 0.03, -0.07], [0.14, -0.03, -0.07], [-0.035, 0.03, -0.07], [-0.035, -0.03, -0.07]]"
     (tmp_path / "four.toml").write_text(text.replace(H1_LINE, four))
     assert read_profile(tmp_path / "four.toml").feet.force_points_m == corners
+    # a triangular sole: the heel pair at one point
+    tri = "force_points_m = [[0.14, 0.03, -0.07], [0.14, -0.03, -0.07], [-0.035, 0.0, -0.07], [-0.035, 0.0, -0.07]]"
+    (tmp_path / "tri.toml").write_text(text.replace(H1_LINE, tri))
+    assert read_profile(tmp_path / "tri.toml").feet.force_points_m[2:] == ((-0.035, 0.0, -0.07),) * 2

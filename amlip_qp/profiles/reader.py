@@ -269,12 +269,13 @@ def _sole_rectangle(t: _Table) -> tuple[tuple[float, float, float], ...]:
 
 
 def _check_four_points(t: _Table, points: list[tuple[float, float, float]]) -> None:
-    """Four force points are toe left, toe right, heel left, heel right (foot frame: x forward, y left)."""
+    """Four force points are toe left, toe right, heel left, heel right (foot frame: x forward, y left);
+    the heel pair may coincide (a triangular sole), the toe pair may not."""
     (x0, y0, _), (x1, y1, _), (x2, y2, _), (x3, y3, _) = points
-    if not (x0 + x1 > x2 + x3 and y0 > y1 and y2 > y3):
+    if not (x0 + x1 > x2 + x3 and y0 > y1 and y2 >= y3):
         t.fail(
             "four points go toe left, toe right, heel left, heel right (the toe pair ahead of the heel pair, "
-            f"each pair's left point first, y larger), got {points!r}",
+            f"each pair's left point first, y larger; only the heel pair may coincide), got {points!r}",
             "force_points_m",
         )
 

@@ -65,7 +65,9 @@ class StanceContact(Constraint):
     same 5 on its diagonal (toe left as the toe, heel right as the heel), then
     the toe-right point's component along ``a x (p_1 - p_0)`` (``a`` the
     diagonal's direction), the only motion the diagonal leaves it: a rotation
-    about the diagonal.
+    about the diagonal. The heel pair may coincide (a triangular sole); the
+    toe pair, whose right point gives the sixth row, may not (the profile
+    reader refuses it).
     """
 
     def __init__(self, layout: VariableLayout, contact_kd: float):
