@@ -6,8 +6,9 @@
   m/s^2 and rad/s^2;
 - ``f_st``, ``f_sw``: world-frame contact point forces of the **stance** and
   **swing** foot, N. Cassie: toe then heel sphere centre, 3-D each (6 per
-  foot); a four-point sole: its corners (12 per foot); Rabbit (planar): the point foot, ``(f_x, f_z)`` (2 per foot). The
-  stance foot's block always comes first, so the dimensions never change
+  foot); a four-point sole: its corners, toe left, toe right, heel left,
+  heel right (12 per foot); Rabbit (planar): the point foot, ``(f_x, f_z)``
+  (2 per foot). The stance foot's block always comes first, so the dimensions never change
   and one persistent ProxQP serves the whole walk (two with
   ``QPTracker(airborne_reduction=True)``: the problem without the airborne
   swing foot's block is the other).
