@@ -123,3 +123,50 @@ def test_wrong_configs_are_typed_errors():
     assert builder.config is CASSIE_CONFIG
     with pytest.raises(InputError, match="no constraint 'tendon'; known: dynamics"):
         builder.constraint("tendon")
+
+
+@pytest.fixture(scope="module")
+def sole_robot(tmp_path_factory):
+    """H1 with its sole's four corners as force points (tests/sole_cases.py)."""
+    from sole_cases import sole_profile
+
+    return load_robot(sole_profile("h1", tmp_path_factory.mktemp("sole")))
+
+
+def test_a_four_point_sole_has_four_pyramids_per_foot_and_six_contact_rows(sole_robot):
+    robot = sole_robot
+    builder = WholeBodyQP(robot)
+    L = builder.layout
+    assert (L.point_dim, L.n_points, L.n_force) == (3, 4, 12)
+    kin = kin_at(robot, 6)
+    a = builder.build(kin, target_for(kin, "left")).copy()
+    b = builder.build(kin, target_for(kin, "right")).copy()
+    assert (a.n, a.n_eq, a.n_in) == (b.n, b.n_eq, b.n_in) == (robot.nv + 24, 6 + 6, robot.nu + 2 * 4 * 4)
+    assert builder.constraint("contact").size == 6 and builder.constraint("friction").size == 32
+    yaw = next(c for c in builder.costs if c.name == "stance_yaw_moment")
+    assert list(yaw.index - L.sl_f_st.start) == [0, 1, 3, 4, 6, 7, 9, 10]  # each corner's x and y
+
+
+@pytest.mark.parametrize("stance", ["left", "right"])
+def test_a_four_point_sole_solution_holds_the_foot_and_loads_each_corner(sole_robot, stance):
+    robot = sole_robot
+    kin = kin_at(robot)
+    builder = WholeBodyQP(robot)
+    problem, x = build_and_solve(builder, kin, target_for(kin, stance, phase=0.5, weight=1.0, offset=0.01))
+    res = problem.residuals(x)
+    assert res["eq"] < 1e-6 and res["in"] < 1e-6 and res["box"] < 1e-6
+    tau = builder.torques(x)
+    vdot = x[problem.variables["vdot"]]
+    S_T_tau = np.zeros(robot.nv)
+    S_T_tau[robot.actuated.pin_v_idx] = tau
+    lhs = kin.mass_matrix() @ vdot + kin.nonlinear_effects() - kin.passive_forces()
+    assert np.max(np.abs(lhs - S_T_tau - builder.generalized_contact_force(x))) < 1e-6 * max(1.0, np.max(np.abs(lhs)))
+    kd = builder.config.contact_kd
+    for fid in robot.force_frame_ids[stance]:  # every corner held, up to the rigid foot's O(v^2)
+        J = kin.frame_jacobian(fid)
+        assert np.max(np.abs(J @ vdot + kin.frame_jdot_v(fid) + kd * (J @ kin.v))) < 0.5
+    st = builder.forces(x)["stance"]
+    cfg = builder.config
+    assert st.shape == (4, 3) and np.all(st[:, 2] >= cfg.min_normal_force_N - 1e-6)
+    assert np.all(np.abs(st[:, :2]) <= cfg.friction_mu * st[:, 2:] + 1e-6)  # each corner's pyramid
+    assert st[:, 2].sum() > 0.5 * robot.mass_kg * 9.81, "the stance foot carries the robot"

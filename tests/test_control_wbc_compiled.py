@@ -81,3 +81,13 @@ def test_compiled_and_python_trackers_give_the_same_torques():
         assert a.ok and b.ok
         np.testing.assert_allclose(a.tau_Nm, b.tau_Nm, atol=1e-6)
         assert a.info["swing_force_weight"] == b.info["swing_force_weight"]
+
+
+def test_a_four_point_sole_compiles_to_the_python_build(tmp_path):
+    """H1 with its sole's four corners (tests/sole_cases.py): 6 contact rows, 4 friction pyramids per
+    foot, the yaw moment over 8 force entries; the generated build gives the numpy problem to 1e-12."""
+    from sole_cases import sole_profile
+
+    robot = load_robot(sole_profile("h1", tmp_path))
+    builder = WholeBodyQP(robot, default_config(robot))
+    assert_compiled_build_equals_the_python_build(builder, CompiledBuild(builder), random_cases(robot, 8))

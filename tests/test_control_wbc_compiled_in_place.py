@@ -161,3 +161,14 @@ def test_the_default_tracker_gives_the_same_torques_as_the_python_build():
             QPTracker(robot, in_place_assembly=True, compiled_build=falsy)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="in_place_assembly"):
         QPTracker(robot, in_place_assembly="yes")
+
+
+@pytest.mark.parametrize("name", ["h1", "g1"])
+def test_the_in_place_build_of_a_four_point_sole_equals_the_python_build(name, tmp_path):
+    """The four-point humanoids (tests/sole_cases.py): the in-place build reads the sole line's
+    midpoint frames for the swing foot's pitch besides the four force frames."""
+    from sole_cases import sole_profile
+
+    robot = load_robot(sole_profile(name, tmp_path))
+    builder = WholeBodyQP(robot, default_config(robot))
+    assert_compiled_build_equals_the_python_build(builder, InPlaceBuild(builder), random_cases(robot, 8))

@@ -55,8 +55,17 @@ def _fake_robot(points_left, points_right, planar=False):
         (_fake_robot(0, 0), "nonzero"),
         (_fake_robot(3, 3), "supported feet"),
         (_fake_robot(2, 2, planar=True), "supported feet"),
+        (_fake_robot(4, 4, planar=True), "supported feet"),
+        (_fake_robot(4, 2), "same"),
     ],
 )
 def test_unsupported_feet_are_a_clear_error(robot, match):
     with pytest.raises(InputError, match=match):
         VariableLayout.for_robot(robot, 0, 0)
+
+
+def test_a_four_point_sole_gives_twelve_forces_per_foot_normals_every_third():
+    layout = VariableLayout.for_robot(_fake_robot(4, 4), 0, 0)
+    assert (layout.n_points, layout.n_force, layout.n) == (4, 12, 8 + 24)
+    assert list(layout.normal_index(layout.sl_f_st)) == [10, 13, 16, 19]
+    assert list(layout.tangential_index(layout.sl_f_sw)) == [20, 21, 23, 24, 26, 27, 29, 30]

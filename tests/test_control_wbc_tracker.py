@@ -238,3 +238,31 @@ def test_tracker_keeps_the_stance_toe_passive_and_reports_the_force_ramp():
     i = list(cassie.actuated.joint_names).index("left-foot")
     assert abs(res.tau_Nm[i]) <= CASSIE_CONFIG.stance_foot_torque_max_Nm + 1e-3  # the solver's tolerance, N m
     assert res.info["swing_force_weight"] == pytest.approx(0.75)
+
+
+@pytest.mark.parametrize("name", ["h1", "g1"])
+def test_a_four_point_robot_at_stand_gives_finite_torques_within_limits(name, tmp_path):
+    """The humanoids with four-point soles (tests/sole_cases.py), the default (in-place compiled)
+    build: at the stand pose in single support the torques are finite, within the motor limits, the
+    passive stance ankle within its band, and the stance corners carry the weight."""
+    from sole_cases import sole_profile
+
+    robot = load_robot(sole_profile(name, tmp_path))
+    tracker = QPTracker(robot, eps_abs=1e-9, warm_start=False)
+    kin, target = _stand(robot)
+    res = tracker.compute(kin, target)
+    assert res.ok and tracker.fallbacks == 0 and np.all(np.isfinite(res.tau_Nm))
+    lim = robot.actuated.torque_limit_Nm
+    assert np.all(res.tau_Nm >= lim[:, 0] - 1e-6) and np.all(res.tau_Nm <= lim[:, 1] + 1e-6)
+    names = list(robot.actuated.joint_names)
+    band = tracker.config.stance_foot_torque_max_Nm
+    for joint in robot.passive_in_stance("left"):
+        assert abs(res.tau_Nm[names.index(joint)]) <= band + 1e-6
+    stance = tracker.builder.forces(tracker.last_solution)["stance"]
+    assert np.all(stance[:, 2] >= tracker.config.min_normal_force_N - 1e-6)
+    assert res.info["stance_fz_N"] == pytest.approx(robot.mass_kg * 9.81, rel=0.15)
+    # mid-swing the airborne swing foot's 12 forces and 16 pyramid rows may be left out: the same optimum
+    assert res.info["swing_force_weight"] == 0.0
+    reduced = QPTracker(robot, eps_abs=1e-9, warm_start=False, airborne_reduction=True)
+    assert reduced.airborne_reduction
+    np.testing.assert_allclose(reduced.compute(kin, target).tau_Nm, res.tau_Nm, atol=1e-5)

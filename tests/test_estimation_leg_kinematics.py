@@ -56,3 +56,21 @@ def test_a_robot_without_a_floating_base_or_a_bad_imu_position_is_refused(cassie
         LegKinematics(cassie, [0.0, np.nan, 0.0])
     with pytest.raises(InputError, match="imu_pos_in_base_m"):
         LegKinematics(cassie, [0.0, 0.0])
+
+
+def test_a_four_point_foot_gives_the_blade_of_its_sole_line(tmp_path):
+    """G1 with its four foot spheres (tests/sole_cases.py): the blade runs from the heel pair's middle
+    to the toe pair's middle (0.17 m, level at the stand pose), the mean of the front corners minus
+    the mean of the back corners."""
+    from sole_cases import sole_profile
+
+    g1 = load_robot(sole_profile("g1", tmp_path))
+    legs = LegKinematics(g1, IMU)
+    kin = RobotKinematics(g1)
+    kin.update_positions(g1.q_stand)
+    R = quat_xyzw_to_rot(g1.q_stand[3:7])
+    blades = legs.blades_in_imu(g1.q_stand)
+    for i, side in enumerate(legs.sides):
+        c = [kin.frame_translation_view(f).copy() for f in g1.force_frame_ids[side]]
+        np.testing.assert_allclose(R @ blades[i], 0.5 * (c[0] + c[1]) - 0.5 * (c[2] + c[3]), atol=1e-12)
+        assert abs(np.linalg.norm(blades[i]) - 0.17) < 1e-9 and abs((R @ blades[i])[2]) < 1e-3

@@ -146,3 +146,71 @@ def test_a_planar_flag_must_match_the_step_width(tmp_path):
     path = _profile_copy(tmp_path, CASSIE_TOML.replace("step_width_m = 0.25", "step_width_m = 0.0"))
     with pytest.raises(ProfileError, match="planar: a planar robot has gait.step_width_m = 0"):
         read_profile(path)
+
+
+H1_LINE = "force_points_m = [[0.14, 0.0, -0.07], [-0.035, 0.0, -0.07]]"
+
+
+@pytest.mark.parametrize(
+    "new, message",
+    [
+        (
+            "force_points_m = [[0.1, 0.0, -0.07], [0.0, 0.0, -0.07], [-0.03, 0.0, -0.07]]",
+            "feet.force_points_m: must be a list of 1 point, 2 points (toe, heel) or 4 points",
+        ),
+        (
+            "force_points_m = [[0.14, -0.03, -0.07], [0.14, 0.03, -0.07], [-0.03, 0.03, -0.07], [-0.03, -0.03, -0.07]]",
+            "feet.force_points_m: four points go toe left, toe right, heel left, heel right",
+        ),
+        (
+            "force_points_m = [[-0.03, 0.03, -0.07], [-0.03, -0.03, -0.07], [0.14, 0.03, -0.07], [0.14, -0.03, -0.07]]",
+            "feet.force_points_m: four points go toe left, toe right, heel left, heel right",
+        ),
+        (
+            "force_points_m = [[0.14, 0.0, -0.07], [0.14, 0.0, -0.07], [-0.03, 0.03, -0.07], [-0.03, -0.03, -0.07]]",
+            "only the heel pair may coincide",
+        ),
+        (
+            f"{H1_LINE}\nsole_rectangle_m = {{ x_front = 0.14, x_back = -0.035, half_width = 0.03, z = -0.07 }}",
+            "feet.sole_rectangle_m: give either 'force_points_m' or 'sole_rectangle_m', not both",
+        ),
+        (
+            "sole_rectangle_m = { x_front = -0.1, x_back = 0.1, half_width = 0.03, z = -0.07 }",
+            "feet.sole_rectangle_m.x_front: must be ahead of x_back",
+        ),
+        (
+            "sole_rectangle_m = { x_front = 0.14, x_back = -0.035, half_width = 0.0, z = -0.07 }",
+            "feet.sole_rectangle_m.half_width: must be positive",
+        ),
+        (
+            "sole_rectangle_m = { x_front = 0.14, x_back = -0.035, width = 0.06, z = -0.07 }",
+            "feet.sole_rectangle_m.half_width: is required",
+        ),
+        ("sole_rectangle_m = [0.14, -0.035, 0.03, -0.07]", "feet.sole_rectangle_m: must be a table"),
+    ],
+)
+def test_a_bad_number_or_order_of_force_points_is_named_in_one_line(tmp_path, new, message):
+    text = (MODELS_DIR / "h1.toml").read_text()
+    assert H1_LINE in text
+    text = text.replace(H1_LINE, new).replace('file = "unitree_', f'file = "{MODELS_DIR}/unitree_')
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ProfileError) as info:
+        read_profile(path)
+    text = str(info.value)
+    assert "\n" not in text and text.startswith(str(path)) and message in text, text
+
+
+def test_a_sole_rectangle_gives_its_four_corners_and_four_points_are_read_as_given(tmp_path):
+    text = (MODELS_DIR / "h1.toml").read_text().replace('file = "unitree_', f'file = "{MODELS_DIR}/unitree_')
+    rect = "sole_rectangle_m = { x_front = 0.14, x_back = -0.035, half_width = 0.03, z = -0.07 }"
+    corners = ((0.14, 0.03, -0.07), (0.14, -0.03, -0.07), (-0.035, 0.03, -0.07), (-0.035, -0.03, -0.07))
+    (tmp_path / "rect.toml").write_text(text.replace(H1_LINE, rect))
+    assert read_profile(tmp_path / "rect.toml").feet.force_points_m == corners
+    four = "force_points_m = [[0.14, 0.03, -0.07], [0.14, -0.03, -0.07], [-0.035, 0.03, -0.07], [-0.035, -0.03, -0.07]]"
+    (tmp_path / "four.toml").write_text(text.replace(H1_LINE, four))
+    assert read_profile(tmp_path / "four.toml").feet.force_points_m == corners
+    # a triangular sole: the heel pair at one point
+    tri = "force_points_m = [[0.14, 0.03, -0.07], [0.14, -0.03, -0.07], [-0.035, 0.0, -0.07], [-0.035, 0.0, -0.07]]"
+    (tmp_path / "tri.toml").write_text(text.replace(H1_LINE, tri))
+    assert read_profile(tmp_path / "tri.toml").feet.force_points_m[2:] == ((-0.035, 0.0, -0.07),) * 2

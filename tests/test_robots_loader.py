@@ -179,3 +179,20 @@ def test_second_body_tree_is_rejected(tmp_path):
     )
     with pytest.raises(MJCFError, match=r"Pinocchio built nv=6 but MuJoCo nv=12"):
         load_robot(bad)
+
+
+def test_four_point_foot_missing_a_corner_or_its_sole_line(tmp_path):
+    corners = "".join(
+        f"<site name='{s}-{c}'/>" for s in ("left", "right") for c in ("toe-left", "toe-right", "heel-left")
+    )
+    line = "".join(f"<site name='{s}-{c}'/>" for s in ("left", "right") for c in ("toe", "heel"))
+    head = "<mujoco><worldbody><body name='base'><freejoint/><geom type='sphere' size='0.1'/>"
+    head += "<site name='left-contact'/><site name='right-contact'/>"
+    bad = tmp_path / "threecorners.xml"
+    bad.write_text(f"{head}{corners}{line}</body></worldbody></mujoco>")
+    with pytest.raises(MJCFError, match=r"site\(s\) left-heel-right missing: a four-point foot needs its corners"):
+        load_robot(bad)
+    all_corners = corners + "<site name='left-heel-right'/><site name='right-heel-right'/>"
+    bad.write_text(f"{head}{all_corners}</body></worldbody></mujoco>")
+    with pytest.raises(MJCFError, match=r"left-toe missing: .* sole line's ends left-toe, left-heel"):
+        load_robot(bad)

@@ -133,3 +133,39 @@ def test_the_unedited_spec_has_what_the_edits_add():
     assert mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "left-contact") < 0
     assert not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, 0)
     assert not ModelSpec(path=MODELS_DIR / "unitree_h1" / "h1.xml").edits_needed  # no edits by default
+
+
+def test_a_four_point_foot_gets_its_corners_and_its_sole_line_midpoints(tmp_path):
+    from sole_cases import sole_profile
+
+    robot = load_robot(sole_profile("h1", tmp_path))
+    m, feet = robot.mj_model, robot.profile.feet
+    corners = ((0.14, 0.03, -0.07), (0.14, -0.03, -0.07), (-0.035, 0.03, -0.07), (-0.035, -0.03, -0.07))
+    assert feet.force_points_m == corners
+    for side in ("left", "right"):
+        names = tuple(f"{side}-{s}" for s in ("toe-left", "toe-right", "heel-left", "heel-right"))
+        assert robot.force_sites[side] == names and robot.sole_line_sites[side] == (f"{side}-toe", f"{side}-heel")
+        body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, feet.body.format(side=side))
+        expected = {
+            **dict(zip(names, corners)),
+            f"{side}-toe": (0.14, 0.0, -0.07),
+            f"{side}-heel": (-0.035, 0.0, -0.07),
+        }
+        for site, point in expected.items():
+            s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, site)
+            assert m.site_bodyid[s] == body
+            np.testing.assert_allclose(m.site_pos[s], point, atol=1e-15)
+        # Pinocchio's frames are the same sites, in the same order
+        frames = [robot.pin_model.frames[f].name for f in robot.force_frame_ids[side]]
+        assert tuple(frames) == names
+        lines = [robot.pin_model.frames[f].name for f in robot.sole_line_frame_ids[side]]
+        assert tuple(lines) == (f"{side}-toe", f"{side}-heel")
+
+
+def test_a_two_point_foot_has_its_force_points_as_its_sole_line():
+    robot = load_robot("h1")
+    for side in ("left", "right"):
+        assert robot.force_sites[side] == robot.sole_line_sites[side] == (f"{side}-toe", f"{side}-heel")
+        assert robot.force_frame_ids[side] == robot.sole_line_frame_ids[side]
+    rabbit = load_robot("rabbit")
+    assert rabbit.sole_line_sites == {"left": (), "right": ()}

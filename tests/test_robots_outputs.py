@@ -62,8 +62,12 @@ def test_an_output_the_model_cannot_compute_is_refused_at_load():
     no_yaw = dataclasses.replace(cassie.profile, joint_roles={"hip_yaw": "{side}-no-such-joint"})
     with pytest.raises(MJCFError, match="'stance_hip_yaw' needs a hip_yaw joint on each leg"):
         OutputMap(dataclasses.replace(cassie, profile=no_yaw))
-    one_point = dataclasses.replace(cassie, force_sites={s: cassie.force_sites[s][:1] for s in cassie.foot_sides})
-    with pytest.raises(MJCFError, match="'swing_toe_pitch' needs two force points on each foot"):
+    one_point = dataclasses.replace(
+        cassie,
+        force_sites={s: cassie.force_sites[s][:1] for s in cassie.foot_sides},
+        sole_line_sites=dict.fromkeys(cassie.foot_sides, ()),
+    )
+    with pytest.raises(MJCFError, match="'swing_toe_pitch' needs a sole line on each foot: two or four force points"):
         OutputMap(one_point)
 
 

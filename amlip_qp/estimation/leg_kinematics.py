@@ -10,7 +10,8 @@ base IMU sits at ``imu_pos_in_base_m`` in the base frame with the base's axes,
 so the vector from the IMU to the site, in IMU axes, is that position minus
 ``imu_pos_in_base_m``. This object keeps its own ``pinocchio.Data``.
 
-For a blade foot (toe and heel force sites, Cassie) it also gives the blade,
+For a blade foot (toe and heel force sites, Cassie; the sole line of a
+four-point foot, ``Robot.sole_line_frame_ids``) it also gives the blade,
 the vector from the heel to the toe, in IMU axes: with the estimated
 orientation it tells whether the blade rests flat on the ground (see
 :meth:`~amlip_qp.estimation.invariant_ekf.InvariantEKF.set_contacts`).
@@ -58,8 +59,8 @@ class LegKinematics:
         self.frame_ids = tuple(robot.contact_frame_ids[s] for s in self.sides)
         #: Pinocchio frame ids of each side's (toe, heel) sites, or ``None`` without blade feet.
         self.blade_frame_ids: tuple[tuple[int, int], ...] | None = None
-        if all(len(robot.force_frame_ids[s]) == 2 for s in self.sides):
-            self.blade_frame_ids = tuple(tuple(robot.force_frame_ids[s]) for s in self.sides)  # type: ignore[misc]
+        if all(len(robot.sole_line_frame_ids.get(s, ())) == 2 for s in self.sides):
+            self.blade_frame_ids = tuple(tuple(robot.sole_line_frame_ids[s]) for s in self.sides)  # type: ignore[misc]
         self.imu_pos_in_base_m = imu
         self._q = np.zeros(self.model.nq)
         self._q[6] = 1.0  # identity base quaternion (x y z w)

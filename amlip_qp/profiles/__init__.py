@@ -23,6 +23,8 @@ from typing import Any
 
 from amlip_qp.profiles.commands import NO_SHAPING, CommandBounds, CommandShaping
 from amlip_qp.profiles.profile import (
+    FORCE_POINT_COUNTS,
+    FORCE_SITE_SUFFIXES,
     JOINT_ROLES,
     CompareRanges,
     FootSpec,
@@ -31,6 +33,8 @@ from amlip_qp.profiles.profile import (
     ModelSpec,
     RobotProfile,
     StandPose,
+    sole_line_points,
+    sole_rectangle_corners,
 )
 from amlip_qp.profiles.reader import read_profile
 from amlip_qp.profiles.registry import (
@@ -49,6 +53,10 @@ from amlip_qp.profiles.registry import (
 PROFILES = BundledProfiles()
 
 __all__ = [
+    "FORCE_POINT_COUNTS",
+    "FORCE_SITE_SUFFIXES",
+    "sole_line_points",
+    "sole_rectangle_corners",
     "DEFAULT_EKF_SCENARIO",
     "DEFAULT_ROBOT",
     "DEFAULT_SCENARIO",

@@ -18,7 +18,8 @@ name                   primitive           value (SI: rad, m)
 ``com_y_over_swing``   CoM over a contact  CoM minus the swing contact point, the step's heading y
 ``com_z_over_swing``   CoM over a contact  CoM minus the swing contact point, z
 ``swing_toe_pitch``    foot angle          the swing foot's pitch along the heading, from its
-                                           force points (first minus last: toe minus heel)
+                                           sole line (toe minus heel: a two-point foot's
+                                           points, a four-point foot's pair midpoints)
 ``swing_foot_roll``    foot angle          the swing foot's roll, from its contact frame's
                                            rotation (z-y-x Euler angles)
 =====================  ==================  ===================================================

@@ -141,19 +141,54 @@ class ModelSpec:
         )
 
 
+#: How many force points a foot may have: a point foot, a line contact (toe, heel), a sole (four corners).
+FORCE_POINT_COUNTS = (0, 1, 2, 4)
+
+#: The names of a foot's force sites after ``{side}-``, by their number: two are toe then heel; four are the
+#: sole's corners (toe left, toe right, heel left, heel right; left and right in the foot's own frame).
+FORCE_SITE_SUFFIXES: dict[int, tuple[str, ...]] = {
+    2: ("toe", "heel"),
+    4: ("toe-left", "toe-right", "heel-left", "heel-right"),
+}
+
+
+def sole_rectangle_corners(
+    x_front: float, x_back: float, half_width: float, z: float
+) -> tuple[tuple[float, float, float], ...]:
+    """The four corners of a rectangular sole, foot frame, m: toe left, toe right, heel left, heel right."""
+    return ((x_front, half_width, z), (x_front, -half_width, z), (x_back, half_width, z), (x_back, -half_width, z))
+
+
+def sole_line_points(points: tuple[tuple[float, float, float], ...]) -> tuple[tuple[float, float, float], ...]:
+    """The ends of a foot's sole line (toe, heel), m, from its 2 or 4 force points: the points themselves,
+    or the midpoints of the toe pair and of the heel pair; ``()`` for fewer points."""
+    if len(points) == 4:
+        (a, b, c, d) = points
+        return (
+            tuple(0.5 * (u + w) for u, w in zip(a, b)),  # type: ignore[return-value]
+            tuple(0.5 * (u + w) for u, w in zip(c, d)),
+        )
+    return tuple(points) if len(points) == 2 else ()
+
+
 @dataclass(frozen=True)
 class FootSpec:
     """Where each foot touches the ground.
 
-    Either the model already has the library's sites (``{side}-contact``, and
-    ``{side}-toe`` / ``{side}-heel`` for a two-point foot), or ``body`` names the
-    foot body and the loader adds them at the points given.
+    Either the model already has the library's sites (``{side}-contact``;
+    ``{side}-toe`` / ``{side}-heel`` for a two-point foot; for a four-point
+    foot its corners ``{side}-toe-left``, ``{side}-toe-right``,
+    ``{side}-heel-left``, ``{side}-heel-right`` and its sole line's ends
+    ``{side}-toe`` / ``{side}-heel``), or ``body`` names the foot body and the
+    loader adds them at the points given.
 
     Attributes:
         body: The foot body's name, with ``{side}`` (``None``: the model has the sites).
         contact_point_m: The ALIP contact point in the foot body's frame, m.
         force_points_m: Where the contact forces act, in the foot body's frame, m: one point (a
-            point foot, the contact point itself) or two (toe then heel, a line contact).
+            point foot, the contact point itself), two (toe then heel, a line contact) or four
+            (toe left, toe right, heel left, heel right: a sole; the profile's ``sole_rectangle_m``
+            gives a rectangle's corners).
         passive_in_stance: Joint roles that carry no torque while the foot is in stance.
     """
 

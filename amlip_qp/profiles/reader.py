@@ -21,6 +21,7 @@ from amlip_qp.exceptions import InputError, ProfileError
 from amlip_qp.profiles.commands import CommandBounds, CommandShaping
 from amlip_qp.profiles.outputs import output_primitives
 from amlip_qp.profiles.profile import (
+    FORCE_POINT_COUNTS,
     JOINT_ROLES,
     SERVO_POLICIES,
     TRACKER_CONFIG_BUILDERS,
@@ -32,6 +33,7 @@ from amlip_qp.profiles.profile import (
     ModelSpec,
     RobotProfile,
     StandPose,
+    sole_rectangle_corners,
 )
 
 if sys.version_info >= (3, 11):
@@ -220,9 +222,10 @@ def _feet(t: _Table | None) -> FootSpec:
     body = _side_template(t, "body", None)
     contact = t.vector("contact_point_m", 3, None, unit="m")
     raw_points = t.raw("force_points_m", [])
-    if not isinstance(raw_points, list) or len(raw_points) not in (0, 1, 2):
+    if not isinstance(raw_points, list) or len(raw_points) not in FORCE_POINT_COUNTS:
         t.fail(
-            f"must be a list of 1 point or 2 points (toe, heel), each 3 numbers in m, got {raw_points!r}",
+            "must be a list of 1 point, 2 points (toe, heel) or 4 points (toe left, toe right, heel left, "
+            f"heel right), each 3 numbers in m, got {raw_points!r}",
             "force_points_m",
         )
     points: list[tuple[float, float, float]] = []
@@ -231,15 +234,50 @@ def _feet(t: _Table | None) -> FootSpec:
             t.fail(f"each point must be 3 numbers (m), got {p!r}", "force_points_m")
         x, y, z = (_number(t, "force_points_m", v, -math.inf, math.inf, "m", True) for v in p)
         points.append((x, y, z))
+    rectangle = t.table("sole_rectangle_m", required=False)
+    if rectangle is not None:
+        if points:
+            t.fail("give either 'force_points_m' or 'sole_rectangle_m', not both", "sole_rectangle_m")
+        points = list(_sole_rectangle(rectangle))
+    elif len(points) == 4:
+        _check_four_points(t, points)
     passive = t.raw("passive_in_stance", [])
     if not isinstance(passive, list) or any(r not in JOINT_ROLES for r in passive):
         t.fail(f"must be a list of joint roles ({', '.join(JOINT_ROLES)}), got {passive!r}", "passive_in_stance")
     if body is not None and contact is None:
         t.fail("is required with 'body' (the ALIP contact point in the foot body's frame)", "contact_point_m")
     if body is None and (contact is not None or points):
-        t.fail("is required with 'contact_point_m' / 'force_points_m' (the foot body they are in)", "body")
+        t.fail(
+            "is required with 'contact_point_m' / 'force_points_m' / 'sole_rectangle_m' (the foot body they are in)",
+            "body",
+        )
     t.done()
     return FootSpec(body=body, contact_point_m=contact, force_points_m=tuple(points), passive_in_stance=tuple(passive))
+
+
+def _sole_rectangle(t: _Table) -> tuple[tuple[float, float, float], ...]:
+    """The 4 corners of ``[feet] sole_rectangle_m`` (toe left, toe right, heel left, heel right), m."""
+    x_front, x_back = t.number("x_front", unit="m"), t.number("x_back", unit="m")
+    half_width = t.number("half_width", low=0.0, unit="m")
+    z = t.number("z", unit="m")
+    if not x_front > x_back:
+        t.fail(f"must be ahead of x_back ({x_back!r} m), got {x_front!r}", "x_front")
+    if not half_width > 0.0:
+        t.fail(f"must be positive (m), got {half_width!r}", "half_width")
+    t.done()
+    return sole_rectangle_corners(x_front, x_back, half_width, z)
+
+
+def _check_four_points(t: _Table, points: list[tuple[float, float, float]]) -> None:
+    """Four force points are toe left, toe right, heel left, heel right (foot frame: x forward, y left);
+    the heel pair may coincide (a triangular sole), the toe pair may not."""
+    (x0, y0, _), (x1, y1, _), (x2, y2, _), (x3, y3, _) = points
+    if not (x0 + x1 > x2 + x3 and y0 > y1 and y2 >= y3):
+        t.fail(
+            "four points go toe left, toe right, heel left, heel right (the toe pair ahead of the heel pair, "
+            f"each pair's left point first, y larger; only the heel pair may coincide), got {points!r}",
+            "force_points_m",
+        )
 
 
 def _roles(t: _Table | None) -> dict[str, str]:

@@ -14,7 +14,14 @@ from pathlib import Path
 import numpy as np
 
 from amlip_qp.exceptions import MJCFError, ModelFileError, ProfileError, UnknownRobotError
-from amlip_qp.profiles import PROFILES, RobotProfile, bundled_names, get_profile, looks_like_profile_path
+from amlip_qp.profiles import (
+    FORCE_SITE_SUFFIXES,
+    PROFILES,
+    RobotProfile,
+    bundled_names,
+    get_profile,
+    looks_like_profile_path,
+)
 from amlip_qp.robots.model_edits import prepared_model_path
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
@@ -115,19 +122,30 @@ def _sites(mj_model, pin_model, path: Path):
             "(see docs/ARCHITECTURE.md, 'Model conventions')"
         )
     force: dict[str, tuple[str, ...]] = {}
+    line: dict[str, tuple[str, ...]] = {}
     for s in FOOT_SIDES:
         toe, heel = has(f"{s}-toe"), has(f"{s}-heel")
         if toe != heel:
             raise MJCFError(
                 f"{path}: site {s}-{'heel' if toe else 'toe'} is missing: a blade foot needs both toe and heel sites"
             )
-        force[s] = (f"{s}-toe", f"{s}-heel") if toe else (f"{s}-contact",)
+        corners = tuple(f"{s}-{suffix}" for suffix in FORCE_SITE_SUFFIXES[4])
+        present = [has(c) for c in corners]
+        if any(present) and not (all(present) and toe):
+            need = [c for c, p in zip((*corners, f"{s}-toe"), (*present, toe)) if not p]
+            raise MJCFError(
+                f"{path}: site(s) {', '.join(need)} missing: a four-point foot needs its corners "
+                f"{', '.join(corners)} and its sole line's ends {s}-toe, {s}-heel"
+            )
+        line[s] = (f"{s}-toe", f"{s}-heel") if toe else ()
+        force[s] = corners if all(present) else line[s] or (f"{s}-contact",)
     contact = {s: f"{s}-contact" for s in FOOT_SIDES}
-    c_mj, c_pin, f_mj, f_pin = {}, {}, {}, {}
+    c_mj, c_pin, f_mj, f_pin, l_pin = {}, {}, {}, {}, {}
     for s in FOOT_SIDES:
         (c_mj[s],), (c_pin[s],) = _site_ids(mj_model, pin_model, (contact[s],), path)
         f_mj[s], f_pin[s] = _site_ids(mj_model, pin_model, force[s], path)
-    return contact, c_mj, c_pin, force, f_mj, f_pin
+        l_pin[s] = _site_ids(mj_model, pin_model, line[s], path)[1]
+    return contact, c_mj, c_pin, force, f_mj, f_pin, line, l_pin
 
 
 def _root(mj_model, path: Path):
@@ -361,7 +379,7 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     mj_model, pin_model = _compile(path)
     smap = build_state_map(mj_model, pin_model, source=str(path))
     actuated = _actuators(mj_model, smap, path)  # first: a servo is refused before anything else
-    contact, c_mj, c_pin, force, f_mj, f_pin = _sites(mj_model, pin_model, path)
+    contact, c_mj, c_pin, force, f_mj, f_pin, line, l_pin = _sites(mj_model, pin_model, path)
     root_body, root_joints, root_names, is_floating, is_planar = _root(mj_model, path)
     _check_sites_agree(mj_model, pin_model, smap, path)
 
@@ -400,6 +418,8 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
         force_sites=force,
         force_site_ids=f_mj,
         force_frame_ids=f_pin,
+        sole_line_sites=line,
+        sole_line_frame_ids=l_pin,
         base_body=base_name,
         base_frame_id=int(pin_model.getFrameId(base_name, pin.BODY)),
         root_joint_names=root_names,

@@ -9,7 +9,10 @@ says what the library adds or changes:
 - a ground plane, if the model has none;
 - a ``stand`` keyframe (replacing the file's), from the base pose and the joint angles by name;
 - the library's foot sites on the foot bodies: ``{side}-contact`` (the ALIP contact point) and,
-  for a two-point foot, ``{side}-toe`` / ``{side}-heel`` (where the contact forces act);
+  for a two-point foot, ``{side}-toe`` / ``{side}-heel`` (where the contact forces act); for a
+  four-point foot its corners ``{side}-toe-left``, ``{side}-toe-right``, ``{side}-heel-left``,
+  ``{side}-heel-right`` (where the forces act) and its sole line's ends ``{side}-toe`` /
+  ``{side}-heel`` (the midpoints of the toe pair and of the heel pair: the swing foot's pitch);
 - position servos turned into torque motors (``servos = "convert"``): gain 1, no bias, the
   control range the joint's force range, so a control is a torque; or refused.
 
@@ -31,7 +34,7 @@ import numpy as np
 
 from amlip_qp.exceptions import MJCFError
 from amlip_qp.paths import cache_root
-from amlip_qp.profiles import FootSpec, ModelSpec, RobotProfile
+from amlip_qp.profiles import FORCE_SITE_SUFFIXES, FootSpec, ModelSpec, RobotProfile, sole_line_points
 
 #: The foot sides.
 _SIDES = ("left", "right")
@@ -121,8 +124,12 @@ def _add_foot_sites(spec: mujoco.MjSpec, feet: FootSpec, path: Path) -> None:
         if body is None:
             raise MJCFError(f"{path}: the profile's foot body {feet.body.format(side=side)!r} is not in the model")
         body.add_site(name=f"{side}-contact", pos=list(feet.contact_point_m or (0.0, 0.0, 0.0)))
-        if len(feet.force_points_m) == 2:
-            toe, heel = feet.force_points_m
+        points = feet.force_points_m
+        if len(points) == 4:
+            for suffix, point in zip(FORCE_SITE_SUFFIXES[4], points):
+                body.add_site(name=f"{side}-{suffix}", pos=list(point))
+        if len(points) in (2, 4):
+            toe, heel = sole_line_points(points)
             body.add_site(name=f"{side}-toe", pos=list(toe))
             body.add_site(name=f"{side}-heel", pos=list(heel))
 

@@ -129,8 +129,8 @@ def _missing_for(robot: Robot, primitive: OutputPrimitive) -> str | None:
         if any(robot.role_joint(primitive.role, s) is None for s in robot.foot_sides):
             return f"a {primitive.role} joint on each leg (the profile's [roles] table names it)"
     elif primitive.kind == "foot_angle" and primitive.axis == "pitch":
-        if any(len(robot.force_sites[s]) < 2 for s in robot.foot_sides):
-            return "two force points on each foot, toe then heel ([feet] force_points_m)"
+        if any(len(robot.sole_line_sites.get(s, ())) != 2 for s in robot.foot_sides):
+            return "a sole line on each foot: two or four force points ([feet] force_points_m or sole_rectangle_m)"
     if primitive.lateral and robot.is_planar:
         return "a 3-D root (the model's root is planar)"
     if primitive.kind == "base_angle" and not (robot.is_floating or robot.is_planar):
@@ -251,12 +251,13 @@ class OutputMap:
     def points(self, stance: str) -> tuple[int, ...]:
         """Pinocchio frame ids of the points the outputs read for ``stance``, in the order of
         :class:`~amlip_qp.codegen.output_map.OutputInputs` (``points``): the stance contact, the
-        swing contact[, the swing foot's first and last force points]."""
+        swing contact[, the ends of the swing foot's sole line, toe then heel
+        (:attr:`~amlip_qp.robots.robot.Robot.sole_line_frame_ids`)]."""
         swing = self._swing_of[stance]
         robot = self.robot
         ids = [robot.contact_frame_ids[stance], robot.contact_frame_ids[swing]]
         if any(p.kind == "foot_angle" and p.axis == "pitch" for p in self.primitives):
-            ids += [robot.force_frame_ids[swing][0], robot.force_frame_ids[swing][-1]]
+            ids += list(robot.sole_line_frame_ids[swing])
         return tuple(ids)
 
     def rotating_frames(self, stance: str) -> tuple[int, ...]:
@@ -364,10 +365,10 @@ class OutputMap:
         return y, J, jdv
 
     def _toe_pitch(self, kin: RobotKinematics, swing: str) -> tuple:
-        """The swing foot's pitch from its blade vector ``d = toe - heel`` (m) as a chain scalar on
-        ``J_toe - J_heel`` (left in :attr:`_J_blade`)."""
-        ids = self.robot.force_frame_ids[swing]
-        toe_id, heel_id = ids[0], ids[-1]
+        """The swing foot's pitch from its blade vector ``d = toe - heel`` (m, the ends of its sole
+        line: a two-point foot's points, a four-point foot's toe-pair and heel-pair midpoints) as a
+        chain scalar on ``J_toe - J_heel`` (left in :attr:`_J_blade`)."""
+        toe_id, heel_id = self.robot.sole_line_frame_ids[swing]
         jac = kin.frame_jacobian6
         t0, t1, t2 = kin.frame_translation_view(toe_id).tolist()
         h0, h1, h2 = kin.frame_translation_view(heel_id).tolist()

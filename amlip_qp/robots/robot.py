@@ -127,9 +127,16 @@ class Robot:
         contact_site_ids: Side -> MuJoCo site id of the contact site.
         contact_frame_ids: Side -> Pinocchio frame id of the contact site.
         force_sites: Side -> names of the sites where contact forces act
-            (toe and heel for Cassie; the contact site for Rabbit).
+            (toe and heel for Cassie; the contact site for Rabbit; the sole's four
+            corners ``{side}-toe-left``, ``-toe-right``, ``-heel-left``, ``-heel-right``
+            for a four-point foot).
         force_site_ids: Side -> MuJoCo site ids of the force sites.
         force_frame_ids: Side -> Pinocchio frame ids of the force sites.
+        sole_line_sites: Side -> the ends of the foot's sole line, ``({side}-toe, {side}-heel)``:
+            a two-point foot's force sites, a four-point foot's midpoints of its toe pair and of
+            its heel pair; ``()`` for a point foot. The swing foot's pitch output, the PBC
+            tracker's stance rows and the EKF's flat-foot test read this line.
+        sole_line_frame_ids: Side -> Pinocchio frame ids of :attr:`sole_line_sites`.
         base_body: Name of the root body (the one carrying the root joints).
         base_frame_id: Pinocchio frame id of the root body.
         root_joint_names: MuJoCo names of the root joints (one free joint,
@@ -195,6 +202,8 @@ class Robot:
     foot_sides: tuple[str, str] = field(default=FOOT_SIDES)
     profile: RobotProfile | None = None
     leg_joint_names: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    sole_line_sites: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    sole_line_frame_ids: dict[str, tuple[int, ...]] = field(default_factory=dict)
 
     def role_joint(self, role: str, side: str) -> str | None:
         """The name of ``side``'s joint with ``role`` (:data:`amlip_qp.profiles.JOINT_ROLES`), or ``None``.

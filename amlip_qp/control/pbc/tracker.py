@@ -12,7 +12,9 @@ free in ``h``):
 - ``B`` selects the actuated coordinates (joint-side torques ``tau``, N m);
 - the constraints ``J_c`` are the stance contact -- Cassie's blade foot: the
   foot frame's translation (3 rows) and its rotation about the two axes
-  normal to the blade (2 rows; the roll about the blade is free); Rabbit's
+  normal to the blade (2 rows; the roll about the blade is free; a four-point
+  sole is held by the same rows on its sole line, toe-pair midpoint to
+  heel-pair midpoint, ``Robot.sole_line_frame_ids``); Rabbit's
   point foot: its in-plane translation (2 rows) -- and the springs treated as
   rigid, as the paper does: each coupling (Cassie's ``q_knee + q_tarsus``) and
   each passive joint outside a coupling (Cassie's shin). The spring forces lie
@@ -130,7 +132,8 @@ class PBCTracker(Tracker):
                 kd=kd,
                 swing_mask=swing_mask,
             )
-        self._blade = {s: len(robot.force_frame_ids[s]) == 2 for s in robot.foot_sides}
+        # A two- or four-point foot: the rows of its sole line (a four-point sole is held as its line).
+        self._blade = {s: len(robot.sole_line_frame_ids.get(s, ())) == 2 for s in robot.foot_sides}
         self._planar = robot.is_planar
         # preallocated KKT system per stance (unknowns: vdot, tau_ctrl, lambda)
         ns = len(self._J_springs)
@@ -199,7 +202,7 @@ class PBCTracker(Tracker):
         if not self._blade[stance]:
             return
         # the two rotation axes normal to the blade u: n1 = u x z (or u x x), n2 = u x n1 (scalar math)
-        toe_id, heel_id = robot.force_frame_ids[stance]
+        toe_id, heel_id = robot.sole_line_frame_ids[stance]
         oMf = kin.data.oMf
         t, h = oMf[toe_id].translation, oMf[heel_id].translation
         ux, uy, uz = t[0] - h[0], t[1] - h[1], t[2] - h[2]

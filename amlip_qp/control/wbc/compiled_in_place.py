@@ -85,6 +85,8 @@ def frame_terms(builder: WholeBodyQP) -> FrameTerms:
     frames = [robot.base_frame_id]
     for side in robot.foot_sides:
         frames += [robot.contact_frame_ids[side], *robot.force_frame_ids[side]]
+    # a four-point foot's sole line (the swing foot's pitch output); a two-point foot's are its force points
+    frames += [f for side in robot.foot_sides for f in robot.sole_line_frame_ids.get(side, ()) if f not in frames]
     rotating = [f for side in robot.foot_sides for f in outputs.rotating_frames(side)]
     return FrameTerms(robot.pin_model, frames, [robot.base_frame_id, *rotating])
 
@@ -140,7 +142,7 @@ def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Fu
     axes = L.axes_index if isinstance(L.axes_index, slice) else [int(a) for a in L.axes_index]
     jf = [T.jacobian(f)[axes, :] for side in (stance, swing) for f in robot.force_frame_ids[side]]
     points = robot.force_frame_ids[stance]
-    if L.n_points == 2:
+    if L.n_points > 1:
         contact = ca.vertcat(*[T.position(f) for f in points], *[T.drift(f)[0:3] for f in points])
     else:
         contact = T.drift(points[0])[axes]

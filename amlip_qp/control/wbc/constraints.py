@@ -61,10 +61,17 @@ class StanceContact(Constraint):
     uses 5 independent rows: the toe's 3 and the heel's 2 components
     orthogonal to the toe-heel axis (the third is implied by the rigid foot,
     and dropping it keeps the rows independent for active-set solvers).
+    A four-point sole (toe left, toe right, heel left, heel right) uses 6: the
+    same 5 on its diagonal (toe left as the toe, heel right as the heel), then
+    the toe-right point's component along ``a x (p_1 - p_0)`` (``a`` the
+    diagonal's direction), the only motion the diagonal leaves it: a rotation
+    about the diagonal. The heel pair may coincide (a triangular sole); the
+    toe pair, whose right point gives the sixth row, may not (the profile
+    reader refuses it).
     """
 
     def __init__(self, layout: VariableLayout, contact_kd: float):
-        super().__init__("contact", slice(0, layout.point_dim if layout.n_points == 1 else 5))
+        super().__init__("contact", slice(0, {1: layout.point_dim, 2: 5, 4: 6}[layout.n_points]))
         self.layout = layout
         self.contact_kd = contact_kd
         self._drift = np.zeros(self.size)
@@ -79,39 +86,55 @@ class StanceContact(Constraint):
             Ac[:] = inputs.point_jacobians[0][L.axes_index]
             drift[:] = inputs.point_drifts[0][L.axes_index]
         else:
-            J0, J1 = inputs.point_jacobians
-            ax = inputs.point_positions[0] - inputs.point_positions[1]
+            # the blade: toe then heel (a sole's diagonal: toe left, heel right)
+            J, P, D = inputs.point_jacobians, inputs.point_positions, inputs.point_drifts
+            ax = P[0] - P[-1]
             ax /= math.sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2])
-            # n1: the vertical made orthogonal to the blade; n2 = axis x n1.
-            n1 = (-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2])
-            s1 = 1.0 / math.sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2])
-            n1 = (n1[0] * s1, n1[1] * s1, n1[2] * s1)
-            N = np.array(
-                [n1, (ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0])]
-            )
-            Ac[:3] = J0
-            np.matmul(N, J1, out=Ac[3:])
-            drift[:3] = inputs.point_drifts[0]
-            np.matmul(N, inputs.point_drifts[1], out=drift[3:])
+            N = _blade_normals(ax)
+            Ac[:3] = J[0]
+            np.matmul(N, J[-1], out=Ac[3:5])
+            drift[:3] = D[0]
+            np.matmul(N, D[-1], out=drift[3:5])
+            if L.n_points == 4:
+                e = P[1] - P[0]
+                m = np.array((ax[1] * e[2] - ax[2] * e[1], ax[2] * e[0] - ax[0] * e[2], ax[0] * e[1] - ax[1] * e[0]))
+                m /= math.sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2])
+                np.matmul(m, J[1], out=Ac[5])
+                drift[5] = m @ D[1]
         bc = np.multiply(Ac @ inputs.v, -self.contact_kd, out=problem.b[self.rows])
         bc -= drift
 
     def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> dict[str, Any]:
         L = self.layout
-        Jf, con = sym.JfT.T, sym.contact
-        if L.n_points == 2:
-            p0, p1, jdv0, jdv1 = con[0:3], con[3:6], con[6:9], con[9:12]
+        Jf, con, k = sym.JfT.T, sym.contact, L.n_points
+        if k in (2, 4):
+            last, d = 3 * (k - 1), 3 * k  # the heel's offset in each half; the drifts' offset
+            p0, p1, jdv0, jdv1 = con[0:3], con[last : last + 3], con[d : d + 3], con[d + last : d + last + 3]
             ax = p0 - p1
             ax = ax / ca.norm_2(ax)
             n1 = ca.vertcat(-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2])
             n1 = n1 / ca.norm_2(n1)
             N = ca.horzcat(n1, ca.cross(ax, n1)).T
-            Ac = ca.vertcat(Jf[0:3, :], ca.mtimes(N, Jf[3:6, :]))
+            Ac = ca.vertcat(Jf[0:3, :], ca.mtimes(N, Jf[last : last + 3, :]))
             drift = ca.vertcat(jdv0, ca.mtimes(N, jdv1))
+            if k == 4:
+                m = ca.cross(ax, con[3:6] - p0)
+                m = m / ca.norm_2(m)
+                Ac = ca.vertcat(Ac, ca.mtimes(m.T, Jf[3:6, :]))
+                drift = ca.vertcat(drift, ca.dot(m, con[d + 3 : d + 6]))
         else:
             Ac, drift = Jf[0 : L.point_dim, :], con
         bc = -self.contact_kd * ca.mtimes(Ac, sym.v) - drift
         return {"A": ca.horzcat(Ac, ca.MX(Ac.shape[0], L.n - L.nv)), "b": bc}
+
+
+def _blade_normals(ax: np.ndarray) -> np.ndarray:
+    """The two unit directions normal to the unit blade axis ``ax``: the vertical made orthogonal
+    to the blade, ``n1``, and ``n2 = ax x n1``, as the rows of a (2, 3) array."""
+    n1 = (-ax[2] * ax[0], -ax[2] * ax[1], 1.0 - ax[2] * ax[2])
+    s1 = 1.0 / math.sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2])
+    n1 = (n1[0] * s1, n1[1] * s1, n1[2] * s1)
+    return np.array([n1, (ax[1] * n1[2] - ax[2] * n1[1], ax[2] * n1[0] - ax[0] * n1[2], ax[0] * n1[1] - ax[1] * n1[0])])
 
 
 class RigidSprings(Constraint):

@@ -180,9 +180,11 @@ class RigidSpringForceRegularization(Cost):
 
 
 class StanceYawMomentCost(Cost):
-    """``w M_z^2``: the yaw moment of the stance foot's two point forces
-    about their mean point, ``M_z = a . (f0_x, f0_y, f1_x, f1_y)`` with
-    ``a = (-dy, dx, dy, -dx)``, ``(dx, dy) = (p0 - p1)_xy / 2`` (3-D two-point feet).
+    """``w M_z^2``: the yaw moment of the stance foot's point forces about
+    their mean point (3-D feet of two or four points). Two points:
+    ``M_z = a . (f0_x, f0_y, f1_x, f1_y)`` with ``a = (-dy, dx, dy, -dx)``,
+    ``(dx, dy) = (p0 - p1)_xy / 2``. Four points: ``M_z = sum_p a_p . (fp_x, fp_y)``
+    with ``a_p = (-dy_p, dx_p)``, ``(dx_p, dy_p) = (p_p - mean)_xy``.
 
     The numpy build adds the rank-one ``w a a^T`` to ``H`` after ``E^T E``;
     the generated build stacks it as the row ``sqrt(w) a^T`` of ``E``.
@@ -192,27 +194,37 @@ class StanceYawMomentCost(Cost):
         super().__init__("stance_yaw_moment")
         self.layout, self.weight = layout, weight
         c, n = layout.sl_f_st.start, layout.n
-        #: The stance force entries the moment depends on.
-        self.index = np.array([c, c + 1, c + 3, c + 4])
+        #: The stance force entries the moment depends on: each point's x and y.
+        self.index = np.array([c + 3 * p + t for p in range(layout.n_points) for t in (0, 1)])
         self._flat = (self.index[:, None] * n + self.index[None, :]).ravel()
 
     @staticmethod
     def applies(layout: VariableLayout, weight: float) -> bool:
-        """True for a positive weight and 3-D feet of two points."""
-        return weight > 0 and not layout.planar and layout.n_points == 2
+        """True for a positive weight and 3-D feet of two or four points."""
+        return weight > 0 and not layout.planar and layout.n_points in (2, 4)
 
     def add_to_hessian(self, inputs: TickInputs, H: np.ndarray) -> None:
-        p0, p1 = inputs.point_positions
-        # M_z = sum_p (r_p - mid) x f_p . e_z; r_0 - mid = -(r_1 - mid) = (p0 - p1) / 2.
-        dx, dy = 0.5 * (p0[0] - p1[0]), 0.5 * (p0[1] - p1[1])
-        a = np.array([-dy, dx, dy, -dx])
+        if self.layout.n_points == 2:
+            p0, p1 = inputs.point_positions
+            # M_z = sum_p (r_p - mid) x f_p . e_z; r_0 - mid = -(r_1 - mid) = (p0 - p1) / 2.
+            dx, dy = 0.5 * (p0[0] - p1[0]), 0.5 * (p0[1] - p1[1])
+            a = np.array([-dy, dx, dy, -dx])
+        else:
+            P = inputs.point_positions
+            mx = 0.25 * (P[0][0] + P[1][0] + P[2][0] + P[3][0])
+            my = 0.25 * (P[0][1] + P[1][1] + P[2][1] + P[3][1])
+            a = np.array([c for p in P for c in (my - p[1], p[0] - mx)])
         Hf = H.reshape(-1)  # a view of the C-contiguous H
         Hf[self._flat] += self.weight * np.multiply.outer(a, a).reshape(-1)
 
     def symbolic(self, sym: SymbolicInputs, dyn: SymbolicDynamics) -> list[tuple[ca.MX, ca.MX]]:
-        con, n = sym.contact, self.layout.n
-        dxy = 0.5 * (con[0:2] - con[3:5])
-        a = ca.vertcat(-dxy[1], dxy[0], dxy[1], -dxy[0])
-        place = np.zeros((n, 4))
-        place[self.index, np.arange(4)] = 1.0
+        con, n, k = sym.contact, self.layout.n, self.layout.n_points
+        if k == 2:
+            dxy = 0.5 * (con[0:2] - con[3:5])
+            a = ca.vertcat(-dxy[1], dxy[0], dxy[1], -dxy[0])
+        else:
+            mid = 0.25 * (con[0:2] + con[3:5] + con[6:8] + con[9:11])
+            a = ca.vertcat(*[c for p in range(4) for c in (mid[1] - con[3 * p + 1], con[3 * p] - mid[0])])
+        place = np.zeros((n, 2 * k))
+        place[self.index, np.arange(2 * k)] = 1.0
         return [(math.sqrt(self.weight) * ca.mtimes(ca.DM(ca.sparsify(dm(place))), a).T, ca.MX(1, 1))]

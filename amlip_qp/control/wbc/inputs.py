@@ -161,10 +161,10 @@ def gather_inputs(kin: RobotKinematics, target: TrackingTarget, inputs: TickInpu
 
 def packed_layout(nq: int, layout: VariableLayout, n_outputs: int) -> dict:
     """Slices of the generated build's packed small input: ``q``, ``v``,
-    ``contact`` (two points: stance toe and heel positions, m, then their
+    ``contact`` (two or four points: the stance points' positions, m, then their
     drifts, m/s^2; one point: its drift on the layout's axes), ``r`` (output
     task residual, pelvis-yaw shift applied), ``w`` (swing force ramp); and its ``size``."""
-    n_con = 12 if layout.n_points == 2 else layout.point_dim
+    n_con = 6 * layout.n_points if layout.n_points > 1 else layout.point_dim
     return consecutive_slices({"q": nq, "v": layout.nv, "contact": n_con, "r": n_outputs, "w": 1})
 
 
@@ -196,9 +196,10 @@ class PackedInput:
         self._q, self._v, self._r = u[small["q"]], u[small["v"]], u[small["r"]]
         self._w = small["w"].start
         c = small["contact"].start
-        if layout.n_points == 2:
-            # stance toe and heel positions, then their drifts
-            self._contact: tuple[np.ndarray, ...] = tuple(u[c + 3 * i : c + 3 * (i + 1)] for i in range(4))
+        if layout.n_points > 1:
+            # the stance points' positions, then their drifts
+            k = 2 * layout.n_points
+            self._contact: tuple[np.ndarray, ...] = tuple(u[c + 3 * i : c + 3 * (i + 1)] for i in range(k))
         else:
             self._contact = (u[small["contact"]],)
         self._axes = layout.axes_index
@@ -214,6 +215,9 @@ class PackedInput:
             contact[1][...] = p1
             contact[2][...] = d0
             contact[3][...] = d1
+        elif len(contact) > 1:
+            for dst, src in zip(contact, (*inputs.point_positions, *inputs.point_drifts)):
+                dst[...] = src
         else:
             contact[0][...] = inputs.point_drifts[0][self._axes]
         rr = self._r

@@ -6,8 +6,9 @@
   m/s^2 and rad/s^2;
 - ``f_st``, ``f_sw``: world-frame contact point forces of the **stance** and
   **swing** foot, N. Cassie: toe then heel sphere centre, 3-D each (6 per
-  foot); Rabbit (planar): the point foot, ``(f_x, f_z)`` (2 per foot). The
-  stance foot's block always comes first, so the dimensions never change
+  foot); a four-point sole: its corners, toe left, toe right, heel left,
+  heel right (12 per foot); Rabbit (planar): the point foot, ``(f_x, f_z)``
+  (2 per foot). The stance foot's block always comes first, so the dimensions never change
   and one persistent ProxQP serves the whole walk (two with
   ``QPTracker(airborne_reduction=True)``: the problem without the airborne
   swing foot's block is the other).
@@ -37,7 +38,8 @@ class VariableLayout:
     Attributes:
         nv: Number of generalized accelerations.
         point_dim: Force components per point: 3 (x, y, z) or 2 for a planar robot (x, z).
-        n_points: Force points per foot (1: point foot, 2: Cassie's blade, toe then heel).
+        n_points: Force points per foot (1: point foot, 2: Cassie's blade, toe then heel; 4: a
+            sole's corners, toe left, toe right, heel left, heel right).
         n_rigid_st: Springs of the stance leg held rigid (eliminated forces, no variables).
         n_rigid_sw: Springs of the swing leg held rigid.
         sl_vdot: Slice of ``vdot`` in ``x``.
@@ -71,7 +73,7 @@ class VariableLayout:
 
     @classmethod
     def for_robot(cls, robot: Robot, n_rigid_st: int, n_rigid_sw: int) -> VariableLayout:
-        """The layout of ``robot``'s feet (point feet or a 3-D two-point blade).
+        """The layout of ``robot``'s feet (point feet, a 3-D two-point blade or a 3-D four-point sole).
 
         Raises:
             InputError: Feet with different or zero numbers of force points, or an unsupported foot.
@@ -80,8 +82,10 @@ class VariableLayout:
         if len(n_points) != 1 or n_points == {0}:
             raise InputError("both feet need the same (nonzero) number of force points")
         k = n_points.pop()
-        if k > 2 or (k == 2 and robot.is_planar):
-            raise InputError("supported feet: one point (3-D or planar) or a 3-D blade of two points")
+        if k not in (1, 2, 4) or (k > 1 and robot.is_planar):
+            raise InputError(
+                "supported feet: one point (3-D or planar), a 3-D blade of two points or a 3-D sole of four"
+            )
         return cls(robot.nv, 2 if robot.is_planar else 3, k, n_rigid_st, n_rigid_sw)
 
     @property
