@@ -13,11 +13,12 @@ scenario under model mismatch.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.exceptions import InputError, UnknownRobotError
+from amlip_qp.exceptions import InputError, UnknownRobotError, UnverifiedCommandWarning
 from amlip_qp.profiles import CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.run_types import PlantSetting, Push
 from amlip_qp.sim.speed_profile import SpeedProfile
@@ -213,6 +214,11 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
     (:data:`amlip_qp.sim.factory.CONTROL_DT_S`, 0.5 ms), so that a too short
     one is refused here rather than once its closed loop is built.
 
+    A command inside the bounds but outside what the robot's acceptance
+    verifies (its profile's :class:`~amlip_qp.profiles.VerifiedEnvelope`,
+    ``[verified]``) passes, with one
+    :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` naming it.
+
     Raises:
         InputError: Naming the bound and the value, e.g. a forward speed
             outside ``CommandBounds.vx_mps``, a lateral command for a planar
@@ -246,3 +252,8 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
         duration_s=scenario.duration_s,
         pushes=[(p.t_s, p.force_N, p.duration_s) for p in scenario.pushes],
     )
+    unverified = profile.verified.unverified(
+        profile.name, vx_mps=scenario.vx.speeds_mps, vy_mps=scenario.vy_mps, turn_rate_radps=scenario.turn_rate_radps
+    )
+    if unverified is not None:
+        warnings.warn(unverified, UnverifiedCommandWarning, stacklevel=2)
