@@ -231,10 +231,10 @@ def profile_scenarios(profile: RobotProfile) -> list:
             known = ", ".join(settings) or "none"
             where.fail(f"setting must name one of the [settings] ({known}), got {own[sc.name]!r}")
         setting, text, _ = settings[own[sc.name]]
-        fields = {"plant": setting.plant, "sensors": setting.sensors, "estimator": setting.estimator}
-        terrain[i] = sc.with_(
-            setting=replace(sc.setting, **fields, imu=setting.imu), description=f"{sc.description}; {text}"
+        on = replace(
+            sc.setting, plant=setting.plant, sensors=setting.sensors, estimator=setting.estimator, imu=setting.imu
         )
+        terrain[i] = sc.with_(setting=on, description=f"{sc.description}; {text}")
     out = list(plain)
     by_name = {s.name: s for s in plain}
     for name in profile.settings:
