@@ -108,6 +108,23 @@ def test_a_sweep_warns_once_for_all_its_unverified_cells(tmp_path, capsys):
     assert warned[0].endswith("(and 2 more walks outside the verified envelope)")
 
 
+def test_a_comparison_warns_once_for_the_ramps_past_the_verified_envelope():
+    from amlip_qp.sim import compare
+    from amlip_qp.sim.robustness import CompareSettings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        compare.build_tasks(["cassie", "rabbit", "h1"], ["qp"], [], CompareSettings())
+    assert [w.category for w in caught] == [UnverifiedCommandWarning]
+    text = str(caught[0].message)
+    # Rabbit's ramp ends at 1.5 m/s, its acceptance verifies 1.0; Cassie's 2.1 and H1's 1.5 are verified
+    assert text.startswith("rabbit's ramp: forward speed 1.5 m/s (verified 0 to 1 m/s)") and "\n" not in text
+    assert "cassie" not in text.split(":")[0] and "h1's ramp" not in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        compare.build_tasks(["rabbit"], ["qp"], [], CompareSettings(), ramp=False)
+
+
 def test_the_envelope_names_every_unverified_command_once():
     env = VerifiedEnvelope(vx_mps=(-0.5, 2.5), vy_max_mps=0.3, turn_rate_max_radps=math.radians(18.0))
     assert env.unverified("r", vx_mps=(0.0, 1.0, 2.5), vy_mps=0.3, turn_rate_radps=math.radians(18.0)) is None
