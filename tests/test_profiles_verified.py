@@ -97,6 +97,14 @@ def test_the_cli_is_silent_inside_the_envelope_and_exits_2_outside_the_bounds(ca
     assert code == 2 and err.count("\n") == 1 and err.startswith("amlip-qp: error: forward speed 5 m/s")
 
 
+def test_bad_input_after_an_unverified_command_is_one_error_line_and_no_warning(tmp_path, capsys):
+    bad = str(tmp_path / "missing" / "x.json")
+    for argv in (["walk", "--vx", "3.5", "--json", bad], ["compare", "--robots", "rabbit", "--json", bad]):
+        code = cli.main(argv)
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and err.startswith("amlip-qp: error:"), err
+
+
 def test_a_sweep_warns_once_for_all_its_unverified_cells(tmp_path, capsys):
     argv = ["sweep", "--grid", "vx=1.2,1.4,1.6", "--set", "robot=rabbit", "--set", "no_command_shaping=true"]
     code = cli.main([*argv, "--duration", "0.0005", "--no-progress", "--workers", "1", "--out", str(tmp_path / "o")])

@@ -44,7 +44,7 @@ from amlip_qp.sim.robustness import (
     ramp_scenario,
 )
 from amlip_qp.sim.run_types import PlantSetting, RunResult, SensorNoise
-from amlip_qp.sim.scenarios import Scenario, check_scenario, get_scenario
+from amlip_qp.sim.scenarios import Scenario, check_scenario, get_scenario, held_warnings, release_warnings
 from amlip_qp.sim.summary import summarize
 
 
@@ -344,26 +344,28 @@ def main(args: argparse.Namespace) -> int:
 
         tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
     robots = list(args.robots if args.robots is not None else compared_robots())
-    tasks = build_tasks(
-        robots,
-        args.trackers,
-        args.scenario,
-        settings,
-        seed=args.seed,
-        noise=args.noise,
-        ramp=not args.no_ramp,
-        push=not args.no_push,
-        setting=setting,
-    )
-    # Outputs are checked before anything runs; the figure's folder (default out/) is created.
-    check_output_path("--json", args.json)
-    if not args.no_plot and args.plot:
-        if args.plot == "-":
-            raise InputError("--plot cannot write to stdout ('-'); give a file name")
-        from amlip_qp.sim.plots import check_figure_path
+    with held_warnings() as unverified:  # said once the input is known good
+        tasks = build_tasks(
+            robots,
+            args.trackers,
+            args.scenario,
+            settings,
+            seed=args.seed,
+            noise=args.noise,
+            ramp=not args.no_ramp,
+            push=not args.no_push,
+            setting=setting,
+        )
+        # Outputs are checked before anything runs; the figure's folder (default out/) is created.
+        check_output_path("--json", args.json)
+        if not args.no_plot and args.plot:
+            if args.plot == "-":
+                raise InputError("--plot cannot write to stdout ('-'); give a file name")
+            from amlip_qp.sim.plots import check_figure_path
 
-        check_figure_path(args.plot)
-        check_output_path("--plot", args.plot, create_folder=True)
+            check_figure_path(args.plot)
+            check_output_path("--plot", args.plot, create_folder=True)
+    release_warnings(unverified)
 
     def log(msg: str) -> None:
         sys.stderr.write(msg + "\n")

@@ -12,6 +12,7 @@ scenario under model mismatch.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import warnings
 from collections.abc import Callable, Iterator, Mapping
@@ -200,6 +201,22 @@ def get_scenario(name: str) -> Scenario:
         return SCENARIOS[name]
     except KeyError:
         raise InputError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}") from None
+
+
+@contextlib.contextmanager
+def held_warnings() -> Iterator[list[warnings.WarningMessage]]:
+    """Hold the warnings raised inside (an :class:`UnverifiedCommandWarning` of :func:`check_scenario`)
+    until :func:`release_warnings`: a command that turns out bad input later is refused in one line,
+    without the warning before it."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UnverifiedCommandWarning)
+        yield caught
+
+
+def release_warnings(caught: list[warnings.WarningMessage]) -> None:
+    """Warn, in order, the warnings :func:`held_warnings` held (once every input check has passed)."""
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> None:

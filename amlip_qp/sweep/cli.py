@@ -15,6 +15,7 @@ import warnings
 from typing import Any
 
 from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
+from amlip_qp.sim.scenarios import held_warnings, release_warnings
 from amlip_qp.sweep import backends
 from amlip_qp.sweep import spec as spec_mod
 from amlip_qp.sweep.cells import Cell
@@ -117,9 +118,11 @@ def run_sweep(args: argparse.Namespace) -> int:
     spec = build_spec(args)
     metrics = metric_columns(spec)
     cells = spec_mod.cells_of(spec)
-    check_cells(spec, cells)
-    folder = SweepFolder(args.out, spec.plain())
-    folder.check()
+    with held_warnings() as unverified:  # said once the input is known good
+        check_cells(spec, cells)
+        folder = SweepFolder(args.out, spec.plain())
+        folder.check()
+    release_warnings(unverified)
     ray, started = (None, False) if args.ray is None else backends.connect_ray(args.ray or None)
     try:
         folder.prepare()
