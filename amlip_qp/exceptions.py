@@ -64,3 +64,8 @@ class QPError(AmlipError):
         super().__init__(message)
         self.problem = problem
         self.status = status
+
+
+class UnverifiedCommandWarning(UserWarning):
+    """A command inside the robot's physical bounds but outside what its acceptance verifies
+    (its profile's ``[verified]``): it runs, unverified. The CLI prints it as one line on stderr."""

@@ -133,16 +133,30 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
     # The rates of the bundled robots let every acceptance scenario's command
     # through bit for bit (the invariant of the command shaping). Sampled
     # every 10 ticks: a ramp within the limit over 10 ticks is within it over each.
+    # The one change a named scenario may see is the step-length cap's: a scenario
+    # faster than max_step_length_m / T (Cassie's 3 m/s ramp) gets shorter steps,
+    # T = max_step_length_m / |vx|, and nothing else.
+    from dataclasses import replace
+
     from amlip_qp.sim.scenarios import SCENARIOS
 
     dt = 10 * DT
+    capped = set()
     for scenario in SCENARIOS.values():
-        shaper = CommandShaper(PROFILES[scenario.robot].shaping)
+        shaping = PROFILES[scenario.robot].shaping
+        shaper = CommandShaper(shaping)
         t = 0.0
         for _ in range(int(round(scenario.duration_s / dt))):
             raw = scenario.command(t)
-            assert shaper.update(raw, t) is raw, (scenario.name, t)
+            out = shaper.update(raw, t)
+            if out is not raw:
+                L = shaping.max_step_length_m
+                assert abs(raw.vx_mps) * raw.step_time_s > L, (scenario.name, t)
+                assert out.step_time_s == pytest.approx(L / abs(raw.vx_mps), rel=1e-12), (scenario.name, t)
+                assert replace(out, step_time_s=raw.step_time_s) == raw, (scenario.name, t)
+                capped.add(scenario.name)
             t += dt
+    assert capped == {"cassie-3mps", "cassie-3mps-cc-ekf"}
 
 
 @pytest.mark.parametrize(

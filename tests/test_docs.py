@@ -385,7 +385,7 @@ def profile_keys(tmp_path: Path) -> dict[str, set[str]]:
 
 def test_the_new_robot_guide_names_every_profile_key(tmp_path):
     keys = profile_keys(tmp_path)
-    tables = {"", "model", "model.stand", "roles", "feet", "imu", "gait", "bounds", "shaping", "compare"}
+    tables = {"", "model", "model.stand", "roles", "feet", "imu", "gait", "bounds", "verified", "shaping", "compare"}
     tables |= {"trackers", "trackers.qp", "trackers.pbc", "trackers.pbc.spring_model_linkage"}
     tables |= {"scenarios.KEY", "settings.KEY", "mismatches", "estimator"}
     assert set(keys) == tables  # each table was probed, in some bundled profile (none has [unsupported])

@@ -75,13 +75,13 @@ def test_compare_ranges_are_inside_the_bounds():
 
 def test_bounds_name_the_bound_they_reject():
     b = get_profile("cassie").bounds
-    b.check("cassie", vx_mps=(-1.0, 2.5))  # the ends are inside
-    with pytest.raises(InputError, match=r"forward speed 2.6 m/s is outside cassie's bounds \[-1, 2.5\] m/s"):
-        b.check("cassie", vx_mps=(0.0, 2.6))
+    b.check("cassie", vx_mps=(-4.14, 4.14))  # the ends are inside
+    with pytest.raises(InputError, match=r"forward speed 4.2 m/s is outside cassie's bounds \[-4.14, 4.14\] m/s"):
+        b.check("cassie", vx_mps=(0.0, 4.2))
     with pytest.raises(InputError, match="lateral speed"):
-        b.check("cassie", vy_mps=-0.51)
+        b.check("cassie", vy_mps=-2.08)
     with pytest.raises(InputError, match="turn rate"):
-        b.check("cassie", turn_rate_radps=math.radians(61.0))
+        b.check("cassie", turn_rate_radps=math.radians(181.0))
     with pytest.raises(InputError, match="duration"):
         b.check("cassie", duration_s=601.0)
     with pytest.raises(InputError, match="impulse"):

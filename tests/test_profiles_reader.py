@@ -29,7 +29,9 @@ def test_the_bundled_profile_reads_the_values_its_file_gives():
     p = get_profile("cassie")
     assert p.model.path == MODELS_DIR / "cassie.xml" and not p.model.edits_needed
     assert (p.gait.step_time_s, p.gait.com_height_m, p.gait.clearance_m, p.gait.step_width_m) == (0.3, 0.8, 0.1, 0.25)
-    assert p.bounds.vx_mps == (-1.0, 2.5) and p.bounds.turn_rate_max_radps == math.radians(60.0)
+    assert p.bounds.vx_mps == (-4.14, 4.14) and p.bounds.turn_rate_max_radps == math.radians(180.0)
+    assert p.bounds.step_time_min_s == 0.25
+    assert p.verified.vx_mps == (-0.5, 3.0) and p.verified.turn_rate_max_radps == math.radians(45.0)
     assert p.shaping.vy_accel_mps2 == math.inf and p.shaping.max_step_length_m == 0.63
     assert p.joint_roles["ankle_pitch"] == "{side}-foot" and p.joint_name("knee", "right") == "right-knee"
     assert p.feet.passive_in_stance == ("ankle_pitch",) and p.feet.body is None
@@ -72,8 +74,8 @@ def test_an_imu_quaternion_near_unit_norm_is_normalised_and_an_imu_body_the_mode
         ("step_time_s = 0.3", "step_time_s = 30.0", "gait.step_time_s: 30 s is outside [0.05, 2]"),
         ("step_time_s = 0.3", "step_time_s = nan", "gait.step_time_s: must be a finite number"),
         ("step_time_s = 0.3\n", "", "gait.step_time_s: is required"),
-        ("vx_mps = [-1.0, 2.5]", "vx_mps = [2.5]", "bounds.vx_mps: must be a list of 2 numbers (m/s)"),
-        ("vx_mps = [-1.0, 2.5]", "vx_mps = [1.0, 2.5]", "min <= 0 <= max"),
+        ("vx_mps = [-4.14, 4.14]", "vx_mps = [2.5]", "bounds.vx_mps: must be a list of 2 numbers (m/s)"),
+        ("vx_mps = [-4.14, 4.14]", "vx_mps = [1.0, 2.5]", "min <= 0 <= max"),
         ('"swing_toe_pitch",\n]', '"swing_toe_ptich",\n]', "outputs: unknown output 'swing_toe_ptich'; known"),
         ('"swing_toe_pitch",\n]', '"swing_toe_pitch", "torso_pitch",\n]', "output 'torso_pitch' is declared more"),
         ('"com_y_over_swing", ', "", "outputs: a 3-D robot needs com_y_over_swing"),

@@ -79,12 +79,12 @@ def test_a_key_press_steps_the_command_by_its_step():
 def test_the_command_stops_at_the_robots_bounds():
     cmd = _command()
     bounds = get_profile("cassie").bounds
-    _press(cmd, "vx+", 40)
-    _press(cmd, "vy+", 40)
-    _press(cmd, "turn-", 40)
+    _press(cmd, "vx+", 100)
+    _press(cmd, "vy+", 100)
+    _press(cmd, "turn-", 100)
     assert cmd.values == (bounds.vx_mps[1], bounds.vy_max_mps, -round(math.degrees(bounds.turn_rate_max_radps), 9))
     assert not cmd.apply("vx+") and not cmd.apply("vy+") and not cmd.apply("turn-")  # at the bound: no change
-    _press(cmd, "vx-", 60)
+    _press(cmd, "vx-", 200)
     assert cmd.vx_mps == bounds.vx_mps[0]
     assert cmd.command().turn_rate_radps == pytest.approx(-bounds.turn_rate_max_radps, rel=1e-12)
 

@@ -38,12 +38,18 @@ def test_a_table_gives_the_scenario_it_describes():
                 "terrain_aware": True,
                 "clearance_m": 0.12,
             },
+            "hill-ekf": {"duration_s": 5.0, "terrain": "slope:5", "clearance_m": 0.12, "setting": "ekf"},
         },  # fmt: skip
         settings={"ekf": {"sensors": "robot", "estimator": "ekf", "description": "EKF"}},
         mismatches={"scenario": "walk-ekf", "heavy": {"mass_scale": 1.1, "description": "10 % heavier"}},
     )
     out = {s.name: s for s in profile_scenarios(profile)}
-    assert list(out) == ["h1-walk", "h1-walk-ekf", "h1-walk-ekf-heavy", "h1-hill"]  # terrain last, no copy
+    # terrain and own settings last, no copy
+    assert list(out) == ["h1-walk", "h1-walk-ekf", "h1-walk-ekf-heavy", "h1-hill", "h1-hill-ekf"]
+    assert out["h1-hill-ekf"].setting == PlantSetting(
+        sensors="robot", estimator="ekf", terrain="slope:5", clearance_m=0.12
+    )
+    assert out["h1-hill-ekf"].description == "; EKF"
     walk = out["h1-walk"]
     assert walk.robot == "h1" and walk.duration_s == 9.0 and walk.description == "a walk"
     assert walk.vx.times_s == (0.0, 1.0, 3.0) and walk.vx.speeds_mps == (0.0, 0.0, 0.8)
@@ -88,6 +94,10 @@ def test_a_setting_copies_only_the_scenarios_it_lists():
             "give either ramp or speed_profile",
         ),
         ({"settings": {"cc": {"plant": "p", "noise": 1}}}, "settings.cc: unknown key 'noise'"),
+        (
+            {"scenarios": {"x": {"duration_s": 1.0, "setting": "cc"}}, "settings": {"ekf": {"estimator": "ekf"}}},
+            "scenarios.x: setting must name one of the [settings] (ekf), got 'cc'",
+        ),
         ({"settings": {"cc": {"scenarios": ["nothing"]}}}, "settings.cc: scenarios must be a list of the robot's"),
         ({"settings": {"t": {"imu": {"quat_wxyz": [1.0, 0.0, 0.2, 0.0]}}}}, "settings.t.imu.quat_wxyz: must be a unit"),
         ({"settings": {"t": {"imu": {"pos_m": [0.1]}}}}, "settings.t.imu.pos_m: must be a list of 3 numbers (m)"),

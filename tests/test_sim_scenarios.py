@@ -75,16 +75,16 @@ def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
     [
         (
             "cassie",
-            {"vx": SpeedProfile.constant(2.6)},
-            "forward speed 2.6 m/s is outside cassie's bounds [-1, 2.5] m/s",
+            {"vx": SpeedProfile.constant(4.2)},
+            "forward speed 4.2 m/s is outside cassie's bounds [-4.14, 4.14] m/s",
         ),
-        ("cassie", {"vx": SpeedProfile((0.0, 4.0, 8.0), (0.0, -1.5, 0.0))}, "forward speed -1.5 m/s"),
-        ("rabbit", {"vx": SpeedProfile.constant(1.6)}, "outside rabbit's bounds [-0.5, 1.5] m/s"),
-        ("cassie", {"vy_mps": -0.51}, "lateral speed -0.51 m/s is outside cassie's bound |vy| <= 0.5 m/s"),
+        ("cassie", {"vx": SpeedProfile((0.0, 4.0, 8.0), (0.0, -4.5, 0.0))}, "forward speed -4.5 m/s"),
+        ("rabbit", {"vx": SpeedProfile.constant(1.8)}, "outside rabbit's bounds [-1.73, 1.73] m/s"),
+        ("cassie", {"vy_mps": -2.08}, "lateral speed -2.08 m/s is outside cassie's bound |vy| <= 2.07 m/s"),
         (
             "cassie",
-            {"turn_rate_radps": math.radians(61.0)},
-            "turn rate 61 deg/s is outside cassie's bound |turn rate| <= 60 deg/s",
+            {"turn_rate_radps": math.radians(181.0)},
+            "turn rate 181 deg/s is outside cassie's bound |turn rate| <= 180 deg/s",
         ),
         ("cassie", {"duration_s": 601.0}, "duration 601 s is above cassie's bound 600 s"),
         ("rabbit", {"vy_mps": 0.1, "turn_rate_radps": 0.2}, "rabbit is planar: lateral speed (0.1 m/s), turn rate"),

@@ -49,7 +49,11 @@ def _ramp_png(path, size=(41, 101), dtype=np.uint8):
         ("stairs:0.15:0.25:2", "stairs", "stairs:0.15:0.25:2", (0.15, 0.25, 2.0)),
         ("rough:0.04", "rough", "rough:0.04:0", (0.04, 0.0)),
         ("rough:0.05:7", "rough", "rough:0.05:7", (0.05, 7.0)),
-        ("waves:0.3:4", "waves", "waves:0.3:4", (0.3, 4.0)),
+        ("waves:0.3:4", "waves", "waves:0.3:4", (0.3, 4.0, 0.0)),
+        ("waves:0.3:4:0", "waves", "waves:0.3:4", (0.3, 4.0, 0.0)),
+        ("waves:0.3:4:-0", "waves", "waves:0.3:4", (0.3, 4.0, 0.0)),
+        ("waves:0.6:2.25:90", "waves", "waves:0.6:2.25:90", (0.6, 2.25, 90.0)),
+        ("waves:0.6:2.25:-30.5", "waves", "waves:0.6:2.25:-30.5", (0.6, 2.25, -30.5)),
     ],
 )
 def test_parse_good_specs(text, kind, canonical, params):
@@ -77,6 +81,11 @@ def test_parse_good_specs(text, kind, canonical, params):
         ("waves:-0.3:4", "HEIGHT_M must be a number in (0, 5]"),
         ("waves:0.3:0.1", "the wavelength must be at least 0.2 m"),
         ("waves:1.5:4", "deg steep at their flanks"),
+        ("waves:1.5:4:90", "deg steep at their flanks"),
+        ("waves:0.3:4:91", "HEADING_DEG must be in [-90, 90]"),
+        ("waves:0.3:4:nan", "HEADING_DEG must be in [-90, 90]"),
+        ("waves:0.3:4:east", "HEADING_DEG must be a number of degrees"),
+        ("waves:0.3:4:0:1", "wrong number of fields for waves"),
         ("hfield:a.png:1:2", "give hfield:PATH.png"),
         ("hfield:/nonexistent/h.png:10:4:0.5", "height map not found: /nonexistent/h.png"),
         ("hfield:x.png:-10:4:0.5", "SIZE_X_M must be a number in (0, 1000]"),
@@ -160,7 +169,76 @@ def test_analytic_profiles():
     assert rough.height_m(5.0, 0.0) != parse_terrain("rough:0.04:4").height_m(5.0, 0.0)  # the seed matters
 
 
-@pytest.mark.parametrize("text", KINDS)
+def test_the_0_deg_waves_grid_is_the_ridges_across_the_path_array_for_array():
+    from amlip_qp.sim import terrain_grids as G
+
+    for h, lam in ((0.3, 4.0), (0.6, 2.25), (0.05, 0.2)):
+        # the ridges across the path as they were built before a heading could be given
+        n_waves = max(int(math.ceil((G.FRONT_M - START_X_M) / lam)), 1)
+        n = max(int(math.ceil(n_waves * lam / G.GRID_SPACING_M)), 1)
+        xs = START_X_M + (n_waves * lam / n) * np.arange(n + 1)
+        profile = 0.5 * h * (1.0 - np.cos(2.0 * math.pi * (xs - START_X_M) / lam))
+        profile[0] = profile[-1] = 0.0
+        rows = np.tile(profile, (17, 1))  # y every 0.5 m over |y| <= 4 m
+        lo, span = float(rows.min()), float(rows.max() - rows.min())
+        for grid in (G.waves_grid(h, lam, START_X_M), G.waves_grid(h, lam, START_X_M, 0.0)):
+            assert np.array_equal(grid.data, ((rows - lo) / span).astype(np.float32))
+            assert (grid.x0_m, grid.y0_m, grid.dy_m, grid.z0_m, grid.elevation_m) == (START_X_M, -4.0, 0.5, lo, span)
+        a, b = parse_terrain(f"waves:{h}:{lam}"), parse_terrain(f"waves:{h}:{lam}:0")
+        assert a.text == b.text and np.array_equal(a.grid.data, b.grid.data)
+
+
+@pytest.mark.parametrize("heading", [0.0, 30.0, -45.0, 90.0])
+def test_the_waves_height_field_samples_the_analytic_field(heading):
+    """The surface MuJoCo collides with is the smooth field to within its linear interpolation:
+    half the field's curvature (2 pi / wavelength)^2 h / 2 times the squared half-diagonal of a cell."""
+    from amlip_qp.sim.terrain_grids import GRID_SPACING_M, waves_height_m
+
+    h, lam = 0.6, 2.25
+    spec = parse_terrain(f"waves:{h}:{lam}:{heading:g}")
+    rng = np.random.default_rng(0)
+    x0 = START_X_M if heading == 0.0 else -3.9
+    xs, ys = rng.uniform(x0, 29.0, 4000), rng.uniform(-HALF_WIDTH_M, HALF_WIDTH_M, 4000)
+    smooth = waves_height_m(xs, ys, h, lam, heading, START_X_M)
+    surface = np.array([spec.height_m(x, y) for x, y in zip(xs, ys)])
+    bound = 0.5 * (2.0 * math.pi / lam) ** 2 * (0.5 * h) * 0.5 * GRID_SPACING_M**2 + 1e-6
+    err = np.abs(surface - smooth)
+    assert np.max(err) < bound  # about 1.2 mm for these 60 cm waves
+    assert np.max(err) > 0.1 * bound  # the grid is a grid, not the function itself
+    assert np.max(smooth) == pytest.approx(h, abs=1e-3) and np.min(smooth) == pytest.approx(0.0, abs=1e-3)
+
+
+def test_waves_at_90_deg_run_along_the_path_with_the_robot_in_a_valley():
+    h, lam = 0.6, 2.25
+    spec = parse_terrain(f"waves:{h}:{lam}:90")
+    for x in (-3.0, 0.0, 0.4, 5.0, 20.0):
+        assert spec.height_m(x, 0.0) == pytest.approx(0.0, abs=1e-6)  # the valley floor under the path
+        assert spec.height_m(x, lam / 2) == pytest.approx(h, abs=1e-3)  # the ridges beside it
+        assert spec.height_m(x, -lam / 2) == pytest.approx(h, abs=1e-3)
+        assert spec.height_m(x, lam) == pytest.approx(0.0, abs=1e-3)  # the next valley
+    # the feet of a robot standing 0.25 m wide at the start are 2 cm up the valley's sides
+    assert spec.height_m(0.0, 0.125) == pytest.approx(0.5 * h * (1 - math.cos(2 * math.pi * 0.125 / lam)), abs=1e-3)
+    # 30 deg: the line through the start along the ridges is a valley floor too
+    oblique = parse_terrain(f"waves:{h}:{lam}:30")
+    for t in (-4.0, -2.0, 0.0, 3.0, 4.0):  # |y| <= 3.5 m, on the terrain
+        x, y = -t * math.sin(math.radians(30.0)), t * math.cos(math.radians(30.0))
+        assert oblique.height_m(x + 4.0, y) == pytest.approx(oblique.height_m(4.0, 0.0), abs=2e-3)
+    assert oblique.height_m(0.0, 0.0) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_robot_starts_standing_in_the_valley_of_90_deg_waves():
+    plant, spec = _plant("cassie", "waves:0.6:2.25:90")
+    ground = ground_height_function(plant, spec)
+    assert ground(0.0, 0.0) == pytest.approx(0.0, abs=1e-6)
+    assert ground(3.0, 1.125) == pytest.approx(0.6, abs=2e-3)
+    data = mujoco.MjData(plant.model)
+    mujoco.mj_resetDataKeyframe(plant.model, data, 0)
+    mujoco.mj_forward(plant.model, data)
+    # the stand keyframe is lifted onto the valley's sides under the feet: 2 cm at most
+    assert 0.0 <= data.qpos[2] - factory.load("cassie").qpos_stand[2] < 0.03
+
+
+@pytest.mark.parametrize("text", [*KINDS, "waves:0.6:2.25:90", "waves:0.3:4:35"])
 def test_analytic_height_matches_mujoco_ray_casts(text):
     plant, spec = _plant("cassie", text)
     ground = ground_height_function(plant, spec)

@@ -15,12 +15,21 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import TextIO
 
 from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import Parser, float_in, handler, int_in
 from amlip_qp.cli.subcommands import TRACKERS, add_check_robot, add_compare, add_sweep, add_view, add_walk
-from amlip_qp.exceptions import AmlipError, InputError, MJCFError, ModelFileError, UnknownRobotError
+from amlip_qp.exceptions import (
+    AmlipError,
+    InputError,
+    MJCFError,
+    ModelFileError,
+    UnknownRobotError,
+    UnverifiedCommandWarning,
+)
 from amlip_qp.profiles import DEFAULT_EKF_SCENARIO, DEFAULT_SCENARIO
 
 PROG = "amlip-qp"
@@ -168,12 +177,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    """An :class:`UnverifiedCommandWarning` as one line on stderr; any other warning as Python shows it."""
+    if issubclass(category, UnverifiedCommandWarning):
+        sys.stderr.write(f"{PROG}: warning: {message}\n")
+    else:
+        _SHOW_WARNING(message, category, filename, lineno, file, line)
+
+
+#: Python's own warning display (the CLI replaces it while a subcommand runs).
+_SHOW_WARNING = warnings.showwarning
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``amlip-qp`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return int(args.func(args) or 0)
     except _USAGE_ERRORS as exc:
         sys.stderr.write(f"{PROG}: error: {exc}\n")
         return 2

@@ -63,8 +63,9 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         default=None,
         help="ground in the plant: flat (default), slope:DEG (|DEG| < 45, up for DEG > 0), "
         "stairs:RISE_M:RUN_M[:N] (N steps up, a landing, N down; N=4), rough:AMPLITUDE_M[:SEED], "
-        "waves:HEIGHT_M:WAVELENGTH_M, hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M (gray: black 0, white HEIGHT_M); "
-        "slopes, stairs and waves start 1 m ahead of the robot",
+        "waves:HEIGHT_M:WAVELENGTH_M[:HEADING_DEG] (ridges at HEADING_DEG to the path, default 0: across it; "
+        "90: along it, the robot in a valley), hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M (gray: black 0, "
+        "white HEIGHT_M); slopes, stairs and waves at heading 0 start 1 m ahead of the robot",
     )
     p.add_argument(
         "--terrain-aware",

@@ -8,7 +8,7 @@ robots' files are among the package's models (``amlip_qp/models/NAME.toml``);
 a user's is given by path (``--robot PATH``, ``load_robot(PATH)``).
 
 - :mod:`~amlip_qp.profiles.profile`: :class:`RobotProfile` and its parts;
-- :mod:`~amlip_qp.profiles.commands`: :class:`CommandBounds`, :class:`CommandShaping`;
+- :mod:`~amlip_qp.profiles.commands`: :class:`CommandBounds`, :class:`VerifiedEnvelope`, :class:`CommandShaping`;
 - :mod:`~amlip_qp.profiles.reader`: the file, checked key by key;
 - :mod:`~amlip_qp.profiles.registry`: the bundled profiles and :func:`get_profile`.
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from amlip_qp.profiles.commands import NO_SHAPING, CommandBounds, CommandShaping
+from amlip_qp.profiles.commands import NO_SHAPING, CommandBounds, CommandShaping, VerifiedEnvelope
 from amlip_qp.profiles.profile import (
     FORCE_POINT_COUNTS,
     FORCE_SITE_SUFFIXES,
@@ -74,6 +74,7 @@ __all__ = [
     "ModelSpec",
     "RobotProfile",
     "StandPose",
+    "VerifiedEnvelope",
     "bundled_names",
     "compared_robots",
     "get_profile",

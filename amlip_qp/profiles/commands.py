@@ -1,7 +1,12 @@
-"""The commands a robot may be given: their physical bounds and how they are shaped.
+"""The commands a robot may be given: their physical bounds, what is verified, and how they are shaped.
 
-Both are data of a robot's profile (:mod:`amlip_qp.profiles`), tables
-``[bounds]`` and ``[shaping]`` of its profile file.
+All are data of a robot's profile (:mod:`amlip_qp.profiles`), tables
+``[bounds]``, ``[verified]`` and ``[shaping]`` of its profile file. Three zones:
+a command inside the verified envelope (:class:`VerifiedEnvelope`) is what the
+acceptance scenarios walk; between it and the physical bounds
+(:class:`CommandBounds`) it runs with one
+:class:`~amlip_qp.exceptions.UnverifiedCommandWarning`; outside the physical
+bounds it is refused (:class:`~amlip_qp.exceptions.InputError`).
 """
 
 from __future__ import annotations
@@ -19,10 +24,15 @@ class CommandBounds:
 
     A command outside these bounds is out of the robot's physical reach or
     certainly a typo, so it is refused before anything is simulated. Inside
-    them a walk is not guaranteed: the step-command and acceptance tests say
-    what is verified.
+    them a walk is not guaranteed: :class:`VerifiedEnvelope` says what is
+    verified.
 
-    Each robot's values, and why, are in its profile file (``[bounds]``).
+    The speed and turn-rate bounds are derived from the robot's legs
+    (:func:`amlip_qp.robots.reach.derive_command_bounds`: reach at the CoM
+    height, the widest foot spread and the hip-yaw range, at the shortest
+    step time ``step_time_min_s``); each robot's values, and how they were
+    derived, are in its profile file (``[bounds]``), and a test holds them to
+    the derivation.
 
     Attributes:
         vx_mps: ``(min, max)`` forward speed in the heading frame, m/s.
@@ -39,6 +49,8 @@ class CommandBounds:
         push_force_max_N: Largest force magnitude of one push, N. 3000 N is
             about ten body weights of a 32-33 kg robot: above it a force is an
             impact, not a push.
+        step_time_min_s: The shortest step time the speed bounds are derived at, s
+            (the robot's fastest stepping); ``None``: the profile gait's step time.
     """
 
     vx_mps: tuple[float, float]
@@ -47,8 +59,12 @@ class CommandBounds:
     duration_max_s: float = 600.0
     push_impulse_max_Ns: float = 100.0
     push_force_max_N: float = 3000.0
+    step_time_min_s: float | None = None
 
     def __post_init__(self) -> None:
+        t = self.step_time_min_s
+        if t is not None and not (math.isfinite(t) and t > 0.0):
+            raise InputError(f"CommandBounds.step_time_min_s must be a positive number of seconds, got {t!r}")
         lo, hi = self.vx_mps
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi):
             raise InputError(
@@ -124,6 +140,80 @@ class CommandBounds:
                     f"push at {t_s:g} s lasting {push_s:g} s ends after the run's {duration_s:g} s; "
                     "lengthen the run or push earlier"
                 )
+
+
+@dataclass(frozen=True)
+class VerifiedEnvelope:
+    """The commands a robot's acceptance scenarios verify (SI units), inside its :class:`CommandBounds`.
+
+    A command between this envelope and the physical bounds runs, with one
+    :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` (:meth:`unverified`
+    says why). The default, of a profile without ``[verified]``, verifies
+    standing in place only.
+
+    Attributes:
+        vx_mps: ``(min, max)`` forward speed the acceptance walks, m/s.
+        vy_max_mps: Largest lateral speed magnitude it walks, m/s.
+        turn_rate_max_radps: Largest turn-rate magnitude it walks, rad/s.
+    """
+
+    vx_mps: tuple[float, float] = (0.0, 0.0)
+    vy_max_mps: float = 0.0
+    turn_rate_max_radps: float = 0.0
+
+    def __post_init__(self) -> None:
+        lo, hi = self.vx_mps
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= 0.0 <= hi):
+            raise InputError(
+                f"VerifiedEnvelope.vx_mps must be finite (min, max) with min <= 0 <= max, got {self.vx_mps!r}"
+            )
+        for name in ("vy_max_mps", "turn_rate_max_radps"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InputError(f"VerifiedEnvelope.{name} must be a finite number >= 0, got {value!r}")
+
+    def within(self, bounds: CommandBounds) -> bool:
+        """Whether the envelope lies inside ``bounds`` (a profile's must)."""
+        lo, hi = self.vx_mps
+        blo, bhi = bounds.vx_mps
+        return (
+            blo <= lo
+            and hi <= bhi
+            and self.vy_max_mps <= bounds.vy_max_mps
+            and self.turn_rate_max_radps <= bounds.turn_rate_max_radps
+        )
+
+    def unverified(
+        self, robot: str, *, vx_mps: Iterable[float] = (), vy_mps: float = 0.0, turn_rate_radps: float = 0.0
+    ) -> str | None:
+        """One line naming every command outside the envelope, or ``None`` when all are inside.
+
+        Args:
+            robot: The robot's name (for the message).
+            vx_mps: Every forward speed commanded, m/s (a profile's knots).
+            vy_mps: Lateral speed, m/s.
+            turn_rate_radps: Turn rate, rad/s.
+        """
+        out = []
+        lo, hi = self.vx_mps
+        speeds = list(vx_mps)
+        fast = [v for v in speeds if not lo <= v <= hi]
+        if fast:
+            worst = max(fast, key=lambda v: max(v - hi, lo - v))
+            out.append(f"forward speed {worst:g} m/s (verified {lo:g} to {hi:g} m/s)")
+        if abs(vy_mps) > self.vy_max_mps:
+            out.append(f"lateral speed {vy_mps:g} m/s (verified |vy| <= {self.vy_max_mps:g} m/s)")
+        if abs(turn_rate_radps) > self.turn_rate_max_radps:
+            out.append(
+                f"turn rate {math.degrees(turn_rate_radps):g} deg/s "
+                f"(verified <= {math.degrees(self.turn_rate_max_radps):g} deg/s)"
+            )
+        if not out:
+            return None
+        return (
+            f"{', '.join(out)}: inside {robot}'s physical bounds but not verified by its acceptance "
+            "(profile [verified]); running it anyway"
+        )
 
 
 @dataclass(frozen=True)

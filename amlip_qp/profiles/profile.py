@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.profiles.commands import CommandBounds, CommandShaping
+from amlip_qp.profiles.commands import CommandBounds, CommandShaping, VerifiedEnvelope
 
 #: Tracker name -> ``"module:function"`` that turns a profile's ``[trackers.NAME]`` table into that
 #: tracker's configuration object (imported only when asked for, so this module stays light).
@@ -229,7 +229,9 @@ class RobotProfile:
         outputs: The outputs the trackers follow, in order (:mod:`amlip_qp.profiles.outputs`).
         planar: True for a robot that walks in the sagittal plane only.
         gait: Default gait.
-        bounds: Command bounds.
+        bounds: Command bounds (physical: outside them a command is refused).
+        verified: The commands the acceptance verifies (outside them, inside ``bounds``,
+            a command runs with an :class:`~amlip_qp.exceptions.UnverifiedCommandWarning`).
         shaping: Command shaping (rate limits).
         trackers: Tracker name -> its configuration table (:meth:`tracker_config` builds it).
         compare: ``amlip-qp compare`` ranges.
@@ -259,6 +261,7 @@ class RobotProfile:
     gait: GaitSettings
     bounds: CommandBounds
     shaping: CommandShaping
+    verified: VerifiedEnvelope = field(default_factory=VerifiedEnvelope)
     trackers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     compare: CompareRanges | None = None
     plants: Mapping[str, Path] = field(default_factory=dict)

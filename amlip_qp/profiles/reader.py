@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from amlip_qp.exceptions import InputError, ProfileError
-from amlip_qp.profiles.commands import CommandBounds, CommandShaping
+from amlip_qp.profiles.commands import CommandBounds, CommandShaping, VerifiedEnvelope
 from amlip_qp.profiles.outputs import output_primitives
 from amlip_qp.profiles.profile import (
     FORCE_POINT_COUNTS,
@@ -309,6 +309,7 @@ def _bounds(t: _Table) -> CommandBounds:
         "duration_max_s": t.number("duration_max_s", 600.0, low=0.0, unit="s"),
         "push_impulse_max_Ns": t.number("push_impulse_max_Ns", 100.0, low=0.0, unit="N s"),
         "push_force_max_N": t.number("push_force_max_N", 3000.0, low=0.0, unit="N"),
+        "step_time_min_s": t.number("step_time_min_s", None, low=1e-3, unit="s"),
     }
     t.done()
     try:
@@ -316,6 +317,23 @@ def _bounds(t: _Table) -> CommandBounds:
     except Exception as exc:
         t.fail(str(exc))
         raise
+
+
+def _verified(t: _Table | None, bounds: CommandBounds) -> VerifiedEnvelope:
+    if t is None:
+        return VerifiedEnvelope()
+    vx = t.vector("vx_mps", 2, unit="m/s")
+    vy = t.number("vy_max_mps", 0.0, low=0.0, unit="m/s")
+    turn = math.radians(t.number("turn_rate_max_degps", 0.0, low=0.0, unit="deg/s"))
+    t.done()
+    try:
+        envelope = VerifiedEnvelope(vx_mps=vx, vy_max_mps=vy, turn_rate_max_radps=turn)
+    except Exception as exc:
+        t.fail(str(exc))
+        raise
+    if not envelope.within(bounds):
+        t.fail("the verified envelope must lie inside [bounds] (a verified command is physically possible)")
+    return envelope
 
 
 def _trackers(t: _Table | None) -> dict[str, dict[str, Any]]:
@@ -373,6 +391,7 @@ def read_profile(path: str | Path) -> RobotProfile:
     bounds_t = top.table("bounds")
     assert bounds_t is not None
     bounds = _bounds(bounds_t)
+    verified = _verified(top.table("verified", required=False), bounds)
     shaping_t = top.table("shaping")
     assert shaping_t is not None
     shaping = _dataclass_table(
@@ -424,6 +443,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         planar=planar,
         gait=gait,
         bounds=bounds,
+        verified=verified,
         shaping=shaping,
         trackers=_trackers(top.table("trackers", required=False)),
         compare=compare,

@@ -23,7 +23,14 @@ from amlip_qp.profiles import DEFAULT_ROBOT, NO_SHAPING, get_profile  # noqa: E4
 from amlip_qp.sim.plant_modifiers import parse_payload  # noqa: E402
 from amlip_qp.sim.run_log import LOG_MODES  # noqa: E402
 from amlip_qp.sim.run_types import PlantSetting, Push, RunResult, SensorNoise  # noqa: E402
-from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario  # noqa: E402
+from amlip_qp.sim.scenarios import (  # noqa: E402
+    Scenario,
+    SpeedProfile,
+    check_scenario,
+    get_scenario,
+    held_warnings,
+    release_warnings,
+)
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.
 PROGRESS_MIN_DURATION_S = 3.0
@@ -199,10 +206,12 @@ def run_walk(args: argparse.Namespace) -> int:
     """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
     from amlip_qp.sim import factory, summary
 
-    scenario = scenario_from_args(args)
-    get_profile(scenario.robot).check_supported(args.tracker)
-    _check_output_paths(args)
-    check_plant(scenario)
+    with held_warnings() as unverified:  # said once the input is known good
+        scenario = scenario_from_args(args)
+        get_profile(scenario.robot).check_supported(args.tracker)
+        _check_output_paths(args)
+        check_plant(scenario)
+    release_warnings(unverified)
     noise = SensorNoise() if args.noise else None
     sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
     recorder = None

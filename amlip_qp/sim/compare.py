@@ -22,6 +22,7 @@ import argparse
 import math
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -29,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from amlip_qp.exceptions import InputError
+from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
 from amlip_qp.profiles import compared_robots, get_profile
 from amlip_qp.sim.robustness import (
     PUSH_DURATION_S,
@@ -43,7 +44,7 @@ from amlip_qp.sim.robustness import (
     ramp_scenario,
 )
 from amlip_qp.sim.run_types import PlantSetting, RunResult, SensorNoise
-from amlip_qp.sim.scenarios import Scenario, check_scenario, get_scenario
+from amlip_qp.sim.scenarios import Scenario, check_scenario, get_scenario, held_warnings, release_warnings
 from amlip_qp.sim.summary import summarize
 
 
@@ -130,6 +131,9 @@ def build_tasks(
 ) -> list[_Task]:
     """Every experiment of a comparison, longest first (better packing on the workers).
 
+    A ramp past a robot's verified envelope (its profile's ``[verified]``; Rabbit's 1.5 m/s) gives
+    one :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` for the whole comparison.
+
     Raises:
         InputError: A plant that does not fit one of the robots (loaded here, once per robot),
             or a setting the robot's gait cannot take (a swing clearance above its CoM height).
@@ -139,9 +143,15 @@ def build_tasks(
 
     setting = setting or PlantSetting()
     tasks = []
+    unverified: list[str] = []
     for robot in robots:
         nominal = nominal_scenario(robot, scenario_names, settings)
         check_scenario(nominal.with_(setting=setting))  # the setting's clearance against the robot's gait
+        if ramp:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", UnverifiedCommandWarning)
+                check_scenario(ramp_scenario(robot, settings))
+            unverified += [f"{robot}'s ramp: {w.message}" for w in caught if w.category is UnverifiedCommandWarning]
         loaded = load(robot)
         planar = loaded.is_planar
         edits = setting_edits(setting, loaded)
@@ -161,6 +171,8 @@ def build_tasks(
     unknown = [n for n in scenario_names if get_scenario(n).robot not in robots]
     if unknown:
         raise InputError(f"--scenario {', '.join(unknown)} is for a robot not in --robots {','.join(robots)}")
+    if unverified:
+        warnings.warn("; ".join(unverified), UnverifiedCommandWarning, stacklevel=2)
     return tasks
 
 
@@ -332,26 +344,28 @@ def main(args: argparse.Namespace) -> int:
 
         tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
     robots = list(args.robots if args.robots is not None else compared_robots())
-    tasks = build_tasks(
-        robots,
-        args.trackers,
-        args.scenario,
-        settings,
-        seed=args.seed,
-        noise=args.noise,
-        ramp=not args.no_ramp,
-        push=not args.no_push,
-        setting=setting,
-    )
-    # Outputs are checked before anything runs; the figure's folder (default out/) is created.
-    check_output_path("--json", args.json)
-    if not args.no_plot and args.plot:
-        if args.plot == "-":
-            raise InputError("--plot cannot write to stdout ('-'); give a file name")
-        from amlip_qp.sim.plots import check_figure_path
+    with held_warnings() as unverified:  # said once the input is known good
+        tasks = build_tasks(
+            robots,
+            args.trackers,
+            args.scenario,
+            settings,
+            seed=args.seed,
+            noise=args.noise,
+            ramp=not args.no_ramp,
+            push=not args.no_push,
+            setting=setting,
+        )
+        # Outputs are checked before anything runs; the figure's folder (default out/) is created.
+        check_output_path("--json", args.json)
+        if not args.no_plot and args.plot:
+            if args.plot == "-":
+                raise InputError("--plot cannot write to stdout ('-'); give a file name")
+            from amlip_qp.sim.plots import check_figure_path
 
-        check_figure_path(args.plot)
-        check_output_path("--plot", args.plot, create_folder=True)
+            check_figure_path(args.plot)
+            check_output_path("--plot", args.plot, create_folder=True)
+    release_warnings(unverified)
 
     def log(msg: str) -> None:
         sys.stderr.write(msg + "\n")

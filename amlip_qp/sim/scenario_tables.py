@@ -7,7 +7,9 @@ A profile file holds the robot's scenarios as data (``docs/NEW_ROBOT.md``):
   ``V_MPS`` over ``RAMP_S`` seconds) or ``speed_profile = [[T_S, V_MPS], ...]``, ``vy_mps``,
   ``turn_rate_degps``, ``turn_start_s``, ``turn_angle_deg``, ``pushes = [{t_s, force_N,
   duration_s, phase}]``, a ``gait`` table (every :class:`~amlip_qp.profiles.GaitSettings`
-  field), and the terrain: ``terrain`` (a ``--terrain`` spec), ``terrain_aware``, ``clearance_m``.
+  field), the terrain: ``terrain`` (a ``--terrain`` spec), ``terrain_aware``, ``clearance_m``, and
+  ``setting``: the name of one of the ``[settings]``, whose plant, sensors, estimator and IMU the
+  scenario runs on (it is then copied into no setting).
 - ``[settings.NAME]``: a plant, sensor model and estimator (``plant``, ``sensors``,
   ``estimator``, ``description``), and where the IMU sits (``imu``: a table of the ``[imu]``
   keys, in place of the profile's ``[imu]``); every scenario on the robot's own model with ideal sensors
@@ -18,7 +20,7 @@ A profile file holds the robot's scenarios as data (``docs/NEW_ROBOT.md``):
   ``description``) gives a copy ``ROBOT-SCENARIO-NAME`` under that model mismatch.
 
 The order: the plain scenarios, their copies in each setting, the mismatches, then the
-scenarios with a terrain. A key that is unknown or of the wrong type is a
+scenarios with a terrain or a ``setting`` of their own. A key that is unknown or of the wrong type is a
 :class:`~amlip_qp.exceptions.ProfileError` naming the file and the key.
 """
 
@@ -56,6 +58,7 @@ _SCENARIO_KEYS = (
     "terrain",
     "terrain_aware",
     "clearance_m",
+    "setting",
 )
 _SETTING_KEYS = ("plant", "sensors", "estimator", "imu", "description", "scenarios")
 _MODIFIER_KEYS = ("mass_scale", "payload_kg", "payload_pos_m", "spring_scale", "friction", "actuator_delay_ticks")
@@ -211,13 +214,31 @@ def profile_scenarios(profile: RobotProfile) -> list:
     """
     plain: list[Scenario] = []
     terrain: list[Scenario] = []
+    own: dict[str, str] = {}  # scenario name -> the setting it runs on
     for key, value in profile.scenarios.items():
         sc = _scenario(profile, key, value)
-        (plain if sc.setting == PlantSetting() else terrain).append(sc)
+        if value.get("setting") is not None:
+            own[sc.name] = value["setting"]
+            terrain.append(sc)
+        else:
+            (plain if sc.setting == PlantSetting() else terrain).append(sc)
+    settings = {name: _setting(profile, name, value) for name, value in profile.settings.items()}
+    for i, sc in enumerate(terrain):
+        if sc.name not in own:
+            continue
+        if own[sc.name] not in settings:
+            where = _Where(profile, f"scenarios.{sc.name.removeprefix(profile.name + '-')}")
+            known = ", ".join(settings) or "none"
+            where.fail(f"setting must name one of the [settings] ({known}), got {own[sc.name]!r}")
+        setting, text, _ = settings[own[sc.name]]
+        on = replace(
+            sc.setting, plant=setting.plant, sensors=setting.sensors, estimator=setting.estimator, imu=setting.imu
+        )
+        terrain[i] = sc.with_(setting=on, description=f"{sc.description}; {text}")
     out = list(plain)
     by_name = {s.name: s for s in plain}
-    for name, value in profile.settings.items():
-        setting, text, keys = _setting(profile, name, value)
+    for name in profile.settings:
+        setting, text, keys = settings[name]
         chosen = {f"{profile.name}-{k}" for k in keys} if keys is not None else None
         for s in plain:
             if chosen is not None and s.name not in chosen:

@@ -12,12 +12,14 @@ scenario under model mismatch.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import warnings
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 
 from amlip_qp.alip.planner import Command
-from amlip_qp.exceptions import InputError, UnknownRobotError
+from amlip_qp.exceptions import InputError, UnknownRobotError, UnverifiedCommandWarning
 from amlip_qp.profiles import CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.run_types import PlantSetting, Push
 from amlip_qp.sim.speed_profile import SpeedProfile
@@ -201,6 +203,22 @@ def get_scenario(name: str) -> Scenario:
         raise InputError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}") from None
 
 
+@contextlib.contextmanager
+def held_warnings() -> Iterator[list[warnings.WarningMessage]]:
+    """Hold the warnings raised inside (an :class:`UnverifiedCommandWarning` of :func:`check_scenario`)
+    until :func:`release_warnings`: a command that turns out bad input later is refused in one line,
+    without the warning before it."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UnverifiedCommandWarning)
+        yield caught
+
+
+def release_warnings(caught: list[warnings.WarningMessage]) -> None:
+    """Warn, in order, the warnings :func:`held_warnings` held (once every input check has passed)."""
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
 def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> None:
     """Refuse a scenario whose commands, duration or pushes are outside its robot's physical bounds.
 
@@ -212,6 +230,11 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
     A run must also last at least one control tick
     (:data:`amlip_qp.sim.factory.CONTROL_DT_S`, 0.5 ms), so that a too short
     one is refused here rather than once its closed loop is built.
+
+    A command inside the bounds but outside what the robot's acceptance
+    verifies (its profile's :class:`~amlip_qp.profiles.VerifiedEnvelope`,
+    ``[verified]``) passes, with one
+    :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` naming it.
 
     Raises:
         InputError: Naming the bound and the value, e.g. a forward speed
@@ -246,3 +269,8 @@ def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> N
         duration_s=scenario.duration_s,
         pushes=[(p.t_s, p.force_N, p.duration_s) for p in scenario.pushes],
     )
+    unverified = profile.verified.unverified(
+        profile.name, vx_mps=scenario.vx.speeds_mps, vy_mps=scenario.vy_mps, turn_rate_radps=scenario.turn_rate_radps
+    )
+    if unverified is not None:
+        warnings.warn(unverified, UnverifiedCommandWarning, stacklevel=2)

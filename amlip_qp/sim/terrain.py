@@ -2,7 +2,7 @@
 
 The terrain exists in the MuJoCo plant only. :func:`parse_terrain` reads a
 spec (``flat``, ``slope:DEG``, ``stairs:RISE_M:RUN_M[:N]``,
-``rough:AMPLITUDE_M[:SEED]``, ``waves:HEIGHT_M:WAVELENGTH_M``,
+``rough:AMPLITUDE_M[:SEED]``, ``waves:HEIGHT_M:WAVELENGTH_M[:HEADING_DEG]``,
 ``hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M``) into a :class:`TerrainSpec`
 whose :meth:`~TerrainSpec.height_m` is the analytic ground height;
 :func:`terrain_edit` builds it into a plant's ``MjSpec`` (boxes where they
@@ -15,7 +15,10 @@ The robot starts at x = 0 heading +x; the terrain varies along x (so the
 planar Rabbit, in the x-z plane, walks on all of it) and spans
 ``|y| <=`` :data:`~amlip_qp.sim.terrain_grids.HALF_WIDTH_M`. Slopes, stairs
 and waves start :data:`START_X_M` ahead of the robot; rough ground is flat
-around the start.
+around the start. Waves at a heading other than 0 (their ridges at
+``HEADING_DEG`` to the path; 90: along it) cover the whole terrain, the robot
+starting on the floor of the valley through x = y = 0
+(:func:`~amlip_qp.sim.terrain_grids.waves_height_m`).
 """
 
 from __future__ import annotations
@@ -60,7 +63,7 @@ HFIELD_BACK_M = 1.0
 
 KINDS = ("flat", "slope", "stairs", "rough", "waves", "hfield")
 _USAGE = (
-    "flat, slope:DEG, stairs:RISE_M:RUN_M[:N], rough:AMPLITUDE_M[:SEED], waves:HEIGHT_M:WAVELENGTH_M "
+    "flat, slope:DEG, stairs:RISE_M:RUN_M[:N], rough:AMPLITUDE_M[:SEED], waves:HEIGHT_M:WAVELENGTH_M[:HEADING_DEG] "
     "or hfield:PATH.png:SIZE_X_M:SIZE_Y_M:HEIGHT_M"
 )
 
@@ -161,6 +164,19 @@ def _positive(name: str, text: str, spec: str, upper: float) -> float:
     return value
 
 
+def _heading(text: str, spec: str) -> float:
+    """The ridges' heading of ``waves``, deg in [-90, 90] (a ridge at 180 deg is the same ridge)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"--terrain {spec!r}: HEADING_DEG must be a number of degrees, got {text!r}") from None
+    if not (math.isfinite(value) and -90.0 <= value <= 90.0):
+        raise InputError(
+            f"--terrain {spec!r}: HEADING_DEG must be in [-90, 90] (ridges repeat every 180 deg), got {text}"
+        )
+    return value + 0.0  # -0.0 is heading 0
+
+
 def _whole(name: str, text: str, spec: str, lo: int, hi: int) -> int:
     try:
         value = int(text)
@@ -177,8 +193,9 @@ def parse_terrain(text: str) -> TerrainSpec:
 
     Raises:
         InputError: Anything malformed (one line saying what to give): an
-            unknown kind, a wrong number of fields, non-numbers, a slope of
-            45 deg or more, heights or sizes <= 0, a missing or unreadable PNG,
+            unknown kind, a wrong number of fields, non-numbers, a slope (or
+            waves' flanks) of 45 deg or more, a waves heading outside [-90, 90] deg,
+            heights or sizes <= 0, a missing or unreadable PNG,
             or one of more than :data:`~amlip_qp.sim.terrain_grids.MAX_HFIELD_PIXELS`
             pixels (read from its header: nothing is decoded).
     """
@@ -223,19 +240,23 @@ def parse_terrain(text: str) -> TerrainSpec:
         amp = _positive("AMPLITUDE_M", fields[0], spec, 1.0)
         seed = _whole("SEED", fields[1], spec, 0, 2**32 - 1) if n == 2 else 0
         return TerrainSpec("rough", f"rough:{_num(amp)}:{seed}", (amp, float(seed)), "", G.rough_grid(amp, seed))
-    if kind == "waves" and n == 2:
+    if kind == "waves" and n in (2, 3):
         h = _positive("HEIGHT_M", fields[0], spec, 5.0)
         lam = _positive("WAVELENGTH_M", fields[1], spec, 100.0)
+        heading = _heading(fields[2], spec) if n == 3 else 0.0
         if lam < 4.0 * G.GRID_SPACING_M:
             raise InputError(f"--terrain {spec!r}: the wavelength must be at least {4.0 * G.GRID_SPACING_M:g} m")
+        # the flanks' steepest grade, along the ridges' normal: the same at every heading (a foot
+        # on a flank stands on that grade whichever way it walks)
         steepest = math.degrees(math.atan(math.pi * h / lam))
         if steepest >= MAX_SLOPE_DEG:
             raise InputError(
                 f"--terrain {spec!r}: these waves are {steepest:.0f} deg steep at their flanks; "
                 f"keep HEIGHT_M / WAVELENGTH_M below {math.tan(math.radians(MAX_SLOPE_DEG)) / math.pi:.3f}"
             )
-        grid = G.waves_grid(h, lam, START_X_M)
-        return TerrainSpec("waves", f"waves:{_num(h)}:{_num(lam)}", (h, lam), "", grid)
+        grid = G.waves_grid(h, lam, START_X_M, heading)
+        text = f"waves:{_num(h)}:{_num(lam)}" + (f":{_num(heading)}" if heading != 0.0 else "")
+        return TerrainSpec("waves", text, (h, lam, heading), "", grid)
     if kind in KINDS:
         raise InputError(f"--terrain {spec!r}: wrong number of fields for {kind}; use {_USAGE}")
     raise InputError(f"--terrain {spec!r}: unknown terrain; use {_USAGE}")

@@ -158,17 +158,51 @@ def rough_grid(amplitude_m: float, seed: int) -> HeightGrid:
     return _from_heights(-BACK_M, -HALF_WIDTH_M, dx, dy, field)
 
 
-def waves_grid(height_m: float, wavelength_m: float, start_x_m: float) -> HeightGrid:
-    """Ridges across the path: ``height/2 (1 - cos(2 pi (x - start) / wavelength))`` from ``start_x_m`` on.
+def waves_height_m(
+    x_m: float | np.ndarray,
+    y_m: float | np.ndarray,
+    height_m: float,
+    wavelength_m: float,
+    heading_deg: float,
+    start_x_m: float,
+) -> float | np.ndarray:
+    """The smooth wave field ``height/2 (1 - cos(2 pi u / wavelength))``, m, before it is sampled on a grid.
 
-    Whole wavelengths up to at least :data:`FRONT_M`; troughs (0 m) at both ends.
+    ``u`` is the distance across the ridges: ``u = (x - start_x_m) cos(heading) + y sin(heading)``
+    for heading 0 (ridges across the path from ``start_x_m`` on, flat before it), and
+    ``u = x cos(heading) + y sin(heading)`` for any other heading (ridges everywhere, at
+    ``heading`` to the path: at 90 deg they run along it). ``u = 0`` is a trough, so the
+    robot's start (x = y = 0) is on a valley floor at every heading. Outside the grid of
+    :func:`waves_grid` the terrain is the flat floor (0 m); this function does not clip.
     """
-    n_waves = max(int(math.ceil((FRONT_M - start_x_m) / wavelength_m)), 1)
-    dx, xs = _axis(start_x_m, start_x_m + n_waves * wavelength_m, GRID_SPACING_M)
-    dy, ys = _axis(-HALF_WIDTH_M, HALF_WIDTH_M, 0.5)
-    profile = 0.5 * height_m * (1.0 - np.cos(2.0 * math.pi * (xs - start_x_m) / wavelength_m))
-    profile[0] = profile[-1] = 0.0
-    return _from_heights(start_x_m, -HALF_WIDTH_M, dx, dy, np.tile(profile, (ys.size, 1)))
+    c, s = math.cos(math.radians(heading_deg)), math.sin(math.radians(heading_deg))
+    x0 = start_x_m if heading_deg == 0.0 else 0.0
+    u = (np.asarray(x_m) - x0) * c + np.asarray(y_m) * s
+    return 0.5 * height_m * (1.0 - np.cos(2.0 * math.pi * u / wavelength_m))
+
+
+def waves_grid(height_m: float, wavelength_m: float, start_x_m: float, heading_deg: float = 0.0) -> HeightGrid:
+    """Ridges at ``heading_deg`` to the path (0: across it), sampled from :func:`waves_height_m`.
+
+    Heading 0: ``height/2 (1 - cos(2 pi (x - start) / wavelength))`` from ``start_x_m`` on, whole
+    wavelengths up to at least :data:`FRONT_M`, troughs (0 m) at both ends, one row every 0.5 m
+    (the field does not change along y). Any other heading: the field over the whole terrain
+    (x from :data:`BACK_M` behind the start to :data:`FRONT_M` ahead, ``|y| <=``
+    :data:`HALF_WIDTH_M`), on a :data:`GRID_SPACING_M` grid both ways; the robot starts on the
+    valley floor through x = y = 0 (at 90 deg it walks along that valley).
+    """
+    if heading_deg == 0.0:
+        n_waves = max(int(math.ceil((FRONT_M - start_x_m) / wavelength_m)), 1)
+        dx, xs = _axis(start_x_m, start_x_m + n_waves * wavelength_m, GRID_SPACING_M)
+        dy, ys = _axis(-HALF_WIDTH_M, HALF_WIDTH_M, 0.5)
+        profile = 0.5 * height_m * (1.0 - np.cos(2.0 * math.pi * (xs - start_x_m) / wavelength_m))
+        profile[0] = profile[-1] = 0.0
+        return _from_heights(start_x_m, -HALF_WIDTH_M, dx, dy, np.tile(profile, (ys.size, 1)))
+    dx, xs = _axis(-BACK_M, FRONT_M, GRID_SPACING_M)
+    dy, ys = _axis(-HALF_WIDTH_M, HALF_WIDTH_M, GRID_SPACING_M)
+    X, Y = np.meshgrid(xs, ys)
+    field = np.asarray(waves_height_m(X, Y, height_m, wavelength_m, heading_deg, start_x_m))
+    return _from_heights(-BACK_M, -HALF_WIDTH_M, dx, dy, field)
 
 
 def _too_large(path: str, what: str) -> str:

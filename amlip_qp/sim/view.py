@@ -131,14 +131,17 @@ def run_view(args: argparse.Namespace) -> int:
     from amlip_qp.profiles import get_profile
     from amlip_qp.sim.cli import check_plant, scenario_from_args
     from amlip_qp.sim.run_types import SensorNoise
+    from amlip_qp.sim.scenarios import held_warnings, release_warnings
 
-    scenario = scenario_from_args(args)
-    profile = get_profile(scenario.robot)
-    profile.check_supported(args.tracker)
-    check_output_path("--json", args.json)
-    script = () if args.script is None else read_key_script(args.script)
-    check_display()
-    check_plant(scenario)
+    with held_warnings() as unverified:  # said once the input is known good
+        scenario = scenario_from_args(args)
+        profile = get_profile(scenario.robot)
+        profile.check_supported(args.tracker)
+        check_output_path("--json", args.json)
+        script = () if args.script is None else read_key_script(args.script)
+        check_display()
+        check_plant(scenario)
+    release_warnings(unverified)
 
     from amlip_qp.sim import factory
 

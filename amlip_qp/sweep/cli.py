@@ -11,9 +11,11 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from typing import Any
 
-from amlip_qp.exceptions import InputError
+from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
+from amlip_qp.sim.scenarios import held_warnings, release_warnings
 from amlip_qp.sweep import backends
 from amlip_qp.sweep import spec as spec_mod
 from amlip_qp.sweep.cells import Cell
@@ -68,22 +70,38 @@ def metric_columns(spec: spec_mod.SweepSpec) -> tuple[str, ...]:
 
 
 def check_cells(spec: spec_mod.SweepSpec, cells: list[Cell]) -> None:
-    """Parse every cell's walk (at both ends of a bisection) and load each plant once: bad input fails here."""
+    """Parse every cell's walk (at both ends of a bisection) and load each plant once: bad input fails here.
+
+    Walks outside the robots' verified envelopes (``[verified]``) give one
+    :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` for the whole sweep,
+    naming the first and counting the others.
+    """
     known = parameter_names()
     names = [*spec.parameters, *spec.fixed, *([spec.bisect.parameter] if spec.bisect else [])]
     unknown = [n for n in names if n not in known]
     if unknown:
         raise InputError(f"unknown parameter {unknown[0]!r}; known: {', '.join(known)}")
     runs = []
+    unverified: list[str] = []
     for cell in cells:
         ends = (
             [{}] if spec.bisect is None else [{spec.bisect.parameter: v} for v in (spec.bisect.low, spec.bisect.high)]
         )
         for extra in ends:
-            try:
-                runs.append(walk_run({**cell.params, **extra}, cell.seed))
-            except InputError as exc:
-                raise InputError(f"cell {cell.index} ({_describe(cell)}): {exc}") from None
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", UnverifiedCommandWarning)
+                try:
+                    runs.append(walk_run({**cell.params, **extra}, cell.seed))
+                except InputError as exc:
+                    raise InputError(f"cell {cell.index} ({_describe(cell)}): {exc}") from None
+            for w in caught:
+                if issubclass(w.category, UnverifiedCommandWarning):
+                    unverified.append(f"cell {cell.index} ({_describe(cell)}): {w.message}")
+                else:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if unverified:
+        more = f" (and {len(unverified) - 1} more walks outside the verified envelope)" if len(unverified) > 1 else ""
+        warnings.warn(unverified[0] + more, UnverifiedCommandWarning, stacklevel=2)
     check_plants(runs)
 
 
@@ -100,9 +118,11 @@ def run_sweep(args: argparse.Namespace) -> int:
     spec = build_spec(args)
     metrics = metric_columns(spec)
     cells = spec_mod.cells_of(spec)
-    check_cells(spec, cells)
-    folder = SweepFolder(args.out, spec.plain())
-    folder.check()
+    with held_warnings() as unverified:  # said once the input is known good
+        check_cells(spec, cells)
+        folder = SweepFolder(args.out, spec.plain())
+        folder.check()
+    release_warnings(unverified)
     ray, started = (None, False) if args.ray is None else backends.connect_ray(args.ray or None)
     try:
         folder.prepare()
