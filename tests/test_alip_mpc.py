@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from alip_cases import OUT3, cmd, est
-from alip_point_mass import LAM, OUTPUTS, G, H, M, T, Walk, reach_clip_hook
+from alip_point_mass import LAM, OUTPUTS, REACH_M, G, H, M, T, Walk, reach_clip_hook
 from amlip_qp.alip import Command, Planner, StepClock
 from amlip_qp.alip import step_mpc as S
 from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
@@ -20,7 +20,7 @@ from amlip_qp.qp.small_qp import SmallQPSolver
 
 COMMAND = Command(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, step_width_m=0.25)
 SETTINGS = MPCSettings()
-REACH_M = (SETTINGS.reach_x * H, SETTINGS.reach_out * H)
+assert REACH_M == (SETTINGS.reach_x * H, SETTINGS.reach_out * H)
 
 
 def mpc_planner(**kw):
@@ -105,7 +105,8 @@ def test_linearisation_is_exact_at_its_point():
     u[names.index("x_hi_1") :: 4] = S.NO_BOUND
     u[names.index("y_lo_1") :: 4] = -S.NO_BOUND
     u[names.index("y_hi_1") :: 4] = S.NO_BOUND
-    Hq, g, Cq, lo, hi, lb, ub = S.split_qp(S.mpc_qp(u))
+    Hq, g, Cq, lower, upper = S.split_qp(S.mpc_qp(u))
+    lb, hi, ub = lower[: S.N_VAR], upper[S.N_VAR :], upper[: S.N_VAR]
     # row 0 is p_sw,x of touchdown 1 in the heading frame (heading 0) minus d_1x: at d = 0 and
     # sigma = sigma_bar, C x + (the constant moved into the bounds) = p(T-) from the flow
     sigma = math.exp(LAM * 0.17)

@@ -28,8 +28,9 @@ planner's numbers to the solver's precision.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -39,11 +40,14 @@ from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, Terrai
 from amlip_qp.alip.planner import VZ_CLAMP_FRACTION, Planner
 from amlip_qp.exceptions import InputError, QPError
 
-#: ``solve_fn(H, g, C, l, u, lb, ub) -> x`` (raises QPError when it cannot solve).
+#: ``solve_fn(H, g, C, lower, upper) -> x`` (:func:`~amlip_qp.alip.step_mpc.split_qp`'s views;
+#: raises QPError when it cannot solve).
 SolveFunction = Callable[..., np.ndarray]
 #: A foothold region: world box ``(x_lo, x_hi, y_lo, y_hi)`` and the ground height ``z`` in it, m.
 Region = tuple[float, float, float, float, float]
 _I_TAU_BAR = S.MPC_QP_INPUTS.index("tau_bar")
+#: The region inputs without regions: flat, boxes of +-NO_BOUND.
+_NO_REGIONS = np.concatenate([np.zeros(S.MPC_STEPS), np.tile([-S.NO_BOUND, S.NO_BOUND] * 2, S.MPC_STEPS)])
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -117,8 +121,9 @@ class MPCPlanner(Planner):
 
     Args:
         outputs, mass_kg, g, plan_fn, reference_fn: as :class:`~amlip_qp.alip.planner.Planner`.
-        solve_fn: ``(H, g, C, l, u, lb, ub) -> x`` for ``min 1/2 x'Hx + g'x``,
-            ``l <= Cx <= u``, ``lb <= x <= ub``; raises QPError on failure.
+        solve_fn: ``(H, g, C, lower, upper) -> x`` for ``min 1/2 x'Hx + g'x``,
+            ``l <= Cx <= u``, ``lb <= x <= ub`` with ``lower = (lb, l)``, ``upper = (ub, u)``
+            stacked (:func:`~amlip_qp.alip.step_mpc.split_qp`); raises QPError on failure.
         mpc_fn: ``MPC_QP`` implementation (default the numpy reference :func:`step_mpc.mpc_qp`).
         settings: :class:`MPCSettings`.
         **planner_kwargs: the :class:`Planner`'s keyword arguments.
@@ -138,7 +143,7 @@ class MPCPlanner(Planner):
         **planner_kwargs,
     ):
         if not callable(solve_fn):
-            raise InputError(f"solve_fn must be callable (H, g, C, l, u, lb, ub) -> x, got {solve_fn!r}")
+            raise InputError(f"solve_fn must be callable (H, g, C, lower, upper) -> x, got {solve_fn!r}")
         if mpc_fn is not None and not callable(mpc_fn):
             raise InputError(f"mpc_fn must be callable ({len(S.MPC_QP_INPUTS)} floats -> QP data), got {mpc_fn!r}")
         if settings is not None and not isinstance(settings, MPCSettings):
@@ -149,6 +154,8 @@ class MPCPlanner(Planner):
         self._u_mpc = np.zeros(len(S.MPC_QP_INPUTS))
         #: Ticks whose QP failed (the one-step law planned them).
         self.failures = 0
+        #: The last tick's QP time (its matrices and solves, every linearisation), µs.
+        self.last_solve_us = 0.0
         #: The last tick's solution (``None`` before the first update of a step).
         self.last_plan: MPCPlan | None = None
         self._T_plan: float | None = None
@@ -206,7 +213,7 @@ class MPCPlanner(Planner):
         else:
             user = foothold
             hook = lambda x, y, heading, s: user(fx, fy, heading, s)  # noqa: E731
-        cmd = command if T0 == command.step_time_s else replace(command, step_time_s=T0)
+        cmd = command if T0 == command.step_time_s else command.with_step_time(T0)
         return super().update(estimate, cmd, terrain, hook)
 
     # --- the QP ---------------------------------------------------------------
@@ -214,9 +221,7 @@ class MPCPlanner(Planner):
     def _region_inputs(self, regions, r0: np.ndarray) -> np.ndarray:
         """``(dz_2.., boxes)``: heights between regions and boxes relative to ``r0`` (``NO_BOUND`` without)."""
         n = S.MPC_STEPS
-        out = np.zeros(n + 4 * n)
-        big = S.NO_BOUND
-        out[n:] = np.tile([-big, big, -big, big], n)
+        out = _NO_REGIONS.copy()
         if regions is None:
             return out
         if len(regions) != n:
@@ -276,6 +281,7 @@ class MPCPlanner(Planner):
             u[n_fixed + S.MPC_STEPS + 3 :: 4] = big
         x = None
         it = 0
+        t0 = time.perf_counter_ns()
         try:
             for it in range(1, st.iterations + 1):
                 y = np.asarray(self.mpc_fn(u), dtype=float).reshape(-1)
@@ -288,6 +294,7 @@ class MPCPlanner(Planner):
                 u[_I_TAU_BAR] = min(max(tau, tau_lo), tau_hi)  # re-linearise at the new duration
         except QPError:
             x = None
+        self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if x is None or not math.isfinite(sum(x.tolist())):
             self.failures += 1
             self._T_plan = None

@@ -38,7 +38,7 @@ the command ``vx_des, vy_des`` (end-of-step velocities in the heading frame, m/s
 ``w_time`` (1/s^2), ``w_terminal``, the heights ``dz_1 .. dz_N`` (m, contact ``j`` minus
 contact ``j-1``) and the boxes ``x_lo_j, x_hi_j, y_lo_j, y_hi_j`` (m, world, relative to the
 stance contact). Outputs (:data:`MPC_QP_N_OUT`): ``H`` (row-major), ``g``, ``C`` (row-major),
-``l``, ``u``, ``lb``, ``ub`` of ``min 1/2 x'Hx + g'x s.t. l <= Cx <= u, lb <= x <= ub``
+``lb``, ``l``, ``ub``, ``u`` of ``min 1/2 x'Hx + g'x s.t. l <= Cx <= u, lb <= x <= ub``
 (:func:`split_qp`).
 """
 
@@ -68,8 +68,10 @@ MPC_QP_INPUTS = (
     + tuple(f"dz_{j}" for j in range(1, MPC_STEPS + 1))
     + tuple(f"{k}_{j}" for j in range(1, MPC_STEPS + 1) for k in ("x_lo", "x_hi", "y_lo", "y_hi"))
 )  # fmt: skip
-#: Sizes of the outputs ``H, g, C, l, u, lb, ub``, in order.
-MPC_QP_BLOCKS = (N_VAR * N_VAR, N_VAR, N_ROWS * N_VAR, N_ROWS, N_ROWS, N_VAR, N_VAR)
+#: Sizes of the outputs ``H, g, C, lb, l, ub, u``, in order (the lower bounds of ``x`` and of the
+#: rows stacked, then the upper ones: DAQP's layout).
+MPC_QP_BLOCKS = (N_VAR * N_VAR, N_VAR, N_ROWS * N_VAR, N_VAR, N_ROWS, N_VAR, N_ROWS)
+_OFFSETS = tuple(int(sum(MPC_QP_BLOCKS[:i])) for i in range(len(MPC_QP_BLOCKS) + 1))
 MPC_QP_N_OUT = sum(MPC_QP_BLOCKS)
 #: An absent bound (m or dimensionless), finite so the generated C needs no infinity.
 NO_BOUND = 1e9
@@ -177,7 +179,7 @@ def mpc_qp_terms(u: Sequence) -> list:
     ub = [xp.exp(l * tau_hi)] + [NO_BOUND] * (2 * MPC_STEPS)
     flat_H = [e for row in H_rows for e in row]
     flat_C = [e for row in C_rows for e in row]
-    return flat_H + g_vec + flat_C + lo + hi + lb + ub
+    return flat_H + g_vec + flat_C + lb + lo + ub + hi
 
 
 def mpc_qp(u: np.ndarray) -> np.ndarray:
@@ -186,6 +188,8 @@ def mpc_qp(u: np.ndarray) -> np.ndarray:
 
 
 def split_qp(y: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Views ``H (n, n), g, C (rows, n), l, u, lb, ub`` of ``MPC_QP``'s output ``y``."""
-    parts = np.split(np.asarray(y), np.cumsum(MPC_QP_BLOCKS)[:-1])
-    return (parts[0].reshape(N_VAR, N_VAR), parts[1], parts[2].reshape(N_ROWS, N_VAR), *parts[3:])
+    """Views ``H (n, n), g, C (rows, n), lower, upper`` of ``MPC_QP``'s output ``y`` (a 1-D array):
+    ``lower = (lb, l)`` and ``upper = (ub, u)``, the bounds of ``x`` then of the rows."""
+    o = _OFFSETS
+    return (y[o[0] : o[1]].reshape(N_VAR, N_VAR), y[o[1] : o[2]], y[o[2] : o[3]].reshape(N_ROWS, N_VAR),
+            y[o[3] : o[5]], y[o[5] : o[7]])  # fmt: skip

@@ -2,13 +2,14 @@
 
 For problems of a few variables solved every control tick (the step-timing MPC of
 :mod:`amlip_qp.alip.mpc_planner`): :class:`SmallQPSolver` is called as
-``x = solver(H, g, C, l, u, lb, ub)`` for
+``x = solver(H, g, C, lower, upper)`` for
 
 .. math::
 
     \\min_x \\tfrac12 x^T H x + g^T x \\quad \\text{s.t.}\\quad l \\le C x \\le u,\\; lb \\le x \\le ub
 
-and keeps DAQP's model (and so its working set) from one call to the next, like
+with ``lower = (lb, l)`` and ``upper = (ub, u)`` stacked (DAQP's layout: the bounds of
+``x``, then the rows'), and keeps DAQP's model (and so its working set) from one call to the next, like
 :class:`~amlip_qp.qp.daqp_solver.DAQPSolver` but without a :class:`~amlip_qp.qp.problem.QPProblem`:
 the arrays are copied into the model's own buffers. Bounds beyond ``+-BIG_BOUND`` are
 DAQP's "no bound".
@@ -67,12 +68,14 @@ class SmallQPSolver:
         self._bu = np.zeros(n + m)
         self._bl = np.zeros(n + m)
         self._sense = np.zeros(n + m, dtype=np.intc)
-        self._hard = np.ones(m, dtype=bool)
+        self._z = np.zeros(n + m)
+        self._t1, self._t2 = np.zeros(n + m), np.zeros(n + m)
+        self._hard = np.ones(n + m)  # 1: checked (the bounds of x, the hard rows), 0: soft
         for i in soft_rows:
             if isinstance(i, bool) or not isinstance(i, int) or not 0 <= i < m:
                 raise QPError(f"soft_rows must be row indices in [0, {m}), got {soft_rows!r}")
             self._sense[n + i] = SENSE_SOFT
-            self._hard[i] = False
+            self._hard[n + i] = 0.0
         self._model: Any = None
         self.solves = 0
         self.failures = 0
@@ -82,18 +85,16 @@ class SmallQPSolver:
         """Forget the working set: the next call sets the model up afresh."""
         self._model = None
 
-    def __call__(self, H, g, C, l, u, lb, ub) -> np.ndarray:
-        """Solve; return ``x`` (a new array). Raises :class:`QPError` when DAQP fails or the
-        solution violates a row or bound by more than :data:`RESIDUAL_CHECK`."""
+    def __call__(self, H, g, C, lower, upper) -> np.ndarray:
+        """Solve; return ``x`` (a new array). ``lower``, ``upper``: ``n + m`` bounds each (module doc).
+        Raises :class:`QPError` when DAQP fails or the solution violates a hard row or a bound
+        by more than :data:`RESIDUAL_CHECK`."""
         t0 = time.perf_counter_ns()
-        n = self.n
         self._H[:] = H
         self._f[:] = g
         self._A[:] = C
-        np.clip(ub, -BIG_BOUND, BIG_BOUND, out=self._bu[:n])
-        np.clip(u, -BIG_BOUND, BIG_BOUND, out=self._bu[n:])
-        np.clip(lb, -BIG_BOUND, BIG_BOUND, out=self._bl[:n])
-        np.clip(l, -BIG_BOUND, BIG_BOUND, out=self._bl[n:])
+        np.minimum(upper, BIG_BOUND, out=self._bu)
+        np.maximum(lower, -BIG_BOUND, out=self._bl)
         self.solves += 1
         if self._model is None:
             model = self._daqp.Model()
@@ -109,12 +110,15 @@ class SmallQPSolver:
         x = np.array(x, dtype=float)
         ok = flag in (1, 2) and math.isfinite(sum(x.tolist()))
         if ok:
-            r = self._A @ x
-            viol = max(float(np.max(self._bl[:n] - x)), float(np.max(x - self._bu[:n])), 0.0)
-            if self._hard.any():
-                h = self._hard
-                viol = max(viol, float(np.max(self._bl[n:][h] - r[h])), float(np.max(r[h] - self._bu[n:][h])))
-            ok = viol <= RESIDUAL_CHECK
+            z = self._z
+            z[: self.n] = x
+            np.dot(self._A, x, out=z[self.n :])
+            t1, t2 = self._t1, self._t2
+            np.subtract(self._bl, z, out=t1)
+            np.subtract(z, self._bu, out=t2)
+            np.maximum(t1, t2, out=t1)
+            t1 *= self._hard
+            ok = float(t1.max()) <= RESIDUAL_CHECK
         self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if not ok:
             self.failures += 1
