@@ -36,8 +36,7 @@ def test_qp_minimum_is_the_one_step_law_at_the_nominal_time():
     a, b = one.update(e, c), mpc.update(e, c)
     np.testing.assert_allclose(b.swing_target_world_m, a.swing_target_world_m, atol=1e-10)
     np.testing.assert_allclose(b.p_sw_des_world_m, a.p_sw_des_world_m, atol=1e-10)
-    assert mpc.last_plan.step_time_s == pytest.approx(0.3, abs=1e-12)
-    assert mpc.clock.step_time_s(0.3) == pytest.approx(0.3, abs=1e-12)
+    assert mpc.last_plan.step_time_s == 0.3 and mpc.clock.step_time_s(0.3) == 0.3  # nominal: exactly T
 
 
 def test_undisturbed_walk_reproduces_the_one_step_law():
@@ -45,7 +44,7 @@ def test_undisturbed_walk_reproduces_the_one_step_law():
     mpc = Walk(mpc_planner(), COMMAND).run(2.4)
     assert len(one.steps) == len(mpc.steps) == 8
     for a, b in zip(one.steps, mpc.steps):
-        assert b[1] - b[0] == pytest.approx(T, abs=1e-9)  # nominal step time
+        assert b[1] - b[0] == a[1] - a[0] == pytest.approx(T, abs=1e-9)  # the nominal step time, tick for tick
         np.testing.assert_allclose(b[2], a[2], atol=1e-10)  # the same footholds
     assert mpc.planner.failures == 0
     # and the walk is the commanded one: the last stride's mean forward speed is 0.5 m/s
@@ -117,6 +116,23 @@ def test_linearisation_is_exact_at_its_point():
     assert lb[0] == pytest.approx(math.exp(LAM * 0.1)) and ub[0] == pytest.approx(math.exp(LAM * 0.3))
     np.testing.assert_allclose(Hq, Hq.T, atol=1e-12)
     assert np.all(np.linalg.eigvalsh(Hq[1:, 1:]) > 0.0)
+
+
+def test_a_late_step_keeps_its_planned_duration():
+    """After the planned end the duration stays (the phase holds at 1, the touchdown test sees it late)."""
+    p = MPCPlanner(OUT3, 31.0, SmallQPSolver(S.N_VAR, S.N_ROWS, S.SOFT_ROWS))
+    p.start_step("left", 0.0, np.zeros(9))
+    c = cmd(step_time_s=0.3, com_height_m=0.9)
+    p.update(est(t_in_step_s=0.1), c)
+    assert p.last_plan.step_time_s == pytest.approx(0.3, abs=1e-12)
+    for t_in in (0.29, 0.31, 0.4):
+        out = p.update(est(t_in_step_s=t_in), c)
+        assert (
+            p.last_plan.step_time_s == pytest.approx(0.3, abs=1e-12)
+            and p.clock.step_time_s(c.step_time_s) == p.last_plan.step_time_s
+        )
+    assert out.s == 1.0 and out.t_remaining_s == 0.0
+    assert p.clock.phase_unclipped(0.4, p.clock.step_time_s(0.3)) == pytest.approx(0.4 / 0.3)
 
 
 def test_step_clock_takes_a_planned_duration():

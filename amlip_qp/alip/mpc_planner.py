@@ -17,8 +17,11 @@ and step duration come from the quadratic program of :mod:`amlip_qp.alip.step_mp
 
 The time left may not drop below ``min_time_left_s`` by re-planning: once the planned
 end is that close, the duration is kept (a step cannot be postponed by shortening it
-tick after tick). A failed solve (:class:`~amlip_qp.exceptions.QPError`) falls back to
-the one-step law at the nominal ``T`` for that tick, counted in :attr:`MPCPlanner.failures`.
+tick after tick), also after it when the touchdown is late (the phase is then held at 1
+and the swing foot may keep descending, as with the one-step law after ``T``). A planned
+duration within :data:`NOMINAL_TOL_S` of ``T`` is ``T``. A failed solve
+(:class:`~amlip_qp.exceptions.QPError`) falls back to the one-step law for that tick (at
+the duration planned so far, else ``T``), counted in :attr:`MPCPlanner.failures`.
 
 With the limits inactive the QP's minimum is the one-step law's footholds at the nominal
 ``T`` (module doc of :mod:`~amlip_qp.alip.step_mpc`): the MPC then gives the one-step
@@ -46,6 +49,8 @@ SolveFunction = Callable[..., np.ndarray]
 #: A foothold region: world box ``(x_lo, x_hi, y_lo, y_hi)`` and the ground height ``z`` in it, m.
 Region = tuple[float, float, float, float, float]
 _I_TAU_BAR = S.MPC_QP_INPUTS.index("tau_bar")
+#: A planned duration this close to the command's ``T`` (s) is ``T`` itself.
+NOMINAL_TOL_S = 1e-9
 #: The region inputs without regions: flat, boxes of +-NO_BOUND.
 _NO_REGIONS = np.concatenate([np.zeros(S.MPC_STEPS), np.tile([-S.NO_BOUND, S.NO_BOUND] * 2, S.MPC_STEPS)])
 
@@ -203,8 +208,9 @@ class MPCPlanner(Planner):
         r0 = estimate.com_m - estimate.p_st_m
         plan = self._solve(estimate, command, terrain, r0, self._region_inputs(regions, r0))
         self.last_plan = plan
-        if not plan.solved:
-            return super().update(estimate, command, terrain, foothold)
+        if not plan.solved:  # the one-step law, at the duration planned so far
+            cmd = command if self._T_plan is None else command.with_step_time(self._T_plan)
+            return super().update(estimate, cmd, terrain, foothold)
         T0 = plan.step_time_s
         self.clock.plan_step_time(T0)
         fx, fy = plan.footholds_m[0].tolist()
@@ -247,8 +253,9 @@ class MPCPlanner(Planner):
         vz_max = VZ_CLAMP_FRACTION * H * l * math.tanh(l * T)
         v_z = min(max(v_z, -vz_max), vz_max)
         tau_nom = max(T - t_in, 0.0)
-        if self._T_plan is not None and self._T_plan - t_in <= st.min_time_left_s:
-            tau_lo = tau_hi = max(self._T_plan - t_in, 0.0)  # committed: the end is near
+        committed = self._T_plan is not None and self._T_plan - t_in <= st.min_time_left_s
+        if committed:
+            tau_lo = tau_hi = max(self._T_plan - t_in, 0.0)  # the end is near (or late): keep it
         else:
             tau_hi = max(st.step_time_max * T - t_in, 0.0)
             tau_lo = min(max(st.step_time_min * T - t_in, st.min_time_left_s), tau_hi)
@@ -297,10 +304,15 @@ class MPCPlanner(Planner):
         self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if x is None or not math.isfinite(sum(x.tolist())):
             self.failures += 1
-            self._T_plan = None
-            return MPCPlan(T, np.full((S.MPC_STEPS, 2), np.nan), it, False)
-        tau = min(max(math.log(max(x[0], 1e-300)) / l, tau_lo), tau_hi)
-        self._T_plan = t_in + tau
+            T_kept = T if self._T_plan is None else self._T_plan
+            return MPCPlan(T_kept, np.full((S.MPC_STEPS, 2), np.nan), it, False)
+        if committed and self._T_plan is not None:
+            T_plan = self._T_plan
+        else:
+            tau = min(max(math.log(max(x[0], 1e-300)) / l, tau_lo), tau_hi)
+            # the nominal end to the solver's precision is the nominal end (the one-step law's phase, bit for bit)
+            T_plan = T if abs(t_in + tau - T) < NOMINAL_TOL_S else t_in + tau
+        self._T_plan = T_plan
         steps = x[1:].reshape(S.MPC_STEPS, 2)
         footholds = r0[:2] + np.cumsum(steps, axis=0)
-        return MPCPlan(self._T_plan, footholds, it, True)
+        return MPCPlan(T_plan, footholds, it, True)
