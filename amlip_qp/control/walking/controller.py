@@ -48,7 +48,7 @@ from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
-from amlip_qp.control.walking.planners import check_planner, make_planner
+from amlip_qp.control.walking.planners import check_planner, make_planner, mpc_regions
 from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_signals
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
@@ -323,12 +323,20 @@ class WalkingController:
                 ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
                 # the swing target of the new step is not known yet: plan once for it
                 first = ground.predict(est.stance_contact_m, self.planner.heading_rad)
-                plan = self.planner.update(state, ground.fit(first, command), first, ground.foothold())
+                plan = self.planner.update(
+                    state, ground.fit(first, command), first, ground.foothold(), **mpc_regions(self.planner, ground)
+                )
                 target_xy = plan.swing_target_world_m
             else:
                 target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
             prediction = ground.predict(target_xy, self.planner.heading_rad)
-            plan = self.planner.update(state, ground.fit(prediction, command), prediction, ground.foothold())
+            plan = self.planner.update(
+                state,
+                ground.fit(prediction, command),
+                prediction,
+                ground.foothold(),
+                **mpc_regions(self.planner, ground),
+            )
         self._last_plan = plan
         target = TrackingTarget(
             stance=stance,

@@ -59,6 +59,12 @@ PITCH_HALF_BASE_M = 0.05
 #: :func:`fit_clearance` lowers a clearance that would lift it too high.
 APEX_MARGIN_M = 0.05
 
+#: The MPC's foothold regions (:meth:`GroundPredictor.regions`) are made for headings within this of a
+#: world axis, rad (a box of world axes along a stretch of the heading).
+REGION_MAX_ANGLE_RAD = math.radians(30.0)
+#: A region's half size across the heading (unbounded), m.
+REGION_OPEN_M = 1000.0
+
 HeightFunction = Callable[[float, float], float]
 FootholdPlacement = Callable[[float, float, float, float], tuple[float, float]]
 
@@ -160,6 +166,36 @@ class GroundPredictor:
     def foothold(self) -> FootholdPlacement | None:
         """The planner's foothold hook: world ``(x, y)``, heading, phase -> foothold ``(x, y)`` ("aware"; else None)."""
         return self.selector.place if self.selector is not None else None
+
+    def regions(self, footholds_xy_m: np.ndarray, heading_rad: float) -> list[tuple[float, ...]] | None:
+        """Foothold regions for the step-timing MPC, one per planned foothold (world ``(n, 2)``, m), in the
+        ``"aware"`` mode with a heading within :data:`REGION_MAX_ANGLE_RAD` of a world axis; else ``None``.
+
+        Each is the world box ``(x_lo, x_hi, y_lo, y_hi, z)`` (m) of the stretch of ground along the heading
+        where the footprint fits nearest to the foothold (:meth:`FootholdSelector.region
+        <amlip_qp.control.walking.footprint.FootholdSelector.region>`: a stair's tread less the foot and
+        its margins), unbounded across the heading, with the ground's height at the stretch's middle.
+        """
+        if self.selector is None:
+            return None
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        along_x = abs(c) >= math.cos(REGION_MAX_ANGLE_RAD)
+        if not (along_x or abs(s) >= math.cos(REGION_MAX_ANGLE_RAD)):
+            return None
+        out: list[tuple[float, ...]] = []
+        for x, y in np.asarray(footholds_xy_m, dtype=float).reshape(-1, 2).tolist():
+            lo, hi = self.selector.region(x, y, heading_rad)
+            if lo > hi:  # no stretch long enough for the foot: its middle
+                lo = hi = 0.5 * (lo + hi)
+            mid = 0.5 * (lo + hi)
+            z = self._height(x + mid * c, y + mid * s)
+            if along_x:
+                a, b = sorted((x + lo * c, x + hi * c))
+                out.append((a, b, -REGION_OPEN_M, REGION_OPEN_M, z))
+            else:
+                a, b = sorted((y + lo * s, y + hi * s))
+                out.append((-REGION_OPEN_M, REGION_OPEN_M, a, b, z))
+        return out
 
     def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
         """The command for a step over ``prediction``: over an edge up or down ("aware") the clearance is raised

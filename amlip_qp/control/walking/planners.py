@@ -5,8 +5,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from amlip_qp.alip.clock import StepClock
-from amlip_qp.alip.mpc_planner import MPCSettings
+from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
 from amlip_qp.alip.planner import Planner
+from amlip_qp.control.walking.ground import GroundPredictor
 from amlip_qp.exceptions import InputError
 
 #: The planners (``WalkingController(planner=...)``, ``amlip-qp walk --planner``).
@@ -50,3 +51,14 @@ def make_planner(
         kernels = load_kernels()
         plan_fn, reference_fn = kernels.alip_plan, kernels.swing_reference
     return Planner(outputs, mass_kg, plan_fn=plan_fn, reference_fn=reference_fn, clock=clock, late_descent=late_descent)
+
+
+def mpc_regions(planner: Planner, ground: GroundPredictor) -> dict:
+    """The keywords of the MPC planner's update with its foothold regions: from the terrain around the
+    last tick's planned footholds (:meth:`GroundPredictor.regions
+    <amlip_qp.control.walking.ground.GroundPredictor.regions>`, the ``"aware"`` mode); ``{}`` for the
+    one-step planner, the other modes and the first tick of a step."""
+    if not isinstance(planner, MPCPlanner) or planner.last_plan is None or not planner.last_plan.solved:
+        return {}
+    regions = ground.regions(planner.last_plan.footholds_m, planner.heading_next_rad)
+    return {} if regions is None else {"regions": regions}
