@@ -177,6 +177,10 @@ def test_mpc_regions_are_the_treads_less_the_footprint():
     assert (a1, b1, z1) == pytest.approx((1.38, 1.45, 0.2), abs=0.006)
     assert b2 == pytest.approx(1.0 - 0.15, abs=0.006) and z2 == 0.0 and a2 < 0.5 - 0.3  # the floor before the stairs
     assert c0 < -100.0 and d0 > 100.0  # unbounded across the heading
+    # a foothold on a stretch found before gets that region again, without sampling the terrain
+    calls = []
+    g.height_fn = lambda x, y: calls.append(x) or stairs_up(x, y)
+    assert g.regions(np.array([[1.1, 0.0], [1.4, 0.3]]), 0.0) == regions[:2] and calls == []
     # along y the boxes turn; far from an axis, and in the other modes, there are none
     turned = g.regions(np.array([[1.2, 0.1]]), 0.5 * math.pi)
     assert turned[0][0] < -100.0 and turned[0][1] > 100.0

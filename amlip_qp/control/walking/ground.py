@@ -64,6 +64,8 @@ APEX_MARGIN_M = 0.05
 REGION_MAX_ANGLE_RAD = math.radians(30.0)
 #: A region's half size across the heading (unbounded), m.
 REGION_OPEN_M = 1000.0
+#: Regions kept for reuse (a foothold on a stretch found before gets its region without sampling the terrain).
+MAX_CACHED_REGIONS = 16
 
 HeightFunction = Callable[[float, float], float]
 FootholdPlacement = Callable[[float, float, float, float], tuple[float, float]]
@@ -126,6 +128,9 @@ class GroundPredictor:
         self._liftoff_pitch = 0.0
         #: Moves swing targets off the terrain's edges ("aware" only; None otherwise).
         self.selector = FootholdSelector(self._height) if mode == "aware" else None
+        # the MPC's regions found so far (their extent along the heading's axis, m, and the region) and their heading
+        self._regions_cache: list[tuple[float, float, tuple[float, ...]]] = []
+        self._regions_heading = math.nan
 
     @property
     def active(self) -> bool:
@@ -145,6 +150,8 @@ class GroundPredictor:
         self._liftoff_pitch = 0.0
         if self.selector is not None:
             self.selector.reset()
+        self._regions_cache.clear()
+        self._regions_heading = math.nan
 
     def touchdown(self, stance_contact_m: np.ndarray, heading_rad: float) -> None:
         """A new stance contact (world, m) on a step of heading ``heading_rad`` (rad): a foothold."""
@@ -174,7 +181,8 @@ class GroundPredictor:
         Each is the world box ``(x_lo, x_hi, y_lo, y_hi, z)`` (m) of the stretch of ground along the heading
         where the footprint fits nearest to the foothold (:meth:`FootholdSelector.region
         <amlip_qp.control.walking.footprint.FootholdSelector.region>`: a stair's tread less the foot and
-        its margins), unbounded across the heading, with the ground's height at the stretch's middle.
+        its margins), unbounded across the heading, with the ground's height at the stretch's middle. A
+        foothold on a stretch found before (at the same heading) gets that region again without sampling.
         """
         if self.selector is None:
             return None
@@ -182,8 +190,16 @@ class GroundPredictor:
         along_x = abs(c) >= math.cos(REGION_MAX_ANGLE_RAD)
         if not (along_x or abs(s) >= math.cos(REGION_MAX_ANGLE_RAD)):
             return None
+        if heading_rad != self._regions_heading:
+            self._regions_cache.clear()
+            self._regions_heading = heading_rad
         out: list[tuple[float, ...]] = []
         for x, y in np.asarray(footholds_xy_m, dtype=float).reshape(-1, 2).tolist():
+            u = x if along_x else y
+            known = next((r for r in self._regions_cache if r[0] <= u <= r[1]), None)
+            if known is not None:  # the foothold is on a stretch found before: the same region
+                out.append(known[2])
+                continue
             lo, hi = self.selector.region(x, y, heading_rad)
             if lo > hi:  # no stretch long enough for the foot: its middle
                 lo = hi = 0.5 * (lo + hi)
@@ -191,10 +207,14 @@ class GroundPredictor:
             z = self._height(x + mid * c, y + mid * s)
             if along_x:
                 a, b = sorted((x + lo * c, x + hi * c))
-                out.append((a, b, -REGION_OPEN_M, REGION_OPEN_M, z))
+                region: tuple[float, ...] = (a, b, -REGION_OPEN_M, REGION_OPEN_M, z)
             else:
                 a, b = sorted((y + lo * s, y + hi * s))
-                out.append((-REGION_OPEN_M, REGION_OPEN_M, a, b, z))
+                region = (-REGION_OPEN_M, REGION_OPEN_M, a, b, z)
+            out.append(region)
+            if len(self._regions_cache) >= MAX_CACHED_REGIONS:
+                self._regions_cache.pop(0)
+            self._regions_cache.append((a, b, region))
         return out
 
     def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
