@@ -181,6 +181,9 @@ def test_mpc_regions_are_the_treads_less_the_footprint():
     calls = []
     g.height_fn = lambda x, y: calls.append(x) or stairs_up(x, y)
     assert g.regions(np.array([[1.1, 0.0], [1.4, 0.3]]), 0.0) == regions[:2] and calls == []
+    # on the floor 0.4 m behind the first floor foothold: found afresh, both ends the search reach's (0.53 m)
+    far = g.regions(np.array([[0.1, 0.0]]), 0.0)[0]
+    assert calls and far[:2] == pytest.approx((0.1 - 0.53, 0.1 + 0.53), abs=0.006)
     # along y the boxes turn; far from an axis, and in the other modes, there are none
     turned = g.regions(np.array([[1.2, 0.1]]), 0.5 * math.pi)
     assert turned[0][0] < -100.0 and turned[0][1] > 100.0

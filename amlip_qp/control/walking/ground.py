@@ -66,6 +66,9 @@ REGION_MAX_ANGLE_RAD = math.radians(30.0)
 REGION_OPEN_M = 1000.0
 #: Regions kept for reuse (a foothold on a stretch found before gets its region without sampling the terrain).
 MAX_CACHED_REGIONS = 16
+#: A region with an end where no edge is within the search reach (the end is the reach's, which moves with the
+#: foothold) is reused for a foothold at most this far (m, along the heading's axis) from where it was found.
+REGION_REUSE_M = 0.05
 
 HeightFunction = Callable[[float, float], float]
 FootholdPlacement = Callable[[float, float, float, float], tuple[float, float]]
@@ -129,7 +132,7 @@ class GroundPredictor:
         #: Moves swing targets off the terrain's edges ("aware" only; None otherwise).
         self.selector = FootholdSelector(self._height) if mode == "aware" else None
         # the MPC's regions found so far (their extent along the heading's axis, m, and the region) and their heading
-        self._regions_cache: list[tuple[float, float, tuple[float, ...]]] = []
+        self._regions_cache: list[tuple[float, float, float, tuple[float, ...]]] = []
         self._regions_heading = math.nan
 
     @property
@@ -182,7 +185,8 @@ class GroundPredictor:
         where the footprint fits nearest to the foothold (:meth:`FootholdSelector.region
         <amlip_qp.control.walking.footprint.FootholdSelector.region>`: a stair's tread less the foot and
         its margins), unbounded across the heading, with the ground's height at the stretch's middle. A
-        foothold on a stretch found before (at the same heading) gets that region again without sampling.
+        foothold on a stretch found before between two edges (at the same heading) gets that region again
+        without sampling; on a stretch with an open end only within :data:`REGION_REUSE_M` of where it was found.
         """
         if self.selector is None:
             return None
@@ -196,9 +200,11 @@ class GroundPredictor:
         out: list[tuple[float, ...]] = []
         for x, y in np.asarray(footholds_xy_m, dtype=float).reshape(-1, 2).tolist():
             u = x if along_x else y
-            known = next((r for r in self._regions_cache if r[0] <= u <= r[1]), None)
-            if known is not None:  # the foothold is on a stretch found before: the same region
-                out.append(known[2])
+            known = next(
+                (r for r in self._regions_cache if r[0] <= u <= r[1] and not abs(u - r[2]) > REGION_REUSE_M), None
+            )
+            if known is not None:  # the foothold is on a stretch found before, near where it was: the same region
+                out.append(known[3])
                 continue
             lo, hi = self.selector.region(x, y, heading_rad)
             if lo > hi:  # no stretch long enough for the foot: its middle
@@ -214,7 +220,9 @@ class GroundPredictor:
             out.append(region)
             if len(self._regions_cache) >= MAX_CACHED_REGIONS:
                 self._regions_cache.pop(0)
-            self._regions_cache.append((a, b, region))
+            # between two edges the region holds for any foothold on it (u0 = NaN); an end at the reach moves
+            bounded = -self.selector.reach_m < lo and hi < self.selector.reach_m
+            self._regions_cache.append((a, b, math.nan if bounded else u, region))
         return out
 
     def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
