@@ -8,7 +8,7 @@ import shutil
 import numpy as np
 import pytest
 
-from amlip_qp.alip import kernels
+from amlip_qp.alip import kernels, step_mpc
 from amlip_qp.codegen.kernels import FastFunction
 
 
@@ -70,18 +70,51 @@ def sample_swing_reference(rng, robot, n):
     return u
 
 
+def sample_mpc_qp(rng, robot, n):
+    """Inputs of the step-timing MPC's QP (layout ``step_mpc.MPC_QP_INPUTS``)."""
+    r = ROBOTS[robot]
+    lat = 1.0 if r["lateral"] else 0.0
+    m, H, T = rng.uniform(*r["m"], n), rng.uniform(*r["H"], n), rng.uniform(*r["T"], n)
+    t_in = rng.uniform(0, 1.2, n) * T
+    tau_nom = np.maximum(T - t_in, 0.0)
+    tau_lo = np.minimum(np.maximum(0.6 * T - t_in, 0.05), np.maximum(1.4 * T - t_in, 0.0))
+    tau_hi = np.maximum(1.4 * T - t_in, 0.0)
+    tau_bar = tau_lo + rng.uniform(0, 1, n) * (tau_hi - tau_lo)
+    big = np.full(n, step_mpc.NO_BOUND)
+    cols = [
+        rng.uniform(-0.3, 0.3, n), lat * rng.uniform(-0.2, 0.2, n),  # p_st
+        -m * H * lat * rng.uniform(-1, 1, n), m * H * rng.uniform(-1, 3, n),  # L_x, L_y
+        rng.uniform(-0.3, 0.3, n), rng.uniform(-1, 3, n), lat * rng.uniform(-1, 1, n),  # v_z, vx, vy
+        lat * rng.uniform(-np.pi, np.pi, n), lat * rng.uniform(-0.3, 0.3, n), rng.choice([-1.0, 1.0], n),
+        m, H, T, rng.uniform(*r["W"], n), np.full(n, 9.81), tau_nom, tau_lo, tau_hi, tau_bar,
+        0.55 * H, 0.5 * H if lat else big, 0.1 * H if lat else big, H, 0.05 * H if lat else -big,
+        0.75 * H if lat else big, rng.uniform(0.5, 10, n), rng.uniform(0.5, 3, n),
+    ]  # fmt: skip
+    cols += [rng.uniform(-0.15, 0.15, n) for _ in range(step_mpc.MPC_STEPS)]  # dz_j
+    for j in range(step_mpc.MPC_STEPS):
+        x0, y0 = rng.uniform(-0.5, 1.5, n) * (j + 1), rng.uniform(-0.5, 0.5, n)
+        cols += [x0, x0 + rng.uniform(0.1, 0.4, n), y0, y0 + rng.uniform(0.1, 0.4, n)]
+    u = np.column_stack(cols)
+    k = min(n, 100)
+    u[:k, -5 * step_mpc.MPC_STEPS :] = np.tile([0.0] * step_mpc.MPC_STEPS + [-1e9, 1e9, -1e9, 1e9] * 4, (k, 1))
+    return u
+
+
+#: Numpy references are slow for the MPC's QP (about 1.5 ms a call): fewer samples of it.
+N_SAMPLES = {"alip_mpc_qp": 300}
 SAMPLERS = {
     "alip_plan": (sample_alip_plan, kernels.alip_plan),
     "swing_reference": (sample_swing_reference, kernels.swing_reference),
+    "alip_mpc_qp": (sample_mpc_qp, step_mpc.mpc_qp),
 }
-SEEDS = {("cassie", "alip_plan"): 11, ("cassie", "swing_reference"): 12,
-         ("rabbit", "alip_plan"): 21, ("rabbit", "swing_reference"): 22}  # fmt: skip
+SEEDS = {("cassie", "alip_plan"): 11, ("cassie", "swing_reference"): 12, ("cassie", "alip_mpc_qp"): 13,
+         ("rabbit", "alip_plan"): 21, ("rabbit", "swing_reference"): 22, ("rabbit", "alip_mpc_qp"): 23}  # fmt: skip
 
 
 def assert_matches_reference(fn: FastFunction, robot: str, seed: int):
     sample, reference = SAMPLERS[fn.name]
     rng = np.random.default_rng(seed)
-    for u in sample(rng, robot, N):
+    for u in sample(rng, robot, N_SAMPLES.get(fn.name, N)):
         y = fn(u).copy()
         ref = reference(u)
         err = np.abs(y - ref) / np.maximum(1.0, np.abs(ref))

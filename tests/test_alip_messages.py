@@ -54,6 +54,18 @@ def test_with_speeds_is_replace_checking_the_two_speeds():
             c.with_speeds(vx, turn)
 
 
+def test_with_step_time_is_replace_checking_the_time():
+    from dataclasses import replace
+
+    c = cmd(turn_rate_radps=0.2, vy_mps=0.1)
+    for T in (0.25, np.float64(0.31), 1):
+        got, ref = c.with_step_time(T), replace(c, step_time_s=T)
+        assert type(got) is type(ref) and got == ref and repr(got) == repr(ref)
+    for bad in (0.0, -0.1, np.inf, np.nan, True):
+        with pytest.raises(InputError, match="Command.step_time_s"):
+            c.with_step_time(bad)
+
+
 @pytest.mark.parametrize(
     "kw, match",
     [

@@ -30,7 +30,7 @@ HEAVY = ("mujoco", "pinocchio", "casadi", "proxsuite", "qpsolvers", "scipy", "ma
 #: What every control subpackage may use below it.
 CONTROL_BASE = ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.profiles")
 #: The control subpackages (jobs).
-CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.control.wbc")
+CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.control.wbc", "amlip_qp.control.mpc")
 
 #: unit (a package, or a top-level module) -> its rule (docs/ARCHITECTURE.md, "Layers").
 RULES: dict[str, Rule] = {
@@ -85,10 +85,17 @@ RULES: dict[str, Rule] = {
     "amlip_qp.qp": Rule(("amlip_qp.qp", "amlip_qp.exceptions"), ("mujoco", "pinocchio", "casadi")),
     # the control layer's own modules (the Tracker interface): never MuJoCo, never a job's package
     "amlip_qp.control": Rule(CONTROL_BASE + ("amlip_qp.control",), ("mujoco", "amlip_qp.qp") + CONTROL_JOBS),
-    # the walking loop runs any tracker: it imports none, nor the QP layer
+    # the walking loop runs any tracker: it imports none, nor the QP layer (the step-timing MPC's
+    # planner, which solves its own small QP, it builds through control.mpc)
     "amlip_qp.control.walking": Rule(
-        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation"),
-        ("mujoco", "proxsuite", "qpsolvers"),
+        CONTROL_BASE
+        + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation", "amlip_qp.control.mpc"),
+        ("mujoco", "proxsuite", "qpsolvers", "amlip_qp.qp"),
+    ),
+    # the step-timing MPC planner on its runtime: the generated C and a small DAQP; its bench handler
+    "amlip_qp.control.mpc": Rule(
+        CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.mpc", "amlip_qp.output_paths"),
+        ("mujoco", "pinocchio", "proxsuite", "amlip_qp.sim", "amlip_qp.control.walking"),
     ),
     # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
     "amlip_qp.estimation": Rule(

@@ -43,6 +43,9 @@ def no_simulation(monkeypatch):
     monkeypatch.setattr(factory, "run_scenario", _simulated)
     monkeypatch.setattr(compare, "run_comparison", _simulated)
     monkeypatch.setattr(codegen_bench, "run_benchmark", _simulated)
+    from amlip_qp.control.mpc import bench as mpc_bench
+
+    monkeypatch.setattr(mpc_bench, "run_benchmark", _simulated)
     from amlip_qp.sim import bench_qp
 
     monkeypatch.setattr(bench_qp, "run", _simulated)
@@ -110,6 +113,9 @@ BAD_INPUTS = [
     (["walk", "--robot", "rabbit", "--turn-rate", "10"], "rabbit is planar"),
     (["walk", "--robot", "rabbit", "--push", "1:0,50,0:0.2"], "rabbit is planar"),
     # malformed values
+    (["walk", "--planner", "two-step"], "--planner: invalid choice: 'two-step'"),
+    (["bench", "mpc", "--duration", "0"], "--duration"),
+    (["bench", "mpc", "--json", "/proc/x"], "--json /proc/x: cannot write"),
     (["walk", "--push", "1:2,3:0.2"], "expected T:FX,FY,FZ:DUR"),
     (["walk", "--push", "1:a,0,0:0.2"], "expected T:FX,FY,FZ:DUR"),
     (["walk", "--push", "-1:1,0,0:0.2"], "T >= 0 s"),

@@ -27,7 +27,7 @@ def fast(cache_dir):
 
 @needs_cc
 @pytest.mark.parametrize("robot", sorted(ROBOTS))
-@pytest.mark.parametrize("name", ["alip_plan", "swing_reference"])
+@pytest.mark.parametrize("name", ["alip_plan", "swing_reference", "alip_mpc_qp"])
 def test_compiled_c_equals_numpy_reference(fast, robot, name):
     assert fast.backend == "c" and fast[name].backend == "c"
     assert fast.library_path is not None and fast.library_path.is_file()

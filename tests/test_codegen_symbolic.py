@@ -10,7 +10,9 @@ from amlip_qp.alip import kernels
 from amlip_qp.codegen import symbolic
 
 
-@pytest.mark.parametrize("name, n_in, n_out", [("alip_plan", 16, 8), ("swing_reference", 15, 30)])
+@pytest.mark.parametrize(
+    "name, n_in, n_out", [("alip_plan", 16, 8), ("swing_reference", 15, 30), ("alip_mpc_qp", 47, 372)]
+)
 def test_function_signature_is_dense(name, n_in, n_out):
     f = symbolic.function(name)
     assert isinstance(f, ca.Function)
@@ -24,7 +26,7 @@ def test_function_signature_is_dense(name, n_in, n_out):
 
 def test_functions_in_library_order_and_cached():
     fs = symbolic.functions()
-    assert list(fs) == ["alip_plan", "swing_reference"]
+    assert list(fs) == ["alip_plan", "swing_reference", "alip_mpc_qp"]
     assert fs["alip_plan"] is symbolic.function("alip_plan")
 
 

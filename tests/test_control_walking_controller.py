@@ -53,6 +53,28 @@ def test_torques_saturate_at_the_motor_limits(rabbit):
     np.testing.assert_allclose(tick.tau_Nm, rabbit.actuated.torque_limit_Nm[:, 1])
 
 
+def test_the_planner_is_chosen_by_name_and_bad_names_are_typed_errors(rabbit):
+    from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
+    from amlip_qp.alip.planner import Planner
+    from amlip_qp.cli.subcommands import PLANNERS as CLI_PLANNERS
+    from amlip_qp.control.walking.planners import PLANNERS
+
+    assert CLI_PLANNERS == PLANNERS == ("one-step", "mpc")
+    kin = RobotKinematics(rabbit)
+    one = WalkingController(rabbit, _HugeTracker(4), kin, planner_backend="numpy")
+    assert type(one.planner) is Planner
+    mpc = WalkingController(rabbit, _HugeTracker(4), kin, planner_backend="numpy", planner="mpc")
+    assert isinstance(mpc.planner, MPCPlanner) and mpc.planner.clock is mpc.clock
+    cmd = Command(step_time_s=0.35, com_height_m=0.68, clearance_m=0.06)
+    tick = mpc.step(Measurement(0.0, rabbit.q_stand.copy(), np.zeros(rabbit.nv)), cmd)
+    assert mpc.planner.last_plan.solved and np.isfinite(tick.tau_Nm).all()
+    assert mpc.clock.planned_step_time_s == pytest.approx(mpc.planner.last_plan.step_time_s)
+    with pytest.raises(InputError, match="planner must be one of"):
+        WalkingController(rabbit, _HugeTracker(4), kin, planner="two-step")
+    with pytest.raises(InputError, match="pass planner='mpc'"):
+        WalkingController(rabbit, _HugeTracker(4), kin, mpc_settings=MPCSettings())
+
+
 def test_bad_initial_stance_and_backend_are_typed_errors(rabbit):
     kin = RobotKinematics(rabbit)
     with pytest.raises(InputError, match="initial_stance"):

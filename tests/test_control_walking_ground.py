@@ -165,3 +165,27 @@ def test_a_step_over_an_edge_gets_the_rise_as_extra_clearance():
     s.touchdown(np.array([2.2, 0.2, 0.0]), 0.0)
     p = s.predict(np.array([2.5, 0.0]), 0.0)
     assert p.dz_sw_m - p.dz_sw0_m > 0.05 and s.edge_rise_m == 0.0 and s.fit(p, cmd) is cmd
+
+
+def test_mpc_regions_are_the_treads_less_the_footprint():
+    """Cassie's blade (0.12 m ahead of the contact, 0.08 m behind) and 0.03 m from a riser ahead, on 0.3 m treads."""
+    g = GroundPredictor("aware", stairs_up)
+    g.touchdown(np.array([0.7, 0.0, 0.0]), 0.0)
+    regions = g.regions(np.array([[1.2, 0.1], [1.45, -0.1], [0.5, 0.1]]), 0.0)
+    (a0, b0, c0, d0, z0), (a1, b1, _, _, z1), (a2, b2, _, _, z2) = regions
+    assert (a0, b0, z0) == pytest.approx((1.08, 1.15, 0.1), abs=0.006)
+    assert (a1, b1, z1) == pytest.approx((1.38, 1.45, 0.2), abs=0.006)
+    assert b2 == pytest.approx(1.0 - 0.15, abs=0.006) and z2 == 0.0 and a2 < 0.5 - 0.3  # the floor before the stairs
+    assert c0 < -100.0 and d0 > 100.0  # unbounded across the heading
+    # a foothold on a stretch found before gets that region again, without sampling the terrain
+    calls = []
+    g.height_fn = lambda x, y: calls.append(x) or stairs_up(x, y)
+    assert g.regions(np.array([[1.1, 0.0], [1.4, 0.3]]), 0.0) == regions[:2] and calls == []
+    # on the floor 0.4 m behind the first floor foothold: found afresh, both ends the search reach's (0.53 m)
+    far = g.regions(np.array([[0.1, 0.0]]), 0.0)[0]
+    assert calls and far[:2] == pytest.approx((0.1 - 0.53, 0.1 + 0.53), abs=0.006)
+    # along y the boxes turn; far from an axis, and in the other modes, there are none
+    turned = g.regions(np.array([[1.2, 0.1]]), 0.5 * math.pi)
+    assert turned[0][0] < -100.0 and turned[0][1] > 100.0
+    assert g.regions(np.array([[1.2, 0.1]]), math.radians(45.0)) is None
+    assert GroundPredictor("blind").regions(np.array([[1.2, 0.1]]), 0.0) is None

@@ -38,6 +38,7 @@ GUIDES = (
     "docs/COMMANDS.md",
     "docs/EQUATIONS.md",
     "docs/ALIP_SLOPES.md",
+    "docs/ALIP_MPC.md",
     "docs/SUMMARY_SCHEMA.md",
     "docs/NEW_ROBOT.md",
     "CONTRIBUTING.md",

@@ -34,6 +34,7 @@ def test_walk_run_builds_the_scenario_with_the_push():
     assert push.force_N == (0.0, 100.0, 0.0) and push.duration_s == 0.2 and push.phase == 0.4  # 20 N s / 0.2 s, +y
     assert push.impulse_Ns == pytest.approx(20.0)
     assert rc.walk_run({"robot": "cassie", "seed": 3}, seed=11).seed == 3
+    assert run.planner == "one-step" and rc.walk_run({"planner": "mpc"}, seed=0).planner == "mpc"
 
 
 def test_push_direction_is_the_angle_from_forward_towards_left():

@@ -16,6 +16,8 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
 - :mod:`~amlip_qp.alip.footholds`: :class:`FootholdPlane`, the ground plane from the last footholds (blind mode).
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
+- :mod:`~amlip_qp.alip.step_mpc`: the step-timing MPC's quadratic program (footholds and the step's duration);
+- :mod:`~amlip_qp.alip.mpc_planner`: :class:`MPCPlanner`, the planner that solves it every tick.
 """
 
 from amlip_qp.alip.clock import StepClock

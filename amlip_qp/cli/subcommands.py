@@ -23,6 +23,8 @@ from amlip_qp.sim.live_keys import keys_help
 #: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
 #: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
 TRACKERS = ("pbc", "qp")
+#: ``walk --planner``: amlip_qp.control.walking.planners.PLANNERS (the CLI stays light; tested equal).
+PLANNERS = ("one-step", "mpc")
 #: Sensor models and base estimators (the same as ``amlip_qp.sim.sensors.SENSOR_MODELS`` and
 #: ``amlip_qp.sim.factory.ESTIMATORS``, checked by the tests).
 SENSORS = ("ideal", "robot")
@@ -187,6 +189,13 @@ def add_walk(sub) -> None:
         "default cassie, or the scenario's",
     )
     p.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
+    p.add_argument(
+        "--planner",
+        choices=PLANNERS,
+        default="one-step",
+        help="foot placement: one-step (the paper's deadbeat law, fixed step time) or mpc (footholds four steps "
+        "ahead and the step's duration, docs/ALIP_MPC.md) (default one-step)",
+    )
     p.add_argument(
         "--scenario", metavar="NAME", default=None, help="start from a named scenario (options below override it)"
     )

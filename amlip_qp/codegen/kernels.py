@@ -7,6 +7,7 @@ Use::
     kernels = load_kernels()          # compiles on first use, then cached
     y = kernels.alip_plan(u16)        # 16 inputs -> 8 outputs
     h = kernels.swing_reference(u15)  # 15 inputs -> 30 outputs
+    q = kernels.alip_mpc_qp(u47)      # the step-timing MPC's QP: 47 inputs -> 372 outputs
     kernels.backend                   # "c" (compiled) or "casadi" (fallback)
 
 Layouts and units are those of :mod:`amlip_qp.alip.kernels`. The library is
@@ -114,11 +115,13 @@ class FastFunction:
 
 
 class Kernels:
-    """Both planner kernels, compiled (backend ``"c"``) or on CasADi (``"casadi"``).
+    """The planner kernels, compiled (backend ``"c"``) or on CasADi (``"casadi"``).
 
     Attributes:
         alip_plan: :class:`FastFunction` ``u[16] -> y[8]``.
         swing_reference: :class:`FastFunction` ``u[15] -> y[30]``.
+        alip_mpc_qp: :class:`FastFunction` ``u[47] -> y[372]``, the step-timing MPC's QP
+            (:mod:`amlip_qp.alip.step_mpc`).
         backend: ``"c"`` or ``"casadi"``.
         library_path: the compiled library, or ``None`` on the fallback.
         fallback_reason: why the fallback is used, or ``None``.
@@ -150,9 +153,10 @@ class Kernels:
         self.swing_reference = FastFunction(
             functions["swing_reference"], symbolic.spec("swing_reference"), self.backend
         )
+        self.alip_mpc_qp = FastFunction(functions["alip_mpc_qp"], symbolic.spec("alip_mpc_qp"), self.backend)
 
     def __getitem__(self, name: str) -> FastFunction:
-        """The kernel called ``name`` (``"alip_plan"`` or ``"swing_reference"``)."""
+        """The kernel called ``name`` (one of ``symbolic.KERNEL_NAMES``)."""
         if name not in symbolic.KERNEL_NAMES:
             raise KeyError(f"unknown kernel {name!r}; expected one of {symbolic.KERNEL_NAMES}")
         return getattr(self, name)

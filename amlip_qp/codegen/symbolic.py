@@ -12,6 +12,8 @@ vector) and one dense output ``y``:
   ``kernels.ALIP_PLAN_OUTPUTS``; SI units, see :mod:`amlip_qp.alip.kernels`).
 - ``swing_reference``: ``u[15] -> y[30]`` (layout:
   ``kernels.SWING_REFERENCE_INPUTS``; ``h_d``, ``dh_d/dt``, ``d2h_d/dt2``).
+- ``alip_mpc_qp``: ``u[47] -> y[372]``, the step-timing MPC's QP (layout:
+  ``step_mpc.MPC_QP_INPUTS``, ``step_mpc.MPC_QP_BLOCKS``; :mod:`amlip_qp.alip.step_mpc`).
 
 Physical parameters (mass, CoM height, step time, width, gravity, clearance)
 are inputs, so the same functions serve Cassie and Rabbit. Every output entry
@@ -29,7 +31,7 @@ from functools import cache
 
 import casadi as ca
 
-from amlip_qp.alip import kernels
+from amlip_qp.alip import kernels, step_mpc
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,8 @@ KERNEL_SPECS: tuple[KernelSpec, ...] = (
                kernels.alip_plan_terms, kernels.ALIP_PLAN_INPUTS),
     KernelSpec("swing_reference", len(kernels.SWING_REFERENCE_INPUTS), kernels.SWING_REFERENCE_N_OUT,
                kernels.swing_reference_terms, kernels.SWING_REFERENCE_INPUTS),
+    KernelSpec("alip_mpc_qp", len(step_mpc.MPC_QP_INPUTS), step_mpc.MPC_QP_N_OUT,
+               step_mpc.mpc_qp_terms, step_mpc.MPC_QP_INPUTS),
 )  # fmt: skip
 
 #: Kernel names, in library order.
@@ -75,7 +79,7 @@ def build_function(kernel: KernelSpec) -> ca.Function:
 
 @cache
 def function(name: str) -> ca.Function:
-    """The (cached) SX Function of the kernel ``name``: ``alip_plan`` or ``swing_reference``."""
+    """The (cached) SX Function of the kernel ``name`` (one of :data:`KERNEL_NAMES`)."""
     return build_function(spec(name))
 
 

@@ -213,7 +213,7 @@ def run_walk(args: argparse.Namespace) -> int:
         check_plant(scenario)
     release_warnings(unverified)
     noise = SensorNoise() if args.noise else None
-    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
+    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise, planner=args.planner)
     recorder = None
     if args.video is not None:
         from amlip_qp.sim.video import VideoRecorder

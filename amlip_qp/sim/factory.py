@@ -132,6 +132,7 @@ def build_simulation(
     estimator: str | None = None,
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
+    planner: str = "one-step",
 ) -> Simulation:
     """The :class:`Simulation` of ``scenario`` with ``tracker`` (a name or an instance).
 
@@ -154,6 +155,8 @@ def build_simulation(
             for a plant given by name or path.
         ctrl_filter: Applied to the actuator controls before they reach the plant,
             after the scenario's actuator delay; see :class:`Simulation`.
+        planner: The controller's foot-placement planner, ``"one-step"`` or ``"mpc"``
+            (``WalkingController(planner=...)``).
     """
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.robots import RobotKinematics
@@ -202,6 +205,7 @@ def build_simulation(
         dt_s=CONTROL_DT_S,
         planner_backend=planner_backend,
         command_shaping=scenario.shaping,
+        planner=planner,
         **options,
     )
     return Simulation(

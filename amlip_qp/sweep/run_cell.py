@@ -122,12 +122,13 @@ def _parse_walk(argv: list[str]):
 
 @dataclass(frozen=True)
 class WalkRun:
-    """What one walk of a cell needs: the scenario, the tracker, the seed, and Gaussian noise on or off."""
+    """What one walk of a cell needs: the scenario, the tracker, the seed, Gaussian noise on or off, the planner."""
 
     scenario: Any  # amlip_qp.sim.scenarios.Scenario (imported lazily: this module stays light)
     tracker: str
     seed: int
     noise: bool
+    planner: str = "one-step"
 
 
 def make_push(params: Mapping[str, Any]):
@@ -183,7 +184,7 @@ def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
                     )
     except InputError as exc:
         raise InputError(f"walk {' '.join(argv)}: {exc}") from None
-    return WalkRun(scenario, args.tracker, int(args.seed), bool(args.noise))
+    return WalkRun(scenario, args.tracker, int(args.seed), bool(args.noise), args.planner)
 
 
 def check_plants(runs: list[WalkRun]) -> None:
@@ -204,7 +205,8 @@ def walk(run: WalkRun) -> dict[str, Any]:
     from amlip_qp.sim.run_types import SensorNoise
 
     sc = run.scenario
-    sim = factory.build_simulation(sc, run.tracker, seed=run.seed, noise=SensorNoise() if run.noise else None)
+    noise = SensorNoise() if run.noise else None
+    sim = factory.build_simulation(sc, run.tracker, seed=run.seed, noise=noise, planner=run.planner)
     result = sim.run(sc.duration_s, log="summary")  # the metrics read only the summary
     result.info["scenario"] = sc.name
     result.info["modifiers"] = sc.setting.modifiers.describe()

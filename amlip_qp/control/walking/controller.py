@@ -16,7 +16,8 @@ One :meth:`WalkingController.step` per control tick (2 kHz by default):
    gives the ground at the swing target (blind: from the footholds;
    terrain-aware: from the terrain's height function);
 4. the planner (the code-generated kernels on the fast path) predicts ``L(T-)``,
-   places the foot and evaluates ``h_d(s)`` and its derivatives (off flat
+   places the foot (the one-step law, or with ``planner="mpc"`` the step-timing
+   MPC, which also plans the step's duration on the step clock) and evaluates ``h_d(s)`` and its derivatives (off flat
    ground with the height difference to the next contact, the swing foot's
    start and end heights and pitches, and a swing foot that keeps descending
    after ``T`` until it touches down);
@@ -41,11 +42,13 @@ from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
+from amlip_qp.alip.mpc_planner import MPCSettings
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
+from amlip_qp.control.walking.planners import check_planner, make_planner, mpc_regions
 from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_signals
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
@@ -97,6 +100,12 @@ class WalkingController:
             friction cone follows the ground.
         terrain_height_fn: World ``(x, y)`` m -> ground height m, for ``"aware"``
             (default mode then; given with another mode: InputError).
+        planner: ``"one-step"`` (default): the one-step deadbeat law
+            (:class:`~amlip_qp.alip.planner.Planner`); ``"mpc"``: the step-timing MPC, footholds
+            four steps ahead and the current step's duration (:class:`~amlip_qp.alip.mpc_planner.MPCPlanner`,
+            docs/ALIP_MPC.md), which plans the step's end on the step clock.
+        mpc_settings: The MPC's limits and weights (:class:`~amlip_qp.alip.mpc_planner.MPCSettings`;
+            ``planner="mpc"`` only).
 
     Raises:
         InputError: A bad argument.
@@ -122,7 +131,10 @@ class WalkingController:
         base_estimator: BaseStateEstimator | None = None,
         ground_mode: str | None = None,
         terrain_height_fn: HeightFunction | None = None,
+        planner: str = "one-step",
+        mpc_settings: MPCSettings | None = None,
     ):
+        check_planner(planner, mpc_settings)
         if initial_stance not in ("left", "right"):
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
         if planner_backend not in ("c", "numpy"):
@@ -163,22 +175,12 @@ class WalkingController:
         #: The ground the steps are planned for (flat, blind or terrain-aware).
         self.ground = GroundPredictor(ground_mode, terrain_height_fn)
         self.gait = GaitLogic(gait)
-        plan_fn = reference_fn = None
-        if planner_backend == "c":
-            from amlip_qp.codegen import load_kernels
-
-            kernels = load_kernels()
-            plan_fn, reference_fn = kernels.alip_plan, kernels.swing_reference
         #: Stance side, start and phase of the current step: the one step clock,
         #: held by the planner, which starts its steps.
         self.clock = StepClock()
-        self.planner = Planner(
-            output_names(robot),
-            robot.mass_kg,
-            plan_fn=plan_fn,
-            reference_fn=reference_fn,
-            clock=self.clock,
-            late_descent="landing" if self.ground.active else None,
+        descent = "landing" if self.ground.active else None
+        self.planner: Planner = make_planner(
+            planner, output_names(robot), robot.mass_kg, self.clock, planner_backend, descent, mpc_settings
         )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
@@ -291,7 +293,7 @@ class WalkingController:
             # touchdown it closes the old step and a new one is made about the
             # new stance contact (the filters restart there).
             est = estimator.estimate(stance)
-            phase_raw = clock.phase_unclipped(t, command.step_time_s)
+            phase_raw = clock.phase_unclipped(t, clock.step_time_s(command.step_time_s))
             swing = other_side(stance)
             height = float(est.swing_contact_m[2] - est.stance_contact_m[2])
             contact = measurement.foot_contact.get(swing) if measurement.foot_contact else None
@@ -321,12 +323,20 @@ class WalkingController:
                 ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
                 # the swing target of the new step is not known yet: plan once for it
                 first = ground.predict(est.stance_contact_m, self.planner.heading_rad)
-                plan = self.planner.update(state, ground.fit(first, command), first, ground.foothold())
+                plan = self.planner.update(
+                    state, ground.fit(first, command), first, ground.foothold(), **mpc_regions(self.planner, ground)
+                )
                 target_xy = plan.swing_target_world_m
             else:
                 target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
             prediction = ground.predict(target_xy, self.planner.heading_rad)
-            plan = self.planner.update(state, ground.fit(prediction, command), prediction, ground.foothold())
+            plan = self.planner.update(
+                state,
+                ground.fit(prediction, command),
+                prediction,
+                ground.foothold(),
+                **mpc_regions(self.planner, ground),
+            )
         self._last_plan = plan
         target = TrackingTarget(
             stance=stance,

@@ -138,6 +138,20 @@ class FootholdSelector:
         out.append((lo, math.inf))
         return out
 
+    @property
+    def reach_m(self) -> float:
+        """How far ahead of and behind a point the selector reads the terrain for it, m."""
+        return SEARCH_M + self.front_m + self.back_m + self.margin_m
+
+    def region(self, x_m: float, y_m: float, heading_rad: float) -> tuple[float, float]:
+        """The stretch of ground along the heading (offsets ``(lo, hi)`` from ``(x_m, y_m)``, m) where the
+        footprint fits nearest to that point: the one holding it, else the nearest; its ends are within the
+        search reach (``SEARCH_M`` plus the footprint), ``+-`` that reach where no edge is nearer."""
+        reach = self.reach_m
+        zones = self.zones(self.edges(x_m, y_m, heading_rad, -reach, reach))
+        lo, hi = min(zones, key=lambda z: z[0] if z[0] > 0.0 else (-z[1] if z[1] < 0.0 else 0.0))
+        return max(lo, -reach), min(hi, reach)
+
     def place(self, x_m: float, y_m: float, heading_rad: float, phase: float = 0.0) -> tuple[float, float]:
         """The foothold for the raw target ``(x_m, y_m)`` (world, m) of a step along ``heading_rad`` (rad) at
         ``phase`` of the swing: the raw target moved along the heading into the nearest stretch of ground where

@@ -59,6 +59,17 @@ PITCH_HALF_BASE_M = 0.05
 #: :func:`fit_clearance` lowers a clearance that would lift it too high.
 APEX_MARGIN_M = 0.05
 
+#: The MPC's foothold regions (:meth:`GroundPredictor.regions`) are made for headings within this of a
+#: world axis, rad (a box of world axes along a stretch of the heading).
+REGION_MAX_ANGLE_RAD = math.radians(30.0)
+#: A region's half size across the heading (unbounded), m.
+REGION_OPEN_M = 1000.0
+#: Regions kept for reuse (a foothold on a stretch found before gets its region without sampling the terrain).
+MAX_CACHED_REGIONS = 16
+#: A region with an end where no edge is within the search reach (the end is the reach's, which moves with the
+#: foothold) is reused for a foothold at most this far (m, along the heading's axis) from where it was found.
+REGION_REUSE_M = 0.05
+
 HeightFunction = Callable[[float, float], float]
 FootholdPlacement = Callable[[float, float, float, float], tuple[float, float]]
 
@@ -120,6 +131,9 @@ class GroundPredictor:
         self._liftoff_pitch = 0.0
         #: Moves swing targets off the terrain's edges ("aware" only; None otherwise).
         self.selector = FootholdSelector(self._height) if mode == "aware" else None
+        # the MPC's regions found so far (their extent along the heading's axis, m, and the region) and their heading
+        self._regions_cache: list[tuple[float, float, float, tuple[float, ...]]] = []
+        self._regions_heading = math.nan
 
     @property
     def active(self) -> bool:
@@ -139,6 +153,8 @@ class GroundPredictor:
         self._liftoff_pitch = 0.0
         if self.selector is not None:
             self.selector.reset()
+        self._regions_cache.clear()
+        self._regions_heading = math.nan
 
     def touchdown(self, stance_contact_m: np.ndarray, heading_rad: float) -> None:
         """A new stance contact (world, m) on a step of heading ``heading_rad`` (rad): a foothold."""
@@ -160,6 +176,54 @@ class GroundPredictor:
     def foothold(self) -> FootholdPlacement | None:
         """The planner's foothold hook: world ``(x, y)``, heading, phase -> foothold ``(x, y)`` ("aware"; else None)."""
         return self.selector.place if self.selector is not None else None
+
+    def regions(self, footholds_xy_m: np.ndarray, heading_rad: float) -> list[tuple[float, ...]] | None:
+        """Foothold regions for the step-timing MPC, one per planned foothold (world ``(n, 2)``, m), in the
+        ``"aware"`` mode with a heading within :data:`REGION_MAX_ANGLE_RAD` of a world axis; else ``None``.
+
+        Each is the world box ``(x_lo, x_hi, y_lo, y_hi, z)`` (m) of the stretch of ground along the heading
+        where the footprint fits nearest to the foothold (:meth:`FootholdSelector.region
+        <amlip_qp.control.walking.footprint.FootholdSelector.region>`: a stair's tread less the foot and
+        its margins), unbounded across the heading, with the ground's height at the stretch's middle. A
+        foothold on a stretch found before between two edges (at the same heading) gets that region again
+        without sampling; on a stretch with an open end only within :data:`REGION_REUSE_M` of where it was found.
+        """
+        if self.selector is None:
+            return None
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        along_x = abs(c) >= math.cos(REGION_MAX_ANGLE_RAD)
+        if not (along_x or abs(s) >= math.cos(REGION_MAX_ANGLE_RAD)):
+            return None
+        if heading_rad != self._regions_heading:
+            self._regions_cache.clear()
+            self._regions_heading = heading_rad
+        out: list[tuple[float, ...]] = []
+        for x, y in np.asarray(footholds_xy_m, dtype=float).reshape(-1, 2).tolist():
+            u = x if along_x else y
+            known = next(
+                (r for r in self._regions_cache if r[0] <= u <= r[1] and not abs(u - r[2]) > REGION_REUSE_M), None
+            )
+            if known is not None:  # the foothold is on a stretch found before, near where it was: the same region
+                out.append(known[3])
+                continue
+            lo, hi = self.selector.region(x, y, heading_rad)
+            if lo > hi:  # no stretch long enough for the foot: its middle
+                lo = hi = 0.5 * (lo + hi)
+            mid = 0.5 * (lo + hi)
+            z = self._height(x + mid * c, y + mid * s)
+            if along_x:
+                a, b = sorted((x + lo * c, x + hi * c))
+                region: tuple[float, ...] = (a, b, -REGION_OPEN_M, REGION_OPEN_M, z)
+            else:
+                a, b = sorted((y + lo * s, y + hi * s))
+                region = (-REGION_OPEN_M, REGION_OPEN_M, a, b, z)
+            out.append(region)
+            if len(self._regions_cache) >= MAX_CACHED_REGIONS:
+                self._regions_cache.pop(0)
+            # between two edges the region holds for any foothold on it (u0 = NaN); an end at the reach moves
+            bounded = -self.selector.reach_m < lo and hi < self.selector.reach_m
+            self._regions_cache.append((a, b, math.nan if bounded else u, region))
+        return out
 
     def fit(self, prediction: TerrainPrediction, command: Command) -> Command:
         """The command for a step over ``prediction``: over an edge up or down ("aware") the clearance is raised

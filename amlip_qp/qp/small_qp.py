@@ -1,0 +1,127 @@
+"""A small dense QP of fixed shape solved by one hot-started DAQP model, with little overhead.
+
+For problems of a few variables solved every control tick (the step-timing MPC of
+:mod:`amlip_qp.alip.mpc_planner`): :class:`SmallQPSolver` is called as
+``x = solver(H, g, C, lower, upper)`` for
+
+.. math::
+
+    \\min_x \\tfrac12 x^T H x + g^T x \\quad \\text{s.t.}\\quad l \\le C x \\le u,\\; lb \\le x \\le ub
+
+with ``lower = (lb, l)`` and ``upper = (ub, u)`` stacked (DAQP's layout: the bounds of
+``x``, then the rows'), and keeps DAQP's model (and so its working set) from one call to the next, like
+:class:`~amlip_qp.qp.daqp_solver.DAQPSolver` but without a :class:`~amlip_qp.qp.problem.QPProblem`:
+the arrays are copied into the model's own buffers. Bounds beyond ``+-BIG_BOUND`` are
+DAQP's "no bound".
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp.daqp_solver import BIG_BOUND, PRIMAL_TOL
+
+#: DAQP's sense flag of a soft row.
+SENSE_SOFT = 8
+#: Largest constraint violation (in the rows' units) a reported solution may have.
+RESIDUAL_CHECK = 1e-4
+
+
+class SmallQPSolver:
+    """A hot-started DAQP model for QPs of ``n`` variables and ``m`` two-sided rows (module doc).
+
+    Args:
+        n: number of variables (> 0).
+        m: number of rows of ``C`` (>= 0).
+        soft_rows: rows of ``C`` that are soft (DAQP's soft constraints: violated, with a
+            slack of cost ``slack^2 / rho_soft``, ``rho_soft = 1e-6``, only when the hard
+            ones leave no other choice); not checked against :data:`RESIDUAL_CHECK`.
+        iter_limit: DAQP's iteration cap per solve.
+
+    Attributes:
+        solves: calls so far; failures: calls that raised; last_solve_us: the last call's time, µs.
+    """
+
+    def __init__(self, n: int, m: int, soft_rows: tuple[int, ...] = (), iter_limit: int = 200):
+        import daqp
+
+        if (
+            isinstance(n, bool)
+            or not isinstance(n, int)
+            or n < 1
+            or isinstance(m, bool)
+            or not isinstance(m, int)
+            or m < 0
+        ):
+            raise QPError(f"SmallQPSolver(n={n!r}, m={m!r}): n must be an integer > 0 and m an integer >= 0")
+        self._daqp = daqp
+        self.n, self.m = n, m
+        self.iter_limit = int(iter_limit)
+        self._H = np.zeros((n, n))
+        self._f = np.zeros(n)
+        self._A = np.zeros((m, n))
+        self._bu = np.zeros(n + m)
+        self._bl = np.zeros(n + m)
+        self._sense = np.zeros(n + m, dtype=np.intc)
+        self._z = np.zeros(n + m)
+        self._t1, self._t2 = np.zeros(n + m), np.zeros(n + m)
+        self._hard = np.ones(n + m)  # 1: checked (the bounds of x, the hard rows), 0: soft
+        for i in soft_rows:
+            if isinstance(i, bool) or not isinstance(i, int) or not 0 <= i < m:
+                raise QPError(f"soft_rows must be row indices in [0, {m}), got {soft_rows!r}")
+            self._sense[n + i] = SENSE_SOFT
+            self._hard[n + i] = 0.0
+        self._model: Any = None
+        self.solves = 0
+        self.failures = 0
+        self.last_solve_us = 0.0
+
+    def reset(self) -> None:
+        """Forget the working set: the next call sets the model up afresh."""
+        self._model = None
+
+    def __call__(self, H, g, C, lower, upper) -> np.ndarray:
+        """Solve; return ``x`` (a new array). ``lower``, ``upper``: ``n + m`` bounds each (module doc).
+        Raises :class:`QPError` when DAQP fails or the solution violates a hard row or a bound
+        by more than :data:`RESIDUAL_CHECK`."""
+        t0 = time.perf_counter_ns()
+        self._H[:] = H
+        self._f[:] = g
+        self._A[:] = C
+        np.minimum(upper, BIG_BOUND, out=self._bu)
+        np.maximum(lower, -BIG_BOUND, out=self._bl)
+        self.solves += 1
+        if self._model is None:
+            model = self._daqp.Model()
+            code = model.setup(self._H, self._f, self._A, self._bu, self._bl, self._sense)
+            if code[0] < 0:
+                self.failures += 1
+                raise QPError(f"DAQP set-up failed with code {code[0]}", status=f"DAQP_SETUP_{code[0]}")
+            model.settings = {"iter_limit": self.iter_limit, "primal_tol": PRIMAL_TOL}
+            self._model = model
+        else:
+            self._model.update(H=self._H, f=self._f, A=self._A, bupper=self._bu, blower=self._bl)
+        x, _, flag, _ = self._model.solve()
+        x = np.array(x, dtype=float)
+        ok = flag in (1, 2) and math.isfinite(sum(x.tolist()))
+        if ok:
+            z = self._z
+            z[: self.n] = x
+            np.dot(self._A, x, out=z[self.n :])
+            t1, t2 = self._t1, self._t2
+            np.subtract(self._bl, z, out=t1)
+            np.subtract(z, self._bu, out=t2)
+            np.maximum(t1, t2, out=t1)
+            t1 *= self._hard
+            ok = float(t1.max()) <= RESIDUAL_CHECK
+        self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
+        if not ok:
+            self.failures += 1
+            self._model = None
+            raise QPError(f"DAQP failed on the small QP (exit flag {flag})", status=f"DAQP_EXIT_{flag}")
+        return x

@@ -1,0 +1,40 @@
+"""SmallQPSolver: a fixed-shape QP on one hot-started DAQP model, with soft rows."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp.small_qp import SmallQPSolver
+
+H = np.diag([2.0, 4.0])
+G = np.array([-2.0, -4.0])  # unconstrained minimum (1, 1)
+
+
+def test_unconstrained_and_active_row_solutions():
+    s = SmallQPSolver(2, 1)
+    np.testing.assert_allclose(
+        s(H, G, np.array([[1.0, 1.0]]), [-1e9, -1e9, -10.0], [1e9, 1e9, 10.0]), [1.0, 1.0], atol=1e-12
+    )
+    # x0 + x1 <= 1: the minimum of (x0-1)^2 + 2 (x1-1)^2 on it is (1/3, 2/3)
+    x = s(H, G, np.array([[1.0, 1.0]]), [-1e9, -1e9, -10.0], [1e9, 1e9, 1.0])
+    np.testing.assert_allclose(x, [1.0 / 3.0, 2.0 / 3.0], atol=1e-12)
+    assert s.solves == 2 and s.failures == 0
+
+
+def test_a_soft_row_gives_way_to_a_hard_bound_and_a_hard_one_fails():
+    C = np.array([[1.0, 0.0]])
+    soft = SmallQPSolver(2, 1, soft_rows=(0,))
+    x = soft(H, G, C, [-1e9, -1e9, 3.0], [2.0, 1e9, 4.0])  # the row wants x0 >= 3, the bound x0 <= 2
+    assert x[0] == pytest.approx(2.0, abs=1e-9)
+    hard = SmallQPSolver(2, 1)
+    with pytest.raises(QPError):
+        hard(H, G, C, [-1e9, -1e9, 3.0], [2.0, 1e9, 4.0])
+    assert hard.failures == 1
+    # after a failure the next solve starts afresh and succeeds
+    np.testing.assert_allclose(hard(H, G, C, [-1e9, -1e9, -3.0], [1e9, 1e9, 4.0]), [1.0, 1.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("n, m, soft", [(0, 1, ()), (2, -1, ()), (2, 1, (1,)), (2.0, 1, ())])
+def test_bad_sizes_raise(n, m, soft):
+    with pytest.raises(QPError):
+        SmallQPSolver(n, m, soft_rows=soft)
