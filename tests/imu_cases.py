@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim.harness import TICK_OK
+from amlip_qp.sim.loop.harness import TICK_OK
 
 #: G1's file's IMU sites (``unitree_g1/g1.xml``): ``imu_in_pelvis`` and ``imu_in_torso``.
 G1_PELVIS_IMU_M = (0.04525, 0.0, -0.08339)

@@ -32,6 +32,26 @@ CONTROL_BASE = ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.robots", "amlip_q
 #: The control subpackages (jobs).
 CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.control.wbc")
 
+#: The subpackages of ``amlip_qp.sim``, one per job, lowest first: each may import those before it, never after.
+SIM_JOBS = (
+    "amlip_qp.sim.world",
+    "amlip_qp.sim.sensing",
+    "amlip_qp.sim.loop",
+    "amlip_qp.sim.scenarios",
+    "amlip_qp.sim.reports",
+)
+#: What sits above the library: never imported by it.
+ABOVE_THE_LIBRARY = ("amlip_qp.experiments", "amlip_qp.sweep", "amlip_qp.cli", "amlip_qp.__main__")
+
+
+def _sim_job(job: str, below: tuple[str, ...], never: tuple[str, ...] = ()) -> Rule:
+    """The rule of the sim job ``job``: itself, the jobs before it in :data:`SIM_JOBS` and ``below``."""
+    lower = SIM_JOBS[: SIM_JOBS.index(job) + 1]
+    return Rule(
+        lower + below, never + SIM_JOBS[SIM_JOBS.index(job) + 1 :] + ABOVE_THE_LIBRARY + ("amlip_qp.output_paths",)
+    )
+
+
 #: unit (a package, or a top-level module) -> its rule (docs/ARCHITECTURE.md, "Layers").
 RULES: dict[str, Rule] = {
     # the package's own __init__: re-exports the exceptions, and lazily the robot, the controller,
@@ -44,7 +64,7 @@ RULES: dict[str, Rule] = {
             "amlip_qp.control.walking",
             "amlip_qp.control.wbc.tracker",
             "amlip_qp.control.pbc.tracker",
-            "amlip_qp.sim.mujoco_loop",
+            "amlip_qp.sim.loop.mujoco_loop",
         ),
         HEAVY + ("numpy",),
     ),
@@ -58,7 +78,14 @@ RULES: dict[str, Rule] = {
     # the command line stays light: handlers are imported by name when a subcommand runs
     # (view's keys for its --help: a leaf module of plain data)
     "amlip_qp.cli": Rule(
-        ("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.sim.live_keys"), HEAVY + ("numpy",)
+        (
+            "amlip_qp.cli",
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.sim.loop.live_keys",
+            "amlip_qp.sim.reports.gl",
+        ),
+        HEAVY + ("numpy",),
     ),
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
@@ -106,13 +133,47 @@ RULES: dict[str, Rule] = {
         + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc"),
         ("mujoco",),
     ),
-    # the MuJoCo harness sits on top (and never imports the sweep that runs it)
-    "amlip_qp.sim": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
+    # the MuJoCo side, one subpackage per job (SIM_JOBS, lowest first): each imports only jobs below it
+    "amlip_qp.sim": Rule((), HEAVY + ("numpy",)),
+    "amlip_qp.sim.world": _sim_job(
+        "amlip_qp.sim.world", ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.robots", "amlip_qp.codegen")
+    ),
+    # the measurement: the IMU reading of the estimators, the controller's Measurement
+    "amlip_qp.sim.sensing": _sim_job(
+        "amlip_qp.sim.sensing",
+        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.estimation.imu", "amlip_qp.control.walking.estimator"),
+    ),
+    # the closed loop runs the controller
+    "amlip_qp.sim.loop": _sim_job(
+        "amlip_qp.sim.loop",
+        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.alip", "amlip_qp.robots", "amlip_qp.control"),
+    ),
+    # a scenario made a closed loop: the robot, a tracker, the controller, its estimator
+    "amlip_qp.sim.scenarios": _sim_job(
+        "amlip_qp.sim.scenarios",
+        (
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.alip",
+            "amlip_qp.robots",
+            "amlip_qp.control",
+            "amlip_qp.estimation",
+        ),
+    ),
+    # a finished run's summary, figures and video: plain data and the terrain's shape, never the controller
+    "amlip_qp.sim.reports": _sim_job(
+        "amlip_qp.sim.reports",
+        ("amlip_qp.exceptions", "amlip_qp.alip"),
+        ("amlip_qp.control", "amlip_qp.sim.scenarios"),
+    ),
+    # the commands' experiments sit on top of the library (and never import the sweep that runs some of them)
+    "amlip_qp.experiments": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
     # the sweep runs walks: the harness, the walk parser of the CLI, the profiles
     "amlip_qp.sweep": Rule(
         (
             "amlip_qp.sweep",
             "amlip_qp.sim",
+            "amlip_qp.experiments",
             "amlip_qp.exceptions",
             "amlip_qp.output_paths",
             "amlip_qp.cli",
@@ -198,6 +259,19 @@ def test_nothing_imports_the_sweep_but_itself():
     assert not offenders
 
 
+def test_nothing_in_the_library_imports_the_experiments_or_the_command_line():
+    """The experiments, the sweep and the command line sit above the library: no library module imports them."""
+    offenders = [
+        f"{f.relative_to(PKG.parent)} imports {name}"
+        for unit, files in _units().items()
+        if not _matches(unit, ABOVE_THE_LIBRARY)
+        for f in files
+        for name in _imports(f)
+        if _matches(name, ABOVE_THE_LIBRARY)
+    ]
+    assert not offenders
+
+
 def test_the_check_catches_violations(tmp_path, monkeypatch):
     pkg = tmp_path / "amlip_qp"
     (pkg / "control" / "walking").mkdir(parents=True)
@@ -205,11 +279,16 @@ def test_the_check_catches_violations(tmp_path, monkeypatch):
     bad.write_text(
         "from amlip_qp.control.pbc.tracker import PBCTracker\n"
         "from . import gait\n"
-        "def f():\n    import mujoco\n    from amlip_qp.sim.harness import Simulation\n"
+        "def f():\n    import mujoco\n    from amlip_qp.sim.loop.harness import Simulation\n"
     )
     monkeypatch.setattr(sys.modules[__name__], "PKG", pkg)
     found = _imports(bad)
-    assert {"mujoco", "amlip_qp.sim.harness", "amlip_qp.control.pbc.tracker", "amlip_qp.control.walking.gait"} <= found
+    assert {
+        "mujoco",
+        "amlip_qp.sim.loop.harness",
+        "amlip_qp.control.pbc.tracker",
+        "amlip_qp.control.walking.gait",
+    } <= found
     offenders = _offenders("amlip_qp.control.walking", [bad])
     assert len(offenders) == 3 and not any("gait" in o for o in offenders)
 
@@ -238,7 +317,7 @@ def test_the_top_level_exports_are_lazy_and_from_the_allowed_modules():
     assert {"load_robot", "Robot", "WalkingController", "QPTracker", "PBCTracker", "Command", "Measurement"} <= set(
         modules
     )
-    assert modules["MujocoLoop"] == "amlip_qp.sim.mujoco_loop"
+    assert modules["MujocoLoop"] == "amlip_qp.sim.loop.mujoco_loop"
     assert all(_matches(m, RULES["amlip_qp"].may) for m in modules.values()), modules
 
 

@@ -21,7 +21,7 @@ from amlip_qp import cli
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import InputError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim import factory
+from amlip_qp.sim.scenarios import factory
 
 #: A plant that lacks everything Cassie's controller needs.
 RABBIT_XML = str(MODELS_DIR / "rabbit.xml")
@@ -36,14 +36,14 @@ def no_simulation(monkeypatch):
     """Make every way of simulating (walk, compare, the benchmarks) or generating code fail the test."""
     from amlip_qp.codegen import bench as codegen_bench
     from amlip_qp.codegen import generate
-    from amlip_qp.sim import bench_ekf, bench_harness, compare
+    from amlip_qp.experiments import bench_ekf, bench_harness, compare
     from amlip_qp.sweep import bench as sweep_bench
 
     monkeypatch.setattr(factory, "build_simulation", _simulated)
     monkeypatch.setattr(factory, "run_scenario", _simulated)
     monkeypatch.setattr(compare, "run_comparison", _simulated)
     monkeypatch.setattr(codegen_bench, "run_benchmark", _simulated)
-    from amlip_qp.sim import bench_qp
+    from amlip_qp.experiments import bench_qp
 
     monkeypatch.setattr(bench_qp, "run", _simulated)
     monkeypatch.setattr(bench_qp, "format_report", _simulated)
@@ -286,7 +286,7 @@ def test_an_option_is_still_an_option_after_a_value_taking_flag(capsys):
 
 
 def test_commands_inside_the_bounds_pass_the_check():
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     for argv in (
@@ -323,7 +323,7 @@ def test_an_os_error_while_writing_after_the_run_exits_2(option, name, tmp_path,
 
 
 def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
-    from amlip_qp.sim import cli as sim_cli
+    from amlip_qp.experiments import walk as sim_cli
 
     def disk_full(args):
         raise OSError(28, "No space left on device", "/data/run.npz")

@@ -7,7 +7,8 @@ from amlip_qp.cli import subcommands as S
 
 
 def test_the_light_name_lists_match_the_heavy_modules():
-    from amlip_qp.sim import factory, sensors
+    from amlip_qp.sim.scenarios import factory
+    from amlip_qp.sim.sensing import sensors
 
     assert S.SENSORS == sensors.SENSOR_MODELS
     assert S.ESTIMATORS == factory.ESTIMATORS

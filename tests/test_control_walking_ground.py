@@ -77,7 +77,7 @@ def test_the_controller_plans_for_its_ground_mode():
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.robots import RobotKinematics
-    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.scenarios.factory import load
 
     robot = load("cassie")
 

@@ -17,8 +17,8 @@ import pytest
 from amlip_qp import cli
 from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import factory
-from amlip_qp.sim.summary import TIMING_FIELDS
+from amlip_qp.sim.reports.summary import TIMING_FIELDS
+from amlip_qp.sim.scenarios import factory
 
 SUMMARY_KEYS = {
     "robot", "tracker", "scenario", "seed", "noise", "duration_s", "sim_time_s", "fell", "fall_time_s", "steps",
@@ -184,7 +184,7 @@ def test_walk_video_gif(tmp_path, capsys, stand_in):
 
 
 def test_scenario_options_override(capsys, stand_in):
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     args = parser.parse_args(
@@ -201,9 +201,9 @@ def test_scenario_options_override(capsys, stand_in):
 
 
 def test_command_shaping_options_reach_the_controller():
+    from amlip_qp.experiments.walk import scenario_from_args
     from amlip_qp.profiles import NO_SHAPING, get_profile
-    from amlip_qp.sim.cli import scenario_from_args
-    from amlip_qp.sim.factory import build_simulation
+    from amlip_qp.sim.scenarios.factory import build_simulation
 
     parser = cli.build_parser()
     assert scenario_from_args(parser.parse_args(["walk", "--robot", "rabbit"])).shaping is None  # the profile's
@@ -288,7 +288,7 @@ def test_factory_names_a_missing_tracker(monkeypatch):
 def test_real_trackers_are_wired(name):
     cls = factory.tracker_class(name)
     assert cls.name == name
-    from amlip_qp.sim.scenarios import Scenario
+    from amlip_qp.sim.scenarios.scenarios import Scenario
 
     res = factory.run_scenario(Scenario("tiny", "rabbit", 0.01), name)
     assert res.tracker == name and res.log["t"].size == 20
@@ -296,7 +296,7 @@ def test_real_trackers_are_wired(name):
 
 def test_clearance_option_reaches_the_planner_command_and_is_bounded():
     from amlip_qp.exceptions import InputError
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     sc = scenario_from_args(parser.parse_args(["walk", "--vx", "0.5"]))
@@ -312,8 +312,8 @@ def test_clearance_option_reaches_the_planner_command_and_is_bounded():
 
 
 def test_compare_takes_the_terrain_aware_and_clearance_settings():
-    from amlip_qp.sim.cli import setting_from_args
-    from amlip_qp.sim.run_types import PlantSetting
+    from amlip_qp.experiments.walk import setting_from_args
+    from amlip_qp.sim.loop.run_types import PlantSetting
 
     parser = cli.build_parser()
     args = parser.parse_args(["compare", "--terrain", "slope:10", "--terrain-aware", "--clearance", "0.15"])
@@ -323,7 +323,7 @@ def test_compare_takes_the_terrain_aware_and_clearance_settings():
 
 
 def test_no_terrain_aware_turns_an_aware_scenario_blind_and_the_default_keeps_it():
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     stairs = ["walk", "--scenario", "cassie-stairs-10cm"]

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
+from amlip_qp.experiments import conformance as C
+from amlip_qp.experiments import conformance_control as CC
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.profiles import bundled_names, get_profile
 from amlip_qp.robots import OutputMap
-from amlip_qp.sim import conformance as C
-from amlip_qp.sim import conformance_control as CC
-from amlip_qp.sim import factory
+from amlip_qp.sim.scenarios import factory
 
 #: Every check that runs without the walk, in order.
 MODEL_AND_TICK_NAMES = [name for name, _ in C.MODEL_CHECKS] + [CC.tick_name(t) for t in CC.TICK_TRACKERS]

@@ -18,9 +18,9 @@ from amlip_qp.control.tracker import Tracker, TrackerResult
 from amlip_qp.exceptions import InputError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import RobotKinematics
-from amlip_qp.sim import factory
-from amlip_qp.sim.scenarios import Scenario
-from amlip_qp.sim.speed_profile import SpeedProfile
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario
+from amlip_qp.sim.scenarios.speed_profile import SpeedProfile
 
 
 @pytest.fixture(scope="module")

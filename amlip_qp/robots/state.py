@@ -194,7 +194,7 @@ def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...
 
     The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot`, the per-tick
     :class:`~amlip_qp.robots.state_reader.StateReader` (its one-free-joint path has it written
-    out, the same operations) and the harness's generated C (:mod:`amlip_qp.sim.compiled_io`,
+    out, the same operations) and the harness's generated C (:mod:`amlip_qp.sim.world.compiled_io`,
     on CasADi symbols) use it; tested bit for bit.
     """
     return (
