@@ -45,7 +45,7 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.output_paths import check_output_path
 from amlip_qp.sim.loop.run_log import LOG_MODES
 from amlip_qp.sim.scenarios.factory import TRACKER_MODULES
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 HERE = pathlib.Path(__file__).resolve().parents[1]
 #: The yardstick's recipe (MuJoCo's step alone on a fixed state), run in the walks of both checkouts.
@@ -61,7 +61,7 @@ import mujoco
 import numpy as np
 try:
     from amlip_qp.sim.scenarios.factory import build_simulation, load
-    from amlip_qp.sim.scenarios.scenarios import get_scenario
+    from amlip_qp.sim.scenarios.named import get_scenario
 except ImportError:  # a checkout from before amlip_qp.sim was laid out by job
     from amlip_qp.sim.factory import build_simulation, load
     from amlip_qp.sim.scenarios import get_scenario

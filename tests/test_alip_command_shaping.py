@@ -133,7 +133,7 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
     # The rates of the bundled robots let every acceptance scenario's command
     # through bit for bit (the invariant of the command shaping). Sampled
     # every 10 ticks: a ramp within the limit over 10 ticks is within it over each.
-    from amlip_qp.sim.scenarios.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     dt = 10 * DT
     for scenario in SCENARIOS.values():

@@ -11,7 +11,7 @@ from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.sim.loop.harness import Simulation
-from amlip_qp.sim.scenarios.scenarios import SCENARIOS
+from amlip_qp.sim.scenarios.named import SCENARIOS
 from robot_states import tuned_config
 
 CASSIE_CONFIG = tuned_config("cassie", "qp")

@@ -15,7 +15,7 @@ from amlip_qp.profiles import ImuMount
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.state import qvel_to_v
 from amlip_qp.sim.scenarios.factory import build_simulation
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 from imu_cases import (
     G1_PELVIS_IMU_M,
     G1_TORSO_IMU_M,

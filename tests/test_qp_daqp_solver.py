@@ -11,7 +11,7 @@ from amlip_qp.qp import DAQPSolver, ProxQPSolver
 from amlip_qp.robots import load_robot
 from amlip_qp.sim.reports.summary import summarize
 from amlip_qp.sim.scenarios.factory import build_simulation
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 from test_qp_problem import random_problem
 
 

@@ -103,7 +103,7 @@ def test_the_harness_walks_the_same_with_and_without_the_generated_c(monkeypatch
     harness reads and writes with the generated C (reading after each tick's plant steps) or with the
     Python reader and the NumPy writer."""
     from amlip_qp.sim.scenarios.factory import build_simulation
-    from amlip_qp.sim.scenarios.scenarios import get_scenario
+    from amlip_qp.sim.scenarios.named import get_scenario
     from amlip_qp.sim.world.plant import Plant
 
     sc = get_scenario("cassie-1mps")
@@ -167,7 +167,7 @@ def test_the_compiled_write_is_numpys_clip_bit_for_bit_and_leaves_nan_to_it():
 
 def test_without_a_compiler_the_plant_reads_and_writes_in_python(monkeypatch):
     from amlip_qp.sim.scenarios.factory import load
-    from amlip_qp.sim.world.plant import load_plant
+    from amlip_qp.sim.world.plant_loader import load_plant
 
     plant = load_plant("cassie", load("cassie"))
     data = plant.new_data()

@@ -204,7 +204,7 @@ def test_the_control_filter_sees_every_tick_s_controls_before_the_plant():
 
 def test_robot_sensors_and_a_plant_of_another_layout(tmp_path):
     """A slide+ball-floated plant with the robot sensors: the robot stands, the truth reaches the controller."""
-    from amlip_qp.sim.world.plant import load_plant
+    from amlip_qp.sim.world.plant_loader import load_plant
     from plant_cases import slide_ball_spec, write_plant
 
     robot = factory.load("cassie")
@@ -298,7 +298,7 @@ def test_a_fall_is_found_at_the_same_tick_in_both_log_modes():
 @pytest.mark.slow
 def test_a_qp_walk_is_the_same_in_both_log_modes():
     from amlip_qp.sim.loop.run_log import SUMMARY_LOG_KEYS
-    from amlip_qp.sim.scenarios.scenarios import get_scenario
+    from amlip_qp.sim.scenarios.named import get_scenario
 
     runs = {}
     for mode in ("full", "summary"):
@@ -353,7 +353,7 @@ def test_the_tilt_fall_is_the_first_tick_whose_tilt_is_over_the_limit_for_any_li
 @pytest.mark.parametrize("plant_step_s", [0.0005, 0.00025, 0.0005 / 3])
 def test_the_clock_is_mujocos_at_every_tick_with_one_or_more_plant_steps_a_tick(plant_step_s):
     """The harness counts MuJoCo's clock (``time += timestep`` a step) instead of reading it: the same floats."""
-    from amlip_qp.sim.world.plant import load_plant
+    from amlip_qp.sim.world.plant_loader import load_plant
 
     robot = factory.load("cassie")
     plant = load_plant("cassie", robot, edits=[lambda spec: setattr(spec.option, "timestep", plant_step_s)])

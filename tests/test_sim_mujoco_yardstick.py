@@ -8,7 +8,7 @@ import pytest
 
 from amlip_qp.experiments import mujoco_yardstick
 from amlip_qp.sim.scenarios.factory import build_simulation
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 
 def test_the_snapshot_is_a_copy_of_the_state_after_the_walks_last_step():

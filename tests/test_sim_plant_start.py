@@ -20,7 +20,7 @@ from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim.loop.run_types import PlantSetting
 from amlip_qp.sim.scenarios import factory
 from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile
-from amlip_qp.sim.world.plant import load_plant
+from amlip_qp.sim.world.plant_loader import load_plant
 from amlip_qp.sim.world.plant_start import SETTLED_TOL, STAND_KEYFRAME, equality_residual, stand_qpos
 from amlip_qp.sim.world.terrain import parse_terrain, terrain_edit
 

@@ -21,7 +21,7 @@ from amlip_qp.experiments.robustness import (
     ramp_scenario,
 )
 from amlip_qp.sim.loop.run_types import RunResult
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 DT = 0.01
 N = 1000  # 10 s

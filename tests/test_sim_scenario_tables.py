@@ -8,8 +8,8 @@ import pytest
 from amlip_qp.exceptions import ProfileError
 from amlip_qp.profiles import ImuMount, get_profile
 from amlip_qp.sim.loop.run_types import PlantSetting
+from amlip_qp.sim.scenarios.named import SCENARIOS
 from amlip_qp.sim.scenarios.scenario_tables import profile_scenarios
-from amlip_qp.sim.scenarios.scenarios import SCENARIOS
 
 
 def _with(profile, **tables):

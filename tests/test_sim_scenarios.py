@@ -8,7 +8,8 @@ import pytest
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES
-from amlip_qp.sim.scenarios.scenarios import SCENARIOS, Scenario, SpeedProfile, get_scenario
+from amlip_qp.sim.scenarios.named import SCENARIOS, get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile
 
 
 def test_named_scenarios_are_valid_and_known():
@@ -119,7 +120,7 @@ def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_
     from dataclasses import replace
 
     from amlip_qp.sim.loop.run_types import PlantSetting
-    from amlip_qp.sim.scenarios.scenarios import TERRAIN_SCENARIOS, ideal_scenarios
+    from amlip_qp.sim.scenarios.named import TERRAIN_SCENARIOS, ideal_scenarios
     from amlip_qp.sim.world.plant_modifiers import PlantModifiers
 
     CLOSED_CHAIN_EKF = PlantSetting("cassie-closed-chain", "robot", "ekf")
@@ -232,7 +233,7 @@ def test_the_command_function_refuses_a_nan_time_first_or_later(turn_rate_radps)
 
 
 def test_terrain_scenarios_have_their_speeds_durations_and_modes():
-    from amlip_qp.sim.scenarios.scenarios import TERRAIN_SCENARIOS
+    from amlip_qp.sim.scenarios.named import TERRAIN_SCENARIOS
     from amlip_qp.sim.world.terrain import parse_terrain
 
     slopes = [n for n in TERRAIN_SCENARIOS if n.startswith("cassie-slope-")]

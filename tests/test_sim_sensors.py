@@ -16,7 +16,7 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.sim.scenarios import factory
 from amlip_qp.sim.scenarios.scenarios import Scenario
 from amlip_qp.sim.sensing.sensors import PlantSensors, SensorSettings, base_indices
-from amlip_qp.sim.world.plant import load_plant
+from amlip_qp.sim.world.plant_loader import load_plant
 
 DT = 0.0005
 

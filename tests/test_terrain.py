@@ -12,7 +12,7 @@ import pytest
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.sim.loop.run_types import PlantSetting
 from amlip_qp.sim.scenarios import factory
-from amlip_qp.sim.world.plant import load_plant
+from amlip_qp.sim.world.plant_loader import load_plant
 from amlip_qp.sim.world.terrain import (
     START_X_M,
     TERRAIN_GEOM_GROUP,

@@ -39,7 +39,7 @@ def _run(key: str) -> dict:
     from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.sim.loop.run_types import SensorNoise
     from amlip_qp.sim.scenarios.factory import build_simulation, load
-    from amlip_qp.sim.scenarios.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
     from walk_numbers import walk_numbers
 
     name, duration, seed, noise = RUNS[key]

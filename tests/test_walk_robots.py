@@ -53,7 +53,7 @@ RUNS: dict[str, tuple[str, str, float | None]] = {
 def _run(key: str) -> dict:
     """Run one entry of RUNS; summary numbers only (picklable)."""
     from amlip_qp.sim.scenarios.factory import build_simulation, load, tracker_class
-    from amlip_qp.sim.scenarios.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
     from walk_numbers import walk_numbers
 
     name, tracker_name, duration = RUNS[key]

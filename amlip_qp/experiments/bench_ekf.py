@@ -25,7 +25,7 @@ from amlip_qp.estimation.base_estimator import BaseStateEstimator
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import DEFAULT_EKF_SCENARIO
 from amlip_qp.sim.scenarios.factory import build_simulation
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 #: The goal: EKF median cost as a fraction of the rest of the QP tracker's tick.
 GOAL_FRACTION = 0.15

@@ -50,7 +50,7 @@ from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
 from amlip_qp.sim.reports.summary import TIMING_FIELDS, summarize, to_jsonable
 from amlip_qp.sim.scenarios.factory import TRACKER_MODULES, build_simulation, load, tracker_class
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import Tracker

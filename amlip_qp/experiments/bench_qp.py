@@ -60,7 +60,7 @@ from amlip_qp.profiles import DEFAULT_ROBOT, DEFAULT_SCENARIO
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.sim.scenarios.factory import build_simulation, load, make_tracker
-from amlip_qp.sim.scenarios.scenarios import get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.control.wbc.tracker import QPTracker
@@ -99,7 +99,7 @@ def record_walk(
 
     Args:
         n_ticks: Problems to keep (after ``t_skip_s``), >= 1.
-        scenario: A name of :data:`amlip_qp.sim.scenarios.scenarios.SCENARIOS`.
+        scenario: A name of :data:`amlip_qp.sim.scenarios.named.SCENARIOS`.
         t_skip_s: Walking time to skip before recording starts (start-up), s.
         mujoco_state: If given, MuJoCo's ``(model, data)`` at the end of the walk is appended to it
             (the state the yardstick replays, :func:`amlip_qp.experiments.mujoco_yardstick.step_time_us`).

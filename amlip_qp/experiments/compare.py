@@ -41,11 +41,17 @@ from amlip_qp.experiments.robustness import (
     push_scenario,
     ramp_scenario,
 )
+from amlip_qp.experiments.walk import setting_from_args
+from amlip_qp.output_paths import check_output_path, writing
 from amlip_qp.profiles import compared_robots, get_profile
 from amlip_qp.sim.loop.run_types import PlantSetting, RunResult, SensorNoise
-from amlip_qp.sim.reports.plots import AT_UPPER_BOUND
+from amlip_qp.sim.reports import summary
+from amlip_qp.sim.reports.plots import AT_UPPER_BOUND, check_figure_path, comparison_figure
 from amlip_qp.sim.reports.summary import summarize
-from amlip_qp.sim.scenarios.scenarios import Scenario, check_scenario, get_scenario
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.named import get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, check_scenario
+from amlip_qp.sim.world.plant_loader import load_plant
 
 
 # ---------------------------------------------------------------- tasks
@@ -62,9 +68,9 @@ class _Task:
 
 
 def _run(scenario: Scenario, tracker: str, seed: int, noise: bool, setting: PlantSetting) -> RunResult:
-    from amlip_qp.sim.scenarios.factory import run_scenario
-
-    return run_scenario(scenario.with_(setting=setting), tracker, seed=seed, noise=SensorNoise() if noise else None)
+    return factory.run_scenario(
+        scenario.with_(setting=setting), tracker, seed=seed, noise=SensorNoise() if noise else None
+    )
 
 
 def _execute(task: _Task) -> dict[str, Any]:
@@ -135,17 +141,14 @@ def build_tasks(
         InputError: A plant that does not fit one of the robots (loaded here, once per robot),
             or a setting the robot's gait cannot take (a swing clearance above its CoM height).
     """
-    from amlip_qp.sim.scenarios.factory import load, setting_edits
-    from amlip_qp.sim.world.plant import load_plant
-
     setting = setting or PlantSetting()
     tasks = []
     for robot in robots:
         nominal = nominal_scenario(robot, scenario_names, settings)
         check_scenario(nominal.with_(setting=setting))  # the setting's clearance against the robot's gait
-        loaded = load(robot)
+        loaded = factory.load(robot)
         planar = loaded.is_planar
-        edits = setting_edits(setting, loaded)
+        edits = factory.setting_edits(setting, loaded)
         if setting.plant is not None or edits:
             # fail fast (exit 2) on a plant that does not fit or cannot take the modifiers or the terrain
             load_plant(setting.plant or robot, loaded, edits=edits)
@@ -302,27 +305,19 @@ def prepare_generated_code(tasks: list[_Task]) -> None:
     so a cold cache prints one first-run line rather than one per worker, and
     no two workers compile the same library at once.
     """
-    from amlip_qp.sim.scenarios.factory import build_simulation
-
     done: set[tuple[str, str]] = set()
     for task in tasks:
         if (task.robot, task.tracker) not in done:
             done.add((task.robot, task.tracker))
-            build_simulation(task.scenario, task.tracker)  # the generated C does not depend on the plant
+            factory.build_simulation(task.scenario, task.tracker)  # the generated C does not depend on the plant
 
 
 def main(args: argparse.Namespace) -> int:
     """The ``compare`` command (see :mod:`amlip_qp.experiments.walk`). Exit 0 (falls are results, not errors)."""
-    from amlip_qp.experiments.walk import setting_from_args
-    from amlip_qp.output_paths import check_output_path, writing
-    from amlip_qp.sim.reports import summary
-
     settings = settings_from_args(args)
     setting = setting_from_args(args, PlantSetting())
     for trk in args.trackers:
-        from amlip_qp.sim.scenarios.factory import tracker_class
-
-        tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
+        factory.tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
     robots = list(args.robots if args.robots is not None else compared_robots())
     tasks = build_tasks(
         robots,
@@ -340,8 +335,6 @@ def main(args: argparse.Namespace) -> int:
     if not args.no_plot and args.plot:
         if args.plot == "-":
             raise InputError("--plot cannot write to stdout ('-'); give a file name")
-        from amlip_qp.sim.reports.plots import check_figure_path
-
         check_figure_path(args.plot)
         check_output_path("--plot", args.plot, create_folder=True)
 
@@ -366,8 +359,6 @@ def main(args: argparse.Namespace) -> int:
             with writing("--json", args.json), open(args.json, "w") as fh:
                 fh.write(summary.dumps({"rows": rows, "settings": _settings_dict(settings, args)}) + "\n")
     if not args.no_plot and args.plot:
-        from amlip_qp.sim.reports.plots import comparison_figure
-
         with writing("--plot", args.plot):
             path = comparison_figure(rows, args.plot)
         log(f"compare: figure written to {path}")
@@ -379,8 +370,6 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
 
     d = asdict(settings)
     d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
-    from amlip_qp.experiments.walk import setting_from_args
-
     d.update(setting_from_args(args, PlantSetting()).describe())
     # the per-robot ranges of the profiles, as (robot, value) pairs
     robots = args.robots if args.robots is not None else compared_robots()

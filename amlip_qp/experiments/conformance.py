@@ -17,25 +17,21 @@ number:
 - :func:`~amlip_qp.experiments.conformance_control.check_walk`: a walk in place with
   the QP tracker does not fall.
 
-:func:`conformance_checks` loads the robot (bad input raises before any
-check runs) and returns the checks' results one by one; a check that raises
-is a failed check whose detail is the exception's one-line message.
+:func:`~amlip_qp.experiments.conformance_cli.conformance_checks` runs them all.
 """
 
 from __future__ import annotations
 
-import functools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from amlip_qp.robots import kinematics
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.robots.robot import Robot
+from amlip_qp.robots.robot import Robot
+from amlip_qp.robots.state import qpos_to_q
 
 #: A check's status.
 PASS, FAIL, SKIP = "PASS", "FAIL", "SKIP"
@@ -177,8 +173,6 @@ def _both_models(robot: Robot, qpos: np.ndarray):
     """MuJoCo's data and Pinocchio's (frames placed) at ``qpos``."""
     import mujoco
     import pinocchio as pin
-
-    from amlip_qp.robots.state import qpos_to_q
 
     data = mujoco.MjData(robot.mj_model)
     data.qpos[:] = qpos
@@ -338,45 +332,3 @@ MODEL_CHECKS: tuple[tuple[str, Callable[[Robot], CheckResult]], ...] = (
     (FLOOR_NAME, check_stand_on_floor),
     (RANK_NAME, check_output_rank),
 )
-
-
-def _guarded(name: str, run: Callable[[], CheckResult]) -> CheckResult:
-    """``run()``, or a failure of ``name`` with the one-line reason if it raises."""
-    try:
-        return run()
-    except Exception as exc:  # a check that raises is a failed check, and the others still run
-        return CheckResult(name, FAIL, None, "", f"raised {type(exc).__name__}: {one_line(exc)}")
-
-
-def conformance_checks(robot_arg: str, walk: bool = True) -> Iterator[CheckResult]:
-    """The checks of the robot ``robot_arg`` (a bundled name or a profile path), run one by one.
-
-    The robot is loaded and its profile's tracker tables are read first, so bad input raises
-    here, before any check runs; the results are then produced as the checks finish (the walk
-    takes the longest).
-
-    Args:
-        robot_arg: A bundled robot's name or a robot profile file's path.
-        walk: Run the walk in place (:func:`~amlip_qp.experiments.conformance_control.check_walk`).
-
-    Raises:
-        UnknownRobotError, ProfileError, ModelFileError, MJCFError: The robot cannot be loaded.
-        InputError: A ``[trackers.NAME]`` table of its profile is invalid.
-    """
-    from amlip_qp.experiments import conformance_control as control
-    from amlip_qp.sim.scenarios import factory
-
-    robot = factory.load(robot_arg)
-    if robot.profile is not None:
-        for tracker in robot.profile.tracker_configs:  # an invalid [trackers.NAME] table is bad input too
-            robot.profile.tracker_config(tracker)
-
-    def run() -> Iterator[CheckResult]:
-        for name, check in MODEL_CHECKS:
-            yield _guarded(name, functools.partial(check, robot))
-        for tracker in control.TICK_TRACKERS:
-            yield _guarded(control.tick_name(tracker), functools.partial(control.check_tick, robot, tracker))
-        if walk:
-            yield _guarded(control.WALK_NAME, functools.partial(control.check_walk, robot_arg, robot))
-
-    return run()

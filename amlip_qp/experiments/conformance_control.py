@@ -8,19 +8,19 @@ profile has no ``[trackers.NAME]`` table for is skipped, not failed.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.alip.messages import Command
+from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
+from amlip_qp.control.walking.controller import WalkingController
+from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.experiments.conformance import SKIP, CheckResult, result
+from amlip_qp.robots.kinematics import RobotKinematics
+from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.run_types import CONTROL_DT_S
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.control.tracker import TrackingTarget
-    from amlip_qp.robots.kinematics import RobotKinematics
-    from amlip_qp.robots.robot import Robot
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario, check_scenario
 
 #: The trackers whose single tick is checked, in order.
 TICK_TRACKERS: tuple[str, ...] = ("qp", "pbc")
@@ -77,12 +77,6 @@ def stand_tick(robot: Robot, tracker: str) -> TrackerResult:
     Raises:
         InputError: The robot has no profile, or its stand pose is not finite.
     """
-    from amlip_qp.alip.messages import Command
-    from amlip_qp.control.walking.controller import WalkingController
-    from amlip_qp.control.walking.estimator import Measurement
-    from amlip_qp.robots import RobotKinematics
-    from amlip_qp.sim.scenarios import factory
-
     profile = robot.profile
     if profile is None:
         raise InputError(f"{robot.name}: a stand tick needs the robot's profile (its gait and tracker tables)")
@@ -149,9 +143,6 @@ def check_tick(robot: Robot, tracker: str) -> CheckResult:
 def check_walk(robot_arg: str, robot: Robot, duration_s: float = WALK_DURATION_S) -> CheckResult:
     """A walk in place of ``duration_s`` with the QP tracker on the robot's own model, ideal sensors:
     it must not fall; the measured number is the CoM's horizontal drift from start to end, m."""
-    from amlip_qp.sim.scenarios import factory
-    from amlip_qp.sim.scenarios.scenarios import Scenario, check_scenario
-
     name = walk_name(duration_s)
     if robot.profile is None or WALK_TRACKER not in robot.profile.trackers:
         return _skip(name, WALK_TRACKER)

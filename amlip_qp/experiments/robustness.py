@@ -20,7 +20,8 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import CompareRanges, get_profile
 from amlip_qp.sim.loop.run_types import Push, RunResult
 from amlip_qp.sim.reports.summary import heading_frame_xy
-from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile, get_scenario
+from amlip_qp.sim.scenarios.named import get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile
 
 #: Push duration of the bisection, s.
 PUSH_DURATION_S = 0.2

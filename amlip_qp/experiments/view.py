@@ -26,9 +26,13 @@ import time
 from pathlib import Path
 
 from amlip_qp.exceptions import InputError
+from amlip_qp.experiments.walk import check_plant, scenario_from_args
 from amlip_qp.output_paths import check_output_path, writing
+from amlip_qp.profiles import get_profile
 from amlip_qp.sim.loop.live import LiveCommand, LiveLoop
 from amlip_qp.sim.loop.live_keys import parse_key_script
+from amlip_qp.sim.loop.run_types import SensorNoise
+from amlip_qp.sim.scenarios import factory
 
 #: The viewer's frame period, s (the loop steps the ticks of one frame between two syncs).
 FRAME_S = 1.0 / 60.0
@@ -128,10 +132,6 @@ def show(live: LiveLoop, clock=time.perf_counter) -> None:
 
 def run_view(args: argparse.Namespace) -> int:
     """``amlip-qp view``: the options as ``walk``'s, the display checked, then the live viewer and a summary."""
-    from amlip_qp.experiments.walk import check_plant, scenario_from_args
-    from amlip_qp.profiles import get_profile
-    from amlip_qp.sim.loop.run_types import SensorNoise
-
     scenario = scenario_from_args(args)
     profile = get_profile(scenario.robot)
     profile.check_supported(args.tracker)
@@ -139,9 +139,6 @@ def run_view(args: argparse.Namespace) -> int:
     script = () if args.script is None else read_key_script(args.script)
     check_display()
     check_plant(scenario)
-
-    from amlip_qp.sim.scenarios import factory
-
     sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=SensorNoise() if args.noise else None)
     command = LiveCommand(
         scenario.command(0.0), profile.bounds, scenario.vx(0.0), scenario.vy_mps, math.degrees(scenario.turn_rate_radps)

@@ -18,8 +18,14 @@ from amlip_qp.output_paths import check_output_path, writing
 from amlip_qp.profiles import DEFAULT_ROBOT, NO_SHAPING, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
 from amlip_qp.sim.loop.run_types import PlantSetting, Push, RunResult, SensorNoise
-from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile, check_scenario, get_scenario
+from amlip_qp.sim.reports import summary
+from amlip_qp.sim.reports.video import VideoRecorder, check_video_fps, check_video_path
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.named import get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile, check_scenario
+from amlip_qp.sim.world.plant_loader import load_plant
 from amlip_qp.sim.world.plant_modifiers import parse_payload
+from amlip_qp.sim.world.terrain import parse_terrain
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.
 PROGRESS_MIN_DURATION_S = 3.0
@@ -117,8 +123,6 @@ def log_file(log_option: str | None) -> str | None:
 
 def _check_output_paths(args: argparse.Namespace) -> None:
     """Fail early (exit 2) on output paths that cannot be written, before a long run."""
-    from amlip_qp.sim.reports.video import check_video_fps, check_video_path
-
     if args.plot is not None and log_mode(args.log) == "summary":
         raise InputError("--plot draws the full log: drop --log summary (or give --log full)")
 
@@ -157,8 +161,6 @@ def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSett
         mods["actuator_delay_ticks"] = args.actuator_delay
     terrain = base.terrain
     if args.terrain is not None:
-        from amlip_qp.sim.world.terrain import parse_terrain
-
         terrain = parse_terrain(args.terrain).text
     setting = PlantSetting(
         plant=base.plant if args.plant is None else args.plant,
@@ -183,9 +185,6 @@ def check_plant(scenario: Scenario) -> None:
         ModelFileError: The plant file does not exist.
         MJCFError: MuJoCo cannot load it, or it cannot take the modifiers.
     """
-    from amlip_qp.sim.scenarios import factory
-    from amlip_qp.sim.world.plant import load_plant
-
     robot = factory.load(scenario.robot)
     setting = scenario.setting
     load_plant(setting.plant or robot.name, robot, edits=factory.setting_edits(setting, robot))
@@ -193,9 +192,6 @@ def check_plant(scenario: Scenario) -> None:
 
 def run_walk(args: argparse.Namespace) -> int:
     """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
-    from amlip_qp.sim.reports import summary
-    from amlip_qp.sim.scenarios import factory
-
     scenario = scenario_from_args(args)
     get_profile(scenario.robot).check_supported(args.tracker)
     _check_output_paths(args)
@@ -204,8 +200,6 @@ def run_walk(args: argparse.Namespace) -> int:
     sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise)
     recorder = None
     if args.video is not None:
-        from amlip_qp.sim.reports.video import VideoRecorder
-
         recorder = VideoRecorder(sim.model, args.video, fps=args.video_fps)
     progress = not args.no_progress and scenario.duration_s >= PROGRESS_MIN_DURATION_S
     try:

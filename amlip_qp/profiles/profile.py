@@ -199,7 +199,7 @@ class RobotProfile:
         trackers: Tracker name -> its configuration table (:meth:`tracker_config` builds it).
         compare: ``amlip-qp compare`` ranges.
         plants: Plant name -> MJCF file: the plants ``--plant`` may name
-            (:func:`amlip_qp.sim.world.plant.load_plant`); the robot's own model is one of them, under
+            (:func:`amlip_qp.sim.world.plant_loader.load_plant`); the robot's own model is one of them, under
             the robot's name.
         imu: Where the IMU sits (:class:`ImuMount`; default: the base body's origin, its axes).
         joint_roles: Role (:data:`JOINT_ROLES`) -> the file's joint name, with ``{side}``.

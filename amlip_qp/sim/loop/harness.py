@@ -37,7 +37,8 @@ from amlip_qp.sim.loop.run_types import (
     TickRecord,
 )
 from amlip_qp.sim.sensing.sensors import PlantSensors, SensorSettings, base_indices, quat_mul_small_rotation
-from amlip_qp.sim.world.plant import Plant, load_plant
+from amlip_qp.sim.world.plant import Plant
+from amlip_qp.sim.world.plant_loader import load_plant
 
 #: MuJoCo warnings that mean the simulation diverged (it then resets the state).
 _DIVERGENCE_WARNINGS = (
@@ -62,7 +63,7 @@ class Simulation:
         contact_threshold_N: Normal force above which a foot's contact switch is on, N.
         fall: Fall criteria.
         keyframe: Initial keyframe name (of the plant); ``None``: MuJoCo's default state.
-        plant: The plant (default: the robot's own model, :func:`~amlip_qp.sim.world.plant.load_plant`).
+        plant: The plant (default: the robot's own model, :func:`~amlip_qp.sim.world.plant_loader.load_plant`).
         sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensing.sensors`).
         estimator: The controller's base estimator (its name, ``--estimator``): with
             ``"truth"`` the measurement carries the simulator's true base state; with any

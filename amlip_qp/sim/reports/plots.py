@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from amlip_qp.exceptions import InputError
 from amlip_qp.sim.loop.run_types import RunResult
 from amlip_qp.sim.reports.summary import heading_frame_xy, step_velocities
+from amlip_qp.sim.world.terrain import parse_terrain
 
 #: File suffixes the figures are written as (the format follows the suffix).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -55,8 +56,6 @@ def _mark_fall(ax, result: RunResult) -> None:
 
 def _side_view(ax, result: RunResult, terrain_text: str) -> None:
     """Ground profile under the CoM's path, CoM height and the feet's touchdown points, against x."""
-    from amlip_qp.sim.world.terrain import parse_terrain
-
     terrain = parse_terrain(terrain_text)
     com = result.log["com"]
     if com.shape[0] == 0:

@@ -13,20 +13,25 @@ import functools
 import importlib
 import inspect
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, cast
+from typing import cast
+
+import numpy as np
 
 from amlip_qp.control.tracker import Tracker
+from amlip_qp.control.walking.controller import WalkingController
+from amlip_qp.estimation import make_base_estimator
+from amlip_qp.estimation.invariant_ekf import noise_from_table
 from amlip_qp.exceptions import InputError
+from amlip_qp.robots import RobotKinematics, load_robot
+from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.harness import Simulation
-from amlip_qp.sim.loop.run_types import CONTROL_DT_S, RunResult, SensorNoise, TickCallback
+from amlip_qp.sim.loop.run_types import CONTROL_DT_S, PlantSetting, RunResult, SensorNoise, TickCallback
 from amlip_qp.sim.scenarios.scenarios import Scenario
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    import numpy as np
-
-    from amlip_qp.robots.robot import Robot
-    from amlip_qp.sim.loop.run_types import PlantSetting
-    from amlip_qp.sim.world.plant import Plant, SpecEdit
+from amlip_qp.sim.world.imu_site import imu_mount_edit
+from amlip_qp.sim.world.plant import Plant, SpecEdit
+from amlip_qp.sim.world.plant_loader import load_plant
+from amlip_qp.sim.world.plant_modifiers import ActuatorDelay
+from amlip_qp.sim.world.terrain import ground_height_function, parse_terrain, terrain_edit
 
 #: The base estimators of ``--estimator``: the simulator's truth, or the contact-aided invariant EKF.
 ESTIMATORS: tuple[str, ...] = ("truth", "ekf")
@@ -41,8 +46,6 @@ TRACKER_MODULES: dict[str, str] = {
 @functools.cache
 def load(robot_name: str) -> Robot:
     """The :class:`~amlip_qp.robots.robot.Robot` named ``robot_name`` (loaded once per process)."""
-    from amlip_qp.robots import load_robot
-
     return load_robot(robot_name)
 
 
@@ -84,21 +87,17 @@ def check_estimator(name: str) -> str:
 
 def setting_edits(setting: PlantSetting, robot: Robot) -> list[SpecEdit]:
     """The spec edits of a plant setting, in order: the plant modifiers', the terrain's (none on flat),
-    then the setting's IMU site (none without ``setting.imu``: :func:`~amlip_qp.sim.world.plant.load_plant`
+    then the setting's IMU site (none without ``setting.imu``: :func:`~amlip_qp.sim.world.plant_loader.load_plant`
     then adds the profile's).
 
     Raises:
         InputError: A malformed ``setting.terrain`` (:func:`~amlip_qp.sim.world.terrain.parse_terrain`).
     """
-    from amlip_qp.sim.world.terrain import parse_terrain, terrain_edit
-
     edits = setting.modifiers.spec_edits(robot.base_body)
     terrain = parse_terrain(setting.terrain)
     if not terrain.is_flat:
         edits.append(terrain_edit(terrain))
     if setting.imu is not None:
-        from amlip_qp.sim.world.imu_site import imu_mount_edit
-
         edits.append(imu_mount_edit(setting.imu, robot.base_body))
     return edits
 
@@ -109,8 +108,6 @@ def _with_delay(
     """``ctrl_filter`` preceded by an actuator delay of ``ticks`` control ticks (none for 0)."""
     if ticks == 0:
         return ctrl_filter
-    from amlip_qp.sim.world.plant_modifiers import ActuatorDelay
-
     delay = ActuatorDelay(ticks, nu)
     if ctrl_filter is None:
         return delay.push
@@ -140,7 +137,7 @@ def build_simulation(
         noise: Gaussian noise on the ideal sensors, or ``None`` for exact measurements.
         planner_backend: ``"c"`` (generated kernels) or ``"numpy"``.
         plant: A plant name of the robot or an MJCF path (loaded with
-            :func:`~amlip_qp.sim.world.plant.load_plant`), a loaded
+            :func:`~amlip_qp.sim.world.plant_loader.load_plant`), a loaded
             :class:`~amlip_qp.sim.world.plant.Plant`, or ``None``: the scenario's
             (``scenario.setting.plant``; ``None`` there: the robot's own model).
         sensors: ``"ideal"`` or ``"robot"`` (:mod:`~amlip_qp.sim.sensing.sensors`); ``None``: the scenario's.
@@ -152,11 +149,6 @@ def build_simulation(
         ctrl_filter: Applied to the actuator controls before they reach the plant,
             after the scenario's actuator delay; see :class:`Simulation`.
     """
-    from amlip_qp.control.walking.controller import WalkingController
-    from amlip_qp.robots import RobotKinematics
-    from amlip_qp.sim.world.plant import Plant, load_plant
-    from amlip_qp.sim.world.terrain import parse_terrain
-
     setting = scenario.setting
     plant = setting.plant if plant is None else plant
     sensors = setting.sensors if sensors is None else sensors
@@ -179,16 +171,11 @@ def build_simulation(
     kin = RobotKinematics(robot)
     options: dict = {}
     if estimator != "truth":  # the truth needs no estimator object: the harness gives the true base
-        from amlip_qp.estimation import make_base_estimator
-        from amlip_qp.estimation.invariant_ekf import noise_from_table
-
         table = robot.profile.estimator if robot.profile is not None else {}
         imu = robot.imu_mount if setting.imu is None else setting.imu
         ekf_noise = noise_from_table(table) if table else None
         options["base_estimator"] = make_base_estimator(estimator, robot, CONTROL_DT_S, imu, ekf_noise)
     if setting.terrain_aware:
-        from amlip_qp.sim.world.terrain import ground_height_function
-
         options["terrain_height_fn"] = ground_height_function(the_plant, terrain)
     elif not terrain.is_flat:
         options["ground_mode"] = "blind"

@@ -27,17 +27,15 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from amlip_qp.exceptions import InputError, ProfileError
 from amlip_qp.profiles import GaitSettings, RobotProfile
 from amlip_qp.profiles.reader import read_imu_table
 from amlip_qp.sim.loop.run_types import PlantSetting, Push
+from amlip_qp.sim.scenarios.scenarios import Scenario
 from amlip_qp.sim.scenarios.speed_profile import SpeedProfile
 from amlip_qp.sim.world.plant_modifiers import PlantModifiers
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.sim.scenarios.scenarios import Scenario
 
 #: When a ``ramp`` starts, s.
 RAMP_START_S = 1.0
@@ -125,8 +123,6 @@ def _pushes(w: _Where, value: Any) -> tuple[Push, ...]:
 
 
 def _scenario(profile: RobotProfile, key: str, value: Any):
-    from amlip_qp.sim.scenarios.scenarios import Scenario
-
     w = _Where(profile, f"scenarios.{key}")
     t = w.table(value, _SCENARIO_KEYS)
     if "duration_s" not in t:

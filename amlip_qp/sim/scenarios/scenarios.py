@@ -1,19 +1,20 @@
 """Walking scenarios: commands over time, pushes, durations, and the plant they run on.
 
 A :class:`Scenario` is everything a run needs besides the robot and the
-tracker. The named scenarios of :data:`SCENARIOS` are data of the robots'
-profiles (``[scenarios]`` tables, :mod:`amlip_qp.sim.scenarios.scenario_tables`): the
-acceptance scenarios; the CLI, the examples, the comparison and the tests all
-take them from here. A profile's ``[settings]`` copy its scenarios onto other
-plants, sensors and estimators (Cassie's ``-cc-ekf``: the closed-chain plant,
-the robot's sensors, the invariant EKF), and its ``[mismatches]`` copy one
-scenario under model mismatch.
+tracker. The named scenarios (:data:`amlip_qp.sim.scenarios.named.SCENARIOS`)
+are data of the robots' profiles (``[scenarios]`` tables,
+:mod:`amlip_qp.sim.scenarios.scenario_tables`): the acceptance scenarios; the
+CLI, the examples, the comparison and the tests all take them from there. A
+profile's ``[settings]`` copy its scenarios onto other plants, sensors and
+estimators (Cassie's ``-cc-ekf``: the closed-chain plant, the robot's
+sensors, the invariant EKF), and its ``[mismatches]`` copy one scenario
+under model mismatch.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from amlip_qp.alip.planner import Command
@@ -150,55 +151,6 @@ class Scenario:
     def with_(self, **changes) -> Scenario:
         """A copy with some fields changed."""
         return replace(self, **changes)
-
-
-class _Scenarios(Mapping[str, "Scenario"]):
-    """Named scenarios by name, built from the bundled profiles' tables on first use (read-only).
-
-    ``only`` keeps those a predicate accepts (the terrain scenarios)."""
-
-    def __init__(self, only: Callable[[Scenario], bool] | None = None):
-        self._only = only
-        self._items: dict[str, Scenario] | None = None
-
-    def _all(self) -> dict[str, Scenario]:
-        if self._items is None:
-            from amlip_qp.profiles import bundled_names
-            from amlip_qp.sim.scenarios.scenario_tables import profile_scenarios
-
-            items = {s.name: s for name in bundled_names() for s in profile_scenarios(get_profile(name))}
-            self._items = {k: v for k, v in items.items() if self._only is None or self._only(v)}
-        return self._items
-
-    def __getitem__(self, name: str) -> Scenario:
-        return self._all()[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._all())
-
-    def __len__(self) -> int:
-        return len(self._all())
-
-
-#: The named scenarios of every bundled robot (each profile's ``[scenarios]``, ``[settings]`` and
-#: ``[mismatches]`` tables, :mod:`amlip_qp.sim.scenarios.scenario_tables`), by name ``ROBOT-KEY``.
-SCENARIOS: Mapping[str, Scenario] = _Scenarios()
-
-#: The named scenarios with a terrain (slopes, stairs, rough ground, waves).
-TERRAIN_SCENARIOS: Mapping[str, Scenario] = _Scenarios(lambda s: s.setting.terrain != "flat")
-
-
-def ideal_scenarios() -> list[str]:
-    """The names of the scenarios on each robot's own model with ideal sensors and the true base state."""
-    return [name for name, s in SCENARIOS.items() if s.setting == PlantSetting()]
-
-
-def get_scenario(name: str) -> Scenario:
-    """The named scenario; :class:`InputError` listing the names otherwise."""
-    try:
-        return SCENARIOS[name]
-    except KeyError:
-        raise InputError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}") from None
 
 
 def check_scenario(scenario: Scenario, profile: RobotProfile | None = None) -> None:

@@ -135,7 +135,9 @@ class PlantSensors:
         for name in (IMU_QUAT_SENSOR, IMU_GYRO_SENSOR, IMU_ACCEL_SENSOR):
             sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)
             if sid < 0 and model == "robot":
-                raise InputError(f"plant {plant.name} has no sensor {name!r}; load it with sim.world.plant.load_plant")
+                raise InputError(
+                    f"plant {plant.name} has no sensor {name!r}; load it with sim.world.plant_loader.load_plant"
+                )
             adr[name] = int(m.sensor_adr[sid]) if sid >= 0 else -1
         q, g, c = adr[IMU_QUAT_SENSOR], adr[IMU_GYRO_SENSOR], adr[IMU_ACCEL_SENSOR]
         #: Whether the plant has the IMU of :func:`imu_spec_edit` (without it, ``ideal`` measurements have none).

@@ -5,7 +5,7 @@ The site ``amlip-imu`` sits where the robot's profile puts the IMU
 in its frame; by default the base body's origin and axes), with MuJoCo sensors
 ``amlip-imu-quat`` (framequat), ``amlip-imu-gyro`` and ``amlip-imu-accel``, in
 the site's own axes; :func:`imu_spec_edit` adds them to a plant's model
-(:func:`~amlip_qp.sim.world.plant.load_plant` does, for every plant). The
+(:func:`~amlip_qp.sim.world.plant_loader.load_plant` does, for every plant). The
 readings are :mod:`amlip_qp.sim.sensing.sensors`'s.
 """
 

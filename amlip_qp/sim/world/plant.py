@@ -3,7 +3,7 @@
 The controller keeps its own Pinocchio model (``--robot``); the plant is
 MuJoCo running a model that may differ from it (``--plant``): extra passive
 joints, loop closures, its own solver options, contact parameters and meshes.
-:func:`load_plant` checks that the plant has what the controller needs and
+:func:`~amlip_qp.sim.world.plant_loader.load_plant` checks that the plant has what the controller needs and
 :class:`Plant` is the one place that maps the two by name:
 
 - every joint of the controller's model (the root joints of a planar robot
@@ -25,24 +25,17 @@ own frame, which is Pinocchio's free-flyer convention.
 
 from __future__ import annotations
 
-import os
-from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
-from amlip_qp.exceptions import CompilerUnavailableError, InputError, MJCFError, PlantMismatchError
+from amlip_qp.exceptions import CompilerUnavailableError, InputError, PlantMismatchError
 from amlip_qp.robots.model_edits import is_servo
+from amlip_qp.robots.robot import Robot
 from amlip_qp.robots.state_reader import StateReader
 from amlip_qp.sim.world.compiled_io import CompiledCtrlWrite, CompiledStateRead, ReadResult
-from amlip_qp.sim.world.contact_sensors import contact_spec_edit, sensor_switcher
-from amlip_qp.sim.world.imu_site import imu_spec_edit
-from amlip_qp.sim.world.plant_files import resolve_plant_source
-from amlip_qp.sim.world.plant_start import STAND_KEYFRAME, stand_qpos
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.robots.robot import Robot
+from amlip_qp.sim.world.contact_sensors import sensor_switcher
 
 #: A change of the plant's model before it is compiled (e.g. a plant modifier).
 SpecEdit = Callable[[mujoco.MjSpec], None]
@@ -50,55 +43,6 @@ SpecEdit = Callable[[mujoco.MjSpec], None]
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3  # mujoco.mjtJoint values
 _QPOS_SIZE = {_FREE: 7, _BALL: 4, _SLIDE: 1, _HINGE: 1}
 _DOF_SIZE = {_FREE: 6, _BALL: 3, _SLIDE: 1, _HINGE: 1}
-
-
-def load_plant(source: str | os.PathLike, robot: Robot, edits: Sequence[SpecEdit] = ()) -> Plant:
-    """Load the plant ``source`` (a plant name of ``robot`` or an MJCF path) for ``robot``'s controller.
-
-    The model is read with ``mujoco.MjSpec.from_file``. A model without a
-    ``stand`` keyframe gets one first: the controller's stand pose mapped by
-    joint name, with its loop closures closed (:func:`amlip_qp.sim.world.plant_start.stand_qpos`).
-    Then every edit of ``edits`` is applied in order, then the IMU
-    (:func:`amlip_qp.sim.world.imu_site.imu_spec_edit`) and the feet's contact sensors
-    (:func:`amlip_qp.sim.world.contact_sensors.contact_spec_edit`), then it is compiled.
-
-    Raises:
-        InputError: An unknown plant name, or a plant without a ``stand``
-            keyframe whose start pose cannot be inferred (the message says why).
-        ModelFileError: The file does not exist.
-        MJCFError: MuJoCo cannot load or compile it.
-        PlantMismatchError: It lacks joints, actuators or bodies of the controller's model.
-    """
-    name, path = resolve_plant_source(source, robot)
-    try:
-        spec = mujoco.MjSpec.from_file(str(path))
-    except Exception as exc:  # MuJoCo raises ValueError for XML errors
-        raise MJCFError(f"{path}: MuJoCo cannot load the plant: {_one_line(exc)}") from exc
-    if spec.key(STAND_KEYFRAME) is None:
-        try:
-            bare = spec.copy().compile()
-        except Exception as exc:
-            raise MJCFError(f"{path}: MuJoCo cannot compile the plant: {_one_line(exc)}") from exc
-        spec.add_key(name=STAND_KEYFRAME, qpos=stand_qpos(Plant(bare, robot, name)).tolist())
-    for edit in edits:
-        edit(spec)
-    mount = robot.imu_mount
-    imu_body = mount.body if mount.body is not None else robot.base_body
-    if spec.body(imu_body) is not None:
-        imu_spec_edit(spec, imu_body, mount.pos_m, mount.quat_wxyz)
-    feet = {side: Plant._body_name_of_site(robot, side) for side in robot.foot_sides}
-    if all(spec.body(body) is not None for body in feet.values()):
-        contact_spec_edit(spec, feet)
-    try:
-        model = spec.compile()
-    except Exception as exc:
-        raise MJCFError(f"{path}: MuJoCo cannot compile the plant: {_one_line(exc)}") from exc
-    return Plant(model, robot, name)
-
-
-def _one_line(exc: BaseException) -> str:
-    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-    return "; ".join(lines) if lines else type(exc).__name__
 
 
 def _id(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
@@ -132,7 +76,7 @@ class Plant:
         self.name = name
         ctrl_model = robot.mj_model
         missing: list[str] = []
-        body_names = [robot.base_body] + [self._body_name_of_site(robot, side) for side in robot.foot_sides]
+        body_names = [robot.base_body] + [self.body_name_of_site(robot, side) for side in robot.foot_sides]
         body_ids = [_id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in body_names]
         missing += [f"body {n!r}" for n, b in zip(body_names, body_ids) if b < 0]
         self.base_body_id = body_ids[0]
@@ -224,7 +168,8 @@ class Plant:
             self._twist = np.zeros(6)
 
     @staticmethod
-    def _body_name_of_site(robot: Robot, side: str) -> str:
+    def body_name_of_site(robot: Robot, side: str) -> str:
+        """The name of the body carrying ``robot``'s ``side`` contact site (in the controller's model)."""
         body = int(robot.mj_model.site_bodyid[robot.contact_site_ids[side]])
         return mujoco.mj_id2name(robot.mj_model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
 
@@ -386,7 +331,8 @@ class Plant:
         (A NaN force, which only a diverged simulation gives, would switch the full sum off.)
         ``data``'s contacts (a live view), the sides each geom pair adds to and the sums' lookups
         are bound once: the harness's per-tick switches. With the feet's contact sensors of
-        :func:`load_plant`, read from them (:func:`~amlip_qp.sim.world.contact_sensors.sensor_switcher`).
+        :func:`~amlip_qp.sim.world.plant_loader.load_plant`, read from them
+        (:func:`~amlip_qp.sim.world.contact_sensors.sensor_switcher`).
         """
         general = self._contact_switcher(data, threshold_N)
         return sensor_switcher(self.model, data, self.foot_body_ids, threshold_N, general) or general

@@ -10,12 +10,9 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from amlip_qp.exceptions import InputError, ModelFileError
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.robots.robot import Robot
+from amlip_qp.robots.robot import Robot
 
 
 def plant_files(robot: Robot) -> dict[str, Path]:

@@ -1,6 +1,6 @@
 """The start pose of a plant whose MJCF has no ``stand`` keyframe: the controller's stand, with its loops closed.
 
-:func:`amlip_qp.sim.world.plant.load_plant` adds the pose of :func:`stand_qpos` to
+:func:`amlip_qp.sim.world.plant_loader.load_plant` adds the pose of :func:`stand_qpos` to
 such a plant as its ``stand`` keyframe, before the other edits (so a terrain
 lifts it as it lifts any keyframe, and the harness starts from it). The pose:
 
@@ -28,15 +28,11 @@ refused in one line (add a ``stand`` keyframe to its MJCF).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import mujoco
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.sim.world.plant import Plant
+from amlip_qp.sim.world.plant import Plant
 
 #: The keyframe the harness starts from.
 STAND_KEYFRAME = "stand"

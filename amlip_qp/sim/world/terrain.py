@@ -24,18 +24,15 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.sim.world import terrain_grids as G
+from amlip_qp.sim.world.plant import Plant
 from amlip_qp.sim.world.plant_modifiers import is_static_body
 from amlip_qp.sim.world.terrain_lift import keyframe_lifts
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.sim.world.plant import Plant
 
 #: Geom group of every terrain geom (the floor included once a terrain is built); rendered by default.
 TERRAIN_GEOM_GROUP = 2
