@@ -47,11 +47,10 @@ from amlip_qp.exceptions import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.alip.messages import Command
     from amlip_qp.control.pbc.tracker import PBCTracker
     from amlip_qp.control.walking.controller import WalkingController
-    from amlip_qp.control.walking.estimator import Measurement
     from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.messages import Command, Measurement
     from amlip_qp.robots.loader import load_robot
     from amlip_qp.robots.robot import Robot
     from amlip_qp.sim.loop.mujoco_loop import MujocoLoop
@@ -80,7 +79,7 @@ __all__ = [
 
 #: Each lazy export -> the module that defines it (imported on first use).
 _LAZY: dict[str, str] = {
-    "Command": "amlip_qp.alip.messages",
+    "Command": "amlip_qp.messages",
     "Measurement": "amlip_qp.control.walking.estimator",
     "MujocoLoop": "amlip_qp.sim.loop.mujoco_loop",
     "PBCTracker": "amlip_qp.control.pbc.tracker",

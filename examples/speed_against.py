@@ -41,10 +41,10 @@ import statistics
 import subprocess
 import sys
 
+from amlip_qp.control.registry import TRACKER_MODULES
 from amlip_qp.exceptions import InputError
 from amlip_qp.output_paths import check_output_path
 from amlip_qp.sim.loop.run_log import LOG_MODES
-from amlip_qp.sim.scenarios.factory import TRACKER_MODULES
 from amlip_qp.sim.scenarios.named import get_scenario
 
 HERE = pathlib.Path(__file__).resolve().parents[1]

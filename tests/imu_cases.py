@@ -93,7 +93,7 @@ def walk_samples(sim, duration_s: float, sensor_names) -> list[Sample]:
 
 def reading(sample: Sample, site: str):
     """The :class:`~amlip_qp.estimation.ImuReading` of test site ``site`` (quaternion made ``x y z w``)."""
-    from amlip_qp.estimation import ImuReading
+    from amlip_qp.messages import ImuReading
 
     w, x, y, z = sample.sensors[f"{site}-quat"]
     return ImuReading(np.array([x, y, z, w]), sample.sensors[f"{site}-gyro"], sample.sensors[f"{site}-accel"])

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip.command_shaping import CommandShaper
-from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from amlip_qp.profiles import PROFILES, CommandShaping
 
 DT = 0.0005

@@ -28,7 +28,14 @@ class Rule:
 #: Third-party packages that only some layers may use.
 HEAVY = ("mujoco", "pinocchio", "casadi", "proxsuite", "qpsolvers", "scipy", "matplotlib", "imageio", "tqdm")
 #: What every control subpackage may use below it.
-CONTROL_BASE = ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.profiles")
+CONTROL_BASE = (
+    "amlip_qp.alip",
+    "amlip_qp.codegen",
+    "amlip_qp.robots",
+    "amlip_qp.exceptions",
+    "amlip_qp.messages",
+    "amlip_qp.profiles",
+)
 #: The control subpackages (jobs).
 CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.control.wbc")
 
@@ -60,7 +67,7 @@ RULES: dict[str, Rule] = {
         (
             "amlip_qp.exceptions",
             "amlip_qp.robots",
-            "amlip_qp.alip.messages",
+            "amlip_qp.messages",
             "amlip_qp.control.walking",
             "amlip_qp.control.wbc.tracker",
             "amlip_qp.control.pbc.tracker",
@@ -69,6 +76,8 @@ RULES: dict[str, Rule] = {
         HEAVY + ("numpy",),
     ),
     "amlip_qp.exceptions": Rule((), HEAVY + ("numpy",)),
+    # the closed loop's messages: below every part that exchanges them (numpy only)
+    "amlip_qp.messages": Rule(("amlip_qp.exceptions",), HEAVY),
     "amlip_qp.paths": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
     # the robot profiles: plain data read from TOML files among the package's models
@@ -90,7 +99,7 @@ RULES: dict[str, Rule] = {
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
     "amlip_qp.alip": Rule(
-        ("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.profiles"),
+        ("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.messages", "amlip_qp.profiles"),
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy"),
     ),
     "amlip_qp.codegen": Rule(
@@ -119,7 +128,14 @@ RULES: dict[str, Rule] = {
     ),
     # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
     "amlip_qp.estimation": Rule(
-        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen", "amlip_qp.profiles"),
+        (
+            "amlip_qp.estimation",
+            "amlip_qp.robots",
+            "amlip_qp.exceptions",
+            "amlip_qp.codegen",
+            "amlip_qp.messages",
+            "amlip_qp.profiles",
+        ),
         ("mujoco", "proxsuite", "qpsolvers", "scipy", "amlip_qp.control", "amlip_qp.sim"),
     ),
     # the paper's tracker: no QP
@@ -138,15 +154,23 @@ RULES: dict[str, Rule] = {
     "amlip_qp.sim.world": _sim_job(
         "amlip_qp.sim.world", ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.robots", "amlip_qp.codegen")
     ),
-    # the measurement: the IMU reading of the estimators, the controller's Measurement
+    # the measurement (the messages' Measurement and ImuReading); never the controller
     "amlip_qp.sim.sensing": _sim_job(
         "amlip_qp.sim.sensing",
-        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.estimation.imu", "amlip_qp.control.walking.estimator"),
+        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.messages"),
+        ("amlip_qp.control",),
     ),
     # the closed loop runs the controller
     "amlip_qp.sim.loop": _sim_job(
         "amlip_qp.sim.loop",
-        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.alip", "amlip_qp.robots", "amlip_qp.control"),
+        (
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.messages",
+            "amlip_qp.alip",
+            "amlip_qp.robots",
+            "amlip_qp.control",
+        ),
     ),
     # a scenario made a closed loop: the robot, a tracker, the controller, its estimator
     "amlip_qp.sim.scenarios": _sim_job(
@@ -154,6 +178,7 @@ RULES: dict[str, Rule] = {
         (
             "amlip_qp.exceptions",
             "amlip_qp.profiles",
+            "amlip_qp.messages",
             "amlip_qp.alip",
             "amlip_qp.robots",
             "amlip_qp.control",

@@ -18,8 +18,10 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.sim.scenarios import factory
 
@@ -316,7 +318,7 @@ def test_an_os_error_while_writing_after_the_run_exits_2(option, name, tmp_path,
     """A link to ``/dev/full`` opens, then every write fails (ENOSPC): the early check passes, the write does not."""
     path = tmp_path / name
     path.symlink_to("/dev/full")
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: ZeroTracker(robot))
     code, out, err = _main(["walk", "--robot", "rabbit", "--duration", "0.01", option, str(path)], capsys)
     assert code == 2
     assert err == f"amlip-qp: error: {option} {path}: writing failed (No space left on device); give a writable path\n"

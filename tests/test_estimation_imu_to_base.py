@@ -6,11 +6,11 @@ pelvis."""
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.estimator import Measurement
-from amlip_qp.estimation import ImuReading, make_base_estimator
+from amlip_qp.estimation import make_base_estimator
 from amlip_qp.estimation.imu_to_base import ImuToBase
 from amlip_qp.estimation.rotations import quat_wxyz_to_rot, quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading, Measurement
 from amlip_qp.profiles import ImuMount
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.state import qvel_to_v

@@ -15,8 +15,10 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.sim.reports.summary import TIMING_FIELDS
 from amlip_qp.sim.scenarios import factory
 
@@ -44,8 +46,8 @@ class ZeroTracker(Tracker):
 @pytest.fixture
 def stand_in(monkeypatch):
     """Every tracker name builds the zero-torque stand-in."""
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
-    monkeypatch.setattr(factory, "tracker_class", lambda name: ZeroTracker)
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    monkeypatch.setattr(registry, "tracker_class", lambda name: ZeroTracker)
 
 
 def _run(argv, capsys):
@@ -256,8 +258,8 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
             super().__init__(robot)
             warnings.warn("stand-in: no C compiler", CodegenFallbackWarning, stacklevel=2)
 
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: FallbackTracker(robot))
-    monkeypatch.setattr(factory, "tracker_class", lambda name: FallbackTracker)
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: FallbackTracker(robot))
+    monkeypatch.setattr(registry, "tracker_class", lambda name: FallbackTracker)
     argv = [
         "compare",
         "--quick",
@@ -277,16 +279,16 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
 
 
 def test_factory_names_a_missing_tracker(monkeypatch):
-    monkeypatch.setitem(factory.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
+    monkeypatch.setitem(registry.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
     with pytest.raises(InputError, match="'pbc' tracker is not available"):
-        factory.tracker_class("pbc")
+        registry.tracker_class("pbc")
     with pytest.raises(InputError, match="unknown tracker"):
-        factory.tracker_class("lqr")
+        registry.tracker_class("lqr")
 
 
 @pytest.mark.parametrize("name", ["pbc", "qp"])
 def test_real_trackers_are_wired(name):
-    cls = factory.tracker_class(name)
+    cls = registry.tracker_class(name)
     assert cls.name == name
     from amlip_qp.sim.scenarios.scenarios import Scenario
 

@@ -11,8 +11,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.sim.scenarios import factory
 from amlip_qp.sim.scenarios.scenarios import Scenario
 from amlip_qp.sim.sensing.sensors import PlantSensors, SensorSettings, base_indices

@@ -44,12 +44,13 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from amlip_qp.control.registry import TRACKER_MODULES, tracker_class
 from amlip_qp.exceptions import InputError
 from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_time_us
 from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
 from amlip_qp.sim.reports.summary import TIMING_FIELDS, summarize, to_jsonable
-from amlip_qp.sim.scenarios.factory import TRACKER_MODULES, build_simulation, load, tracker_class
+from amlip_qp.sim.scenarios.factory import build_simulation, load
 from amlip_qp.sim.scenarios.named import get_scenario
 
 if TYPE_CHECKING:

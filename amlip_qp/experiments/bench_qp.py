@@ -1,7 +1,7 @@
 """``amlip-qp bench qp``: replay recorded tracker QPs through every installed QP solver.
 
 :func:`record_walk` runs a scenario with the whole-body QP tracker (the
-tracker named ``"qp"`` in :data:`amlip_qp.sim.scenarios.factory.TRACKER_MODULES`) and
+tracker named ``"qp"`` in :data:`amlip_qp.control.registry.TRACKER_MODULES`) and
 copies every tick's problem, keeping the whole controller tick times
 (estimate, plan, build, solve) and MuJoCo's state at the end of the walk.
 :func:`bench_solvers` replays the recorded sequence through every solver of
@@ -50,6 +50,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.control.registry import make_tracker
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.experiments import qp_solver_list
 from amlip_qp.experiments.bench_qp_report import agreement, format_report, time_stats
@@ -59,7 +60,7 @@ from amlip_qp.experiments.qp_solver_list import REFERENCE, SolverSettings, Solve
 from amlip_qp.profiles import DEFAULT_ROBOT, DEFAULT_SCENARIO
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
-from amlip_qp.sim.scenarios.factory import build_simulation, load, make_tracker
+from amlip_qp.sim.scenarios.factory import build_simulation, load
 from amlip_qp.sim.scenarios.named import get_scenario
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -68,7 +69,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 __all__ = ["bench_solvers", "format_report", "record_walk", "reference_solutions", "run", "run_bench"]
 
-#: The tracker whose problems are recorded (a name of :data:`amlip_qp.sim.scenarios.factory.TRACKER_MODULES`).
+#: The tracker whose problems are recorded (a name of :data:`amlip_qp.control.registry.TRACKER_MODULES`).
 QP_TRACKER = "qp"
 
 #: Problems solved untimed before the timed pass (CPU frequency and caches

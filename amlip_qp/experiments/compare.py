@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from amlip_qp.control import registry
 from amlip_qp.exceptions import InputError
 from amlip_qp.experiments.robustness import (
     PUSH_DURATION_S,
@@ -317,7 +318,7 @@ def main(args: argparse.Namespace) -> int:
     settings = settings_from_args(args)
     setting = setting_from_args(args, PlantSetting())
     for trk in args.trackers:
-        factory.tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
+        registry.tracker_class(trk)  # fail fast (exit 2) if a tracker is missing
     robots = list(args.robots if args.robots is not None else compared_robots())
     tasks = build_tasks(
         robots,

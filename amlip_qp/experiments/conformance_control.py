@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from amlip_qp.alip.messages import Command
-from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.controller import WalkingController
-from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
 from amlip_qp.experiments.conformance import SKIP, CheckResult, result
+from amlip_qp.messages import Command, Measurement, TrackerResult
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.run_types import CONTROL_DT_S
@@ -80,7 +80,7 @@ def stand_tick(robot: Robot, tracker: str) -> TrackerResult:
     profile = robot.profile
     if profile is None:
         raise InputError(f"{robot.name}: a stand tick needs the robot's profile (its gait and tracker tables)")
-    recorder = _Recorder(factory.make_tracker(tracker, robot))
+    recorder = _Recorder(registry.make_tracker(tracker, robot))
     controller = WalkingController(
         robot,
         recorder,

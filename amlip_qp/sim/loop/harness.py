@@ -4,7 +4,7 @@ The harness is the only code that knows the plant. Every control tick it
 reads the plant's state in the controller's Pinocchio convention through the
 :class:`~amlip_qp.sim.world.plant.Plant` (which maps any plant model to the
 controller's by name), optionally adds Gaussian noise (``--noise``), hands the
-sensors' :class:`~amlip_qp.control.walking.estimator.Measurement`
+sensors' :class:`~amlip_qp.messages.Measurement`
 (:mod:`~amlip_qp.sim.sensing.sensors`: ``ideal`` or ``robot``) to the controller,
 turns the joint torques into the plant's actuator controls
 (``ctrl = tau / gear``), applies pushes on the base body, and steps MuJoCo.
@@ -21,10 +21,9 @@ from typing import cast
 import mujoco
 import numpy as np
 
-from amlip_qp.alip.planner import Command
 from amlip_qp.control.walking.controller import WalkingController
-from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command, Measurement
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.pushes import PushSchedule
 from amlip_qp.sim.loop.run_log import BLOCK_ROWS, LOG_MODES, RowBlocks, TickLog

@@ -28,8 +28,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from amlip_qp.profiles import CommandBounds
 from amlip_qp.sim.loop.harness import TICK_OK, Simulation
 from amlip_qp.sim.loop.live_keys import ACTION_OF_CODE, TURN_STEP_DEGPS, VX_STEP_MPS, VY_STEP_MPS
@@ -43,7 +43,7 @@ class LiveCommand:
 
     Args:
         base: The command's fixed fields (step time, CoM height, clearance, step width):
-            a :class:`~amlip_qp.alip.messages.Command` of the scenario.
+            a :class:`~amlip_qp.messages.Command` of the scenario.
         bounds: The robot's bounds; every value is clipped to them (a planar robot's
             lateral speed and turn rate stay 0).
         vx_mps: Starting forward speed, m/s.

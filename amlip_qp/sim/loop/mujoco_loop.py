@@ -31,11 +31,11 @@ import math
 import mujoco
 import numpy as np
 
-from amlip_qp.alip.messages import Command
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.records import TickInfo
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.sensing.sensors import PlantSensors
@@ -107,7 +107,7 @@ class MujocoLoop:
         self._zero_tau = np.zeros(robot.nu)
 
     def command(self, vx_mps: float = 0.0, vy_mps: float = 0.0, turn_rate_radps: float = 0.0) -> Command:
-        """A :class:`~amlip_qp.alip.messages.Command` with the robot profile's gait and these speeds.
+        """A :class:`~amlip_qp.messages.Command` with the robot profile's gait and these speeds.
 
         Args:
             vx_mps: Forward speed in the heading frame, m/s.

@@ -1,4 +1,8 @@
-"""Figures of a walking run and of a tracker comparison (matplotlib, Agg backend: no display needed)."""
+"""Figures of a walking run and of a tracker comparison.
+
+Matplotlib :class:`~matplotlib.figure.Figure` objects written to files, without pyplot: no display
+needed, and importing this module changes no matplotlib setting (its backend stays the user's).
+"""
 
 from __future__ import annotations
 
@@ -7,10 +11,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -32,15 +32,12 @@ def check_figure_path(path: str | os.PathLike) -> Path:
 
 
 def _save(fig, path: str | os.PathLike) -> Path:
-    """Write ``fig`` to ``path`` (its folder created) and close it; a failed write raises :class:`OSError`."""
+    """Write ``fig`` to ``path`` (its folder created); a failed write raises :class:`OSError`."""
     p = check_figure_path(path)
-    try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        # Our own file object: Pillow, given a file name, ignores a failing close (a full disk).
-        with open(p, "wb") as fh:
-            fig.savefig(fh, format=p.suffix[1:].lower(), dpi=110)
-    finally:
-        plt.close(fig)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    # Our own file object: Pillow, given a file name, ignores a failing close (a full disk).
+    with open(p, "wb") as fh:
+        fig.savefig(fh, format=p.suffix[1:].lower(), dpi=110)
     return p
 
 
@@ -83,9 +80,11 @@ def walk_figure(result: RunResult, path: str | os.PathLike, title: str | None = 
     planar = bool(result.info.get("planar", False))
     terrain = str(result.info.get("terrain", "flat"))
     if terrain == "flat":
-        fig, axes = plt.subplots(4, 1, figsize=(10, 12), sharex=True)
+        fig = Figure(figsize=(10, 12))
+        axes = fig.subplots(4, 1, sharex=True)
     else:
-        fig, axes = plt.subplots(5, 1, figsize=(10, 15))
+        fig = Figure(figsize=(10, 15))
+        axes = fig.subplots(5, 1)
         for ax in axes[1:4]:
             ax.sharex(axes[0])
         _side_view(axes[4], result, terrain)
@@ -173,7 +172,7 @@ def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -
 
 
 def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
-    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker (an open figure).
+    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker.
 
     ``rows`` are the per-(robot, tracker) dictionaries of :mod:`amlip_qp.experiments.compare`.
     A value that reached the top of its search range (its flag in
@@ -186,7 +185,8 @@ def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
     trackers = list(dict.fromkeys(r["tracker"] for r in rows))
     ncol = 3
     nrow = int(np.ceil(len(COMPARISON_METRICS) / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow))
+    fig = Figure(figsize=(4.2 * ncol, 3.2 * nrow))
+    axes = fig.subplots(nrow, ncol)
     width = 0.8 / max(len(trackers), 1)
     x = np.arange(len(robots))
     for ax, (key, label) in zip(axes.flat, COMPARISON_METRICS):

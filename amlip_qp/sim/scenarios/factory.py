@@ -1,22 +1,17 @@
 """Assemble a closed loop (robot, tracker, controller, plant) from names.
 
-The trackers live in their own modules (:data:`TRACKER_MODULES`) and are
-imported only when asked for, so the CLI and the tests do not pay for (or
-depend on) a tracker they do not use.
-A tracker class is found in its module as the :class:`~amlip_qp.control.tracker.Tracker`
-subclass whose ``name`` attribute is the requested name.
+A tracker given by name is made by the trackers' registry
+(:mod:`amlip_qp.control.registry`).
 """
 
 from __future__ import annotations
 
 import functools
-import importlib
-import inspect
 from collections.abc import Callable, Sequence
-from typing import cast
 
 import numpy as np
 
+from amlip_qp.control import registry
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.estimation import make_base_estimator
@@ -36,46 +31,11 @@ from amlip_qp.sim.world.terrain import ground_height_function, parse_terrain, te
 #: The base estimators of ``--estimator``: the simulator's truth, or the contact-aided invariant EKF.
 ESTIMATORS: tuple[str, ...] = ("truth", "ekf")
 
-#: Tracker name -> module that defines it.
-TRACKER_MODULES: dict[str, str] = {
-    "pbc": "amlip_qp.control.pbc.tracker",
-    "qp": "amlip_qp.control.wbc.tracker",
-}
-
 
 @functools.cache
 def load(robot_name: str) -> Robot:
     """The :class:`~amlip_qp.robots.robot.Robot` named ``robot_name`` (loaded once per process)."""
     return load_robot(robot_name)
-
-
-def tracker_class(name: str) -> type[Tracker]:
-    """The tracker class called ``name`` (``"pbc"`` or ``"qp"``).
-
-    Raises:
-        InputError: Unknown name, or its module is not available (yet).
-    """
-    if name not in TRACKER_MODULES:
-        raise InputError(f"unknown tracker {name!r}; known: {', '.join(TRACKER_MODULES)}")
-    module_name = TRACKER_MODULES[name]
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:
-        if exc.name == module_name:
-            raise InputError(f"the {name!r} tracker is not available: module {module_name} is missing") from None
-        raise
-    for _, obj in inspect.getmembers(module, inspect.isclass):
-        if issubclass(obj, Tracker) and obj is not Tracker and getattr(obj, "name", None) == name:
-            return obj
-    raise InputError(f"the {name!r} tracker is not available: {module_name} defines no Tracker named {name!r}")
-
-
-def make_tracker(name: str, robot: Robot) -> Tracker:
-    """A new tracker ``name`` for ``robot`` (constructed as ``cls(robot)``)."""
-    # The abstract base declares no constructor; every registered tracker takes the robot
-    # as its only required argument (TRACKER_MODULES' classes, checked by the tests).
-    cls = cast("Callable[[Robot], Tracker]", tracker_class(name))
-    return cls(robot)
 
 
 def check_estimator(name: str) -> str:
@@ -165,7 +125,7 @@ def build_simulation(
     else:
         the_plant = load_plant(robot.name if plant is None else plant, robot, edits=edits)
     ctrl_filter = _with_delay(setting.modifiers.actuator_delay_ticks, len(robot.actuated.names), ctrl_filter)
-    trk = make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
+    trk = registry.make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
     kin = RobotKinematics(robot)

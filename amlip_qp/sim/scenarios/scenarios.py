@@ -17,8 +17,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
-from amlip_qp.alip.planner import Command
 from amlip_qp.exceptions import InputError, UnknownRobotError
+from amlip_qp.messages import Command
 from amlip_qp.profiles import CommandShaping, GaitSettings, RobotProfile, get_profile
 from amlip_qp.sim.loop.run_types import CONTROL_DT_S, PlantSetting, Push
 from amlip_qp.sim.scenarios.speed_profile import SpeedProfile

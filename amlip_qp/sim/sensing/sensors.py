@@ -34,9 +34,8 @@ from dataclasses import dataclass, fields
 import mujoco
 import numpy as np
 
-from amlip_qp.control.walking.estimator import Measurement
-from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading, Measurement
 from amlip_qp.sim.world.contact_sensors import contact_sensor_indices, list_switcher
 from amlip_qp.sim.world.imu_site import IMU_ACCEL_SENSOR, IMU_GYRO_SENSOR, IMU_QUAT_SENSOR
 from amlip_qp.sim.world.plant import Plant

@@ -1,23 +1,36 @@
-"""What a walking controller and the ALIP planner exchange every control tick.
+"""The messages of the closed loop: what its parts hand each other every control tick.
 
-:class:`Command` (what the controller asks for), :class:`StateEstimate`
-(the controller's estimate) and, off flat ground, :class:`TerrainPrediction`
-(the ground heights and pitches the controller expects) go into
-:meth:`Planner.update <amlip_qp.alip.planner.Planner.update>`;
-:class:`PlannerOutput` comes out. All are frozen, keyword-only dataclasses in
-SI units, validated on creation (bad values raise
-:class:`~amlip_qp.exceptions.InputError`).
+Below every part that exchanges them (the plant and its sensors, the
+estimators, the planner, the trackers, the walking controller), so that data
+flows one way:
 
+- :class:`Measurement` (with its :class:`ImuReading`): what the sensors report,
+  into the walking controller;
+- :class:`Command` (what the controller asks for), :class:`StateEstimate`
+  (the controller's estimate) and, off flat ground, :class:`TerrainPrediction`
+  (the ground heights and pitches the controller expects) go into
+  :meth:`Planner.update <amlip_qp.alip.planner.Planner.update>`;
+  :class:`PlannerOutput` comes out;
+- :class:`TrackerResult`: a tracker's torques for one tick.
+
+The planner's messages are frozen, keyword-only dataclasses in SI units,
+validated on creation (bad values raise :class:`~amlip_qp.exceptions.InputError`).
 The terrain is its own message, not part of the state estimate: it comes from
 another source (the footholds of :mod:`amlip_qp.alip.footholds` when blind, a
 height function when terrain-aware), and its default, all zeros, is flat
 ground with today's numbers bit for bit.
+
+The IMU frame of an :class:`ImuReading` is rigidly attached to the body the
+robot's profile names (:attr:`~amlip_qp.robots.robot.Robot.imu_mount`: a body,
+a position and axes in its frame; by default the base body's origin and axes).
+The EKF takes the reading turned into that of an IMU fixed to the base with
+the base's axes (:mod:`~amlip_qp.estimation.imu_to_base`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -276,3 +289,80 @@ class PlannerOutput:
     heading_next_rad: float
     turn_rad: float
     v_z_used_mps: float
+
+
+@dataclass(frozen=True)
+class ImuReading:
+    """What the IMU reports at one tick (SI units).
+
+    Attributes:
+        quat_xyzw: Orientation of the IMU frame in the world, as the IMU's own
+            filter reports it (unit quaternion, x y z w), shape (4,).
+        gyro_radps: Angular velocity of the IMU frame, IMU axes, rad/s, shape (3,).
+        accel_mps2: Specific force ``a - g`` in IMU axes, m/s^2, shape (3,)
+            (reads ``+9.81`` on z at rest, level).
+    """
+
+    quat_xyzw: np.ndarray
+    gyro_radps: np.ndarray
+    accel_mps2: np.ndarray
+
+    @classmethod
+    def of_packed(cls, packed: np.ndarray, start: int = 0) -> ImuReading:
+        """``ImuReading(p[:4], p[4:7], p[7:10])`` of ``p = packed[start:]``: the reading of 10 floats
+        (quaternion x y z w, gyro, accelerometer) of one array, holding views of it.
+
+        The same object as the constructor's (tested), made without its three frozen
+        ``object.__setattr__`` calls: the harness's per-tick reading.
+        """
+        reading = object.__new__(cls)
+        fields = reading.__dict__
+        fields["quat_xyzw"] = packed[start : start + 4]
+        fields["gyro_radps"] = packed[start + 4 : start + 7]
+        fields["accel_mps2"] = packed[start + 7 : start + 10]
+        return reading
+
+
+@dataclass
+class Measurement:
+    """What the sensors report at one tick.
+
+    Attributes:
+        t_s: Time, s.
+        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw).
+        v: Velocity, Pinocchio convention (free-flyer twist in the base frame).
+        foot_contact: Side -> contact switch (True when the foot carries load);
+            an empty dict means "no contact sensing": touchdown is then
+            detected from the swing foot's height.
+        imu: The IMU reading (:class:`~amlip_qp.messages.ImuReading`),
+            or ``None`` without an IMU.
+        base_known: False when the base part (``q[:7]``, ``v[:6]``) is not a
+            measurement (robot sensors): a base-state estimator must fill it
+            (:mod:`amlip_qp.estimation.base_estimator`).
+    """
+
+    t_s: float
+    q: np.ndarray
+    v: np.ndarray
+    foot_contact: dict[str, bool] = field(default_factory=dict)
+    imu: ImuReading | None = None
+    base_known: bool = True
+
+
+@dataclass
+class TrackerResult:
+    """A tracker's output for one tick.
+
+    Attributes:
+        tau_Nm: Joint-side torques of the actuated joints (robot's actuator
+            order), before saturation by the controller, N m. Never NaN.
+        ok: ``False`` when the tracker fell back (solver failure, NaN...).
+        fallback: Why it fell back, or ``None``.
+        info: Diagnostics (solve time, iterations, contact forces, tracking
+            error...), numbers only.
+    """
+
+    tau_Nm: np.ndarray
+    ok: bool = True
+    fallback: str | None = None
+    info: dict = field(default_factory=dict)
