@@ -9,16 +9,16 @@ import pytest
 
 
 @pytest.fixture(scope="session")
-def session_cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """One cache of compiled generated C for the whole test session, shared by its xdist workers.
+def shared_cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One cache of compiled generated C for the whole pytest run, shared by its xdist workers.
 
     The tests that compile into a cache of their own, not the user's, build each library once
-    per session here rather than once per module or test. The workers may share it: a library's
+    per run here rather than once per module or test. The workers may share it: a library's
     folder is named by the hash of its source, compiler and flags, and each library is written to
     a temporary file and renamed into place (:mod:`amlip_qp.codegen.runtime`).
     """
     base = tmp_path_factory.getbasetemp()
-    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # the session's folder
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # the run's folder, above the workers'
     path = root / "amlip_qp_cache"
     path.mkdir(exist_ok=True)
     return path

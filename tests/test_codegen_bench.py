@@ -12,8 +12,8 @@ PATHS = {"c-fast", "casadi-function", "numpy"}
 
 
 @pytest.fixture(autouse=True)
-def _session_cache(session_cache_dir, monkeypatch):
-    monkeypatch.setenv("AMLIP_QP_CACHE_DIR", str(session_cache_dir))
+def _shared_cache(shared_cache_dir, monkeypatch):
+    monkeypatch.setenv("AMLIP_QP_CACHE_DIR", str(shared_cache_dir))
 
 
 def _check_schema(result):

@@ -33,13 +33,13 @@ def test_cache_key_changes_with_source_compiler_and_flags():
 
 
 @needs_cc
-def test_changed_source_builds_a_new_library(session_cache_dir):
+def test_changed_source_builds_a_new_library(shared_cache_dir):
     src = generate.generate_files()[generate.SOURCE_FILE]
     compiler = runtime.find_compiler()
-    lib = runtime.build_library(src, compiler, session_cache_dir)
-    assert lib == runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=session_cache_dir)[0]
-    assert runtime.build_library(src, compiler, session_cache_dir) == lib  # cached
-    other = runtime.build_library(src + b"/* changed */\n", compiler, session_cache_dir)
+    lib = runtime.build_library(src, compiler, shared_cache_dir)
+    assert lib == runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=shared_cache_dir)[0]
+    assert runtime.build_library(src, compiler, shared_cache_dir) == lib  # cached
+    other = runtime.build_library(src + b"/* changed */\n", compiler, shared_cache_dir)
     assert other != lib and other.parent.name == runtime.cache_key(src + b"/* changed */\n", compiler)
     assert other.is_file() and (other.parent / generate.SOURCE_FILE).read_bytes().endswith(b"/* changed */\n")
 
