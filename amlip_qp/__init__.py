@@ -21,7 +21,7 @@ MuJoCo nor Pinocchio:
   :class:`Measurement` and a :class:`Command` each tick, around a tracker:
   :class:`QPTracker` (:mod:`amlip_qp.control.wbc`) or :class:`PBCTracker`
   (:mod:`amlip_qp.control.pbc`).
-- :class:`MujocoLoop` (:mod:`amlip_qp.sim.mujoco_loop`): that controller on a
+- :class:`MujocoLoop` (:mod:`amlip_qp.sim.loop.mujoco_loop`): that controller on a
   ``mujoco.MjModel`` and ``mujoco.MjData`` you step.
 - The typed errors of :mod:`amlip_qp.exceptions`.
 
@@ -47,14 +47,13 @@ from amlip_qp.exceptions import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.alip.messages import Command
     from amlip_qp.control.pbc.tracker import PBCTracker
     from amlip_qp.control.walking.controller import WalkingController
-    from amlip_qp.control.walking.estimator import Measurement
     from amlip_qp.control.wbc.tracker import QPTracker
+    from amlip_qp.messages import Command, Measurement
     from amlip_qp.robots.loader import load_robot
     from amlip_qp.robots.robot import Robot
-    from amlip_qp.sim.mujoco_loop import MujocoLoop
+    from amlip_qp.sim.loop.mujoco_loop import MujocoLoop
 
 __version__ = "0.1.0"
 
@@ -80,9 +79,9 @@ __all__ = [
 
 #: Each lazy export -> the module that defines it (imported on first use).
 _LAZY: dict[str, str] = {
-    "Command": "amlip_qp.alip.messages",
+    "Command": "amlip_qp.messages",
     "Measurement": "amlip_qp.control.walking.estimator",
-    "MujocoLoop": "amlip_qp.sim.mujoco_loop",
+    "MujocoLoop": "amlip_qp.sim.loop.mujoco_loop",
     "PBCTracker": "amlip_qp.control.pbc.tracker",
     "QPTracker": "amlip_qp.control.wbc.tracker",
     "Robot": "amlip_qp.robots.robot",

@@ -3,7 +3,7 @@
 Usage: ``python examples/acceptance_table.py [--set ideal|cc-ekf|all] [--trackers pbc,qp] [--jobs 2] [--json PATH]``
 
 Each row is one deterministic run (seed 0) of a named scenario of
-:data:`amlip_qp.sim.scenarios.SCENARIOS`: by default the ideal ones (each
+:data:`amlip_qp.sim.scenarios.named.SCENARIOS`: by default the ideal ones (each
 robot's own model, exact sensors, the true base state); ``--set cc-ekf`` the
 hardware-like ones (closed-chain plant, robot sensors, invariant EKF, and the
 model mismatches; the terrain scenarios have their own table,
@@ -24,9 +24,9 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from amlip_qp.sim.factory import run_scenario
-from amlip_qp.sim.scenarios import SCENARIOS, TERRAIN_SCENARIOS, ideal_scenarios
-from amlip_qp.sim.summary import summarize, to_jsonable
+from amlip_qp.sim.reports.summary import summarize, to_jsonable
+from amlip_qp.sim.scenarios.factory import run_scenario
+from amlip_qp.sim.scenarios.named import SCENARIOS, TERRAIN_SCENARIOS, ideal_scenarios
 
 
 def _run(job: tuple[str, str]) -> dict:

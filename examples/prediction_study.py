@@ -29,7 +29,7 @@ import json
 import sys
 from pathlib import Path
 
-from amlip_qp.sim.video import prefer_offscreen_gl
+from amlip_qp.sim.reports.gl import prefer_offscreen_gl
 
 prefer_offscreen_gl()
 
@@ -41,9 +41,9 @@ import numpy as np  # noqa: E402
 
 from amlip_qp.alip import formulas, lip  # noqa: E402
 from amlip_qp.exceptions import InputError  # noqa: E402
-from amlip_qp.sim import factory  # noqa: E402
-from amlip_qp.sim.scenarios import get_scenario  # noqa: E402
-from amlip_qp.sim.summary import heading_frame_xy, to_jsonable  # noqa: E402
+from amlip_qp.sim.reports.summary import heading_frame_xy, to_jsonable  # noqa: E402
+from amlip_qp.sim.scenarios import factory  # noqa: E402
+from amlip_qp.sim.scenarios.named import get_scenario  # noqa: E402
 
 #: Forward-walking scenario per robot (the ratio std/|mean| needs a mean away from 0).
 SCENARIOS = {"cassie": "cassie-1mps", "rabbit": "rabbit-0.5mps"}

@@ -16,7 +16,7 @@ at different machine speeds: MuJoCo's step time of the same walk (``_per_mujoco`
 stable under load, but a leaner loop leaves MuJoCo's data in the caches and its
 step faster, so it understates a leaner code's gain) and MuJoCo's step time
 alone, measured in the same process right after the walk (``_per_step``;
-:mod:`amlip_qp.sim.mujoco_yardstick`, this checkout's recipe in both walks:
+:mod:`amlip_qp.experiments.mujoco_yardstick`, this checkout's recipe in both walks:
 ``mj_step`` replayed on copies of the state at the end of the 0.5-s warm-up
 walk; independent of the code, but it swings with the machine's load). The
 real-time factors' ratio needs no yardstick; the ABBA order and the median
@@ -41,15 +41,15 @@ import statistics
 import subprocess
 import sys
 
+from amlip_qp.control.registry import TRACKER_MODULES
 from amlip_qp.exceptions import InputError
 from amlip_qp.output_paths import check_output_path
-from amlip_qp.sim.factory import TRACKER_MODULES
-from amlip_qp.sim.run_log import LOG_MODES
-from amlip_qp.sim.scenarios import get_scenario
+from amlip_qp.sim.loop.run_log import LOG_MODES
+from amlip_qp.sim.scenarios.named import get_scenario
 
 HERE = pathlib.Path(__file__).resolve().parents[1]
 #: The yardstick's recipe (MuJoCo's step alone on a fixed state), run in the walks of both checkouts.
-YARDSTICK = HERE / "amlip_qp" / "sim" / "mujoco_yardstick.py"
+YARDSTICK = HERE / "amlip_qp" / "experiments" / "mujoco_yardstick.py"
 #: The warm-up walk before each timed walk (imports, compiled kernels; its end state is the yardstick's), s.
 WARMUP_S = 0.5
 
@@ -59,8 +59,12 @@ import inspect, json, sys, time
 import amlip_qp
 import mujoco
 import numpy as np
-from amlip_qp.sim.factory import build_simulation
-from amlip_qp.sim.scenarios import get_scenario
+try:
+    from amlip_qp.sim.scenarios.factory import build_simulation, load
+    from amlip_qp.sim.scenarios.named import get_scenario
+except ImportError:  # a checkout from before amlip_qp.sim was laid out by job
+    from amlip_qp.sim.factory import build_simulation, load
+    from amlip_qp.sim.scenarios import get_scenario
 
 scenario, tracker_name, duration, log = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
 yardstick, gathered = sys.argv[5], sys.argv[6] == "1"
@@ -70,13 +74,12 @@ def tracker():
     if not gathered:
         return tracker_name
     from amlip_qp.control.wbc.tracker import QPTracker
-    from amlip_qp.sim.factory import load
     made = QPTracker(load(sc.robot), in_place_assembly=False)
     if made.build_backend != "c":
         raise SystemExit(f"no compiled build that gathers its inputs: {made.build_backend}")
     return made
 
-ys = {}  # this checkout's amlip_qp/sim/mujoco_yardstick.py, the same recipe in every version
+ys = {}  # this checkout's amlip_qp/experiments/mujoco_yardstick.py, the same recipe in every version
 exec(compile(open(yardstick).read(), yardstick, "exec"), ys)
 # warm-up (imports, compiled kernels, caches), and the state the yardstick replays
 model, state = ys["snapshot_walk"](lambda: build_simulation(sc, tracker()).run(WARMUP_S))

@@ -3,7 +3,7 @@
 Usage: ``python examples/terrain_table.py [--trackers pbc,qp] [--scenarios NAME,...] [--jobs 2] [--json PATH]``
 
 Each row is one deterministic run of a terrain scenario of
-:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS`: terrain,
+:data:`amlip_qp.sim.scenarios.named.TERRAIN_SCENARIOS`: terrain,
 tracker, mode (blind or terrain-aware), whether the robot fell, the mean
 speed over the last 3 s (horizontal, along the heading) against the command,
 and the foot placement error RMS (touchdown against the planner's target,
@@ -18,9 +18,9 @@ import argparse
 import json
 from concurrent.futures import ProcessPoolExecutor
 
-from amlip_qp.sim.factory import run_scenario
-from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS
-from amlip_qp.sim.summary import summarize, to_jsonable
+from amlip_qp.sim.reports.summary import summarize, to_jsonable
+from amlip_qp.sim.scenarios.factory import run_scenario
+from amlip_qp.sim.scenarios.named import TERRAIN_SCENARIOS
 
 
 def _run(job: tuple[str, str]) -> dict:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amlip_qp.sim.video import VideoRecorder, prefer_offscreen_gl
+from amlip_qp.sim.reports.gl import prefer_offscreen_gl
 
 prefer_offscreen_gl()  # headless rendering, before mujoco is imported
 
@@ -25,6 +25,7 @@ import mujoco  # noqa: E402
 
 import amlip_qp  # noqa: E402
 from amlip_qp.cli.parsing import Parser, float_in  # noqa: E402
+from amlip_qp.sim.reports.video import VideoRecorder  # noqa: E402
 
 PUSH_N, PUSH_START_S, PUSH_END_S = (100.0, 0.0, 0.0), 6.0, 6.2
 

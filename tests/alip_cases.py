@@ -1,6 +1,6 @@
 """Shared planner inputs of the alip tests: a Command and a StateEstimate with overridable fields (SI units)."""
 
-from amlip_qp.alip import Command, StateEstimate
+from amlip_qp.messages import Command, StateEstimate
 
 #: CoM height (m) and step time (s) of the cases.
 H, T = 0.9, 0.3

@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from amlip_qp.alip import StateEstimate
 from amlip_qp.alip.heading import heading_to_world, world_to_heading
+from amlip_qp.messages import StateEstimate
 
 M, H, G, T = 32.0, 0.8, 9.81, 0.3
 LAM = math.sqrt(G / H)

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim.harness import TICK_OK
+from amlip_qp.sim.loop.harness import TICK_OK
 
 #: G1's file's IMU sites (``unitree_g1/g1.xml``): ``imu_in_pelvis`` and ``imu_in_torso``.
 G1_PELVIS_IMU_M = (0.04525, 0.0, -0.08339)
@@ -93,7 +93,7 @@ def walk_samples(sim, duration_s: float, sensor_names) -> list[Sample]:
 
 def reading(sample: Sample, site: str):
     """The :class:`~amlip_qp.estimation.ImuReading` of test site ``site`` (quaternion made ``x y z w``)."""
-    from amlip_qp.estimation import ImuReading
+    from amlip_qp.messages import ImuReading
 
     w, x, y, z = sample.sensors[f"{site}-quat"]
     return ImuReading(np.array([x, y, z, w]), sample.sensors[f"{site}-gyro"], sample.sensors[f"{site}-accel"])

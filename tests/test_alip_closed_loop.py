@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from alip_cases import OUT2, OUT3
-from amlip_qp.alip import Command, Planner, StateEstimate, desired
+from amlip_qp.alip import Planner, desired
 from amlip_qp.alip.heading import world_to_heading
+from amlip_qp.messages import Command, StateEstimate
 
 M, H, G, T, DT = 32.0, 0.85, 9.81, 0.32, 1e-3
 N_TICK = int(round(T / DT))
@@ -240,7 +241,7 @@ class PointMassOnSlope:
 def walk_on_slope(slope_deg, full_transfer, n_steps=8, seed=7):
     """Walk the slope sim with the Planner. The height difference to the next contact is the ground's at the
     previous tick's target, as a controller gets it: the law is a contraction in it, converged by touchdown."""
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     k = np.tan(np.radians(slope_deg))
     rng = np.random.default_rng(seed)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip.command_shaping import CommandShaper
-from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from amlip_qp.profiles import PROFILES, CommandShaping
 
 DT = 0.0005
@@ -138,7 +138,7 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
     # T = max_step_length_m / |vx|, and nothing else.
     from dataclasses import replace
 
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     dt = 10 * DT
     capped = set()

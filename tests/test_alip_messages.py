@@ -1,4 +1,4 @@
-"""Tests of amlip_qp.alip.messages: Command, StateEstimate and PlannerOutput, their conversion and validation."""
+"""Tests of amlip_qp.messages: Command, StateEstimate and PlannerOutput, their conversion and validation."""
 
 import math
 
@@ -101,7 +101,7 @@ def test_state_estimate_converts_other_inputs_to_float64():
 
 
 def test_terrain_prediction_defaults_to_flat_ground_and_is_validated():
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     flat = TerrainPrediction()
     assert (flat.dz_next_m, flat.dz_sw_m, flat.dz_sw0_m, flat.slope_pitch_rad, flat.slope_pitch0_rad) == (0.0,) * 5

@@ -12,10 +12,11 @@ import pytest
 
 from alip_cases import OUT3, cmd, est
 from alip_point_mass import LAM, OUTPUTS, REACH_M, G, H, M, T, Walk, reach_clip_hook
-from amlip_qp.alip import Command, Planner, StepClock
+from amlip_qp.alip import Planner, StepClock
 from amlip_qp.alip import step_mpc as S
 from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
 from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.messages import Command
 from amlip_qp.qp.small_qp import SmallQPSolver
 
 COMMAND = Command(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, step_width_m=0.25)

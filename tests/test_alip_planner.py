@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from alip_cases import OUT2, OUT3, H, T, cmd, est
-from amlip_qp.alip import Planner, PlannerOutput, StepClock, desired, kernels, lip
+from amlip_qp.alip import Planner, StepClock, desired, kernels, lip
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import PlannerOutput
 
 M, G = 31.0, 9.81
 H0 = np.array([0.01, -0.02, 0.03, -0.04, 0.9, -0.15, 0.12, 0.88, 0.0])
@@ -275,7 +276,7 @@ def _same_bits(a, b):
 
 @pytest.mark.parametrize("robot, h0", [(OUT3, H0), (OUT2, np.array([0.02, 0.9, -0.15, 0.88]))])
 def test_no_terrain_and_flat_terrain_give_the_same_bits(robot, h0):
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     for t_in in (0.0, 0.13, T, T + 0.05):
         a = started(robot, h0).update(est(t_in_step_s=t_in), cmd())
@@ -285,7 +286,7 @@ def test_no_terrain_and_flat_terrain_give_the_same_bits(robot, h0):
 
 
 def test_terrain_reaches_the_kernels_and_the_swing_target():
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     seen = {}
 
@@ -333,7 +334,7 @@ def test_late_descent_continues_the_swing_foot_down():
 
 
 def test_bad_terrain_raises_input_error():
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     with pytest.raises(InputError, match="terrain must be a TerrainPrediction or None, got dict"):
         started().update(est(), cmd(), {"dz_next_m": 0.1})
@@ -347,7 +348,7 @@ def test_bad_terrain_raises_input_error():
 
 
 def test_a_foothold_hook_moves_the_swing_target_and_the_placement():
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     terrain = TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1)
     free = started().update(est(t_in_step_s=0.1), cmd(), terrain)
@@ -372,7 +373,7 @@ def test_a_foothold_hook_moves_the_swing_target_and_the_placement():
 
 
 def test_a_foothold_hook_that_is_not_one_is_refused_with_the_reason():
-    from amlip_qp.alip import TerrainPrediction
+    from amlip_qp.messages import TerrainPrediction
 
     terrain = TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1)
     bad_hooks = {

@@ -28,9 +28,36 @@ class Rule:
 #: Third-party packages that only some layers may use.
 HEAVY = ("mujoco", "pinocchio", "casadi", "proxsuite", "qpsolvers", "scipy", "matplotlib", "imageio", "tqdm")
 #: What every control subpackage may use below it.
-CONTROL_BASE = ("amlip_qp.alip", "amlip_qp.codegen", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.profiles")
+CONTROL_BASE = (
+    "amlip_qp.alip",
+    "amlip_qp.codegen",
+    "amlip_qp.robots",
+    "amlip_qp.exceptions",
+    "amlip_qp.messages",
+    "amlip_qp.profiles",
+)
 #: The control subpackages (jobs).
 CONTROL_JOBS = ("amlip_qp.control.walking", "amlip_qp.control.pbc", "amlip_qp.control.wbc", "amlip_qp.control.mpc")
+
+#: The subpackages of ``amlip_qp.sim``, one per job, lowest first: each may import those before it, never after.
+SIM_JOBS = (
+    "amlip_qp.sim.world",
+    "amlip_qp.sim.sensing",
+    "amlip_qp.sim.loop",
+    "amlip_qp.sim.scenarios",
+    "amlip_qp.sim.reports",
+)
+#: What sits above the library: never imported by it.
+ABOVE_THE_LIBRARY = ("amlip_qp.experiments", "amlip_qp.sweep", "amlip_qp.cli", "amlip_qp.__main__")
+
+
+def _sim_job(job: str, below: tuple[str, ...], never: tuple[str, ...] = ()) -> Rule:
+    """The rule of the sim job ``job``: itself, the jobs before it in :data:`SIM_JOBS` and ``below``."""
+    lower = SIM_JOBS[: SIM_JOBS.index(job) + 1]
+    return Rule(
+        lower + below, never + SIM_JOBS[SIM_JOBS.index(job) + 1 :] + ABOVE_THE_LIBRARY + ("amlip_qp.output_paths",)
+    )
+
 
 #: unit (a package, or a top-level module) -> its rule (docs/ARCHITECTURE.md, "Layers").
 RULES: dict[str, Rule] = {
@@ -40,15 +67,17 @@ RULES: dict[str, Rule] = {
         (
             "amlip_qp.exceptions",
             "amlip_qp.robots",
-            "amlip_qp.alip.messages",
+            "amlip_qp.messages",
             "amlip_qp.control.walking",
             "amlip_qp.control.wbc.tracker",
             "amlip_qp.control.pbc.tracker",
-            "amlip_qp.sim.mujoco_loop",
+            "amlip_qp.sim.loop.mujoco_loop",
         ),
         HEAVY + ("numpy",),
     ),
     "amlip_qp.exceptions": Rule((), HEAVY + ("numpy",)),
+    # the closed loop's messages: below every part that exchanges them (numpy only)
+    "amlip_qp.messages": Rule(("amlip_qp.exceptions",), HEAVY),
     "amlip_qp.paths": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
     # the robot profiles: plain data read from TOML files among the package's models
@@ -58,12 +87,19 @@ RULES: dict[str, Rule] = {
     # the command line stays light: handlers are imported by name when a subcommand runs
     # (view's keys for its --help: a leaf module of plain data)
     "amlip_qp.cli": Rule(
-        ("amlip_qp.cli", "amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.sim.live_keys"), HEAVY + ("numpy",)
+        (
+            "amlip_qp.cli",
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.sim.loop.live_keys",
+            "amlip_qp.sim.reports.gl",
+        ),
+        HEAVY + ("numpy",),
     ),
     # pure math: numpy (CasADi only when handed CasADi symbols)
     # profiles only for the CommandShaping parameters (a leaf module of plain dataclasses)
     "amlip_qp.alip": Rule(
-        ("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.profiles"),
+        ("amlip_qp.alip", "amlip_qp.exceptions", "amlip_qp.messages", "amlip_qp.profiles"),
         ("mujoco", "pinocchio", "proxsuite", "qpsolvers", "scipy"),
     ),
     "amlip_qp.codegen": Rule(
@@ -99,7 +135,14 @@ RULES: dict[str, Rule] = {
     ),
     # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo
     "amlip_qp.estimation": Rule(
-        ("amlip_qp.estimation", "amlip_qp.robots", "amlip_qp.exceptions", "amlip_qp.codegen", "amlip_qp.profiles"),
+        (
+            "amlip_qp.estimation",
+            "amlip_qp.robots",
+            "amlip_qp.exceptions",
+            "amlip_qp.codegen",
+            "amlip_qp.messages",
+            "amlip_qp.profiles",
+        ),
         ("mujoco", "proxsuite", "qpsolvers", "scipy", "amlip_qp.control", "amlip_qp.sim"),
     ),
     # the paper's tracker: no QP
@@ -113,13 +156,56 @@ RULES: dict[str, Rule] = {
         + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc"),
         ("mujoco",),
     ),
-    # the MuJoCo harness sits on top (and never imports the sweep that runs it)
-    "amlip_qp.sim": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
+    # the MuJoCo side, one subpackage per job (SIM_JOBS, lowest first): each imports only jobs below it
+    "amlip_qp.sim": Rule((), HEAVY + ("numpy",)),
+    "amlip_qp.sim.world": _sim_job(
+        "amlip_qp.sim.world", ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.robots", "amlip_qp.codegen")
+    ),
+    # the measurement (the messages' Measurement and ImuReading); never the controller
+    "amlip_qp.sim.sensing": _sim_job(
+        "amlip_qp.sim.sensing",
+        ("amlip_qp.exceptions", "amlip_qp.profiles", "amlip_qp.messages"),
+        ("amlip_qp.control",),
+    ),
+    # the closed loop runs the controller
+    "amlip_qp.sim.loop": _sim_job(
+        "amlip_qp.sim.loop",
+        (
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.messages",
+            "amlip_qp.alip",
+            "amlip_qp.robots",
+            "amlip_qp.control",
+        ),
+    ),
+    # a scenario made a closed loop: the robot, a tracker, the controller, its estimator
+    "amlip_qp.sim.scenarios": _sim_job(
+        "amlip_qp.sim.scenarios",
+        (
+            "amlip_qp.exceptions",
+            "amlip_qp.profiles",
+            "amlip_qp.messages",
+            "amlip_qp.alip",
+            "amlip_qp.robots",
+            "amlip_qp.control",
+            "amlip_qp.estimation",
+        ),
+    ),
+    # a finished run's summary, figures and video: plain data and the terrain's shape, never the controller
+    "amlip_qp.sim.reports": _sim_job(
+        "amlip_qp.sim.reports",
+        ("amlip_qp.exceptions", "amlip_qp.alip"),
+        ("amlip_qp.control", "amlip_qp.sim.scenarios"),
+    ),
+    # the commands' experiments sit on top of the library (and never import the sweep that runs some of them)
+    "amlip_qp.experiments": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
     # the sweep runs walks: the harness, the walk parser of the CLI, the profiles
     "amlip_qp.sweep": Rule(
         (
             "amlip_qp.sweep",
             "amlip_qp.sim",
+            "amlip_qp.experiments",
             "amlip_qp.exceptions",
             "amlip_qp.output_paths",
             "amlip_qp.cli",
@@ -205,6 +291,96 @@ def test_nothing_imports_the_sweep_but_itself():
     assert not offenders
 
 
+def test_nothing_in_the_library_imports_the_experiments_or_the_command_line():
+    """The experiments, the sweep and the command line sit above the library: no library module imports them."""
+    offenders = [
+        f"{f.relative_to(PKG.parent)} imports {name}"
+        for unit, files in _units().items()
+        if not _matches(unit, ABOVE_THE_LIBRARY)
+        for f in files
+        for name in _imports(f)
+        if _matches(name, ABOVE_THE_LIBRARY)
+    ]
+    assert not offenders
+
+
+def _module_graph() -> dict[str, set[str]]:
+    """Module -> the amlip_qp modules it imports: top level, inside functions and under ``TYPE_CHECKING``.
+
+    ``from package import name`` counts as importing the module ``package.name`` when there is one,
+    else ``package`` itself.
+    """
+    modules = {_module_name(p): p for p in PKG.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        edges = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                edges.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                parts = package.split(".")
+                base = (
+                    ".".join(parts[: len(parts) - node.level + 1] + ([node.module] if node.module else []))
+                    if node.level
+                    else node.module or ""
+                )
+                edges.update(f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names)
+        graph[name] = {e for e in edges if e in modules and e != name}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import cycles of ``graph``: its strongly connected components of more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_module_import_cycle():
+    """Data flow one way: no two modules import each other, even lazily or for typing only."""
+    assert _cycles(_module_graph()) == []
+
+
+def test_the_cycle_check_finds_a_cycle(tmp_path, monkeypatch):
+    pkg = tmp_path / "amlip_qp"
+    (pkg / "sim").mkdir(parents=True)
+    (pkg / "sim" / "__init__.py").write_text("")
+    (pkg / "sim" / "a.py").write_text("from amlip_qp.sim import b\n")
+    (pkg / "sim" / "b.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from amlip_qp.sim.c import C\n"
+    )
+    (pkg / "sim" / "c.py").write_text("def f():\n    from .a import g\n")
+    (pkg / "sim" / "d.py").write_text("from amlip_qp.sim import a\n")
+    monkeypatch.setattr(sys.modules[__name__], "PKG", pkg)
+    assert _cycles(_module_graph()) == [["amlip_qp.sim.a", "amlip_qp.sim.b", "amlip_qp.sim.c"]]
+
+
 def test_the_check_catches_violations(tmp_path, monkeypatch):
     pkg = tmp_path / "amlip_qp"
     (pkg / "control" / "walking").mkdir(parents=True)
@@ -212,11 +388,16 @@ def test_the_check_catches_violations(tmp_path, monkeypatch):
     bad.write_text(
         "from amlip_qp.control.pbc.tracker import PBCTracker\n"
         "from . import gait\n"
-        "def f():\n    import mujoco\n    from amlip_qp.sim.harness import Simulation\n"
+        "def f():\n    import mujoco\n    from amlip_qp.sim.loop.harness import Simulation\n"
     )
     monkeypatch.setattr(sys.modules[__name__], "PKG", pkg)
     found = _imports(bad)
-    assert {"mujoco", "amlip_qp.sim.harness", "amlip_qp.control.pbc.tracker", "amlip_qp.control.walking.gait"} <= found
+    assert {
+        "mujoco",
+        "amlip_qp.sim.loop.harness",
+        "amlip_qp.control.pbc.tracker",
+        "amlip_qp.control.walking.gait",
+    } <= found
     offenders = _offenders("amlip_qp.control.walking", [bad])
     assert len(offenders) == 3 and not any("gait" in o for o in offenders)
 
@@ -245,7 +426,7 @@ def test_the_top_level_exports_are_lazy_and_from_the_allowed_modules():
     assert {"load_robot", "Robot", "WalkingController", "QPTracker", "PBCTracker", "Command", "Measurement"} <= set(
         modules
     )
-    assert modules["MujocoLoop"] == "amlip_qp.sim.mujoco_loop"
+    assert modules["MujocoLoop"] == "amlip_qp.sim.loop.mujoco_loop"
     assert all(_matches(m, RULES["amlip_qp"].may) for m in modules.values()), modules
 
 

@@ -18,10 +18,12 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim import factory
+from amlip_qp.sim.scenarios import factory
 
 #: A plant that lacks everything Cassie's controller needs.
 RABBIT_XML = str(MODELS_DIR / "rabbit.xml")
@@ -36,7 +38,7 @@ def no_simulation(monkeypatch):
     """Make every way of simulating (walk, compare, the benchmarks) or generating code fail the test."""
     from amlip_qp.codegen import bench as codegen_bench
     from amlip_qp.codegen import generate
-    from amlip_qp.sim import bench_ekf, bench_harness, compare
+    from amlip_qp.experiments import bench_ekf, bench_harness, compare
     from amlip_qp.sweep import bench as sweep_bench
 
     monkeypatch.setattr(factory, "build_simulation", _simulated)
@@ -46,7 +48,7 @@ def no_simulation(monkeypatch):
     from amlip_qp.control.mpc import bench as mpc_bench
 
     monkeypatch.setattr(mpc_bench, "run_benchmark", _simulated)
-    from amlip_qp.sim import bench_qp
+    from amlip_qp.experiments import bench_qp
 
     monkeypatch.setattr(bench_qp, "run", _simulated)
     monkeypatch.setattr(bench_qp, "format_report", _simulated)
@@ -293,7 +295,7 @@ def test_an_option_is_still_an_option_after_a_value_taking_flag(capsys):
 
 
 def test_commands_inside_the_bounds_pass_the_check():
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     for argv in (
@@ -323,14 +325,14 @@ def test_an_os_error_while_writing_after_the_run_exits_2(option, name, tmp_path,
     """A link to ``/dev/full`` opens, then every write fails (ENOSPC): the early check passes, the write does not."""
     path = tmp_path / name
     path.symlink_to("/dev/full")
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: ZeroTracker(robot))
     code, out, err = _main(["walk", "--robot", "rabbit", "--duration", "0.01", option, str(path)], capsys)
     assert code == 2
     assert err == f"amlip-qp: error: {option} {path}: writing failed (No space left on device); give a writable path\n"
 
 
 def test_any_other_os_error_exits_2_naming_the_path(monkeypatch, capsys):
-    from amlip_qp.sim import cli as sim_cli
+    from amlip_qp.experiments import walk as sim_cli
 
     def disk_full(args):
         raise OSError(28, "No space left on device", "/data/run.npz")

@@ -6,15 +6,17 @@ import mujoco
 
 from amlip_qp.cli import bounds as B
 from amlip_qp.cli import build_parser
+from amlip_qp.experiments import robustness
 from amlip_qp.profiles import CommandBounds, get_profile
-from amlip_qp.sim import factory, robustness, video
-from amlip_qp.sim.plant_modifiers import MIN_FRICTION
+from amlip_qp.sim.loop import run_types
+from amlip_qp.sim.reports import video
+from amlip_qp.sim.world.plant_modifiers import MIN_FRICTION
 
 
 def test_the_bounds_repeated_for_a_light_help_equal_the_librarys():
     assert B.MAX_BISECTION_ITERATIONS == robustness.MAX_BISECTION_ITERATIONS == 20
     assert B.MAX_VIDEO_FPS == video.MAX_VIDEO_FPS == 240.0 and video.MAX_GIF_FPS == 100.0
-    assert B.MIN_DURATION_S == factory.CONTROL_DT_S == 0.0005
+    assert B.MIN_DURATION_S == run_types.CONTROL_DT_S == 0.0005
     assert B.MAX_DURATION_S == CommandBounds.duration_max_s == 600.0
     for robot in ("cassie", "rabbit"):
         assert get_profile(robot).bounds.duration_max_s == B.MAX_DURATION_S

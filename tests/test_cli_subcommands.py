@@ -7,11 +7,13 @@ from amlip_qp.cli import subcommands as S
 
 
 def test_the_light_name_lists_match_the_heavy_modules():
-    from amlip_qp.sim import factory, sensors
+    from amlip_qp.control import registry
+    from amlip_qp.sim.scenarios import factory
+    from amlip_qp.sim.sensing import sensors
 
     assert S.SENSORS == sensors.SENSOR_MODELS
     assert S.ESTIMATORS == factory.ESTIMATORS
-    assert set(S.TRACKERS) == set(factory.TRACKER_MODULES)
+    assert set(S.TRACKERS) == set(registry.TRACKER_MODULES)
 
 
 def test_walk_and_compare_take_the_plant_options():

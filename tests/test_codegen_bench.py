@@ -12,8 +12,8 @@ PATHS = {"c-fast", "casadi-function", "numpy"}
 
 
 @pytest.fixture(autouse=True)
-def _private_cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("AMLIP_QP_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "amlip_cache"))
+def _shared_cache(shared_cache_dir, monkeypatch):
+    monkeypatch.setenv("AMLIP_QP_CACHE_DIR", str(shared_cache_dir))
 
 
 def _check_schema(result):

@@ -16,13 +16,8 @@ from codegen_cases import ROBOTS, SEEDS, assert_matches_reference, needs_cc, sam
 
 
 @pytest.fixture(scope="module")
-def cache_dir(tmp_path_factory):
-    return tmp_path_factory.mktemp("amlip_cache")
-
-
-@pytest.fixture(scope="module")
-def fast(cache_dir):
-    return Kernels(cache_dir=cache_dir)
+def fast(shared_cache_dir):
+    return Kernels(cache_dir=shared_cache_dir)
 
 
 @needs_cc
@@ -112,20 +107,20 @@ def test_two_fallback_instances_have_independent_buffers(tmp_path, monkeypatch):
 
 
 @needs_cc
-def test_missing_committed_sources_generate_into_the_cache(tmp_path, cache_dir, fast):
+def test_missing_committed_sources_generate_into_the_cache(tmp_path, shared_cache_dir, fast):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        k = Kernels(cache_dir=cache_dir, committed_dir=tmp_path / "absent")
+        k = Kernels(cache_dir=shared_cache_dir, committed_dir=tmp_path / "absent")
     assert k.backend == "c" and k.library_path == fast.library_path
 
 
 @needs_cc
-def test_stale_committed_sources_warn_and_use_fresh(tmp_path, cache_dir, fast):
+def test_stale_committed_sources_warn_and_use_fresh(tmp_path, shared_cache_dir, fast):
     generate.write_files(tmp_path)
     src = tmp_path / generate.SOURCE_FILE
     src.write_bytes(src.read_bytes() + b"/* stale */\n")
     with pytest.warns(CodegenStaleWarning, match="amlip_kernels.c"):
-        k = Kernels(cache_dir=cache_dir, committed_dir=tmp_path)
+        k = Kernels(cache_dir=shared_cache_dir, committed_dir=tmp_path)
     assert k.library_path == fast.library_path
 
 

@@ -15,11 +15,6 @@ from amlip_qp.paths import PACKAGE_DIR
 from codegen_cases import needs_cc
 
 
-@pytest.fixture(scope="module")
-def cache_dir(tmp_path_factory):
-    return tmp_path_factory.mktemp("amlip_cache")
-
-
 def test_cache_root_honours_env(tmp_path, monkeypatch):
     monkeypatch.setenv(runtime.CACHE_ENV, str(tmp_path / "c"))
     assert runtime.cache_root() == tmp_path / "c"
@@ -38,13 +33,13 @@ def test_cache_key_changes_with_source_compiler_and_flags():
 
 
 @needs_cc
-def test_changed_source_builds_a_new_library(cache_dir):
+def test_changed_source_builds_a_new_library(shared_cache_dir):
     src = generate.generate_files()[generate.SOURCE_FILE]
     compiler = runtime.find_compiler()
-    lib = runtime.build_library(src, compiler, cache_dir)
-    assert lib == runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=cache_dir)[0]
-    assert runtime.build_library(src, compiler, cache_dir) == lib  # cached
-    other = runtime.build_library(src + b"/* changed */\n", compiler, cache_dir)
+    lib = runtime.build_library(src, compiler, shared_cache_dir)
+    assert lib == runtime.compile_and_load(src, symbolic.KERNEL_NAMES, cache_dir=shared_cache_dir)[0]
+    assert runtime.build_library(src, compiler, shared_cache_dir) == lib  # cached
+    other = runtime.build_library(src + b"/* changed */\n", compiler, shared_cache_dir)
     assert other != lib and other.parent.name == runtime.cache_key(src + b"/* changed */\n", compiler)
     assert other.is_file() and (other.parent / generate.SOURCE_FILE).read_bytes().endswith(b"/* changed */\n")
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from alip_point_mass import OUTPUTS, REACH_M, G, H, M, T, Walk
-from amlip_qp.alip import Command
 from amlip_qp.control.mpc import make_mpc_planner
 from amlip_qp.control.mpc.bench import format_table, run_benchmark
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from codegen_cases import needs_cc
 
 COMMAND = Command(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, step_width_m=0.25)

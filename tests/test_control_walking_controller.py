@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 
-from amlip_qp.alip.messages import Command
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.walking.controller import WalkingController
-from amlip_qp.control.walking.estimator import Measurement
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command, Measurement, TrackerResult
 from amlip_qp.robots import RobotKinematics, load_robot
 
 

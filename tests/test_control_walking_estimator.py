@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip.kalman import AngularMomentumFilter
-from amlip_qp.control.walking.estimator import Estimator, Measurement
+from amlip_qp.control.walking.estimator import Estimator
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Measurement
 from amlip_qp.robots import RobotKinematics, load_robot
 
 

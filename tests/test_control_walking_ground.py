@@ -77,7 +77,7 @@ def test_the_controller_plans_for_its_ground_mode():
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
     from amlip_qp.robots import RobotKinematics
-    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.scenarios.factory import load
 
     robot = load("cassie")
 
@@ -104,9 +104,9 @@ def test_aware_pitch_beside_a_stair_edge_is_the_treads():
 
 
 def test_a_clearance_too_high_for_the_step_is_lowered_to_keep_the_swing_apex_below_the_com():
-    from amlip_qp.alip.messages import Command, TerrainPrediction
     from amlip_qp.alip.outputs import check_ground
     from amlip_qp.control.walking.ground import APEX_MARGIN_M, fit_clearance
+    from amlip_qp.messages import Command, TerrainPrediction
 
     cmd = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.7)
     up = TerrainPrediction(dz_next_m=0.2, dz_sw_m=0.2)
@@ -144,7 +144,7 @@ def test_only_the_aware_mode_has_a_foothold_hook():
 
 
 def test_a_step_over_an_edge_gets_the_rise_as_extra_clearance():
-    from amlip_qp.alip.messages import Command
+    from amlip_qp.messages import Command
 
     cmd = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.1)
     g = GroundPredictor("aware", stairs_up)

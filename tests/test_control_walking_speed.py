@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from amlip_qp.alip.messages import Command
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 
 
 def test_integral_removes_a_constant_bias_geometrically():

@@ -10,8 +10,8 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.qp.solver import ProxQPSolver
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
-from amlip_qp.sim.harness import Simulation
-from amlip_qp.sim.scenarios import SCENARIOS
+from amlip_qp.sim.loop.harness import Simulation
+from amlip_qp.sim.scenarios.named import SCENARIOS
 from robot_states import tuned_config
 
 CASSIE_CONFIG = tuned_config("cassie", "qp")
@@ -149,8 +149,8 @@ def test_nan_state_through_the_controller_never_gives_nan_torques():
 
 
 def test_bench_reports_every_solver_on_recorded_problems(walk):
-    from amlip_qp.sim import qp_solver_list
-    from amlip_qp.sim.bench_qp import bench_solvers, format_report
+    from amlip_qp.experiments import qp_solver_list
+    from amlip_qp.experiments.bench_qp import bench_solvers, format_report
 
     _, tracker, _ = walk
     problems = [p for p, _ in tracker.recorded[::20]]

@@ -51,7 +51,7 @@ GUIDES = (
 #: Top-level folders of the repository whose paths the guides name.
 REPO_FOLDERS = ("amlip_qp", "tests", "docs", "examples", "models", ".ci")
 #: Subpackages that the guides name relative to ``amlip_qp/`` (``control/wbc/``, ``qp/problem.py``).
-PACKAGE_FOLDERS = ("alip", "codegen", "control", "qp", "robots", "sim")
+PACKAGE_FOLDERS = ("alip", "codegen", "control", "experiments", "qp", "robots", "sim")
 
 FUNCTION_REF = re.compile(r"`(amlip_qp(?:\.\w+)+):([\w.]+)`")
 TEST_REF = re.compile(r"(tests/\w+\.py)::(\w+)")
@@ -352,7 +352,7 @@ def profile_keys(tmp_path: Path) -> dict[str, set[str]]:
     from amlip_qp.exceptions import InputError
     from amlip_qp.paths import MODELS_DIR
     from amlip_qp.profiles import bundled_names, read_profile
-    from amlip_qp.sim.scenario_tables import profile_scenarios
+    from amlip_qp.sim.scenarios.scenario_tables import profile_scenarios
 
     found: dict[str, set[str]] = {}
     for name in bundled_names():

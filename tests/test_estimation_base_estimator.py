@@ -4,11 +4,11 @@ IMU and the leg kinematics (standing still, divergence, determinism, bad input).
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.estimator import Measurement
-from amlip_qp.estimation import ImuReading, TruthBaseEstimator, make_base_estimator
+from amlip_qp.estimation import TruthBaseEstimator, make_base_estimator
 from amlip_qp.estimation.base_estimator import quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.estimation.invariant_ekf import so3_exp
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading, Measurement
 from amlip_qp.robots import load_robot
 
 IMU = [0.03, 0.0, 0.09]

@@ -21,9 +21,9 @@ pytestmark = pytest.mark.slow
 
 @pytest.fixture(scope="module")
 def summary() -> dict:
-    from amlip_qp.sim.factory import run_scenario
-    from amlip_qp.sim.scenarios import Scenario, SpeedProfile, check_scenario
-    from amlip_qp.sim.summary import summarize
+    from amlip_qp.sim.reports.summary import summarize
+    from amlip_qp.sim.scenarios.factory import run_scenario
+    from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile, check_scenario
 
     scenario = Scenario("custom", "cassie", 20.0).with_(vx=SpeedProfile.constant(1.0))
     check_scenario(scenario)

@@ -5,9 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.estimator import ImuReading as Reexported
-from amlip_qp.control.walking.estimator import Measurement
-from amlip_qp.estimation.imu import ImuReading
+from amlip_qp.messages import ImuReading, Measurement
+from amlip_qp.messages import ImuReading as Reexported
 
 
 def test_an_imu_reading_is_frozen_and_rides_in_the_measurement():

@@ -6,16 +6,16 @@ pelvis."""
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.estimator import Measurement
-from amlip_qp.estimation import ImuReading, make_base_estimator
+from amlip_qp.estimation import make_base_estimator
 from amlip_qp.estimation.imu_to_base import ImuToBase
 from amlip_qp.estimation.rotations import quat_wxyz_to_rot, quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading, Measurement
 from amlip_qp.profiles import ImuMount
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.state import qvel_to_v
-from amlip_qp.sim.factory import build_simulation
-from amlip_qp.sim.scenarios import get_scenario
+from amlip_qp.sim.scenarios.factory import build_simulation
+from amlip_qp.sim.scenarios.named import get_scenario
 from imu_cases import (
     G1_PELVIS_IMU_M,
     G1_TORSO_IMU_M,

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from amlip_qp.cli import main
-from amlip_qp.sim import summary
+from amlip_qp.sim.reports import summary
 
 REPO = Path(__file__).resolve().parents[1]
 #: Summary fields that measure the machine, not the walk.

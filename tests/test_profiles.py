@@ -14,7 +14,7 @@ from amlip_qp.profiles import (
     get_profile,
 )
 from amlip_qp.robots import OutputMap, load_robot
-from amlip_qp.sim.scenarios import SCENARIOS
+from amlip_qp.sim.scenarios.named import SCENARIOS
 
 
 def test_registry_names_match_their_profiles_and_model_files_exist():

@@ -18,7 +18,7 @@ from amlip_qp.profiles import VerifiedEnvelope, get_profile, read_profile
 
 
 def _scenario(argv):
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     return scenario_from_args(cli.build_parser().parse_args(["walk", *argv]))
 
@@ -117,8 +117,8 @@ def test_a_sweep_warns_once_for_all_its_unverified_cells(tmp_path, capsys):
 
 
 def test_a_comparison_warns_once_for_the_ramps_past_the_verified_envelope():
-    from amlip_qp.sim import compare
-    from amlip_qp.sim.robustness import CompareSettings
+    from amlip_qp.experiments import compare
+    from amlip_qp.experiments.robustness import CompareSettings
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

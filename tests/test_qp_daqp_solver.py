@@ -6,12 +6,12 @@ import pytest
 
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.experiments.bench_qp import record_walk
 from amlip_qp.qp import DAQPSolver, ProxQPSolver
 from amlip_qp.robots import load_robot
-from amlip_qp.sim.bench_qp import record_walk
-from amlip_qp.sim.factory import build_simulation
-from amlip_qp.sim.scenarios import get_scenario
-from amlip_qp.sim.summary import summarize
+from amlip_qp.sim.reports.summary import summarize
+from amlip_qp.sim.scenarios.factory import build_simulation
+from amlip_qp.sim.scenarios.named import get_scenario
 from test_qp_problem import random_problem
 
 

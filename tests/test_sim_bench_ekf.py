@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import bench_ekf
+from amlip_qp.experiments import bench_ekf
 
 
 def test_the_report_times_the_ekf_inside_each_tick_and_its_ratio_to_the_rest():

@@ -9,7 +9,7 @@ import pytest
 
 from amlip_qp import cli
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import bench_harness
+from amlip_qp.experiments import bench_harness
 
 
 def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():

@@ -1,21 +1,21 @@
-"""amlip_qp.sim.bench_qp (`amlip-qp bench qp`): recording a walk's QPs, every solver's answer against
+"""amlip_qp.experiments.bench_qp (`amlip-qp bench qp`): recording a walk's QPs, every solver's answer against
 ProxQP's, the report, a solver that is not installed, bad arguments."""
 
 import numpy as np
 import pytest
 
 from amlip_qp.cli import main
-from amlip_qp.sim import qp_solver_list
-from amlip_qp.sim.bench_qp import (
+from amlip_qp.experiments import qp_solver_list
+from amlip_qp.experiments.bench_qp import (
     bench_solvers,
     format_report,
     record_walk,
     reference_solutions,
     tracker_solver_options,
 )
-from amlip_qp.sim.bench_qp_report import agreement
-from amlip_qp.sim.qp_runners_sparse import QPSolversRunner
-from amlip_qp.sim.qp_solver_list import SolverSpec
+from amlip_qp.experiments.bench_qp_report import agreement
+from amlip_qp.experiments.qp_runners_sparse import QPSolversRunner
+from amlip_qp.experiments.qp_solver_list import SolverSpec
 
 #: The solvers of the `test` extra (pyproject.toml), each driven through its own interface.
 TEST_EXTRA_SOLVERS = "proxsuite-init,daqp-hot,daqp-cold,piqp,clarabel,qpalm,quadprog,qpmad,osqp"
@@ -61,7 +61,7 @@ def test_record_walk_keeps_one_distinct_problem_per_solved_tick(walk):
 
 def test_the_bench_times_the_solver_with_the_trackers_options():
     from amlip_qp.control.wbc.tracker import QPTracker
-    from amlip_qp.sim.factory import load
+    from amlip_qp.sim.scenarios.factory import load
 
     options = tracker_solver_options()
     assert options == QPTracker(load("cassie"), qp_solver="proxqp").solver.options

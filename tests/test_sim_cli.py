@@ -15,10 +15,12 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import factory
-from amlip_qp.sim.summary import TIMING_FIELDS
+from amlip_qp.messages import TrackerResult
+from amlip_qp.sim.reports.summary import TIMING_FIELDS
+from amlip_qp.sim.scenarios import factory
 
 SUMMARY_KEYS = {
     "robot", "tracker", "scenario", "seed", "noise", "duration_s", "sim_time_s", "fell", "fall_time_s", "steps",
@@ -44,8 +46,8 @@ class ZeroTracker(Tracker):
 @pytest.fixture
 def stand_in(monkeypatch):
     """Every tracker name builds the zero-torque stand-in."""
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: ZeroTracker(robot))
-    monkeypatch.setattr(factory, "tracker_class", lambda name: ZeroTracker)
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: ZeroTracker(robot))
+    monkeypatch.setattr(registry, "tracker_class", lambda name: ZeroTracker)
 
 
 def _run(argv, capsys):
@@ -184,7 +186,7 @@ def test_walk_video_gif(tmp_path, capsys, stand_in):
 
 
 def test_scenario_options_override(capsys, stand_in):
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     args = parser.parse_args(
@@ -201,9 +203,9 @@ def test_scenario_options_override(capsys, stand_in):
 
 
 def test_command_shaping_options_reach_the_controller():
+    from amlip_qp.experiments.walk import scenario_from_args
     from amlip_qp.profiles import NO_SHAPING, get_profile
-    from amlip_qp.sim.cli import scenario_from_args
-    from amlip_qp.sim.factory import build_simulation
+    from amlip_qp.sim.scenarios.factory import build_simulation
 
     parser = cli.build_parser()
     assert scenario_from_args(parser.parse_args(["walk", "--robot", "rabbit"])).shaping is None  # the profile's
@@ -256,8 +258,8 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
             super().__init__(robot)
             warnings.warn("stand-in: no C compiler", CodegenFallbackWarning, stacklevel=2)
 
-    monkeypatch.setattr(factory, "make_tracker", lambda name, robot: FallbackTracker(robot))
-    monkeypatch.setattr(factory, "tracker_class", lambda name: FallbackTracker)
+    monkeypatch.setattr(registry, "make_tracker", lambda name, robot: FallbackTracker(robot))
+    monkeypatch.setattr(registry, "tracker_class", lambda name: FallbackTracker)
     argv = [
         "compare",
         "--quick",
@@ -277,18 +279,18 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
 
 
 def test_factory_names_a_missing_tracker(monkeypatch):
-    monkeypatch.setitem(factory.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
+    monkeypatch.setitem(registry.TRACKER_MODULES, "pbc", "amlip_qp.control.no_such_module")
     with pytest.raises(InputError, match="'pbc' tracker is not available"):
-        factory.tracker_class("pbc")
+        registry.tracker_class("pbc")
     with pytest.raises(InputError, match="unknown tracker"):
-        factory.tracker_class("lqr")
+        registry.tracker_class("lqr")
 
 
 @pytest.mark.parametrize("name", ["pbc", "qp"])
 def test_real_trackers_are_wired(name):
-    cls = factory.tracker_class(name)
+    cls = registry.tracker_class(name)
     assert cls.name == name
-    from amlip_qp.sim.scenarios import Scenario
+    from amlip_qp.sim.scenarios.scenarios import Scenario
 
     res = factory.run_scenario(Scenario("tiny", "rabbit", 0.01), name)
     assert res.tracker == name and res.log["t"].size == 20
@@ -296,7 +298,7 @@ def test_real_trackers_are_wired(name):
 
 def test_clearance_option_reaches_the_planner_command_and_is_bounded():
     from amlip_qp.exceptions import InputError
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     sc = scenario_from_args(parser.parse_args(["walk", "--vx", "0.5"]))
@@ -312,8 +314,8 @@ def test_clearance_option_reaches_the_planner_command_and_is_bounded():
 
 
 def test_compare_takes_the_terrain_aware_and_clearance_settings():
-    from amlip_qp.sim.cli import setting_from_args
-    from amlip_qp.sim.run_types import PlantSetting
+    from amlip_qp.experiments.walk import setting_from_args
+    from amlip_qp.sim.loop.run_types import PlantSetting
 
     parser = cli.build_parser()
     args = parser.parse_args(["compare", "--terrain", "slope:10", "--terrain-aware", "--clearance", "0.15"])
@@ -323,7 +325,7 @@ def test_compare_takes_the_terrain_aware_and_clearance_settings():
 
 
 def test_no_terrain_aware_turns_an_aware_scenario_blind_and_the_default_keeps_it():
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
 
     parser = cli.build_parser()
     stairs = ["walk", "--scenario", "cassie-stairs-10cm"]

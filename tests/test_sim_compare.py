@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from amlip_qp.sim.compare import format_table
+from amlip_qp.experiments.compare import format_table
 
 
 def test_table_formats_rows():
@@ -35,8 +35,9 @@ def test_compare_table_marks_values_at_the_top_of_the_search():
 
 
 def test_generated_code_is_prepared_once_per_robot_and_tracker(monkeypatch):
-    from amlip_qp.sim import compare, factory
-    from amlip_qp.sim.robustness import CompareSettings
+    from amlip_qp.experiments import compare
+    from amlip_qp.experiments.robustness import CompareSettings
+    from amlip_qp.sim.scenarios import factory
 
     built = []
     monkeypatch.setattr(factory, "build_simulation", lambda scenario, tracker: built.append((scenario.robot, tracker)))
@@ -47,8 +48,8 @@ def test_generated_code_is_prepared_once_per_robot_and_tracker(monkeypatch):
 
 
 def test_a_tracker_a_profile_says_cannot_run_is_skipped_with_its_reason(tmp_path):
+    from amlip_qp.experiments.compare import unsupported_pairs
     from amlip_qp.paths import MODELS_DIR
-    from amlip_qp.sim.compare import unsupported_pairs
 
     text = (MODELS_DIR / "h1.toml").read_text()
     text = text.replace('file = "unitree_h1/h1.xml"', f'file = "{MODELS_DIR / "unitree_h1" / "h1.xml"}"')

@@ -1,4 +1,4 @@
-"""Tests of amlip_qp.sim.compiled_io: the generated-C state read equals the reference bit for bit."""
+"""Tests of amlip_qp.sim.world.compiled_io: the generated-C state read equals the reference bit for bit."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.state_reader import StateReader
-from amlip_qp.sim.compiled_io import CompiledStateRead
+from amlip_qp.sim.world.compiled_io import CompiledStateRead
 from robot_states import random_mj_state
 
 
@@ -102,9 +102,9 @@ def test_the_harness_walks_the_same_with_and_without_the_generated_c(monkeypatch
     """0.5 s of the QP walk: every logged signal and the controller's steps are bit-identical whether the
     harness reads and writes with the generated C (reading after each tick's plant steps) or with the
     Python reader and the NumPy writer."""
-    from amlip_qp.sim.factory import build_simulation
-    from amlip_qp.sim.plant import Plant
-    from amlip_qp.sim.scenarios import get_scenario
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import get_scenario
+    from amlip_qp.sim.world.plant import Plant
 
     sc = get_scenario("cassie-1mps")
     used = []
@@ -131,7 +131,7 @@ def test_the_harness_walks_the_same_with_and_without_the_generated_c(monkeypatch
 def test_the_compiled_write_is_numpys_clip_bit_for_bit_and_leaves_nan_to_it():
     """Torques over 6 decades, inside and beyond the control range, both signs: the controls equal the
     NumPy writer's; a NaN torque is written by the NumPy writer (NaN stays NaN)."""
-    from amlip_qp.sim.compiled_io import CompiledCtrlWrite
+    from amlip_qp.sim.world.compiled_io import CompiledCtrlWrite
 
     rng = np.random.default_rng(9)
     nu = 10
@@ -166,8 +166,8 @@ def test_the_compiled_write_is_numpys_clip_bit_for_bit_and_leaves_nan_to_it():
 
 
 def test_without_a_compiler_the_plant_reads_and_writes_in_python(monkeypatch):
-    from amlip_qp.sim.factory import load
-    from amlip_qp.sim.plant import load_plant
+    from amlip_qp.sim.scenarios.factory import load
+    from amlip_qp.sim.world.plant_loader import load_plant
 
     plant = load_plant("cassie", load("cassie"))
     data = plant.new_data()

@@ -15,12 +15,13 @@ import numpy as np
 import pytest
 
 from amlip_qp import cli
+from amlip_qp.experiments import conformance as C
+from amlip_qp.experiments import conformance_cli
+from amlip_qp.experiments import conformance_control as CC
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.profiles import bundled_names, get_profile
 from amlip_qp.robots import OutputMap
-from amlip_qp.sim import conformance as C
-from amlip_qp.sim import conformance_control as CC
-from amlip_qp.sim import factory
+from amlip_qp.sim.scenarios import factory
 
 #: Every check that runs without the walk, in order.
 MODEL_AND_TICK_NAMES = [name for name, _ in C.MODEL_CHECKS] + [CC.tick_name(t) for t in CC.TICK_TRACKERS]
@@ -29,7 +30,7 @@ MODEL_AND_TICK_NAMES = [name for name, _ in C.MODEL_CHECKS] + [CC.tick_name(t) f
 @pytest.fixture(scope="module")
 def bundled_results():
     """Robot name -> check name -> result, for every bundled robot, without the walk."""
-    return {name: {r.name: r for r in C.conformance_checks(name, walk=False)} for name in bundled_names()}
+    return {name: {r.name: r for r in conformance_cli.conformance_checks(name, walk=False)} for name in bundled_names()}
 
 
 def _main(argv, capsys):
@@ -166,7 +167,7 @@ def test_straight_legs_fail_the_rank_check(capsys, tmp_path):
     lengthen and both feet are under the hips, so two outputs lose their rank."""
     stand = '[model.stand]\nbase_pos_m = [0.0, 0.0, 0.0]\n[model.stand.joints]\n"root-z" = 0.82\n\n[roles]'
     profile = _profile_copy(tmp_path, "rabbit", {"[roles]": stand})
-    results = {r.name: r for r in C.conformance_checks(profile, walk=False)}
+    results = {r.name: r for r in conformance_cli.conformance_checks(profile, walk=False)}
     rank = results[C.RANK_NAME]
     assert rank.status == C.FAIL and rank.value < 1e-9 and "rank 2 of 4" in rank.detail
     for name in (C.MASS_NAME, C.SITES_NAME, C.BODIES_NAME, C.ROLES_NAME, C.FLOOR_NAME):
@@ -219,7 +220,7 @@ def _weak_rabbit(tmp_path) -> str:
 def test_tiny_torque_limits_fail_the_pbc_tick(tmp_path):
     """The PBC asks for the torques the stand needs; the QP keeps within the limits (at them)."""
     profile = _weak_rabbit(tmp_path)
-    results = {r.name: r for r in C.conformance_checks(profile, walk=False)}
+    results = {r.name: r for r in conformance_cli.conformance_checks(profile, walk=False)}
     pbc = results[CC.tick_name("pbc")]
     assert pbc.status == C.FAIL and pbc.value > 10.0
     assert re.search(r"needs [-\d.]+ N m, outside its limits \[-1, 1\] N m", pbc.detail)

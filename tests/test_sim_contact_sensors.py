@@ -6,9 +6,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from amlip_qp.sim import contact_sensors, factory
-from amlip_qp.sim.contact_sensors import CONTACT_SLOTS, contact_sensor_name, contact_spec_edit, sensor_switcher
-from amlip_qp.sim.plant import Plant, load_plant
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.world import contact_sensors
+from amlip_qp.sim.world.contact_sensors import CONTACT_SLOTS, contact_sensor_name, contact_spec_edit, sensor_switcher
+from amlip_qp.sim.world.plant import Plant
+from amlip_qp.sim.world.plant_loader import load_plant
 from plant_cases import CASSIE_XML
 
 THRESHOLDS = (-1.0, 0.0, 5.0, 20.0, 100.0)

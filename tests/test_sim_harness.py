@@ -11,11 +11,12 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import factory
-from amlip_qp.sim.run_types import Push, SensorNoise
-from amlip_qp.sim.scenarios import Scenario
+from amlip_qp.messages import TrackerResult
+from amlip_qp.sim.loop.run_types import Push, SensorNoise
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario
 
 
 class ZeroTracker(Tracker):
@@ -146,8 +147,8 @@ def test_a_diverging_simulation_is_a_fall_not_a_restart():
 
 def _controller_base_log(sim, duration_s, **run_options):
     """A run and the world base state of the controller's kinematics after each tick (as the log's ``*_est``)."""
-    from amlip_qp.sim.run_log import world_base
-    from amlip_qp.sim.sensors import base_indices
+    from amlip_qp.sim.loop.run_log import world_base
+    from amlip_qp.sim.sensing.sensors import base_indices
 
     rows, kin, (bq, bv) = [], sim.controller.kin, base_indices(sim.robot)
 
@@ -204,7 +205,7 @@ def test_the_control_filter_sees_every_tick_s_controls_before_the_plant():
 
 def test_robot_sensors_and_a_plant_of_another_layout(tmp_path):
     """A slide+ball-floated plant with the robot sensors: the robot stands, the truth reaches the controller."""
-    from amlip_qp.sim.plant import load_plant
+    from amlip_qp.sim.world.plant_loader import load_plant
     from plant_cases import slide_ball_spec, write_plant
 
     robot = factory.load("cassie")
@@ -220,7 +221,7 @@ def test_robot_sensors_and_a_plant_of_another_layout(tmp_path):
 
 
 def test_without_the_truth_the_measurement_has_no_base():
-    from amlip_qp.sim.harness import Simulation
+    from amlip_qp.sim.loop.harness import Simulation
 
     sim = _sim("cassie")
     blind = Simulation(sim.robot, sim.controller, sim.command_fn, plant=sim.plant, sensors="robot", estimator="ekf")
@@ -251,7 +252,8 @@ def test_plant_edits_and_the_control_filter_reach_the_plant_through_the_factory(
 
 @pytest.mark.parametrize("robot", ["cassie", "rabbit"])
 def test_the_summary_log_walks_the_same_trajectory_and_keeps_what_the_summary_reads(robot):
-    from amlip_qp.sim.summary import SUMMARY_LOG_KEYS, TIMING_FIELDS, summarize, to_jsonable
+    from amlip_qp.sim.loop.run_log import SUMMARY_LOG_KEYS
+    from amlip_qp.sim.reports.summary import TIMING_FIELDS, summarize, to_jsonable
 
     runs = {}
     for mode in ("full", "summary"):
@@ -296,8 +298,8 @@ def test_a_fall_is_found_at_the_same_tick_in_both_log_modes():
 
 @pytest.mark.slow
 def test_a_qp_walk_is_the_same_in_both_log_modes():
-    from amlip_qp.sim.scenarios import get_scenario
-    from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
+    from amlip_qp.sim.loop.run_log import SUMMARY_LOG_KEYS
+    from amlip_qp.sim.scenarios.named import get_scenario
 
     runs = {}
     for mode in ("full", "summary"):
@@ -310,8 +312,8 @@ def test_a_qp_walk_is_the_same_in_both_log_modes():
 
 
 def test_the_fall_check_measures_the_base_height_above_the_ground_under_it():
-    from amlip_qp.sim.harness import Simulation
-    from amlip_qp.sim.run_types import PlantSetting
+    from amlip_qp.sim.loop.harness import Simulation
+    from amlip_qp.sim.loop.run_types import PlantSetting
 
     # a terrain reaches the harness through the factory: its analytic height
     sc = Scenario("test", "cassie", 0.01, setting=PlantSetting(terrain="slope:10"))
@@ -332,7 +334,7 @@ def test_the_fall_check_measures_the_base_height_above_the_ground_under_it():
 
 
 def test_the_tilt_fall_is_the_first_tick_whose_tilt_is_over_the_limit_for_any_limit():
-    from amlip_qp.sim.run_types import FallCriteria
+    from amlip_qp.sim.loop.run_types import FallCriteria
 
     def knocked_over(max_tilt_rad):
         sim = _sim("cassie", duration=0.4, pushes=[Push(0.0, (0.0, 2000.0, 0.0), 0.1)])
@@ -352,7 +354,7 @@ def test_the_tilt_fall_is_the_first_tick_whose_tilt_is_over_the_limit_for_any_li
 @pytest.mark.parametrize("plant_step_s", [0.0005, 0.00025, 0.0005 / 3])
 def test_the_clock_is_mujocos_at_every_tick_with_one_or_more_plant_steps_a_tick(plant_step_s):
     """The harness counts MuJoCo's clock (``time += timestep`` a step) instead of reading it: the same floats."""
-    from amlip_qp.sim.plant import load_plant
+    from amlip_qp.sim.world.plant_loader import load_plant
 
     robot = factory.load("cassie")
     plant = load_plant("cassie", robot, edits=[lambda spec: setattr(spec.option, "timestep", plant_step_s)])

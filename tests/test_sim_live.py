@@ -1,4 +1,4 @@
-"""Tests of amlip_qp.sim.live and amlip_qp.sim.live_keys: the keys' command, the live loop without a window."""
+"""Tests of amlip_qp.sim.loop.live and live_keys: the keys' command, the live loop without a window."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import pytest
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import get_profile
-from amlip_qp.sim import factory
-from amlip_qp.sim.live import LiveCommand, LiveLoop
-from amlip_qp.sim.live_keys import ACTIONS, BINDINGS, CODE_OF_NAME, VX_STEP_MPS, keys_help, parse_key_script
-from amlip_qp.sim.run_types import FallCriteria
-from amlip_qp.sim.scenarios import Scenario
+from amlip_qp.sim.loop.live import LiveCommand, LiveLoop
+from amlip_qp.sim.loop.live_keys import ACTIONS, BINDINGS, CODE_OF_NAME, VX_STEP_MPS, keys_help, parse_key_script
+from amlip_qp.sim.loop.run_types import FallCriteria
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario
 
 UP, DOWN, LEFT, RIGHT = (CODE_OF_NAME[k] for k in ("up", "down", "left", "right"))
 HOME, END, ENTER, SPACE, BACKSPACE = (CODE_OF_NAME[k] for k in ("home", "end", "enter", "space", "backspace"))

@@ -14,13 +14,15 @@ import numpy as np
 import pytest
 
 import amlip_qp
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control import registry
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError, PlantMismatchError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.robots import RobotKinematics
-from amlip_qp.sim import factory
-from amlip_qp.sim.scenarios import Scenario
-from amlip_qp.sim.speed_profile import SpeedProfile
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario
+from amlip_qp.sim.scenarios.speed_profile import SpeedProfile
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +64,7 @@ def test_on_the_robots_own_model_the_loop_walks_the_harness_walk_bit_for_bit(rob
     result = sim.run(scenario.duration_s, log="summary")
     robot = sim.robot
     data = robot.new_mj_data("stand")
-    loop = amlip_qp.MujocoLoop(robot, factory.make_tracker(tracker, robot), robot.mj_model, data)
+    loop = amlip_qp.MujocoLoop(robot, registry.make_tracker(tracker, robot), robot.mj_model, data)
     command = loop.command(vx_mps=0.5)
     assert command == scenario.command(0.0)  # the profile's gait
     taus = []
@@ -91,7 +93,7 @@ def test_a_model_with_its_actuators_in_another_order_walks_the_same(cassie):
         data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, data, mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "stand"))
         mujoco.mj_forward(m, data)
-        loop = amlip_qp.MujocoLoop(cassie, factory.make_tracker("qp", cassie), m, data)
+        loop = amlip_qp.MujocoLoop(cassie, registry.make_tracker("qp", cassie), m, data)
         runs.append(_walk(loop, loop.command(vx_mps=0.5), 700))
         assert len(loop.controller.steps) == 1  # a touchdown at about 0.3 s
         lo, hi = cassie.actuated.ctrl_range.T
@@ -144,7 +146,7 @@ def test_a_coarser_timestep_takes_whole_steps_per_tick(rabbit):
     model.opt.timestep = 0.00025
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, "stand"))
-    loop = amlip_qp.MujocoLoop(rabbit, factory.make_tracker("pbc", rabbit), model, data)
+    loop = amlip_qp.MujocoLoop(rabbit, registry.make_tracker("pbc", rabbit), model, data)
     assert loop.substeps == 2
     loop.step(loop.command())
     mujoco.mj_step(model, data)  # one step of two: half a control period
@@ -156,7 +158,7 @@ def test_a_coarser_timestep_takes_whole_steps_per_tick(rabbit):
 
 def test_each_call_is_one_tick_later_and_reset_starts_over(rabbit):
     data = rabbit.new_mj_data("stand")
-    loop = amlip_qp.MujocoLoop(rabbit, factory.make_tracker("pbc", rabbit), rabbit.mj_model, data)
+    loop = amlip_qp.MujocoLoop(rabbit, registry.make_tracker("pbc", rabbit), rabbit.mj_model, data)
     command = loop.command(vx_mps=0.3)
     _walk(loop, command, 800)
     assert len(loop.controller.steps) >= 1
@@ -196,7 +198,7 @@ def test_a_robot_without_a_profile_needs_its_own_command(rabbit, tmp_path):
     copy.write_text((MODELS_DIR / "rabbit.xml").read_text())
     bare = amlip_qp.load_robot(copy)
     assert bare.profile is None
-    loop = amlip_qp.MujocoLoop(bare, factory.make_tracker("pbc", bare), bare.mj_model, bare.new_mj_data("stand"))
+    loop = amlip_qp.MujocoLoop(bare, registry.make_tracker("pbc", bare), bare.mj_model, bare.new_mj_data("stand"))
     with pytest.raises(InputError, match="rabbit has no profile and so no gait: make the Command yourself"):
         loop.command(vx_mps=0.5)
     gait = rabbit.profile.gait

@@ -1,4 +1,4 @@
-"""MuJoCo's step time alone on a fixed walking state (amlip_qp.sim.mujoco_yardstick)."""
+"""MuJoCo's step time alone on a fixed walking state (amlip_qp.experiments.mujoco_yardstick)."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from amlip_qp.sim import mujoco_yardstick
-from amlip_qp.sim.factory import build_simulation
-from amlip_qp.sim.scenarios import get_scenario
+from amlip_qp.experiments import mujoco_yardstick
+from amlip_qp.sim.scenarios.factory import build_simulation
+from amlip_qp.sim.scenarios.named import get_scenario
 
 
 def test_the_snapshot_is_a_copy_of_the_state_after_the_walks_last_step():

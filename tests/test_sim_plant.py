@@ -13,9 +13,10 @@ import pytest
 
 from amlip_qp.exceptions import InputError, ModelFileError, PlantMismatchError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim import factory
-from amlip_qp.sim.plant import Plant, load_plant
-from amlip_qp.sim.sensors import IMU_SITE
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.world.imu_site import IMU_SITE
+from amlip_qp.sim.world.plant import Plant
+from amlip_qp.sim.world.plant_loader import load_plant
 from plant_cases import CASSIE_XML, extra_joint_spec, slide_ball_spec, write_plant
 
 

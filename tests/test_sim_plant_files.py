@@ -9,8 +9,8 @@ import pytest
 
 from amlip_qp.exceptions import InputError, ModelFileError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim import factory
-from amlip_qp.sim.plant_files import plant_files, resolve_plant_source
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.world.plant_files import plant_files, resolve_plant_source
 
 
 @pytest.fixture(scope="module")

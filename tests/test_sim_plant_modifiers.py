@@ -1,4 +1,4 @@
-"""Tests of amlip_qp/sim/plant_modifiers.py: each modifier's physics on compiled Cassie and Rabbit plants."""
+"""Tests of amlip_qp/sim/world/plant_modifiers.py: each modifier's physics on compiled Cassie and Rabbit plants."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim.plant_modifiers import (
+from amlip_qp.sim.world.plant_modifiers import (
     PAYLOAD_BODY,
     ActuatorDelay,
     FrictionEdit,

@@ -1,4 +1,4 @@
-"""amlip_qp/sim/plant_start.py: a plant without a ``stand`` keyframe starts from the controller's stand, loops closed.
+"""sim/world/plant_start.py: a plant without a ``stand`` keyframe starts from the controller's stand, loops closed.
 
 The bundled closed-chain Cassie, copied with its keyframe removed, is the
 main case: its generator made its keyframe the same way (cassie.xml's stand,
@@ -17,12 +17,12 @@ import pytest
 from amlip_qp import cli
 from amlip_qp.exceptions import InputError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim import factory
-from amlip_qp.sim.plant import load_plant
-from amlip_qp.sim.plant_start import SETTLED_TOL, STAND_KEYFRAME, equality_residual, stand_qpos
-from amlip_qp.sim.run_types import PlantSetting
-from amlip_qp.sim.scenarios import Scenario, SpeedProfile
-from amlip_qp.sim.terrain import parse_terrain, terrain_edit
+from amlip_qp.sim.loop.run_types import PlantSetting
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile
+from amlip_qp.sim.world.plant_loader import load_plant
+from amlip_qp.sim.world.plant_start import SETTLED_TOL, STAND_KEYFRAME, equality_residual, stand_qpos
+from amlip_qp.sim.world.terrain import parse_terrain, terrain_edit
 
 CLOSED_CHAIN = MODELS_DIR / "cassie-closed-chain.xml"
 SIDES = ("left", "right")

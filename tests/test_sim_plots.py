@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import plots
+from amlip_qp.sim.reports import plots
 
 
 def _rows():
@@ -76,8 +76,8 @@ def test_comparison_figure_writes_the_file_and_checks_its_suffix(tmp_path):
 def _walk_result(terrain: str):
     """A synthetic 2 s walk up the first metres of ``terrain``: the CoM 0.85 m above the ground, 4 steps."""
     from amlip_qp.control.walking.controller import StepRecord
-    from amlip_qp.sim.run_types import RunResult
-    from amlip_qp.sim.terrain import parse_terrain
+    from amlip_qp.sim.loop.run_types import RunResult
+    from amlip_qp.sim.world.terrain import parse_terrain
 
     ground = parse_terrain(terrain)
     t = np.linspace(0.0, 2.0, 401)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from amlip_qp.sim.pushes import PushSchedule
-from amlip_qp.sim.run_types import Push
+from amlip_qp.sim.loop.pushes import PushSchedule
+from amlip_qp.sim.loop.run_types import Push
 
 
 def test_a_timed_push_acts_on_its_window_whatever_the_phase():

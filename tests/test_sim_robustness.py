@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.robustness import (
+from amlip_qp.experiments.robustness import (
     PUSH_DURATION_S,
     QUICK,
     CompareSettings,
@@ -20,8 +20,8 @@ from amlip_qp.sim.robustness import (
     push_scenario,
     ramp_scenario,
 )
-from amlip_qp.sim.run_types import RunResult
-from amlip_qp.sim.scenarios import get_scenario
+from amlip_qp.sim.loop.run_types import RunResult
+from amlip_qp.sim.scenarios.named import get_scenario
 
 DT = 0.01
 N = 1000  # 10 s

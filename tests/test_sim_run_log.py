@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.sim import run_log
-from amlip_qp.sim.summary import SUMMARY_LOG_KEYS
+from amlip_qp.sim.loop import run_log
+from amlip_qp.sim.loop.run_log import SUMMARY_LOG_KEYS
 
 
 def _rows(n: int, full: bool, n_out: int = 2, nu: int = 3):
@@ -53,7 +53,7 @@ def test_world_base_rotates_the_body_velocity_and_gives_the_yaw():
 
 
 def test_row_blocks_keep_every_row_in_order_across_flushes():
-    from amlip_qp.sim.run_log import RowBlocks
+    from amlip_qp.sim.loop.run_log import RowBlocks
 
     rng = np.random.default_rng(0)
     rows = rng.normal(size=(25, 3)).tolist()
@@ -74,7 +74,7 @@ def test_row_blocks_keep_every_row_in_order_across_flushes():
 
 def test_row_blocks_of_integers_keep_them_exactly():
     """The harness's clock stamps (ns since boot: beyond float64's exact integers after 104 days)."""
-    from amlip_qp.sim.run_log import RowBlocks
+    from amlip_qp.sim.loop.run_log import RowBlocks
 
     blocks = RowBlocks(2, np.int64)
     assert blocks.array().dtype == np.int64 and blocks.array().shape == (0, 2)

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.run_types import Push, quat_mul_small_rotation
+from amlip_qp.sim.loop.run_types import Push
+from amlip_qp.sim.sensing.sensors import quat_mul_small_rotation
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""amlip_qp.sim.scenario_tables: a profile's scenarios, settings and mismatches as Scenario objects."""
+"""amlip_qp.sim.scenarios.scenario_tables: a profile's scenarios, settings and mismatches as Scenario objects."""
 
 import dataclasses
 import math
@@ -7,9 +7,9 @@ import pytest
 
 from amlip_qp.exceptions import ProfileError
 from amlip_qp.profiles import ImuMount, get_profile
-from amlip_qp.sim.run_types import PlantSetting
-from amlip_qp.sim.scenario_tables import profile_scenarios
-from amlip_qp.sim.scenarios import SCENARIOS
+from amlip_qp.sim.loop.run_types import PlantSetting
+from amlip_qp.sim.scenarios.named import SCENARIOS
+from amlip_qp.sim.scenarios.scenario_tables import profile_scenarios
 
 
 def _with(profile, **tables):

@@ -8,7 +8,8 @@ import pytest
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.profiles import PROFILES
-from amlip_qp.sim.scenarios import SCENARIOS, Scenario, SpeedProfile, get_scenario
+from amlip_qp.sim.scenarios.named import SCENARIOS, get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, SpeedProfile
 
 
 def test_named_scenarios_are_valid_and_known():
@@ -46,7 +47,7 @@ def test_scenario_validation_and_copy():
 
 
 def test_every_named_scenario_is_inside_its_robots_bounds():
-    from amlip_qp.sim.scenarios import check_scenario
+    from amlip_qp.sim.scenarios.scenarios import check_scenario
 
     for sc in SCENARIOS.values():
         check_scenario(sc)
@@ -65,7 +66,7 @@ def test_every_named_scenario_is_inside_its_robots_bounds():
     ],
 )
 def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
-    from amlip_qp.sim.scenarios import check_scenario
+    from amlip_qp.sim.scenarios.scenarios import check_scenario
 
     check_scenario(Scenario("step", robot, 10.0, vx=SpeedProfile.constant(vx)))
 
@@ -96,8 +97,8 @@ def test_the_verified_step_commands_are_inside_the_bounds(robot, vx):
 )
 def test_check_scenario_names_the_bound(robot, changes, needle):
     from amlip_qp.profiles import get_profile
-    from amlip_qp.sim.run_types import Push
-    from amlip_qp.sim.scenarios import check_scenario
+    from amlip_qp.sim.loop.run_types import Push
+    from amlip_qp.sim.scenarios.scenarios import check_scenario
 
     if "pushes" in changes:
         changes = {"pushes": tuple(Push(*p) for p in changes["pushes"])}
@@ -118,9 +119,9 @@ def test_check_scenario_names_the_bound(robot, changes, needle):
 def test_the_closed_chain_ekf_scenarios_are_the_ideal_ones_on_the_hardware_like_setting():
     from dataclasses import replace
 
-    from amlip_qp.sim.plant_modifiers import PlantModifiers
-    from amlip_qp.sim.run_types import PlantSetting
-    from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS, ideal_scenarios
+    from amlip_qp.sim.loop.run_types import PlantSetting
+    from amlip_qp.sim.scenarios.named import TERRAIN_SCENARIOS, ideal_scenarios
+    from amlip_qp.sim.world.plant_modifiers import PlantModifiers
 
     CLOSED_CHAIN_EKF = PlantSetting("cassie-closed-chain", "robot", "ekf")
     MISMATCHES = {
@@ -232,8 +233,8 @@ def test_the_command_function_refuses_a_nan_time_first_or_later(turn_rate_radps)
 
 
 def test_terrain_scenarios_have_their_speeds_durations_and_modes():
-    from amlip_qp.sim.scenarios import TERRAIN_SCENARIOS
-    from amlip_qp.sim.terrain import parse_terrain
+    from amlip_qp.sim.scenarios.named import TERRAIN_SCENARIOS
+    from amlip_qp.sim.world.terrain import parse_terrain
 
     slopes = [n for n in TERRAIN_SCENARIOS if n.startswith("cassie-slope-")]
     assert len(slopes) == 10  # 10 and 15 deg up and down, 22 deg up; each blind and terrain-aware

@@ -11,12 +11,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim import factory
-from amlip_qp.sim.plant import load_plant
-from amlip_qp.sim.scenarios import Scenario
-from amlip_qp.sim.sensors import PlantSensors, SensorSettings, base_indices
+from amlip_qp.messages import TrackerResult
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.scenarios.scenarios import Scenario
+from amlip_qp.sim.sensing.sensors import PlantSensors, SensorSettings, base_indices
+from amlip_qp.sim.world.plant_loader import load_plant
 
 DT = 0.0005
 
@@ -71,7 +72,7 @@ def test_exact_imu_is_the_base_orientation_and_angular_velocity(plant):
 def test_exact_accelerometer_reads_plus_g_up_at_rest():
     """A base welded to the world, tilted: the accelerometer reads the world's +g in IMU axes."""
     from amlip_qp.paths import MODELS_DIR
-    from amlip_qp.sim.sensors import IMU_ACCEL_SENSOR, IMU_QUAT_SENSOR, imu_spec_edit
+    from amlip_qp.sim.world.imu_site import IMU_ACCEL_SENSOR, IMU_QUAT_SENSOR, imu_spec_edit
 
     spec = mujoco.MjSpec.from_file(str(MODELS_DIR / "cassie.xml"))
     spec.delete(spec.joint("floating-base"))
@@ -257,7 +258,7 @@ def test_the_base_is_the_first_free_joint_or_refused(cassie):
 
 
 def test_a_plant_without_the_imu_gives_ideal_measurements_without_a_reading(cassie):
-    from amlip_qp.sim.plant import Plant
+    from amlip_qp.sim.world.plant import Plant
 
     bare = Plant(cassie.mj_model, cassie, "bare")  # the robot's own model: no IMU sensors
     d = cassie.new_mj_data("stand")  # a little above the floor

@@ -1,4 +1,4 @@
-"""Tests of amlip_qp.sim.speed_profile: parsing, and np.interp of the knots bit for bit."""
+"""Tests of amlip_qp.sim.scenarios.speed_profile: parsing, and np.interp of the knots bit for bit."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.speed_profile import SpeedProfile
+from amlip_qp.sim.scenarios.speed_profile import SpeedProfile
 
 
 def test_speed_profile_parse_and_interpolate():

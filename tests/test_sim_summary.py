@@ -10,8 +10,8 @@ import pytest
 
 from amlip_qp.control.walking.controller import StepRecord
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.run_types import RunResult
-from amlip_qp.sim.summary import dumps, heading_frame_xy, step_velocities, summarize, to_jsonable
+from amlip_qp.sim.loop.run_types import RunResult
+from amlip_qp.sim.reports.summary import dumps, heading_frame_xy, step_velocities, summarize, to_jsonable
 
 DT = 0.01
 N = 1000  # 10 s

@@ -1,4 +1,4 @@
-"""Tests of ``amlip-qp view`` (amlip_qp.sim.view): refused without a display; MuJoCo's viewer on a virtual X server.
+"""Tests of ``amlip-qp view`` (experiments.view): refused without a display; MuJoCo's viewer on a virtual X server.
 
 The slow tests open the viewer for real on an Xvfb server of their own and drive
 it with keys: from a ``--script`` (handed to the same key handler as the
@@ -35,7 +35,7 @@ def _no_simulation(*args, **kwargs):
 def test_view_without_a_display_exits_2_in_one_line_before_anything_runs(monkeypatch, capsys):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setattr("amlip_qp.sim.factory.build_simulation", _no_simulation)
+    monkeypatch.setattr("amlip_qp.sim.scenarios.factory.build_simulation", _no_simulation)
     assert main(["view", "--vx", "0.5"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "view opens a window: $DISPLAY is not set" in err and "xvfb-run" in err
@@ -44,7 +44,7 @@ def test_view_without_a_display_exits_2_in_one_line_before_anything_runs(monkeyp
 def test_view_names_a_display_it_cannot_reach(monkeypatch, capsys):
     monkeypatch.setenv("DISPLAY", ":987")  # no X server there
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setattr("amlip_qp.sim.factory.build_simulation", _no_simulation)
+    monkeypatch.setattr("amlip_qp.sim.scenarios.factory.build_simulation", _no_simulation)
     assert main(["view"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "view cannot reach the display :987" in err

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.robustness import MAX_BISECTION_ITERATIONS
+from amlip_qp.experiments.robustness import MAX_BISECTION_ITERATIONS
 from amlip_qp.sweep import spec as spec_mod
 from amlip_qp.sweep.spec import MAX_CELLS, Range, cell_count, cells_of, from_toml_text, parse_cli_value, parse_spec
 

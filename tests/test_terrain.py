@@ -1,4 +1,4 @@
-"""Terrain in the plant (amlip_qp.sim.terrain, terrain_grids, terrain_lift): specs, MuJoCo's surface, keyframes."""
+"""Terrain in the plant (sim.world.terrain, terrain_grids, terrain_lift): specs, MuJoCo's surface, keyframes."""
 
 from __future__ import annotations
 
@@ -10,17 +10,17 @@ import numpy as np
 import pytest
 
 from amlip_qp.exceptions import InputError, MJCFError
-from amlip_qp.sim import factory
-from amlip_qp.sim.plant import load_plant
-from amlip_qp.sim.run_types import PlantSetting
-from amlip_qp.sim.terrain import (
+from amlip_qp.sim.loop.run_types import PlantSetting
+from amlip_qp.sim.scenarios import factory
+from amlip_qp.sim.world.plant_loader import load_plant
+from amlip_qp.sim.world.terrain import (
     START_X_M,
     TERRAIN_GEOM_GROUP,
     ground_height_function,
     parse_terrain,
     terrain_edit,
 )
-from amlip_qp.sim.terrain_grids import HALF_WIDTH_M
+from amlip_qp.sim.world.terrain_grids import HALF_WIDTH_M
 
 KINDS = ["slope:10", "slope:-15", "stairs:0.1:0.3", "rough:0.04:3", "waves:0.3:4"]
 
@@ -110,7 +110,7 @@ def test_unreadable_and_tiny_pngs_are_input_errors(tmp_path):
 
 
 def test_a_height_map_above_the_pixel_bound_is_refused_from_its_header(tmp_path, monkeypatch):
-    from amlip_qp.sim import terrain_grids as G
+    from amlip_qp.sim.world import terrain_grids as G
 
     at_bound, above = tmp_path / "at.png", tmp_path / "above.png"
     iio.imwrite(at_bound, np.zeros((4096, 4096), dtype=np.uint8))
@@ -131,7 +131,7 @@ def test_a_height_map_above_the_pixel_bound_is_refused_from_its_header(tmp_path,
 
 
 def test_other_image_formats_are_sized_by_pillow_and_a_decompression_bomb_is_refused(tmp_path):
-    from amlip_qp.sim import terrain_grids as G
+    from amlip_qp.sim.world import terrain_grids as G
 
     small = tmp_path / "small.bmp"
     iio.imwrite(small, np.zeros((3, 7), dtype=np.uint8))
@@ -170,7 +170,7 @@ def test_analytic_profiles():
 
 
 def test_the_0_deg_waves_grid_is_the_ridges_across_the_path_array_for_array():
-    from amlip_qp.sim import terrain_grids as G
+    from amlip_qp.sim.world import terrain_grids as G
 
     for h, lam in ((0.3, 4.0), (0.6, 2.25), (0.05, 0.2)):
         # the ridges across the path as they were built before a heading could be given
@@ -192,7 +192,7 @@ def test_the_0_deg_waves_grid_is_the_ridges_across_the_path_array_for_array():
 def test_the_waves_height_field_samples_the_analytic_field(heading):
     """The surface MuJoCo collides with is the smooth field to within its linear interpolation:
     half the field's curvature (2 pi / wavelength)^2 h / 2 times the squared half-diagonal of a cell."""
-    from amlip_qp.sim.terrain_grids import GRID_SPACING_M, waves_height_m
+    from amlip_qp.sim.world.terrain_grids import GRID_SPACING_M, waves_height_m
 
     h, lam = 0.6, 2.25
     spec = parse_terrain(f"waves:{h}:{lam}:{heading:g}")
@@ -380,7 +380,7 @@ def test_png_round_trip(tmp_path, dtype):
 @pytest.mark.slow
 def test_the_qp_controller_stands_on_a_ramp_it_starts_on(tmp_path):
     """Started on an 11 deg ramp (keyframe lifted), 0.5 s of the controller stepping in place: feet on the ground."""
-    from amlip_qp.sim.scenarios import Scenario
+    from amlip_qp.sim.scenarios.scenarios import Scenario
 
     _ramp_png(tmp_path / "ramp.png")
     setting = PlantSetting(terrain=f"hfield:{tmp_path / 'ramp.png'}:10:4:2")
@@ -403,7 +403,7 @@ def test_the_qp_controller_stands_on_a_ramp_it_starts_on(tmp_path):
 
 
 def test_a_gray_and_alpha_png_reads_its_gray_level_not_the_alpha(tmp_path):
-    from amlip_qp.sim.terrain_grids import read_gray_png
+    from amlip_qp.sim.world.terrain_grids import read_gray_png
 
     gray = np.array([[0, 64], [128, 255]], dtype=np.uint8)
     path = tmp_path / "la.png"
@@ -412,7 +412,7 @@ def test_a_gray_and_alpha_png_reads_its_gray_level_not_the_alpha(tmp_path):
 
 
 def test_ray_casts_skip_robot_geoms_that_share_the_terrain_group():
-    from amlip_qp.sim.terrain import TERRAIN_GEOM_GROUP
+    from amlip_qp.sim.world.terrain import TERRAIN_GEOM_GROUP
 
     spec = parse_terrain("waves:0.3:4")
 

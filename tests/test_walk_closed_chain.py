@@ -49,9 +49,9 @@ SPEED_TOL_MPS = 0.15
 
 def _run(job: tuple[str, str]) -> dict:
     """One run of RUNS; its numbers only (picklable)."""
-    from amlip_qp.sim.factory import run_scenario
-    from amlip_qp.sim.scenarios import SCENARIOS
-    from amlip_qp.sim.summary import summarize
+    from amlip_qp.sim.reports.summary import summarize
+    from amlip_qp.sim.scenarios.factory import run_scenario
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     name, tracker = job
     sc = SCENARIOS[name]
@@ -89,7 +89,7 @@ def _run(job: tuple[str, str]) -> dict:
 
 @pytest.fixture(scope="module")
 def results() -> dict:
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     jobs = sorted(RUNS, key=lambda j: -(RUNS[j] or SCENARIOS[j[0]].duration_s))
     with ProcessPoolExecutor(max_workers=2) as pool:
@@ -175,9 +175,9 @@ def test_qp_walks_1mps_for_10s_under_model_mismatch(results, key):
 def _ramp_from_a_raised_start(k: int) -> tuple[bool, float]:
     """The QP's closed-chain 2.1 m/s ramp started with the base k * 1e-12 m higher: (fell, forward speed over
     the last 3 s in the heading frame, m/s)."""
-    from amlip_qp.sim.factory import build_simulation
-    from amlip_qp.sim.scenarios import SCENARIOS
-    from amlip_qp.sim.summary import mean_velocity_heading
+    from amlip_qp.sim.reports.summary import mean_velocity_heading
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     sc = SCENARIOS["cassie-ramp-2.1-cc-ekf"]
     sim = build_simulation(sc, "qp")

@@ -18,9 +18,9 @@ PUSH_N, PUSH_T_S, DURATION_S = 350.0, 3.0, 6.0
 
 def _run(planner: str) -> dict:
     """The pushed cassie-1mps walk with ``planner``; summary numbers only (picklable)."""
-    from amlip_qp.sim.factory import build_simulation
-    from amlip_qp.sim.run_types import Push
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.loop.run_types import Push
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     sc = SCENARIOS["cassie-1mps"].with_(duration_s=DURATION_S, pushes=(Push(PUSH_T_S, (PUSH_N, 0.0, 0.0), 0.2),))
     sim = build_simulation(sc, "qp", planner=planner)

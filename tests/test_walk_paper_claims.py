@@ -38,9 +38,9 @@ RUNS = (
 
 def _run(name: str) -> dict:
     """One run's numbers (picklable)."""
-    from amlip_qp.sim.factory import run_scenario
-    from amlip_qp.sim.scenarios import SCENARIOS
-    from amlip_qp.sim.summary import summarize
+    from amlip_qp.sim.reports.summary import summarize
+    from amlip_qp.sim.scenarios.factory import run_scenario
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     sc = SCENARIOS[name]
     res = run_scenario(sc, "qp")
@@ -81,7 +81,7 @@ def _run(name: str) -> dict:
 
 @pytest.fixture(scope="module")
 def results() -> dict:
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     jobs = sorted(RUNS, key=lambda n: -SCENARIOS[n].duration_s)
     with ProcessPoolExecutor(max_workers=2) as pool:
@@ -127,7 +127,7 @@ def test_turns_90_degrees_in_2_s_at_1_mps_without_slowing(results):
 
 
 def test_walks_20_s_along_a_valley_between_60_cm_ridges(results):
-    from amlip_qp.sim.terrain import parse_terrain
+    from amlip_qp.sim.world.terrain import parse_terrain
 
     r = results["cassie-waves-60cm-valley-cc-ekf"]
     _walked(r)

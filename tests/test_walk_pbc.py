@@ -1,6 +1,6 @@
 """Closed-loop acceptance of the baseline tracker (IK + PBC) in MuJoCo.
 
-Each scenario of :data:`amlip_qp.sim.scenarios.SCENARIOS` listed in :data:`RUNS`
+Each scenario of :data:`amlip_qp.sim.scenarios.named.SCENARIOS` listed in :data:`RUNS`
 runs once (two worker processes, one per core; the longest runs first so the
 two workers finish together) and the tests check its numbers. Mean speed =
 mean CoM velocity over the last 3 s, in the heading frame. Wall time: 3 min
@@ -40,8 +40,8 @@ SPEED_TOL = 0.15
 
 def _run(name: str) -> dict:
     """Run one scenario with the PBC tracker; summary numbers only (picklable)."""
-    from amlip_qp.sim.factory import build_simulation
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     sc = SCENARIOS[name]
     res = build_simulation(sc, "pbc").run(sc.duration_s)

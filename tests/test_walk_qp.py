@@ -37,9 +37,9 @@ RUNS: dict[str, tuple[str, float | None, int, bool]] = {
 def _run(key: str) -> dict:
     """Run one entry of RUNS with the QP tracker; summary numbers only (picklable)."""
     from amlip_qp.control.wbc.tracker import QPTracker
-    from amlip_qp.sim.factory import build_simulation, load
-    from amlip_qp.sim.run_types import SensorNoise
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.sim.loop.run_types import SensorNoise
+    from amlip_qp.sim.scenarios.factory import build_simulation, load
+    from amlip_qp.sim.scenarios.named import SCENARIOS
     from walk_numbers import walk_numbers
 
     name, duration, seed, noise = RUNS[key]

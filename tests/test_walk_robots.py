@@ -52,8 +52,9 @@ RUNS: dict[str, tuple[str, str, float | None]] = {
 
 def _run(key: str) -> dict:
     """Run one entry of RUNS; summary numbers only (picklable)."""
-    from amlip_qp.sim.factory import build_simulation, load, tracker_class
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.control.registry import tracker_class
+    from amlip_qp.sim.scenarios.factory import build_simulation, load
+    from amlip_qp.sim.scenarios.named import SCENARIOS
     from walk_numbers import walk_numbers
 
     name, tracker_name, duration = RUNS[key]

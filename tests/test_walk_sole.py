@@ -12,8 +12,9 @@ pytestmark = pytest.mark.slow
 
 
 def _walk(name: str, scenario: str, folder) -> dict:
-    from amlip_qp.sim.factory import build_simulation, load, tracker_class
-    from amlip_qp.sim.scenarios import SCENARIOS
+    from amlip_qp.control.registry import tracker_class
+    from amlip_qp.sim.scenarios.factory import build_simulation, load
+    from amlip_qp.sim.scenarios.named import SCENARIOS
     from sole_cases import sole_profile
     from walk_numbers import walk_numbers
 

@@ -42,8 +42,9 @@ SPEED_TOL_MPS = 0.1
 def _walk(case: tuple[str, str, float]) -> dict:
     """``amlip-qp walk --robot R --tracker T --vx V``; summary numbers only (picklable)."""
     from amlip_qp.cli import build_parser
-    from amlip_qp.sim import factory, summary
-    from amlip_qp.sim.cli import scenario_from_args
+    from amlip_qp.experiments.walk import scenario_from_args
+    from amlip_qp.sim.reports import summary
+    from amlip_qp.sim.scenarios import factory
 
     robot, tracker, vx = case
     args = build_parser().parse_args(["walk", "--robot", robot, "--tracker", tracker, f"--vx={vx}"])

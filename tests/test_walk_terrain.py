@@ -1,6 +1,6 @@
 """Closed-loop acceptance on uneven ground: the QP tracker on Cassie.
 
-Each test is one run of a named terrain scenario (:data:`amlip_qp.sim.scenarios.TERRAIN_SCENARIOS`,
+Each test is one run of a named terrain scenario (:data:`amlip_qp.sim.scenarios.named.TERRAIN_SCENARIOS`,
 with their own durations and speeds): slopes of 10 and 15 degrees up and down at 0.5 m/s
 for 15 s, blind and terrain-aware; stairs of 10 cm rise and 30 cm run up and down at 0.4 m/s
 (terrain-aware); rough ground of +-4 cm at 0.75 m/s for 20 s (blind); waves 30 cm high with a
@@ -36,9 +36,9 @@ SPEED_TOLERANCE_MPS = 0.15
 
 @pytest.mark.parametrize("name", REQUIRED)
 def test_qp_walks_the_terrain_at_the_commanded_speed(name):
-    from amlip_qp.sim.factory import run_scenario
-    from amlip_qp.sim.scenarios import SCENARIOS
-    from amlip_qp.sim.summary import summarize
+    from amlip_qp.sim.reports.summary import summarize
+    from amlip_qp.sim.scenarios.factory import run_scenario
+    from amlip_qp.sim.scenarios.named import SCENARIOS
 
     scenario = SCENARIOS[name]
     s = summarize(run_scenario(scenario, "qp", log="summary"))

@@ -8,7 +8,7 @@ def walk_numbers(sc, res) -> dict:
 
     Args:
         sc: The scenario run (its duration and commands).
-        res: Its :class:`~amlip_qp.sim.run_types.RunResult`.
+        res: Its :class:`~amlip_qp.sim.loop.run_types.RunResult`.
     """
     log = res.log
     last = log["t"] > log["t"][-1] - 3.0

@@ -11,9 +11,8 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.phase`: the gait phase ``s``;
 - :mod:`~amlip_qp.alip.clock`: :class:`StepClock`, the stance side, step start and phase of the current step;
 - :mod:`~amlip_qp.alip.outputs`: the reference outputs ``h_d(s)`` and their names;
-- :mod:`~amlip_qp.alip.messages`: :class:`Command`, :class:`StateEstimate`, :class:`TerrainPrediction`,
-  :class:`PlannerOutput` (planner I/O);
-- :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick.
+- :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick (what goes in
+  and out of it: :mod:`amlip_qp.messages`).
 - :mod:`~amlip_qp.alip.footholds`: :class:`FootholdPlane`, the ground plane from the last footholds (blind mode).
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 - :mod:`~amlip_qp.alip.step_mpc`: the step-timing MPC's quadratic program (footholds and the step's duration);
@@ -48,7 +47,6 @@ from amlip_qp.alip.lip import (
     transfer_3d,
     vz_limit,
 )
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 from amlip_qp.alip.outputs import REFERENCE_OUTPUTS, OutputSet, reference_outputs
 from amlip_qp.alip.phase import step_phase, step_phase_clipped, time_remaining
 from amlip_qp.alip.planner import Planner
@@ -57,7 +55,6 @@ __all__ = [
     "GRAVITY_MPS2",
     "REFERENCE_OUTPUTS",
     "AngularMomentumFilter",
-    "Command",
     "FootholdPlane",
     "GroundPlane",
     "Lx_from_lateral_speed",
@@ -66,10 +63,7 @@ __all__ = [
     "MomentumFilter1D",
     "OutputSet",
     "Planner",
-    "PlannerOutput",
-    "StateEstimate",
     "StepClock",
-    "TerrainPrediction",
     "alip_plan",
     "desired_L_heading",
     "desired_L_world",

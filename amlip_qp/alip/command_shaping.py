@@ -14,7 +14,7 @@ Exact pass-through: whenever every axis of the raw command is within reach
 (it changes no faster than the limit, up to a relative slack
 :data:`RATE_RTOL` for the rounding of a ramp sampled at the tick times) and
 its steps are not longer than the cap, the raw
-:class:`~amlip_qp.alip.messages.Command` object itself is returned, so a
+:class:`~amlip_qp.messages.Command` object itself is returned, so a
 command that is already a slow enough ramp reaches the planner bit for bit.
 Only an axis that is out of reach is replaced, by ``previous ± rate * dt``.
 
@@ -34,8 +34,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from amlip_qp.alip.messages import Command
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command
 from amlip_qp.profiles import CommandShaping
 
 #: Relative slack of the reach test: a raw change up to ``rate * dt * (1 + RATE_RTOL)``

@@ -8,7 +8,7 @@ heading frame (``u`` along the heading, ``w`` to its left). From the plane it
 gives the ground's pitch and roll along the heading and its rise to a target
 point, from which the walking controller's ground predictor
 (:mod:`amlip_qp.control.walking.ground`, blind mode) makes the planner's
-:class:`~amlip_qp.alip.messages.TerrainPrediction` (docs/ALIP_SLOPES.md):
+:class:`~amlip_qp.messages.TerrainPrediction` (docs/ALIP_SLOPES.md):
 
     plane = FootholdPlane()
     plane.add(stance_contact_world_m, heading_rad)   # at every touchdown
@@ -27,7 +27,7 @@ Guards against nonsense:
   foothold forgets all but the newest (the old footholds describe ground
   behind a corner).
 
-Conventions (those of :class:`~amlip_qp.alip.messages.TerrainPrediction`):
+Conventions (those of :class:`~amlip_qp.messages.TerrainPrediction`):
 pitch is the ground's rotation about the heading frame's y axis, positive =
 descending ahead (an uphill slope of ``a`` has pitch ``-a``); roll is its
 rotation about the heading's x axis, positive = rising to the left.

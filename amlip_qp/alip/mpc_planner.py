@@ -39,9 +39,9 @@ import numpy as np
 
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import step_mpc as S
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 from amlip_qp.alip.planner import VZ_CLAMP_FRACTION, Planner
 from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
 #: ``solve_fn(H, g, C, lower, upper) -> x`` (:func:`~amlip_qp.alip.step_mpc.split_qp`'s views;
 #: raises QPError when it cannot solve).

@@ -31,7 +31,7 @@ Use::
     out = planner.update(estimate, command)       # every control tick (flat ground)
     out = planner.update(estimate, command, TerrainPrediction(dz_next_m=0.1, dz_sw_m=0.1))
 
-Terrain: :class:`~amlip_qp.alip.messages.TerrainPrediction` (optional third
+Terrain: :class:`~amlip_qp.messages.TerrainPrediction` (optional third
 argument of :meth:`Planner.update`; ``None`` is flat ground and gives today's
 numbers bit for bit) carries the ground heights relative to the stance
 contact and the ground pitches. ``H`` stays the CoM height over the stance
@@ -74,10 +74,10 @@ from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
-__all__ = ["VZ_CLAMP_FRACTION", "Command", "Planner", "PlannerOutput", "StateEstimate", "TerrainPrediction"]
+__all__ = ["VZ_CLAMP_FRACTION", "Planner"]
 
 #: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
 #: of ``H l tanh(lT)``, where the law's denominator vanishes (see

@@ -97,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAMES",
         help="comma-separated solvers to compare with the tracker's warm ProxQP (default: every one installed)",
     )
-    b.set_defaults(func=handler("amlip_qp.sim.bench_qp:run_bench"))
+    b.set_defaults(func=handler("amlip_qp.experiments.bench_qp:run_bench"))
     b = bench.add_parser(
         "mpc", help="the step-timing MPC's QP per control tick (matrices and solve) on a pushed point-mass walk"
     )
@@ -118,7 +118,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--duration", type=_DURATION, default=4.0, metavar="S", help=f"simulated time, s, {_DURATION_HELP} (default 4)"
     )
-    b.set_defaults(func=handler("amlip_qp.sim.bench_ekf:run_bench"))
+    b.set_defaults(func=handler("amlip_qp.experiments.bench_ekf:run_bench"))
     b = bench.add_parser(
         "harness",
         help="where a closed-loop tick goes: controller, MuJoCo and the harness's own time, per tracker and log mode",
@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
         "inputs in Python, the default before the in-place one), qp-daqp (the QP with the DAQP solver) "
         "(default qp,pbc)",
     )
-    b.set_defaults(func=handler("amlip_qp.sim.bench_harness:run_bench"))
+    b.set_defaults(func=handler("amlip_qp.experiments.bench_harness:run_bench"))
 
     b = bench.add_parser(
         "sweep", help="sweep throughput: cells per second with 1 and with 2 worker processes, interleaved"

@@ -4,8 +4,8 @@ The options' value types (:mod:`~amlip_qp.cli.parsing`) refuse a value
 outside these bounds while the command line is read, before any work, in one
 line naming the option and the bound. Bounds that belong to a robot (speeds,
 the duration of a walk, pushes: ``amlip_qp.profiles.CommandBounds``), to the
-plant (the plant modifiers: ``amlip_qp.sim.plant_modifiers``), to the terrain
-(``amlip_qp.sim.terrain``) or to a sweep spec (``amlip_qp.sweep.spec``) are
+plant (the plant modifiers: ``amlip_qp.sim.world.plant_modifiers``), to the terrain
+(``amlip_qp.sim.world.terrain``) or to a sweep spec (``amlip_qp.sweep.spec``) are
 checked there, also before any work. The ones repeated here from a heavier
 module (:data:`MAX_BISECTION_ITERATIONS`, :data:`MAX_VIDEO_FPS`) are held
 equal to theirs by the tests, so ``--help`` needs no heavy import.
@@ -16,7 +16,7 @@ from __future__ import annotations
 from amlip_qp.profiles import CommandBounds
 
 #: Shortest simulated time of a walk, s: one control tick of the closed loops, 0.5 ms (2 kHz; the same
-#: as ``amlip_qp.sim.factory.CONTROL_DT_S``).
+#: as ``amlip_qp.sim.loop.run_types.CONTROL_DT_S``).
 MIN_DURATION_S = 0.0005
 
 #: Longest simulated time of one walk of a benchmark (``bench ekf``, ``bench harness``, ``bench sweep``)
@@ -37,7 +37,7 @@ MAX_SEED = 2**32 - 1
 #: Most bisection iterations (``compare --push-iterations``, a sweep's ``--bisect`` / ``[bisect]``): 20.
 #: Each iteration halves the interval (20 leave 1e-6 of it, 57 uN s of Cassie's 60 N s push search)
 #: and is one more walk of several seconds per cell and push direction. The same as
-#: ``amlip_qp.sim.robustness.MAX_BISECTION_ITERATIONS``.
+#: ``amlip_qp.experiments.robustness.MAX_BISECTION_ITERATIONS``.
 MAX_BISECTION_ITERATIONS = 20
 
 #: Largest ``walk --accel-limit``, m/s^2: 100 (about 10 g). A speed command rate-limited at 100 m/s^2
@@ -49,7 +49,7 @@ MAX_ACCEL_LIMIT_MPS2 = 100.0
 #: refresh rate of the fastest common displays: more frames are never shown, yet each is rendered and
 #: encoded, up to one a control tick (a 0.5 s walk at 1e9 frames/s rendered 1,000 frames in 97 s).
 #: A ``.gif`` allows at most 100 (its frame delays are whole hundredths of a second). The same as
-#: ``amlip_qp.sim.video.MAX_VIDEO_FPS``.
+#: ``amlip_qp.sim.reports.video.MAX_VIDEO_FPS``.
 MAX_VIDEO_FPS = 240.0
 
 #: Most timed calls of ``bench codegen --calls``: 1,000,000. One call of every kernel on its three

@@ -14,6 +14,8 @@ import sys
 from collections.abc import Callable
 from typing import NoReturn
 
+from amlip_qp.sim.reports.gl import prefer_offscreen_gl
+
 #: An argument argparse should read as a value, not an option: anything that starts like a
 #: negative number. Argparse's own pattern knows only ``-1`` and ``-1.5``; this one also takes
 #: exponents (``-1e-1``, ``-5E0``), ``-inf``/``-nan`` and a push at a negative time
@@ -35,10 +37,18 @@ class Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def handler(path: str) -> Callable[[argparse.Namespace], int]:
-    """Return a lazily-imported handler ``"module:function"``."""
+def handler(path: str, offscreen_gl: bool = False) -> Callable[[argparse.Namespace], int]:
+    """Return a lazily-imported handler ``"module:function"``.
+
+    ``offscreen_gl``: before importing the handler (and with it MuJoCo), choose
+    EGL rendering on a machine without a display
+    (:func:`~amlip_qp.sim.reports.gl.prefer_offscreen_gl`), for a handler that
+    may render off-screen.
+    """
 
     def run(args: argparse.Namespace) -> int:
+        if offscreen_gl:
+            prefer_offscreen_gl()
         module_name, func_name = path.split(":")
         return getattr(importlib.import_module(module_name), func_name)(args)
 

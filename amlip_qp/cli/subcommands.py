@@ -18,15 +18,15 @@ from amlip_qp.cli.parsing import (
 )
 from amlip_qp.cli.robot_option import robot_list, robot_name_or_path
 from amlip_qp.profiles import ROBOT_NAMES
-from amlip_qp.sim.live_keys import keys_help
+from amlip_qp.sim.loop.live_keys import keys_help
 
 #: Trackers of ``walk`` and ``compare`` (kept here so ``--help`` needs no heavy import; the
 #: robots are the profiles' :data:`~amlip_qp.profiles.ROBOT_NAMES`, a light import).
 TRACKERS = ("pbc", "qp")
 #: ``walk --planner``: amlip_qp.control.walking.planners.PLANNERS (the CLI stays light; tested equal).
 PLANNERS = ("one-step", "mpc")
-#: Sensor models and base estimators (the same as ``amlip_qp.sim.sensors.SENSOR_MODELS`` and
-#: ``amlip_qp.sim.factory.ESTIMATORS``, checked by the tests).
+#: Sensor models and base estimators (the same as ``amlip_qp.sim.sensing.sensors.SENSOR_MODELS`` and
+#: ``amlip_qp.sim.scenarios.factory.ESTIMATORS``, checked by the tests).
 SENSORS = ("ideal", "robot")
 ESTIMATORS = ("truth", "ekf")
 
@@ -238,7 +238,7 @@ def add_walk(sub) -> None:
         "(default 30)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    p.set_defaults(func=handler("amlip_qp.sim.cli:run_walk"))
+    p.set_defaults(func=handler("amlip_qp.experiments.walk:run_walk", offscreen_gl=True))
 
 
 def add_view(sub) -> None:
@@ -287,7 +287,7 @@ def add_view(sub) -> None:
     )
     # what walk's scenario builder reads and view does not take
     p.set_defaults(scenario=None, speed_profile=None, duration=None, push=[])
-    p.set_defaults(func=handler("amlip_qp.sim.view:run_view"))
+    p.set_defaults(func=handler("amlip_qp.experiments.view:run_view"))
 
 
 def add_compare(sub) -> None:
@@ -348,7 +348,7 @@ def add_compare(sub) -> None:
         help="comparison figure, .png, .pdf or .svg (default out/compare.png; folder created)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not write the figure")
-    p.set_defaults(func=handler("amlip_qp.sim.cli:run_compare"))
+    p.set_defaults(func=handler("amlip_qp.experiments.compare:main"))
 
 
 def add_sweep(sub) -> None:
@@ -431,4 +431,4 @@ def add_check_robot(sub) -> None:
     )
     p.add_argument("--no-walk", action="store_true", help="skip the walk in place (faster)")
     p.add_argument("--json", metavar="FILE", default=None, help="write the checks as JSON to FILE, or '-' for stdout")
-    p.set_defaults(func=handler("amlip_qp.sim.conformance_cli:run_check_robot"))
+    p.set_defaults(func=handler("amlip_qp.experiments.conformance_cli:run_check_robot"))

@@ -3,7 +3,7 @@
 - :mod:`~amlip_qp.control.tracker`: the one interface every tracker
   implements (:class:`~amlip_qp.control.tracker.Tracker`,
   :class:`~amlip_qp.control.tracker.TrackingTarget`,
-  :class:`~amlip_qp.control.tracker.TrackerResult`);
+  :class:`~amlip_qp.messages.TrackerResult`);
 - :mod:`~amlip_qp.control.walking`: the walking loop (estimator, step clock,
   touchdown detection, speed integral, the ALIP planner call, the compiled
   output map) around any tracker;

@@ -12,10 +12,12 @@ QP both implement it, so the walking loop
 from __future__ import annotations
 
 import abc
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from amlip_qp.messages import TrackerResult
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -48,25 +50,6 @@ class TrackingTarget:
     ddh_d: np.ndarray
     swing_contact_weight: float = 0.0
     stance_ground_pitch_rad: float | None = None
-
-
-@dataclass
-class TrackerResult:
-    """A tracker's output for one tick.
-
-    Attributes:
-        tau_Nm: Joint-side torques of the actuated joints (robot's actuator
-            order), before saturation by the controller, N m. Never NaN.
-        ok: ``False`` when the tracker fell back (solver failure, NaN...).
-        fallback: Why it fell back, or ``None``.
-        info: Diagnostics (solve time, iterations, contact forces, tracking
-            error...), numbers only.
-    """
-
-    tau_Nm: np.ndarray
-    ok: bool = True
-    fallback: str | None = None
-    info: dict = field(default_factory=dict)
 
 
 class Tracker(abc.ABC):

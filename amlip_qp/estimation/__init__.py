@@ -1,4 +1,4 @@
-"""Base-state estimation for the controller: the IMU reading, the contact-aided invariant EKF
+"""Base-state estimation for the controller: the contact-aided invariant EKF
 (Hartley et al., IJRR 2020), the leg kinematics it corrects with, and the estimators the walking
 controller calls (``truth`` or ``ekf``). Numpy and Pinocchio only, never MuJoCo."""
 
@@ -9,7 +9,6 @@ from amlip_qp.estimation.base_estimator import (
     TruthBaseEstimator,
     make_base_estimator,
 )
-from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.estimation.invariant_ekf import EkfNoise, InvariantEKF
 
 __all__ = [
@@ -17,7 +16,6 @@ __all__ = [
     "BaseStateEstimator",
     "EkfBaseEstimator",
     "EkfNoise",
-    "ImuReading",
     "InvariantEKF",
     "TruthBaseEstimator",
     "make_base_estimator",

@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amlip_qp.estimation.base_estimator import EkfBaseEstimator
-from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot

@@ -49,9 +49,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.estimation.rotations import quat_wxyz_to_rot, quat_xyzw_to_rot, rot_to_quat_xyzw
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import ImuReading
 from amlip_qp.profiles.profile import UNIT_QUATERNION_TOL
 
 if TYPE_CHECKING:  # pragma: no cover - typing only

@@ -78,7 +78,7 @@ class CompareRanges:
     """What ``amlip-qp compare`` runs for a robot.
 
     Attributes:
-        nominal_scenario: Name of the nominal scenario (``amlip_qp.sim.scenarios``).
+        nominal_scenario: Name of the nominal scenario (``amlip_qp.sim.scenarios.scenarios``).
         ramp_end_mps: Speed the ramp test reaches, m/s.
         push_max_impulse_Ns: Upper end of the push bisection, N s.
         relative_cost: Relative wall-time cost of one simulated second (schedules the longest first).
@@ -236,14 +236,14 @@ class RobotProfile:
         trackers: Tracker name -> its configuration table (:meth:`tracker_config` builds it).
         compare: ``amlip-qp compare`` ranges.
         plants: Plant name -> MJCF file: the plants ``--plant`` may name
-            (:func:`amlip_qp.sim.plant.load_plant`); the robot's own model is one of them, under
+            (:func:`amlip_qp.sim.world.plant_loader.load_plant`); the robot's own model is one of them, under
             the robot's name.
         imu: Where the IMU sits (:class:`ImuMount`; default: the base body's origin, its axes).
         joint_roles: Role (:data:`JOINT_ROLES`) -> the file's joint name, with ``{side}``.
         feet: The feet.
         description: One line for people.
         scenarios: Scenario name (without the robot's prefix) -> its table: the robot's named
-            scenarios (:mod:`amlip_qp.sim.scenario_tables` builds them, and checks their keys).
+            scenarios (:mod:`amlip_qp.sim.scenarios.scenario_tables` builds them, and checks their keys).
         settings: Setting name -> its table: plants, sensors and estimators the robot's
             scenarios are copied onto (each copy named ``SCENARIO-SETTING``).
         mismatches: Name -> table of plant modifiers: copies of one scenario under model mismatch.

@@ -430,7 +430,7 @@ def read_profile(path: str | Path) -> RobotProfile:
         unsupported_t.done()
     imu = _imu(top.table("imu", required=False))
     raw = {}
-    # scenarios, settings, mismatches: checked key by key by amlip_qp.sim.scenario_tables;
+    # scenarios, settings, mismatches: checked key by key by amlip_qp.sim.scenarios.scenario_tables;
     # estimator: by amlip_qp.estimation.invariant_ekf.noise_from_table
     for key in ("scenarios", "settings", "mismatches", "estimator"):
         t = top.table(key, required=False)

@@ -72,7 +72,7 @@ class ProxQPSolver:
     failure, against 4.1 iterations and 47 spurious infeasibility reports
     with ProxQP's defaults (the tracker's ``eps_abs=1e-3`` takes 2.05). To
     measure on your machine, replay the problems of
-    :func:`amlip_qp.sim.bench_qp.record_walk` (or run ``amlip-qp bench qp``).
+    :func:`amlip_qp.experiments.bench_qp.record_walk` (or run ``amlip-qp bench qp``).
     """
 
     def __init__(

@@ -20,17 +20,15 @@ map Pinocchio's ``v`` (see :mod:`~amlip_qp.robots.model_kinematics`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.robots import passive as _passive
 from amlip_qp.robots.model_kinematics import ModelKinematics
-
-if TYPE_CHECKING:
-    from amlip_qp.robots.robot import Robot
-
+from amlip_qp.robots.outputs import OutputMap, check_output_map
+from amlip_qp.robots.robot import Robot
 
 #: A singular value of the output Jacobian at or below this counts as lost rank (m or rad of output
 #: per m or rad of the velocity coordinates): tracking 1 m/s (or 1 rad/s) along it would take 100
@@ -147,15 +145,11 @@ class RobotKinematics(ModelKinematics):
         ``names`` and ``evaluate(kin, stance, heading_rad)``, e.g. the compiled
         :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`."""
         if self._output_map is None:
-            from amlip_qp.robots.outputs import OutputMap
-
             self._output_map = OutputMap(self.robot)
         return self._output_map
 
     @output_map.setter
     def output_map(self, output_map) -> None:
-        from amlip_qp.robots.outputs import check_output_map
-
         check_output_map(self.robot, output_map)
         self._output_map = output_map
         self._out_cache = None

@@ -9,6 +9,7 @@ joint names, actuator gears and limits, fixed tendons, springs, sites.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ from amlip_qp.profiles import (
     looks_like_profile_path,
 )
 from amlip_qp.robots.model_edits import prepared_model_path
+from amlip_qp.robots.passive import spring_rows
 from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
 
@@ -405,7 +407,7 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     if profile is not None and not has_imu_body:
         raise ProfileError(f"{profile.source}: imu.body: the model {path.name} has no body {imu_body!r}")
     stiff, ref, damp, arm = _passive_params(mj_model, smap, path)
-    return Robot(
+    robot = Robot(
         name=name,
         path=path,
         mj_model=mj_model,
@@ -441,3 +443,4 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
         profile=profile,
         leg_joint_names=_leg_joints(mj_model, c_mj, root_joints),
     )
+    return replace(robot, springs=spring_rows(robot))

@@ -28,7 +28,6 @@ results are the same to the last bit.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,11 +35,8 @@ from amlip_qp.alip import other_side
 from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.profiles.outputs import OutputPrimitive, output_primitives
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.robots.kinematics import RobotKinematics
-    from amlip_qp.robots.robot import Robot
-
+from amlip_qp.robots.model_kinematics import ModelKinematics
+from amlip_qp.robots.robot import Robot
 
 # A "chain scalar" is a tuple ``(val, rate, c0, c1, c2, jdv)``: a scalar
 # function of the state with its value, its time derivative ``J v``, its
@@ -193,7 +189,7 @@ def computes_standard_outputs(output_map) -> bool:
 
 
 class OutputMap:
-    """``h_0(q)`` for one robot; evaluate on an updated :class:`RobotKinematics`.
+    """``h_0(q)`` for one robot; evaluate on an updated :class:`~amlip_qp.robots.kinematics.RobotKinematics`.
 
     One instance keeps scratch buffers for :meth:`evaluate`: do not share it
     between threads.
@@ -276,7 +272,7 @@ class OutputMap:
             raise InputError(f"heading_rad must be finite, got {heading_rad!r}")
         return swing
 
-    def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
+    def evaluate(self, kin: ModelKinematics, stance: str, heading_rad: float = 0.0):
         """Outputs, Jacobian and drift at the last ``kin.update``.
 
         Args:
@@ -364,7 +360,7 @@ class OutputMap:
                 y[i], jdv[i] = chain[0], chain[5]
         return y, J, jdv
 
-    def _toe_pitch(self, kin: RobotKinematics, swing: str) -> tuple:
+    def _toe_pitch(self, kin: ModelKinematics, swing: str) -> tuple:
         """The swing foot's pitch from its blade vector ``d = toe - heel`` (m, the ends of its sole
         line: a two-point foot's points, a four-point foot's toe-pair and heel-pair midpoints) as a
         chain scalar on ``J_toe - J_heel`` (left in :attr:`_J_blade`)."""

@@ -8,14 +8,11 @@ MuJoCo's ``qfrc_passive`` (converted to Pinocchio coordinates) for any model.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
-
-if TYPE_CHECKING:
-    from amlip_qp.robots.robot import Robot
+from amlip_qp.robots.robot import Robot
 
 
 def _checked(robot: Robot, q, v) -> tuple[np.ndarray, np.ndarray]:
@@ -186,7 +183,7 @@ def _side_of(robot: Robot, joint_names) -> str | None:
 def spring_rows(robot: Robot) -> tuple[SpringRow, ...]:
     """The robot's springs, the one enumeration every tracker uses (read
     them from :attr:`Robot.springs <amlip_qp.robots.robot.Robot.springs>`,
-    which builds them once).
+    which the loader fills once).
 
     Order: the fixed tendons (couplings) in model order, then the passive
     joints outside every coupling in model order (Cassie: per leg the achilles

@@ -14,18 +14,18 @@ Index conventions: ``*_v_idx`` / ``*_q_idx`` index Pinocchio's ``v`` / ``q``;
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from amlip_qp.robots.state import StateMap
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import mujoco
     import pinocchio as pin
 
     from amlip_qp.profiles import ImuMount, RobotProfile
-    from amlip_qp.robots.state import StateMap
 
 #: The two foot sides, in the order used everywhere.
 FOOT_SIDES: tuple[str, str] = ("left", "right")
@@ -167,6 +167,7 @@ class Robot:
             that is not in its model comes from it.
         leg_joint_names: Side -> the hinge and slide joints on the tree path
             from the root to that side's contact site (MuJoCo order).
+        springs: The robot's springs (:func:`amlip_qp.robots.passive.spring_rows`, filled by the loader).
     """
 
     name: str
@@ -204,6 +205,7 @@ class Robot:
     leg_joint_names: dict[str, tuple[str, ...]] = field(default_factory=dict)
     sole_line_sites: dict[str, tuple[str, ...]] = field(default_factory=dict)
     sole_line_frame_ids: dict[str, tuple[int, ...]] = field(default_factory=dict)
+    springs: tuple = ()
 
     def role_joint(self, role: str, side: str) -> str | None:
         """The name of ``side``'s joint with ``role`` (:data:`amlip_qp.profiles.JOINT_ROLES`), or ``None``.
@@ -271,10 +273,3 @@ class Robot:
     def new_pin_data(self) -> pin.Data:
         """A fresh ``pinocchio.Data`` for this robot's Pinocchio model."""
         return self.pin_model.createData()
-
-    @cached_property
-    def springs(self) -> tuple:
-        """The robot's springs, :func:`amlip_qp.robots.passive.spring_rows`, built once."""
-        from amlip_qp.robots.passive import spring_rows
-
-        return spring_rows(self)

@@ -24,14 +24,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError, MJCFError
-
-if TYPE_CHECKING:
-    from amlip_qp.robots.robot import Robot
 
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3  # mujoco.mjtJoint values
 
@@ -151,7 +148,14 @@ def build_state_map(mj_model, pin_model, source: str = "model") -> StateMap:
     )
 
 
-def _smap(robot_or_map: Robot | StateMap) -> StateMap:
+class HasStateMap(Protocol):
+    """Anything with a :class:`StateMap`, e.g. a :class:`~amlip_qp.robots.robot.Robot`."""
+
+    @property
+    def state_map(self) -> StateMap: ...
+
+
+def _smap(robot_or_map: HasStateMap | StateMap) -> StateMap:
     return robot_or_map if isinstance(robot_or_map, StateMap) else robot_or_map.state_map
 
 
@@ -194,7 +198,7 @@ def rotation_entries(w: float, x: float, y: float, z: float) -> tuple[float, ...
 
     The one formula of the quaternion's rotation: :func:`_quat_wxyz_to_rot`, the per-tick
     :class:`~amlip_qp.robots.state_reader.StateReader` (its one-free-joint path has it written
-    out, the same operations) and the harness's generated C (:mod:`amlip_qp.sim.compiled_io`,
+    out, the same operations) and the harness's generated C (:mod:`amlip_qp.sim.world.compiled_io`,
     on CasADi symbols) use it; tested bit for bit.
     """
     return (
@@ -217,7 +221,7 @@ def _normalized(quat: np.ndarray, what: str) -> np.ndarray:
     return quat / n
 
 
-def qpos_to_q(robot: Robot | StateMap, qpos) -> np.ndarray:
+def qpos_to_q(robot: HasStateMap | StateMap, qpos) -> np.ndarray:
     """MuJoCo ``qpos`` -> Pinocchio ``q`` (quaternions normalized, reordered to xyzw)."""
     m = _smap(robot)
     qpos = _check(qpos, m.nq_mj, "qpos")
@@ -233,7 +237,7 @@ def qpos_to_q(robot: Robot | StateMap, qpos) -> np.ndarray:
     return q
 
 
-def q_to_qpos(robot: Robot | StateMap, q) -> np.ndarray:
+def q_to_qpos(robot: HasStateMap | StateMap, q) -> np.ndarray:
     """Pinocchio ``q`` -> MuJoCo ``qpos`` (quaternions normalized, reordered to wxyz)."""
     m = _smap(robot)
     q = _check(q, m.nq_pin, "q")
@@ -249,7 +253,7 @@ def q_to_qpos(robot: Robot | StateMap, q) -> np.ndarray:
     return qpos
 
 
-def velocity_map(robot: Robot | StateMap, q) -> np.ndarray:
+def velocity_map(robot: HasStateMap | StateMap, q) -> np.ndarray:
     """The matrix ``T(q)`` (nv x nv) with MuJoCo ``qvel = T @ v`` (Pinocchio ``v``).
 
     It is a permutation except for each free joint's linear block, which is
@@ -267,7 +271,7 @@ def velocity_map(robot: Robot | StateMap, q) -> np.ndarray:
     return T
 
 
-def velocity_map_dot_v(robot: Robot | StateMap, q, v) -> np.ndarray:
+def velocity_map_dot_v(robot: HasStateMap | StateMap, q, v) -> np.ndarray:
     """``Tdot(q, v) @ v`` in MuJoCo dof order: the world-frame base-velocity drift.
 
     For each free joint: ``d/dt(R) v_body = R (w_body x v_body)``; zero elsewhere.
@@ -282,7 +286,7 @@ def velocity_map_dot_v(robot: Robot | StateMap, q, v) -> np.ndarray:
     return out
 
 
-def qvel_to_v(robot: Robot | StateMap, q, qvel) -> np.ndarray:
+def qvel_to_v(robot: HasStateMap | StateMap, q, qvel) -> np.ndarray:
     """MuJoCo ``qvel`` -> Pinocchio ``v`` at Pinocchio configuration ``q``."""
     m = _smap(robot)
     return _qvel_to_v(m, _check(q, m.nq_pin, "q"), _check(qvel, m.nv, "qvel"))
@@ -308,7 +312,7 @@ def _qvel_to_v(m: StateMap, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
     return v
 
 
-def v_to_qvel(robot: Robot | StateMap, q, v) -> np.ndarray:
+def v_to_qvel(robot: HasStateMap | StateMap, q, v) -> np.ndarray:
     """Pinocchio ``v`` -> MuJoCo ``qvel`` at Pinocchio configuration ``q``."""
     m = _smap(robot)
     q = _check(q, m.nq_pin, "q")
@@ -324,7 +328,7 @@ def v_to_qvel(robot: Robot | StateMap, q, v) -> np.ndarray:
     return qvel
 
 
-def mj_to_pin(robot: Robot | StateMap, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
+def mj_to_pin(robot: HasStateMap | StateMap, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
     """MuJoCo ``(qpos, qvel)`` -> Pinocchio ``(q, v)``.
 
     Args:
@@ -340,7 +344,7 @@ def mj_to_pin(robot: Robot | StateMap, qpos, qvel) -> tuple[np.ndarray, np.ndarr
     return q, _qvel_to_v(m, q, _check(qvel, m.nv, "qvel"))
 
 
-def pin_to_mj(robot: Robot | StateMap, q, v) -> tuple[np.ndarray, np.ndarray]:
+def pin_to_mj(robot: HasStateMap | StateMap, q, v) -> tuple[np.ndarray, np.ndarray]:
     """Pinocchio ``(q, v)`` -> MuJoCo ``(qpos, qvel)`` (inverse of :func:`mj_to_pin`).
 
     Raises:
@@ -349,14 +353,14 @@ def pin_to_mj(robot: Robot | StateMap, q, v) -> tuple[np.ndarray, np.ndarray]:
     return q_to_qpos(robot, q), v_to_qvel(robot, q, v)
 
 
-def force_mj_to_pin(robot: Robot | StateMap, q, f_mj) -> np.ndarray:
+def force_mj_to_pin(robot: HasStateMap | StateMap, q, f_mj) -> np.ndarray:
     """Generalized force in MuJoCo dof coordinates -> Pinocchio's: ``f_pin = T^T f_mj``."""
     m = _smap(robot)
     f_mj = _check(f_mj, m.nv, "f_mj")
     return velocity_map(robot, q).T @ f_mj
 
 
-def force_pin_to_mj(robot: Robot | StateMap, q, f_pin) -> np.ndarray:
+def force_pin_to_mj(robot: HasStateMap | StateMap, q, f_pin) -> np.ndarray:
     """Generalized force in Pinocchio coordinates -> MuJoCo's: ``f_mj = T^-T f_pin``.
 
     ``T`` is orthogonal (a permutation with rotation blocks), so ``T^-T = T``.
@@ -366,13 +370,13 @@ def force_pin_to_mj(robot: Robot | StateMap, q, f_pin) -> np.ndarray:
     return velocity_map(robot, q) @ f_pin
 
 
-def mass_matrix_mj_to_pin(robot: Robot | StateMap, q, M_mj) -> np.ndarray:
+def mass_matrix_mj_to_pin(robot: HasStateMap | StateMap, q, M_mj) -> np.ndarray:
     """MuJoCo's joint-space inertia matrix -> Pinocchio's: ``T^T M_mj T``."""
     T = velocity_map(robot, q)
     return T.T @ np.asarray(M_mj, dtype=float) @ T
 
 
-def bias_mj_to_pin(robot: Robot | StateMap, q, v, bias_mj, M_mj) -> np.ndarray:
+def bias_mj_to_pin(robot: HasStateMap | StateMap, q, v, bias_mj, M_mj) -> np.ndarray:
     """MuJoCo bias forces (``qfrc_bias``) -> Pinocchio's nonlinear effects.
 
     From ``qvel = T v``: ``qacc = T vdot + Tdot v``; multiplying MuJoCo's

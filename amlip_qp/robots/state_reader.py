@@ -29,7 +29,7 @@ class FreeJointPlan(NamedTuple):
     """Where :meth:`StateReader.arrays` of one free joint (and no ball joint) takes each number.
 
     For another implementation of the same read (the harness's generated C,
-    :mod:`amlip_qp.sim.compiled_io`), which must give the same numbers: ``q`` is
+    :mod:`amlip_qp.sim.world.compiled_io`), which must give the same numbers: ``q`` is
     ``qpos[gather_q]`` and ``v`` is ``qvel[gather_v]``, then the quaternion
     ``qpos[quat_wxyz]``, normalized, is written to ``q[pq:pq + 4]`` (x y z w) and the
     linear velocity ``qvel[lin_xyz]`` rotated into the base frame to ``v[pv:pv + 3]``;

@@ -15,7 +15,7 @@ import warnings
 from typing import Any
 
 from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
-from amlip_qp.sim.scenarios import held_warnings, release_warnings
+from amlip_qp.sim.scenarios.scenarios import held_warnings, release_warnings
 from amlip_qp.sweep import backends
 from amlip_qp.sweep import spec as spec_mod
 from amlip_qp.sweep.cells import Cell

@@ -4,8 +4,8 @@ A cell's parameters are ``walk`` options by their argparse names (``vx``,
 ``tracker``, ``plant_mass_scale``, ``terrain``, ...; ``--turn-rate`` is
 ``turn_rate``), parsed with the ``walk`` subcommand of
 :func:`amlip_qp.cli.build_parser` and turned into a scenario by
-:func:`amlip_qp.sim.cli.scenario_from_args` (which applies
-:func:`~amlip_qp.sim.cli.setting_from_args`), so every ``walk`` option is
+:func:`amlip_qp.experiments.walk.scenario_from_args` (which applies
+:func:`~amlip_qp.experiments.walk.setting_from_args`), so every ``walk`` option is
 sweepable, including options added later. A flag (``noise``) takes ``true`` or
 ``false``. The push parameters (:data:`PUSH_DEFAULTS`) add one push on the
 base: ``push_impulse_Ns`` (0: no push), ``push_direction_deg`` (in the
@@ -39,7 +39,7 @@ PUSH_DEFAULTS: dict[str, float | None] = {
 #: ``walk`` options that are not part of a walk's outcome (outputs, the progress bar, the handler).
 NOT_PARAMETERS = ("command", "func", "json", "log", "plot", "video", "video_fps", "no_progress")
 
-#: Metric name -> how it is read from the JSON summary (:func:`amlip_qp.sim.summary.summarize`).
+#: Metric name -> how it is read from the JSON summary (:func:`amlip_qp.sim.reports.summary.summarize`).
 _METRIC_READERS: dict[str, Any] = {
     "survived": lambda s: not s["fell"],
     "fell": lambda s: s["fell"],
@@ -124,7 +124,7 @@ def _parse_walk(argv: list[str]):
 class WalkRun:
     """What one walk of a cell needs: the scenario, the tracker, the seed, Gaussian noise on or off, the planner."""
 
-    scenario: Any  # amlip_qp.sim.scenarios.Scenario (imported lazily: this module stays light)
+    scenario: Any  # amlip_qp.sim.scenarios.scenarios.Scenario (imported lazily: this module stays light)
     tracker: str
     seed: int
     noise: bool
@@ -133,7 +133,7 @@ class WalkRun:
 
 def make_push(params: Mapping[str, Any]):
     """The push of ``params`` (:data:`PUSH_DEFAULTS` for the missing ones), or ``None`` for a zero impulse."""
-    from amlip_qp.sim.run_types import Push
+    from amlip_qp.sim.loop.run_types import Push
 
     p = {**PUSH_DEFAULTS, **{k: v for k, v in params.items() if k in PUSH_DEFAULTS}}
     for name, value in p.items():
@@ -159,8 +159,8 @@ def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
         InputError: An unknown or malformed option or value, a command outside the
             robot's bounds, or a phase push that may not start before the walk ends.
     """
-    from amlip_qp.sim.cli import scenario_from_args
-    from amlip_qp.sim.scenarios import check_scenario
+    from amlip_qp.experiments.walk import scenario_from_args
+    from amlip_qp.sim.scenarios.scenarios import check_scenario
 
     unknown = [n for n in params if n not in walk_defaults() and n not in PUSH_DEFAULTS]
     if unknown:
@@ -189,7 +189,7 @@ def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
 
 def check_plants(runs: list[WalkRun]) -> None:
     """Load each distinct plant setting once (with its modifiers), so a bad plant fails before any walk."""
-    from amlip_qp.sim.cli import check_plant
+    from amlip_qp.experiments.walk import check_plant
 
     seen = set()
     for run in runs:
@@ -201,8 +201,9 @@ def check_plants(runs: list[WalkRun]) -> None:
 
 def walk(run: WalkRun) -> dict[str, Any]:
     """Simulate one walk; every metric of :data:`METRICS` (JSON values: NaN as ``None``)."""
-    from amlip_qp.sim import factory, summary
-    from amlip_qp.sim.run_types import SensorNoise
+    from amlip_qp.sim.loop.run_types import SensorNoise
+    from amlip_qp.sim.reports import summary
+    from amlip_qp.sim.scenarios import factory
 
     sc = run.scenario
     noise = SensorNoise() if run.noise else None
@@ -237,7 +238,7 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
 
 def cell_metrics(task: dict[str, Any]) -> dict[str, Any]:
     """The metrics of one cell (see :func:`run_cell`); raises whatever its walks raise."""
-    from amlip_qp.sim.robustness import largest_surviving
+    from amlip_qp.experiments.robustness import largest_surviving
 
     params, seed, bis = task["params"], task["seed"], task["bisect"]
     if bis is None:

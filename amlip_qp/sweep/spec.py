@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from amlip_qp.exceptions import InputError
-from amlip_qp.sim.robustness import MAX_BISECTION_ITERATIONS
+from amlip_qp.experiments.robustness import MAX_BISECTION_ITERATIONS
 from amlip_qp.sweep.cells import Cell
 
 if sys.version_info >= (3, 11):
@@ -98,7 +98,7 @@ class Range:
 
 @dataclass(frozen=True)
 class Bisect:
-    """The bisection of one parameter per cell (:func:`amlip_qp.sim.robustness.largest_surviving`)."""
+    """The bisection of one parameter per cell (:func:`amlip_qp.experiments.robustness.largest_surviving`)."""
 
     parameter: str
     low: float

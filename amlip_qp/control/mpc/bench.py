@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from amlip_qp.alip.messages import Command, StateEstimate
 from amlip_qp.alip.planner import Planner
 from amlip_qp.codegen import load_kernels
 from amlip_qp.control.mpc.factory import make_mpc_planner
+from amlip_qp.messages import Command, StateEstimate
 from amlip_qp.output_paths import check_output_path, writing
 
 M_KG, H_M, G, T_S, DT_S = 32.0, 0.8, 9.81, 0.3, 0.0005

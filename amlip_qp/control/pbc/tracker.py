@@ -65,7 +65,8 @@ from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
-from amlip_qp.control.tracker import Tracker, TrackerResult, TrackingTarget
+from amlip_qp.control.tracker import Tracker, TrackingTarget
+from amlip_qp.messages import TrackerResult
 from amlip_qp.robots.outputs import OutputMap
 
 if TYPE_CHECKING:  # pragma: no cover - typing only

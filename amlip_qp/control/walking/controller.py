@@ -25,7 +25,7 @@ One :meth:`WalkingController.step` per control tick (2 kHz by default):
 6. the torques are checked (never NaN: a damped fallback replaces them and the
    event is counted) and saturated at the motor limits.
 
-The controller never touches MuJoCo: it sees :class:`~amlip_qp.control.walking.estimator.Measurement` only.
+The controller never touches MuJoCo: it sees :class:`~amlip_qp.messages.Measurement` only.
 What it reports (:class:`StepRecord`, :class:`TickInfo`) is in :mod:`~amlip_qp.control.walking.records`.
 """
 
@@ -41,11 +41,10 @@ from amlip_qp.alip import other_side
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.command_shaping import CommandShaper
 from amlip_qp.alip.heading import world_to_heading
-from amlip_qp.alip.messages import Command, PlannerOutput, StateEstimate
 from amlip_qp.alip.mpc_planner import MPCSettings
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
-from amlip_qp.control.walking.estimator import Estimate, Estimator, Measurement
+from amlip_qp.control.walking.estimator import Estimate, Estimator
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
 from amlip_qp.control.walking.planners import check_planner, make_planner, mpc_regions
@@ -53,6 +52,7 @@ from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_sign
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command, Measurement, PlannerOutput, StateEstimate
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.kinematics import check_stand_output_rank
 from amlip_qp.robots.outputs import output_names

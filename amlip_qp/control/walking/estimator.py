@@ -12,46 +12,20 @@ Angular Momentum") and the CoM vertical velocity.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.alip import other_side
 from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, AngularMomentumFilter
-from amlip_qp.estimation.imu import ImuReading
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Measurement
 
-__all__ = ["Estimate", "Estimator", "ImuReading", "Measurement"]
+__all__ = ["Estimate", "Estimator"]
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
-
-
-@dataclass
-class Measurement:
-    """What the sensors report at one tick.
-
-    Attributes:
-        t_s: Time, s.
-        q: Configuration, Pinocchio convention (free-flyer quaternion xyzw).
-        v: Velocity, Pinocchio convention (free-flyer twist in the base frame).
-        foot_contact: Side -> contact switch (True when the foot carries load);
-            an empty dict means "no contact sensing": touchdown is then
-            detected from the swing foot's height.
-        imu: The IMU reading (:class:`~amlip_qp.estimation.imu.ImuReading`),
-            or ``None`` without an IMU.
-        base_known: False when the base part (``q[:7]``, ``v[:6]``) is not a
-            measurement (robot sensors): a base-state estimator must fill it
-            (:mod:`amlip_qp.estimation.base_estimator`).
-    """
-
-    t_s: float
-    q: np.ndarray
-    v: np.ndarray
-    foot_contact: dict[str, bool] = field(default_factory=dict)
-    imu: ImuReading | None = None
-    base_known: bool = True
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """The ground the walking controller plans each step for: flat, blind (felt footholds) or terrain-aware.
 
-The planner takes the ground as a :class:`~amlip_qp.alip.messages.TerrainPrediction`
+The planner takes the ground as a :class:`~amlip_qp.messages.TerrainPrediction`
 (heights relative to the stance contact, pitches along the heading;
 docs/ALIP_SLOPES.md). A :class:`GroundPredictor` makes one every tick, in one of
 the modes of :data:`GROUND_MODES`:
@@ -39,9 +39,9 @@ from dataclasses import replace
 import numpy as np
 
 from amlip_qp.alip.footholds import FootholdPlane, GroundPlane
-from amlip_qp.alip.messages import Command, TerrainPrediction
 from amlip_qp.control.walking.footprint import EDGE_RISE_M, FootholdSelector
 from amlip_qp.exceptions import InputError
+from amlip_qp.messages import Command, TerrainPrediction
 
 #: The ground modes of :class:`GroundPredictor` (module doc).
 GROUND_MODES: tuple[str, ...] = ("flat", "blind", "aware")

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from amlip_qp.alip.messages import PlannerOutput
 from amlip_qp.control.walking.estimator import Estimate
+from amlip_qp.messages import PlannerOutput
 
 
 @dataclass

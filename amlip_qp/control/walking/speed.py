@@ -20,7 +20,7 @@ import numpy as np
 from amlip_qp.exceptions import InputError
 
 if TYPE_CHECKING:
-    from amlip_qp.alip.messages import Command
+    from amlip_qp.messages import Command
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ class SpeedIntegrator:
 class CorrectedCommand:
     """The command the planner sees: the given one plus the integral speed correction.
 
-    The corrected :class:`~amlip_qp.alip.messages.Command` is made once per
+    The corrected :class:`~amlip_qp.messages.Command` is made once per
     (command, correction) pair and reused while neither changes (the
     correction changes once per step).
 

@@ -37,13 +37,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.tracker import Tracker, TrackerResult
+from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import CompiledBuild
 from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild
 from amlip_qp.control.wbc.config import QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
+from amlip_qp.messages import TrackerResult
 from amlip_qp.qp.daqp_solver import DAQPSolver
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver, QPSolution

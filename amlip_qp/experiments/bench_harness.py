@@ -1,0 +1,308 @@
+"""``amlip-qp bench harness``: where a closed-loop tick goes, per tracker and log mode.
+
+Every tick of :meth:`~amlip_qp.sim.loop.harness.Simulation.run` is timed in three
+parts: the controller's ``step`` (``tick_time_us``), MuJoCo's plant steps
+(``mujoco_time_us``) and the rest of the loop, the harness's own time
+(``harness_time_us``: reading the plant state, sensors, command, controls,
+pushes, logging, fall checks). :func:`run` walks a scenario with each tracker
+in both log modes (``full`` and ``summary``), repeatedly, taking turns
+(tracker by tracker, mode by mode, repeat by repeat), so the speed drifts of a
+shared machine (up to 1.6x within minutes on the 2-core development machine)
+affect every configuration alike. It reports, per tracker and mode, the
+median of each part over all ticks of all repeats, their sum, and the median
+real-time factor; it also checks that both log modes give the same summary
+(timing fields aside), as they walk the same trajectory.
+
+The speed goals are numbers in units of MuJoCo's step time of the same walk,
+which is the same work in every version of the code, so that runs made at
+different machine speeds compare: for the 10-s ``cassie-1mps`` QP walk, the
+harness's own time at most 0.75 MuJoCo steps per tick
+(:data:`GOAL_HARNESS_PER_MUJOCO`), and the walk at 1.0x real time or faster
+(:data:`GOAL_REALTIME_FACTOR`) on the reference machine state, on which a walk
+costing :data:`REFERENCE_TICK_PER_MUJOCO` MuJoCo steps of wall time per tick
+ran at :data:`REFERENCE_REALTIME_FACTOR`: a wall time of at most 8.58 MuJoCo
+steps per tick (:data:`GOAL_TICK_PER_MUJOCO`). A walk of ``tick_per_mujoco``
+steps per tick runs at ``realtime_factor_at_reference`` on that machine state.
+``examples/speed_against.py`` walks another checkout and this one
+interleaved and times both the same way; it is the primary measure of a
+change. MuJoCo's step inside the loop is a stable yardstick under the shared
+machine's load, but it depends a little on the code under test (a leaner loop
+leaves MuJoCo's data in the caches, so its step runs faster), which makes these
+verdicts conservative for a leaner loop. Each row also gives MuJoCo's
+step time alone (:mod:`amlip_qp.experiments.mujoco_yardstick`, replayed on the state at
+the end of the warm-up walk, after each walk) and the tick and harness in such
+steps, for information: that yardstick does not depend on the code, but it
+swings with the machine's load. Recording needs the plant, so the benchmark
+lives in ``sim``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import TYPE_CHECKING, cast
+
+import numpy as np
+
+from amlip_qp.control.registry import TRACKER_MODULES, tracker_class
+from amlip_qp.exceptions import InputError
+from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_time_us
+from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
+from amlip_qp.sim.loop.run_log import LOG_MODES
+from amlip_qp.sim.reports.summary import TIMING_FIELDS, summarize, to_jsonable
+from amlip_qp.sim.scenarios.factory import build_simulation, load
+from amlip_qp.sim.scenarios.named import get_scenario
+
+if TYPE_CHECKING:
+    from amlip_qp.control.tracker import Tracker
+
+#: The goal for a QP walk: simulated time / wall time, at least, on the reference machine state.
+GOAL_REALTIME_FACTOR = 1.0
+
+#: The reference walk: the 10-s ``cassie-1mps`` QP walk of an earlier version of the code on the
+#: 2-core development machine (the medians of 6 walks of ``examples/speed_against.py --reference``,
+#: interleaved with this code). Its wall time per tick and its harness's own time per tick (wall
+#: time less controller and MuJoCo: its harness reports no split), each divided by MuJoCo's step
+#: time per tick of the same walk (MuJoCo's step is the same work in every version, so the ratios
+#: compare runs made at different machine speeds; a leaner harness leaves MuJoCo's step a little
+#: faster, so these ratios slightly understate a leaner code's gain). MuJoCo steps per tick.
+REFERENCE_TICK_PER_MUJOCO = 13.2
+REFERENCE_HARNESS_PER_MUJOCO = 3.01
+
+#: The real-time factor of the reference walk: the machine state the real-time goal is judged at.
+REFERENCE_REALTIME_FACTOR = 0.65
+
+#: The scenario and tracker of the reference walks: the goals are judged on those only.
+REFERENCE_SCENARIO, REFERENCE_TRACKER = DEFAULT_SCENARIO, "qp"
+
+#: The harness goal: at most a quarter of the reference's own cost per tick, 0.75 MuJoCo steps per tick.
+GOAL_HARNESS_PER_MUJOCO = REFERENCE_HARNESS_PER_MUJOCO / 4.0
+
+#: The real-time goal as a cost: at most 8.58 MuJoCo steps of wall time per tick.
+GOAL_TICK_PER_MUJOCO = REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / GOAL_REALTIME_FACTOR
+
+#: Tracker variants the benchmark knows besides :data:`TRACKER_MODULES`' names: ``name -> (tracker, options)``.
+VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
+    "qp-gathered": ("qp", {"in_place_assembly": False}),
+    "qp-daqp": ("qp", {"qp_solver": "daqp"}),
+}
+
+#: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
+WARMUP_S = 0.5
+
+
+def run(
+    scenario: str = DEFAULT_SCENARIO,
+    duration_s: float = 3.0,
+    repeats: int = 3,
+    trackers: tuple[str, ...] = ("qp", "pbc"),
+) -> dict:
+    """Walk ``scenario`` for ``duration_s`` with each tracker in each log mode, ``repeats`` times, interleaved.
+
+    Returns:
+        The report: per ``"{tracker}/{mode}"`` the medians (µs per tick) of the
+        controller, MuJoCo and harness times and their sum, the median real-time
+        factor, the wall time per tick and the harness's mean per tick in MuJoCo
+        steps (``tick_per_mujoco``, ``harness_per_mujoco``), the real-time factor
+        on the reference's machine state (``realtime_factor_at_reference``),
+        MuJoCo's step time alone (``step_alone_us``, the median after each
+        walk) and the tick and harness in a tick's worth of such steps
+        (``tick_per_step``, ``harness_per_step``: medians of the walks' ratios), the
+        ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
+        two modes' summaries agree, timing fields aside); ``reference`` (the
+        reference walk's figures), the goals (``goal_realtime_factor``,
+        ``goal_tick_per_mujoco``, ``goal_harness_per_mujoco``) and their verdicts,
+        given only for the QP rows (``qp`` and ``qp-gathered``, :data:`VARIANTS`)
+        of the reference's scenario (empty otherwise: the goals are set there).
+
+    Raises:
+        InputError: An unknown scenario or tracker, a non-positive duration or repeat count.
+    """
+    sc = get_scenario(scenario)
+    known = (*TRACKER_MODULES, *VARIANTS)
+    unknown = [t for t in trackers if t not in known]
+    if unknown or not trackers:
+        raise InputError(f"unknown trackers {unknown or '(none given)'}; known: {', '.join(known)}")
+    if repeats < 1 or not duration_s > 0:
+        raise InputError(f"bench harness needs repeats >= 1 and a duration > 0 s, got {repeats}, {duration_s}")
+    sc = sc.with_(duration_s=duration_s)
+    states = {  # warm-up (imports, compiled kernels, caches), and the state the step-alone yardstick replays
+        tracker: snapshot_walk(lambda tracker=tracker: build_simulation(sc, tracker_for(sc, tracker)).run(WARMUP_S))
+        for tracker in trackers
+    }
+    per_step: dict[str, dict[str, list[float]]] = {}
+    parts: dict[str, dict[str, list[np.ndarray]]] = {}
+    rtf: dict[str, list[float]] = {}
+    wall: dict[str, float] = {}
+    fell: dict[str, bool] = {}
+    summaries: dict[str, list[dict]] = {}
+    for _ in range(repeats):
+        for tracker in trackers:
+            for mode in LOG_MODES:
+                key = f"{tracker}/{mode}"
+                sim = build_simulation(sc, tracker_for(sc, tracker))
+                result = sim.run(duration_s, log=mode)
+                alone = step_time_us(*states[tracker])
+                ratios = per_step.setdefault(key, {"alone": [], "tick": [], "harness": []})
+                ratios["alone"].append(alone)
+                tick_alone = alone * sim.substeps  # a tick's MuJoCo steps, alone
+                ratios["tick"].append(result.wall_time_s * 1e6 / len(result.tick_time_us) / tick_alone)
+                ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
+                got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": []})
+                got["controller"].append(np.asarray(result.tick_time_us))
+                got["mujoco"].append(np.asarray(result.mujoco_time_us))
+                got["harness"].append(np.asarray(result.harness_time_us))
+                rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
+                wall[key] = wall.get(key, 0.0) + result.wall_time_s
+                fell[key] = fell.get(key, False) or bool(result.fell)
+                summ = to_jsonable({k: v for k, v in summarize(result).items() if k not in TIMING_FIELDS})
+                summaries.setdefault(tracker, []).append(summ)
+    report: dict = {"scenario": scenario, "duration_s": duration_s, "repeats": repeats, "runs": {}}
+    for key, got in parts.items():
+        ticks = {name: np.concatenate(arrays) for name, arrays in got.items()}
+        med = {name: float(np.median(a)) for name, a in ticks.items()}
+        n = int(ticks["controller"].size)
+        mujoco_mean = float(np.mean(ticks["mujoco"]))
+        tick_per_mujoco = wall[key] * 1e6 / n / mujoco_mean
+        report["runs"][key] = {
+            "controller_us_per_tick": med["controller"],
+            "mujoco_us_per_tick": med["mujoco"],
+            "harness_us_per_tick": med["harness"],
+            "sum_us_per_tick": med["controller"] + med["mujoco"] + med["harness"],
+            "realtime_factor": float(np.median(rtf[key])),
+            "tick_per_mujoco": tick_per_mujoco,
+            "harness_per_mujoco": float(np.mean(ticks["harness"])) / mujoco_mean,
+            "realtime_factor_at_reference": reference_realtime(tick_per_mujoco),
+            "step_alone_us": float(np.median(per_step[key]["alone"])),
+            "tick_per_step": float(np.median(per_step[key]["tick"])),
+            "harness_per_step": float(np.median(per_step[key]["harness"])),
+            "ticks": n,
+            "fell": fell[key],
+        }
+    report["same_summary"] = {t: all(s == summaries[t][0] for s in summaries[t]) for t in trackers}
+    report["reference"] = {
+        "scenario": REFERENCE_SCENARIO,
+        "tracker": REFERENCE_TRACKER,
+        "tick_per_mujoco": REFERENCE_TICK_PER_MUJOCO,
+        "harness_per_mujoco": REFERENCE_HARNESS_PER_MUJOCO,
+        "realtime_factor": REFERENCE_REALTIME_FACTOR,
+    }
+    report["goal_realtime_factor"] = GOAL_REALTIME_FACTOR
+    report["goal_harness_per_mujoco"] = GOAL_HARNESS_PER_MUJOCO
+    report["goal_tick_per_mujoco"] = GOAL_TICK_PER_MUJOCO
+    same_walk = scenario == REFERENCE_SCENARIO
+    qp_rows = {
+        key: row for key, row in report["runs"].items() if same_walk and key.split("/")[0] in _QP_NAMES
+    }  # the goals are set for QP walks: no verdict on another tracker's
+    report["qp_meets_realtime_goal"] = {
+        key: bool(row["realtime_factor_at_reference"] >= GOAL_REALTIME_FACTOR)
+        for key, row in qp_rows.items()
+        if key.endswith("/summary")
+    }
+    report["harness_meets_goal"] = {
+        key: bool(row["harness_per_mujoco"] <= GOAL_HARNESS_PER_MUJOCO) for key, row in qp_rows.items()
+    }
+    return report
+
+
+#: The QP tracker's names in the report (the goals are set for QP walks).
+_QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() if base == REFERENCE_TRACKER))
+
+
+def tracker_for(scenario, name: str):
+    """The tracker ``name`` for :func:`~amlip_qp.sim.scenarios.factory.build_simulation`: the name itself,
+    or for a variant of :data:`VARIANTS` a new tracker with its options."""
+    if name not in VARIANTS:
+        return name
+    base, options = VARIANTS[name]
+    # The abstract base declares no constructor; the registered trackers take the robot and keywords.
+    cls = cast("Callable[..., Tracker]", tracker_class(base))
+    return cls(load(scenario.robot), **options)
+
+
+def reference_realtime(tick_per_mujoco: float) -> float:
+    """The real-time factor of a walk costing ``tick_per_mujoco`` MuJoCo steps of wall time per tick,
+    on the machine state on which the reference's walk ran at :data:`REFERENCE_REALTIME_FACTOR`."""
+    return REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / tick_per_mujoco
+
+
+def format_report(r: dict) -> str:
+    """The report as a table."""
+    ref = r["reference"]
+    lines = [
+        f"closed-loop tick, {r['scenario']}, {r['duration_s']:g} s x {r['repeats']} per row, interleaved "
+        "(medians, µs per tick; per MuJoCo step: means; per step alone: medians of the walks' ratios)",
+        f"  {'tracker/log':19s} {'controller':>10s} {'MuJoCo':>8s} {'harness':>8s} {'sum':>8s} {'realtime':>9s}"
+        f" {'tick/MJ':>8s} {'harn/MJ':>8s} {'at ref.':>8s} {'alone':>6s} {'tick/al':>8s} {'harn/al':>8s}",
+    ]
+    for key, row in r["runs"].items():
+        lines.append(
+            f"  {key:19s} {row['controller_us_per_tick']:10.1f} {row['mujoco_us_per_tick']:8.1f} "
+            f"{row['harness_us_per_tick']:8.1f} {row['sum_us_per_tick']:8.1f} {row['realtime_factor']:8.2f}x"
+            f" {row['tick_per_mujoco']:8.2f} {row['harness_per_mujoco']:8.2f}"
+            f" {row['realtime_factor_at_reference']:7.2f}x {row['step_alone_us']:6.2f} {row['tick_per_step']:8.2f}"
+            f" {row['harness_per_step']:8.2f}" + (" (FELL)" if row["fell"] else "")
+        )
+    same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
+    lines.append(f"  same summary in both log modes: {same}")
+    lines.append(
+        f"  reference machine state: a {ref['scenario']} {ref['tracker']} walk of "
+        f"{ref['tick_per_mujoco']:.2f} MuJoCo steps of wall time per tick (harness {ref['harness_per_mujoco']:.2f}) "
+        f"ran at {ref['realtime_factor']:g}x real time"
+    )
+    for key, ok in r["qp_meets_realtime_goal"].items():
+        lines.append(
+            f"  {key} walk at >= {r['goal_realtime_factor']:g}x real time on that machine state "
+            f"(<= {r['goal_tick_per_mujoco']:.2f} MuJoCo steps per tick): " + ("met" if ok else "NOT met")
+        )
+    if not r["harness_meets_goal"]:
+        lines.append(f"  no verdict on the goals: they are set for {ref['scenario']} {ref['tracker']} walks")
+        return "\n".join(lines)
+    met = [key for key, ok in r["harness_meets_goal"].items() if ok]
+    lines.append(
+        f"  harness <= {r['goal_harness_per_mujoco']:.2f} MuJoCo steps per tick: "
+        + (f"met by {', '.join(met)}" if met else "NOT met")
+    )
+    return "\n".join(lines)
+
+
+#: ``--scenario robots``: each bundled robot's nominal walk.
+EVERY_ROBOT = "robots"
+
+
+def scenario_names(text: str) -> tuple[str, ...]:
+    """The scenarios of ``--scenario``: a comma-separated list, where :data:`EVERY_ROBOT` stands for each
+    bundled robot's nominal walk (its profile's ``[compare] nominal_scenario``), in name order.
+
+    Raises:
+        InputError: No scenario named, or an unknown one (checked before any walk).
+    """
+    names: list[str] = []
+    for item in (t.strip() for t in text.split(",")):
+        if not item:
+            continue
+        if item == EVERY_ROBOT:
+            profiles = (get_profile(robot) for robot in bundled_names())
+            names.extend(p.compare.nominal_scenario for p in profiles if p.compare is not None)
+        else:
+            names.append(item)
+    if not names:
+        raise InputError(f"--scenario: expected scenario names or {EVERY_ROBOT!r}, got {text!r}")
+    for name in names:
+        get_scenario(name)
+    return tuple(dict.fromkeys(names))
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    """``amlip-qp bench harness``: print the table per scenario (and write JSON: one scenario's report,
+    or ``{"scenarios": [report, ...]}`` for several); exit 1 if the two log modes disagree on any walk."""
+    from amlip_qp.output_paths import check_output_path, emit_report
+
+    target = getattr(args, "json", None)
+    check_output_path("--json", target)
+    trackers = tuple(t.strip() for t in str(args.trackers).split(",") if t.strip())
+    scenarios = scenario_names(str(args.scenario))
+    reports = [run(scenario=s, duration_s=args.duration, repeats=args.repeats, trackers=trackers) for s in scenarios]
+    text = "\n\n".join(format_report(r) for r in reports)
+    emit_report(text, reports[0] if len(reports) == 1 else {"scenarios": reports}, target)
+    return 0 if all(all(r["same_summary"].values()) for r in reports) else 1

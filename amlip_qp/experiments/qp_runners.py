@@ -1,0 +1,238 @@
+"""The solvers of ``amlip-qp bench qp`` that take dense matrices, each driven through its own interface.
+
+A runner turns a recorded :class:`~amlip_qp.qp.problem.QPProblem` into its
+solver's own format in :meth:`Runner.prepare` (not timed: a tracker written
+for that solver would build its matrices in that format in place) and solves
+it in :meth:`Runner.solve` (timed). A runner whose solver keeps a workspace
+between problems (``persistent``) sets it up on its first problem and then
+only updates the data, as the tracker does with ProxQP; ``start`` says what
+each solve starts from. :attr:`Runner.timed` says what the timed call does.
+
+The sparse solvers (OSQP, QPALM, Clarabel) and the other ``qpsolvers``
+backends are in :mod:`amlip_qp.experiments.qp_runners_sparse`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from amlip_qp.exceptions import QPError
+from amlip_qp.qp.problem import QPProblem
+from amlip_qp.qp.solver import ProxQPSolver
+
+#: Infinite bounds as the C solvers that take no ``inf`` (DAQP) read them.
+BIG_BOUND = 1e30
+
+
+class Runner:
+    """One solver as the bench runs it: :meth:`prepare` untimed, :meth:`solve` timed.
+
+    Attributes:
+        name: The name in the report.
+        start: What each solve starts from (warm/hot start, or none and why).
+        timed: What the timed :meth:`solve` call does.
+        failures: Problems the solver returned no solution for.
+    """
+
+    name = ""
+    start = ""
+    timed = ""
+
+    def __init__(self) -> None:
+        self.failures = 0
+
+    def setup(self, problems: list[QPProblem]) -> None:
+        """Fix what stays the same from problem to problem (not timed; e.g. a sparsity pattern)."""
+
+    def prepare(self, problem: QPProblem) -> Any:
+        """``problem`` in the solver's own format (not timed)."""
+        return problem
+
+    def solve(self, data: Any) -> np.ndarray | None:
+        """Solve prepared data (timed): the full-size ``x``, or ``None`` when the solver found none."""
+        raise NotImplementedError
+
+
+class ProxSuiteRunner(Runner):
+    """The tracker's :class:`~amlip_qp.qp.solver.ProxQPSolver` with the tracker's options: after a
+    failure it retries once from scratch, as the tracker does (the retry timed too)."""
+
+    timed = "ProxQPSolver.solve: update (or init) + solve, status check"
+
+    def __init__(self, warm: bool, options: dict):
+        super().__init__()
+        self.name = "proxsuite-warm" if warm else "proxsuite-init"
+        self.start = "warm: previous x, y, z (the tracker's path)" if warm else "cold: re-initialised every problem"
+        self.solver = ProxQPSolver(**{**options, "warm_start": warm})
+        self.retries = 0
+
+    def solve(self, data: QPProblem) -> np.ndarray | None:
+        try:
+            return self.solver.solve(data).x
+        except QPError:
+            self.retries += 1
+            try:
+                return self.solver.solve(data).x
+            except QPError:
+                self.failures += 1
+                return None
+
+
+def _daqp_data(p: QPProblem) -> tuple:
+    """DAQP's ``(H, f, A, bupper, blower, sense)``: the box first, then ``C``, then ``A`` (sense 5: equality)."""
+    A = np.ascontiguousarray(np.vstack([p.C, p.A]))
+    bu = np.minimum(np.concatenate([p.ub, p.u, p.b]), BIG_BOUND)
+    bl = np.maximum(np.concatenate([p.lb, p.l, p.b]), -BIG_BOUND)
+    sense = np.zeros(bu.size, dtype=np.intc)
+    sense[p.n + p.n_in :] = 5
+    return np.ascontiguousarray(p.H), np.array(p.g), A, bu, bl, sense
+
+
+class DAQPRunner(Runner):
+    """DAQP (dual active set). ``hot``: one ``daqp.Model``, set up on the first problem, then
+    ``update`` + ``solve``, which starts from the previous problem's working set; otherwise
+    ``daqp.solve``, from the empty working set. A fixed variable (``lb == ub``) stays a bound."""
+
+    def __init__(self, hot: bool):
+        super().__init__()
+        import daqp
+
+        self._daqp = daqp
+        self.hot = hot
+        self.name = "daqp-hot" if hot else "daqp-cold"
+        self.start = "hot: previous working set" if hot else "cold: empty working set"
+        self.timed = "Model.update + Model.solve" if hot else "daqp.solve (set-up + solve)"
+        self._model: Any = None
+
+    def prepare(self, p: QPProblem) -> tuple:
+        return _daqp_data(p)
+
+    def solve(self, data: tuple) -> np.ndarray | None:
+        H, f, A, bu, bl, sense = data
+        if not self.hot:
+            x, _, flag, _ = self._daqp.solve(H, f, A, bu, bl, sense)
+        else:
+            if self._model is None:
+                self._model = self._daqp.Model()
+                if self._model.setup(H, f, A, bu, bl, sense)[0] < 0:
+                    self._model = None
+                    self.failures += 1
+                    return None
+            else:
+                self._model.update(H=H, f=f, A=A, bupper=bu, blower=bl)
+            x, _, flag, _ = self._model.solve()
+        if flag <= 0:
+            self.failures += 1
+            if self.hot:
+                self._model = None  # start the next one afresh
+            return None
+        return x
+
+
+class QuadprogRunner(Runner):
+    """quadprog (Goldfarb-Idnani, dense, no state kept): fixed variables become equality rows, rows
+    and bounds at infinity are dropped (in :meth:`prepare`)."""
+
+    name = "quadprog"
+    start = "none: no warm start in its interface"
+    timed = "quadprog.solve_qp (factorisation + solve)"
+
+    def __init__(self) -> None:
+        super().__init__()
+        from quadprog import solve_qp
+
+        self._solve_qp = solve_qp
+
+    def prepare(self, p: QPProblem) -> tuple:
+        eye = np.eye(p.n)
+        fixed = p.lb == p.ub
+        fu, fl = np.isfinite(p.u), np.isfinite(p.l)
+        bu, bl = np.isfinite(p.ub) & ~fixed, np.isfinite(p.lb) & ~fixed
+        # quadprog: min 1/2 x'Gx - a'x  s.t.  C'x >= b, the first meq rows equalities.
+        C = np.vstack([p.A, eye[fixed], -p.C[fu], p.C[fl], -eye[bu], eye[bl]])
+        b = np.concatenate([p.b, p.lb[fixed], -p.u[fu], p.l[fl], -p.ub[bu], p.lb[bl]])
+        return np.array(p.H), -p.g, np.asfortranarray(C.T), b, p.n_eq + int(fixed.sum())
+
+    def solve(self, data: tuple) -> np.ndarray | None:
+        try:
+            return self._solve_qp(*data)[0]
+        except ValueError:  # "constraints are inconsistent, no solution", "matrix G is not positive definite"
+            self.failures += 1
+            return None
+
+
+class QPMADRunner(Runner):
+    """qpmad (Goldfarb-Idnani, dense) through one persistent ``pyqpmad.Solver`` (its workspace kept);
+    equalities are rows with equal bounds. Its ``solve`` factorises ``H`` in place: :meth:`prepare`
+    hands it a copy."""
+
+    name = "qpmad"
+    start = "none: the solver starts from the unconstrained optimum"
+    timed = "Solver.solve (factorisation + solve)"
+
+    def __init__(self) -> None:
+        super().__init__()
+        import pyqpmad
+
+        self._ok = pyqpmad.ReturnStatus.OK
+        self._solver = pyqpmad.Solver()
+        self._params = pyqpmad.SolverParameters()
+
+    def prepare(self, p: QPProblem) -> tuple:
+        A = np.asfortranarray(np.vstack([p.A, p.C]))  # qpmad takes column-major matrices
+        H = np.array(p.H, order="F")
+        return H, np.array(p.g), p.lb, p.ub, A, np.concatenate([p.b, p.l]), np.concatenate([p.b, p.u])
+
+    def solve(self, data: tuple) -> np.ndarray | None:
+        H, h, lb, ub, A, Alb, Aub = data
+        x = np.zeros(h.size)
+        if self._solver.solve(x, H, h, lb, ub, A, Alb, Aub, self._params) != self._ok:
+            self.failures += 1
+            return None
+        return x
+
+
+class PIQPRunner(Runner):
+    """PIQP (proximal interior point) through one persistent ``piqp.DenseSolver``: set up on the
+    first problem, then ``update`` + ``solve``. Given the tracker's absolute tolerance (relative 0) and
+    its primal infeasibility threshold (PIQP's default, 1e-4, reported spurious infeasibility on 4
+    of 1200 recorded problems, as ProxQP's does)."""
+
+    name = "piqp"
+    start = "none: an interior-point method has no warm start (workspace kept)"
+    timed = "DenseSolver.update + solve"
+
+    def __init__(self, eps_abs: float, eps_primal_inf: float):
+        super().__init__()
+        import piqp
+
+        self._piqp = piqp
+        self.eps_abs, self.eps_primal_inf = eps_abs, eps_primal_inf
+        self._solver: Any = None
+
+    def prepare(self, p: QPProblem) -> tuple:
+        # A row free on both sides becomes the row 0 in [-1, 1] (PIQP warns on every call about
+        # infinite pairs, then zeroes such rows itself).
+        free = ~(np.isfinite(p.l) | np.isfinite(p.u))
+        G = np.asfortranarray(p.C)
+        G[free] = 0.0
+        h_l, h_u = np.where(free, -1.0, p.l), np.where(free, 1.0, p.u)
+        f = np.asfortranarray
+        return f(p.H), np.array(p.g), f(p.A), np.array(p.b), G, h_l, h_u, p.lb, p.ub
+
+    def solve(self, data: tuple) -> np.ndarray | None:
+        if self._solver is None:
+            self._solver = self._piqp.DenseSolver()
+            s = self._solver.settings
+            s.verbose, s.eps_abs, s.eps_rel, s.eps_primal_inf = False, self.eps_abs, 0.0, self.eps_primal_inf
+            self._solver.setup(*data)
+        else:
+            P, c, A, b, G, h_l, h_u, x_l, x_u = data
+            self._solver.update(P=P, c=c, A=A, b=b, G=G, h_l=h_l, h_u=h_u, x_l=x_l, x_u=x_u)
+        if self._solver.solve() != self._piqp.PIQP_SOLVED:
+            self.failures += 1
+            self._solver = None
+            return None
+        return np.array(self._solver.result.x)
