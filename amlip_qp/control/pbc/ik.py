@@ -69,11 +69,15 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot
 
 
+_add_reduce = np.add.reduce
+
+
 def _finite(*arrays) -> bool:
     """True if every entry is finite (a NaN or inf makes the sum non-finite; cheaper than
-    ``np.all(np.isfinite(.))`` on these small arrays; the array method skips ``np.sum``'s dispatch)."""
+    ``np.all(np.isfinite(.))`` on these small arrays; the ufunc's reduce skips the Python
+    layers of ``np.sum`` and ``ndarray.sum``)."""
     for a in arrays:
-        if not math.isfinite(a.sum()):
+        if not math.isfinite(_add_reduce(a)):
             return False
     return True
 
