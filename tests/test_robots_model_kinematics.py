@@ -200,44 +200,6 @@ def test_update_positions_matches_full_update_without_velocity_terms(robot):
     np.testing.assert_allclose(light.frame_jdot_v6(cid), _jdot_v6_at(robot, q2, v, cid), atol=1e-12)
 
 
-def test_update_kinematics_matches_full_update_without_dynamics(robot):
-    """The kinematic update gives update(q, v)'s positions, Jacobians, drifts and CoM terms (to
-    rounding: the CoM is summed in another order); the dynamics getters refuse until a full update."""
-    rng = np.random.default_rng(22)
-    q = pin.integrate(robot.pin_model, robot.q_stand, rng.normal(0.0, 0.05, robot.nv))
-    v = rng.normal(0.0, 0.5, robot.nv)
-    full, kinematic = ModelKinematics(robot.pin_model), ModelKinematics(robot.pin_model)
-    kinematic.update(q, np.zeros(robot.nv))  # a full update first: the kinematic one must drop its caches
-    cid = robot.contact_frame_ids["left"]
-    kinematic.frame_jacobian6(cid), kinematic.frame_jdot_v6(cid), kinematic.mass_matrix()
-    q2 = pin.integrate(robot.pin_model, q, rng.normal(0.0, 0.05, robot.nv))
-    kinematic.update_kinematics(q2, v)
-    full.update(q2, v)
-    assert not kinematic.positions_only and not kinematic.has_dynamics and full.has_dynamics
-    np.testing.assert_array_equal(kinematic.v, v)
-    np.testing.assert_allclose(kinematic.com(), full.com(), atol=1e-12)
-    np.testing.assert_allclose(kinematic.com_jacobian(), full.com_jacobian(), atol=1e-12)
-    np.testing.assert_allclose(kinematic.com_velocity(), full.com_velocity(), atol=1e-12)
-    np.testing.assert_allclose(kinematic.com_jdot_v(), full.com_jdot_v(), atol=1e-12)
-    assert np.abs(kinematic.frame_jdot_v6(cid)).max() > 1e-3  # the drifts are the velocity's, not zero
-    for fid in list(robot.contact_frame_ids.values()) + [robot.base_frame_id]:
-        np.testing.assert_array_equal(kinematic.frame_position(fid), full.frame_position(fid))
-        np.testing.assert_array_equal(kinematic.frame_rotation(fid), full.frame_rotation(fid))
-        np.testing.assert_array_equal(kinematic.frame_jacobian6(fid), full.frame_jacobian6(fid))
-        np.testing.assert_array_equal(kinematic.frame_jdot_v6(fid), full.frame_jdot_v6(fid))
-    for getter in (
-        kinematic.mass_matrix,
-        kinematic.nonlinear_effects,
-        kinematic.centroidal_momentum_matrix,
-        kinematic.centroidal_momentum,
-    ):
-        with pytest.raises(InputError, match="update_kinematics"):
-            getter()
-    kinematic.update(q2, v)
-    assert kinematic.has_dynamics
-    np.testing.assert_array_equal(kinematic.mass_matrix(), full.mass_matrix())
-
-
 def _jdot_v6_at(robot, q, v, fid):
     k = ModelKinematics(robot.pin_model)
     k.update(q, v)

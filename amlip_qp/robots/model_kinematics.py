@@ -16,10 +16,6 @@ costs about a microsecond per item, a control tick needs dozens).
 :meth:`ModelKinematics.update_positions` is a lighter update for iterative
 kinematics (the IK): positions, Jacobians and the CoM at ``q`` with ``v = 0``;
 drifts and momenta are then zero and the dynamics getters raise.
-:meth:`ModelKinematics.update_kinematics` is the IK's update with a velocity:
-the kinematics, Jacobians, drifts and the CoM with its velocity, Jacobian and
-acceleration at ``(q, v)``, without the dynamics (no CRBA, nonlinear effects
-or centroidal momentum: a third of ``computeAllTerms``' cost).
 
 All vectors are in world axes and SI units. Jacobians are world-aligned
 (Pinocchio's ``LOCAL_WORLD_ALIGNED``) and map Pinocchio's ``v``; a
@@ -77,9 +73,6 @@ class ModelKinematics:
         self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
-        #: True after :meth:`update` (the dynamics computed), False after the lighter updates.
-        self.has_dynamics = False
-        self._zero_nv = np.zeros(self.model.nv)
         # Shared zero drifts of update_positions(): read-only, as callers get views.
         self._zero3 = np.zeros(3)
         self._zero6 = np.zeros(6)
@@ -111,33 +104,6 @@ class ModelKinematics:
         # forwardKinematics(q, v, 0)); the frame drifts and acom use them.
         pin.computeAllTerms(m, d, q, v)
         pin.updateFramePlacements(m, d)
-        pin.centerOfMass(m, d, self._com_acc_level, False)
-        self._invalidate(False)
-        self.has_dynamics = True
-
-    def update_kinematics(self, q, v) -> None:
-        """Kinematics at ``(q, v)`` without the dynamics (the IK's update with a velocity).
-
-        Runs the forward kinematics with ``vdot = 0`` (the drifts), the joint
-        Jacobians, the frame placements, the CoM Jacobian and the CoM with its
-        velocity and acceleration: every getter of :meth:`update` but the
-        dynamics (``mass_matrix``, ``nonlinear_effects``, the centroidal
-        momentum), which raise :class:`~amlip_qp.exceptions.InputError` until
-        the next :meth:`update`. The same quantities as :meth:`update` up to
-        rounding (the CoM and its Jacobian are summed in another order). ``q``
-        and ``v`` are not checked (hot path of the IK): pass finite arrays of
-        shapes (nq,) and (nv,).
-        """
-        pin = self._pin
-        m, d = self.model, self.data
-        if d is not self._views_data:
-            self._bind_views()
-        self.q = q = np.array(q, dtype=float)
-        self.v = v = np.array(v, dtype=float)
-        pin.forwardKinematics(m, d, q, v, self._zero_nv)
-        pin.computeJointJacobians(m, d)
-        pin.updateFramePlacements(m, d)
-        pin.jacobianCenterOfMass(m, d, False)  # also com[0]; before the CoM pass, which recomputes it
         pin.centerOfMass(m, d, self._com_acc_level, False)
         self._invalidate(False)
 
@@ -199,7 +165,6 @@ class ModelKinematics:
         self._acc3.clear()
         self._M = None
         self.positions_only = positions_only
-        self.has_dynamics = False
 
     def _ready(self) -> None:
         if self.q is None or self.v is None:  # state()'s test, without its call (a dozen getters a tick)
@@ -215,9 +180,8 @@ class ModelKinematics:
     def require_dynamics(self) -> None:
         """Raise :class:`InputError` unless the last update was a full ``update(q, v)``."""
         self._ready()
-        if not self.has_dynamics:
-            light = "update_positions()" if self.positions_only else "update_kinematics()"
-            raise InputError(f"{type(self).__name__}: dynamics not computed by {light}; call update(q, v)")
+        if self.positions_only:
+            raise InputError(f"{type(self).__name__}: dynamics not computed by update_positions(); call update(q, v)")
 
     # ------------------------------------------------------------- frames
     def frame_position(self, frame_id: int) -> np.ndarray:

@@ -19,21 +19,16 @@ stacked Jacobians of these equations):
   as 0. The drift ``Adot v`` is exact (a finite difference of ``A`` along
   ``v_r``) on cold solves and whenever ``iterations`` is given; on warm
   default solves it is the analytic drift of the output map and contact frame
-  at the previous tick's ``v_r`` (one kinematic update at ``(q, v_r^-)``,
-  without the dynamics, replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
+  at the previous tick's ``v_r`` (one full kinematics update at ``(q, v_r^-)``
+  replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
   in ``v``, so the error is about ``2 |dAdot/dv| |v_r| |v_r - v_r^-|``, i.e.
   of the order of ``|a_r| dt`` relative to the drift (checked in
   tests/test_control_pbc_ik.py).
 
 Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
-:class:`amlip_qp.robots.outputs.OutputMap` (or the drop-in the controller's
-kinematics use: :class:`~amlip_qp.control.pbc.tracker.PBCTracker` hands the
-IK the controller's, the generated C of
-:class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap` by
-default), evaluated on the IK's own
+:class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
 :class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
-through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`
-or :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_kinematics`.
+through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
 
 Robustness: each Newton step solves ``A dq = -F`` (LU; a damped least-squares
 step ``(A^T A + mu I) dq = -A^T F`` only if the LU step is not finite), its
@@ -156,14 +151,14 @@ class IterativeIK:
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
         """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
 
-        With a velocity ``v`` the IK's kinematics get a kinematic update at ``(q, v)``
+        With a velocity ``v`` the IK's kinematics get a full update at ``(q, v)``
         (then :meth:`_drift` gives ``Adot v``); without, the light position update.
         """
         kin = self.kin
         if v is None:
             kin.update_positions(q)
         else:
-            kin.update_kinematics(q, v)
+            kin.update(q, v)
         y, J, _ = kin.outputs(stance, heading)
         n = self.size
         A[:n] = J

@@ -259,9 +259,6 @@ class PBCTracker(Tracker):
         t0 = time.perf_counter()
         stance = target.stance
         lay = self._layout[stance]
-        output_map = kin.output_map
-        if self.ik.kin.output_map is not output_map:  # the IK evaluates the outputs as the controller does
-            self.ik.kin.output_map = output_map
         q, v = kin.state()
         held = None
         if self.gains.spring_model_offset and len(self._spring_rest):
