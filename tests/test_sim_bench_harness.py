@@ -33,6 +33,7 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         # the tick in MuJoCo steps: each step of the yardstick timed alone, medians; the PBC's goals
         assert row["step_median_us"] > 0.0 and row["controller_per_step"] > row["tracker_per_step"] > 0.0
         assert row["tracker_us_per_tick"] < row["controller_us_per_tick"]
+        assert row["controller_per_loop_step"] > row["tracker_per_loop_step"] > 0.0
         goals = row["speed_goals"]
         assert set(goals) == {"controller_steps", "realtime_factor"}  # cassie-1mps: Cassie's nominal walk
         assert goals["controller_steps"] == {

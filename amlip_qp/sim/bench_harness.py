@@ -121,7 +121,10 @@ def run(
         (``tick_per_step``, ``harness_per_step``: medians of the walks' ratios), the median of
         a single step's time (``step_median_us``) and the controller's tick
         and the tracker's work in such steps (``controller_per_step``,
-        ``tracker_per_step``), the goals of :func:`speed_goals` with their
+        ``tracker_per_step``), the same two over MuJoCo's step in the same
+        tick, medians over the ticks (``controller_per_loop_step``,
+        ``tracker_per_loop_step``: both parts of one tick see the same machine
+        state), the goals of :func:`speed_goals` with their
         verdicts (``speed_goals``), the ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (the
         reference walk's figures), the goals (``goal_realtime_factor``,
@@ -202,6 +205,8 @@ def run(
             "step_median_us": float(np.median(per_step[key]["step"])),
             "controller_per_step": float(np.median(per_step[key]["controller"])),
             "tracker_per_step": float(np.median(per_step[key]["tracker"])),
+            "controller_per_loop_step": _per_tick_ratio(ticks["controller"], ticks["mujoco"]),
+            "tracker_per_loop_step": _per_tick_ratio(ticks["tracker"], ticks["mujoco"]),
             "ticks": n,
             "fell": fell[key],
         }
@@ -234,6 +239,14 @@ def run(
 
 #: The QP tracker's names in the report (the goals are set for QP walks).
 _QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() if base == REFERENCE_TRACKER))
+
+
+def _per_tick_ratio(part_us: np.ndarray, mujoco_us: np.ndarray) -> float:
+    """Median over the ticks of ``part / MuJoCo's step`` in the same tick; the ratio of the medians
+    when the two do not pair up (a tick without the tracker: the safe mode)."""
+    if part_us.shape == mujoco_us.shape:
+        return float(np.median(part_us / mujoco_us))
+    return float(np.median(part_us) / np.median(mujoco_us))
 
 
 def speed_goals(robot: str, scenario: str, key: str, row: dict) -> dict:
@@ -293,7 +306,8 @@ def format_report(r: dict) -> str:
     lines.append(
         "  in MuJoCo steps (each step timed alone, replayed after every walk; the walks' tick medians over the"
         " step medians, median over the walks): step µs, controller tick, tracker's own work (kinematics update"
-        " + compute); goals"
+        " + compute); the same two over MuJoCo's step in the same tick of the loop (medians over the ticks);"
+        " goals (on the step alone)"
     )
     for key, row in r["runs"].items():
         verdicts = []
@@ -304,7 +318,8 @@ def format_report(r: dict) -> str:
             verdicts.append(f"{label} {sign} {g['goal']:g}{unit}: " + ("met" if g["met"] else "NOT met"))
         lines.append(
             f"  {key:19s} {row['step_median_us']:6.1f} {row['controller_per_step']:6.2f}"
-            f" {row['tracker_per_step']:6.2f}   " + ("; ".join(verdicts) if verdicts else "no goal")
+            f" {row['tracker_per_step']:6.2f}   {row['controller_per_loop_step']:6.2f}"
+            f" {row['tracker_per_loop_step']:6.2f}   " + ("; ".join(verdicts) if verdicts else "no goal")
         )
     same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
     lines.append(f"  same summary in both log modes: {same}")
