@@ -2,10 +2,12 @@
 
 A shared machine's speed drifts (up to 1.6x within minutes on the 2-core
 development machine, more with other jobs on it), so the tick goals are
-ratios to a yardstick measured in the same run: MuJoCo's step alone on a
-walking state (:mod:`amlip_qp.sim.mujoco_yardstick`), replayed after every
-walk, the walks and the yardstick taking turns. A tick of ``x`` MuJoCo steps
-costs ``x`` times the plant's own step.
+ratios to MuJoCo's step measured in the same run: the plant's step in the
+same tick of the walking loop (35-40 µs for Cassie on the development
+machine), the median over the ticks of the per-tick ratios. A tick of ``x``
+MuJoCo steps costs ``x`` times the plant's own step. ``amlip-qp bench
+harness`` also gives the figures over the step alone
+(:mod:`amlip_qp.sim.mujoco_yardstick`, replayed after every walk).
 
 - :data:`GOAL_CONTROLLER_STEPS`: the whole-body QP controller's whole tick
   (estimate, plan, track), median;
