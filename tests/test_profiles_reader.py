@@ -42,6 +42,8 @@ def test_the_bundled_profile_reads_the_values_its_file_gives():
     assert p.tracker_config("qp") is qp  # built once
     pbc = p.tracker_config("pbc")
     assert pbc.kd_stance_ps == 44.72 and pbc.spring_model_linkage.heel_stiffness_Nmprad == 1250.0
+    assert p.compare is not None and p.compare.realtime_goal == {"qp": 2.5, "pbc": 1.5}
+    assert get_profile("rabbit").compare.realtime_goal == {}  # no goal: the key is optional
 
 
 def test_a_copy_of_a_bundled_profile_reads_alike(tmp_path):
@@ -100,6 +102,9 @@ def test_an_imu_quaternion_near_unit_norm_is_normalised_and_an_imu_body_the_mode
         ("[imu]\n", "[imu]\nquat_wxyz = [1.0, 0.0, 0.1, 0.0]\n", "imu.quat_wxyz: must be a unit quaternion"),
         ("[imu]\n", "[imu]\nbody = 3\n", "imu.body: must be a non-empty string, got 3"),
         ("[imu]\n", "[imu]\npos_in_base_m = [0.0, 0.0, 0.0]\n", "imu: unknown key 'pos_in_base_m' (known here: body"),
+        ("realtime_goal = { qp = 2.5,", "realtime_goal = { lqr = 2.5,", "compare.realtime_goal.lqr: unknown tracker"),
+        ("realtime_goal = { qp = 2.5,", "realtime_goal = { qp = 0.0,", "compare.realtime_goal.qp: 0 is outside"),
+        ("realtime_goal = { qp = 2.5,", 'realtime_goal = { qp = "fast",', "compare.realtime_goal.qp: must be a number"),
     ],
 )
 def test_each_bad_key_is_named_in_one_line(tmp_path, old, new, message):

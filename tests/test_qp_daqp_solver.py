@@ -32,6 +32,24 @@ def test_matches_quadprog_on_random_problems():
         assert max(p.residuals(x).values()) < 1e-9
 
 
+def test_the_solution_check_measures_the_problems_own_residuals():
+    """The check of every reported solution (on the stacked rows DAQP solved, an infinite bound held
+    as 1e30) gives the problem's largest residual, for points inside and outside the constraints."""
+    from amlip_qp.qp.daqp_solver import _Shape
+
+    rng = np.random.default_rng(5)
+    for seed in range(6):
+        p = random_problem(seed)
+        p.u[0], p.lb[1] = np.inf, -np.inf  # an infinite bound of each kind
+        shape = _Shape(p)
+        shape.fill(p)
+        for scale in (0.0, 0.1, 10.0):
+            x = p.solve_with("quadprog") + scale * rng.normal(size=p.n)
+            expected = max(max(p.residuals(x).values()), 0.0)
+            assert shape.violation(x) == pytest.approx(expected, rel=1e-12, abs=1e-12)
+            assert (shape.violation(x) > 1e-4) == (expected > 1e-4)
+
+
 def test_finds_the_trackers_optimum_exactly(walk_problems):
     """quadprog's solution (both are exact active-set methods) to 1e-7 in x (N, m/s^2), constraints held
     to 1e-6; and never a higher cost than ProxQP even at 1e-10 (on these problems ProxQP's is up to

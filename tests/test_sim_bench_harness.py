@@ -29,6 +29,18 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         assert row["realtime_factor_at_reference"] == pytest.approx(0.65 * ref / row["tick_per_mujoco"])
         assert row["step_alone_us"] > 0.0 and row["tick_per_step"] > row["harness_per_step"] > 0.0
     assert r["harness_meets_goal"] == {}  # the reference's walks were QP walks: no verdict on a PBC walk
+    for row in r["runs"].values():
+        # the tick in MuJoCo steps: each step of the yardstick timed alone, medians; the PBC's goals
+        assert row["step_median_us"] > 0.0 and row["controller_per_step"] > row["tracker_per_step"] > 0.0
+        assert row["tracker_us_per_tick"] < row["controller_us_per_tick"]
+        assert row["controller_per_loop_step"] > row["tracker_per_loop_step"] > 0.0
+        goals = row["speed_goals"]
+        assert set(goals) == {"controller_steps", "realtime_factor"}  # cassie-1mps: Cassie's nominal walk
+        assert goals["controller_steps"] == {
+            "goal": 6.0, "value": row["controller_per_loop_step"], "met": row["controller_per_loop_step"] <= 6.0
+        }  # fmt: skip
+        assert goals["realtime_factor"]["goal"] == 1.5
+        assert goals["realtime_factor"]["met"] == (row["realtime_factor"] >= 1.5)
     text = bench_harness.format_report(r)
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
     assert "a cassie-1mps qp walk of 13.20 MuJoCo steps of wall time per tick (harness 3.01) ran at 0.65x" in text
@@ -39,6 +51,12 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
 def test_the_goals_are_judged_on_the_reference_walk_only(scenario):
     r = bench_harness.run(scenario=scenario, duration_s=0.05, repeats=1, trackers=("qp",))
     text = bench_harness.format_report(r)
+    goals = r["runs"]["qp/summary"]["speed_goals"]
+    assert goals["controller_steps"]["goal"] == 3.0 and goals["tracker_steps"]["goal"] == 2.0
+    assert goals["tracker_steps"]["met"] == (r["runs"]["qp/summary"]["tracker_per_loop_step"] <= 2.0)
+    # a real-time goal only where the robot's profile sets one for its nominal walk (Rabbit's sets none)
+    assert ("realtime_factor" in goals) == (scenario == "cassie-1mps")
+    assert "tick <= 3 steps: " in text and "tracker <= 2 steps: " in text
     if scenario != bench_harness.REFERENCE_SCENARIO:
         assert r["qp_meets_realtime_goal"] == {} and r["harness_meets_goal"] == {}
         assert "no verdict on the goals" in text

@@ -22,6 +22,9 @@ def test_the_snapshot_is_a_copy_of_the_state_after_the_walks_last_step():
     assert 0.0 < us < 1e4
     np.testing.assert_array_equal(state.qpos, before)  # the replays ran on copies
     assert state.time == pytest.approx(0.05)
+    median = mujoco_yardstick.step_median_us(model, state, steps=20, rounds=3)
+    assert 0.0 < median < 1e4
+    np.testing.assert_array_equal(state.qpos, before)
 
 
 def test_a_walk_without_a_step_is_an_error_and_unwraps_mujoco():

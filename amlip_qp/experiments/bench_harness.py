@@ -34,6 +34,19 @@ the end of the warm-up walk, after each walk) and the tick and harness in such
 steps, for information: that yardstick does not depend on the code, but it
 swings with the machine's load. Recording needs the plant, so the benchmark
 lives in ``sim``.
+
+The controller's own speed goals (:mod:`amlip_qp.experiments.bench_goals`) are judged
+per row in MuJoCo steps: the controller's tick and the tracker's own work per
+tick (the kinematics update and the tracker's ``compute``,
+:class:`~amlip_qp.experiments.bench_goals.TrackerWork`) over MuJoCo's step in the
+same tick of the loop, medians over the ticks (the goals' unit: MuJoCo's step
+inside the walking loop, 35-40 µs for Cassie on the development machine; both
+parts of a tick see the same machine state); and the real-time factor against
+the robot's ``[compare] realtime_goal`` on its nominal walk. The same two are
+also given over the yardstick's step alone with every step timed on its own
+(:func:`~amlip_qp.experiments.mujoco_yardstick.step_median_us`, robust to a step
+preempted by another process; a warm-cache step, about 2.4 times shorter
+than the loop's), the median over the walks.
 """
 
 from __future__ import annotations
@@ -46,7 +59,8 @@ import numpy as np
 
 from amlip_qp.control.registry import TRACKER_MODULES, tracker_class
 from amlip_qp.exceptions import InputError
-from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_time_us
+from amlip_qp.experiments.bench_goals import TrackerWork, realtime_goal, tick_goals, tracker_base
+from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_median_us, step_time_us
 from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
 from amlip_qp.sim.reports.summary import TIMING_FIELDS, summarize, to_jsonable
@@ -102,13 +116,20 @@ def run(
     Returns:
         The report: per ``"{tracker}/{mode}"`` the medians (µs per tick) of the
         controller, MuJoCo and harness times and their sum, the median real-time
-        factor, the wall time per tick and the harness's mean per tick in MuJoCo
+        factor, the tracker's own work per tick (``tracker_us_per_tick``), the wall time per tick and the
+        harness's mean per tick in MuJoCo
         steps (``tick_per_mujoco``, ``harness_per_mujoco``), the real-time factor
         on the reference's machine state (``realtime_factor_at_reference``),
         MuJoCo's step time alone (``step_alone_us``, the median after each
         walk) and the tick and harness in a tick's worth of such steps
-        (``tick_per_step``, ``harness_per_step``: medians of the walks' ratios), the
-        ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
+        (``tick_per_step``, ``harness_per_step``: medians of the walks' ratios), the median of
+        a single step's time (``step_median_us``) and the controller's tick
+        and the tracker's work in such steps (``controller_per_step``,
+        ``tracker_per_step``), the same two over MuJoCo's step in the same
+        tick, medians over the ticks (``controller_per_loop_step``,
+        ``tracker_per_loop_step``: both parts of one tick see the same machine
+        state), the goals of :func:`speed_goals` with their
+        verdicts (``speed_goals``), the ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (the
         reference walk's figures), the goals (``goal_realtime_factor``,
         ``goal_tick_per_mujoco``, ``goal_harness_per_mujoco``) and their verdicts,
@@ -141,17 +162,25 @@ def run(
             for mode in LOG_MODES:
                 key = f"{tracker}/{mode}"
                 sim = build_simulation(sc, tracker_for(sc, tracker))
+                work = TrackerWork(sim)
                 result = sim.run(duration_s, log=mode)
                 alone = step_time_us(*states[tracker])
-                ratios = per_step.setdefault(key, {"alone": [], "tick": [], "harness": []})
+                step_us = step_median_us(*states[tracker]) * sim.substeps  # a tick's MuJoCo steps, each timed
+                ratios = per_step.setdefault(
+                    key, {"alone": [], "tick": [], "harness": [], "step": [], "controller": [], "tracker": []}
+                )
+                ratios["step"].append(step_us)
                 ratios["alone"].append(alone)
                 tick_alone = alone * sim.substeps  # a tick's MuJoCo steps, alone
                 ratios["tick"].append(result.wall_time_s * 1e6 / len(result.tick_time_us) / tick_alone)
                 ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
-                got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": []})
+                ratios["controller"].append(float(np.median(result.tick_time_us)) / step_us)
+                ratios["tracker"].append(float(np.median(work.times_us)) / step_us)
+                got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": [], "tracker": []})
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))
                 got["harness"].append(np.asarray(result.harness_time_us))
+                got["tracker"].append(np.asarray(work.times_us))
                 rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
                 wall[key] = wall.get(key, 0.0) + result.wall_time_s
                 fell[key] = fell.get(key, False) or bool(result.fell)
@@ -169,6 +198,7 @@ def run(
             "mujoco_us_per_tick": med["mujoco"],
             "harness_us_per_tick": med["harness"],
             "sum_us_per_tick": med["controller"] + med["mujoco"] + med["harness"],
+            "tracker_us_per_tick": med["tracker"],
             "realtime_factor": float(np.median(rtf[key])),
             "tick_per_mujoco": tick_per_mujoco,
             "harness_per_mujoco": float(np.mean(ticks["harness"])) / mujoco_mean,
@@ -176,9 +206,15 @@ def run(
             "step_alone_us": float(np.median(per_step[key]["alone"])),
             "tick_per_step": float(np.median(per_step[key]["tick"])),
             "harness_per_step": float(np.median(per_step[key]["harness"])),
+            "step_median_us": float(np.median(per_step[key]["step"])),
+            "controller_per_step": float(np.median(per_step[key]["controller"])),
+            "tracker_per_step": float(np.median(per_step[key]["tracker"])),
+            "controller_per_loop_step": _per_tick_ratio(ticks["controller"], ticks["mujoco"]),
+            "tracker_per_loop_step": _per_tick_ratio(ticks["tracker"], ticks["mujoco"]),
             "ticks": n,
             "fell": fell[key],
         }
+        report["runs"][key]["speed_goals"] = speed_goals(sc.robot, scenario, key, report["runs"][key])
     report["same_summary"] = {t: all(s == summaries[t][0] for s in summaries[t]) for t in trackers}
     report["reference"] = {
         "scenario": REFERENCE_SCENARIO,
@@ -207,6 +243,34 @@ def run(
 
 #: The QP tracker's names in the report (the goals are set for QP walks).
 _QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() if base == REFERENCE_TRACKER))
+
+
+def _per_tick_ratio(part_us: np.ndarray, mujoco_us: np.ndarray) -> float:
+    """Median over the ticks of ``part / MuJoCo's step`` in the same tick; the ratio of the medians
+    when the two do not pair up (a tick without the tracker: the safe mode)."""
+    if part_us.shape == mujoco_us.shape:
+        return float(np.median(part_us / mujoco_us))
+    return float(np.median(part_us) / np.median(mujoco_us))
+
+
+def speed_goals(robot: str, scenario: str, key: str, row: dict) -> dict:
+    """The goals of :mod:`amlip_qp.experiments.bench_goals` that apply to the row ``key`` (``tracker/mode``) and
+    their verdicts: ``{name: {"goal": number, "value": number, "met": bool}}`` for ``controller_steps``,
+    ``tracker_steps`` (MuJoCo steps, medians) and ``realtime_factor`` (the robot's nominal walk only)."""
+    tracker = tracker_base(key.split("/")[0], VARIANTS)
+    goals = tick_goals(tracker)
+    out: dict = {}
+    if "controller" in goals:
+        value = row["controller_per_loop_step"]
+        out["controller_steps"] = {"goal": goals["controller"], "value": value, "met": value <= goals["controller"]}
+    if "tracker" in goals:
+        value = row["tracker_per_loop_step"]
+        out["tracker_steps"] = {"goal": goals["tracker"], "value": value, "met": value <= goals["tracker"]}
+    rt = realtime_goal(robot, scenario, tracker)
+    if rt is not None:
+        value = row["realtime_factor"]
+        out["realtime_factor"] = {"goal": rt, "value": value, "met": value >= rt}
+    return out
 
 
 def tracker_for(scenario, name: str):
@@ -242,6 +306,24 @@ def format_report(r: dict) -> str:
             f" {row['tick_per_mujoco']:8.2f} {row['harness_per_mujoco']:8.2f}"
             f" {row['realtime_factor_at_reference']:7.2f}x {row['step_alone_us']:6.2f} {row['tick_per_step']:8.2f}"
             f" {row['harness_per_step']:8.2f}" + (" (FELL)" if row["fell"] else "")
+        )
+    lines.append(
+        "  in MuJoCo steps (each step timed alone, replayed after every walk; the walks' tick medians over the"
+        " step medians, median over the walks): step µs, controller tick, tracker's own work (kinematics update"
+        " + compute); the same two over MuJoCo's step in the same tick of the loop (medians over the ticks);"
+        " goals (on the step in the loop)"
+    )
+    for key, row in r["runs"].items():
+        verdicts = []
+        for name, g in row["speed_goals"].items():
+            unit = "x real time" if name == "realtime_factor" else " steps"
+            sign = ">=" if name == "realtime_factor" else "<="
+            label = {"controller_steps": "tick", "tracker_steps": "tracker", "realtime_factor": "walk"}[name]
+            verdicts.append(f"{label} {sign} {g['goal']:g}{unit}: " + ("met" if g["met"] else "NOT met"))
+        lines.append(
+            f"  {key:19s} {row['step_median_us']:6.1f} {row['controller_per_step']:6.2f}"
+            f" {row['tracker_per_step']:6.2f}   {row['controller_per_loop_step']:6.2f}"
+            f" {row['tracker_per_loop_step']:6.2f}   " + ("; ".join(verdicts) if verdicts else "no goal")
         )
     same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
     lines.append(f"  same summary in both log modes: {same}")

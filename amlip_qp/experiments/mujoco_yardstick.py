@@ -9,8 +9,11 @@ does not depend on the code under test, unlike MuJoCo's time inside the
 walking loop, where the rest of the tick evicts MuJoCo's data from the caches
 (the step costs about twice as much there, and a leaner loop leaves it
 faster). But it lasts about 25 ms, so it swings with the machine's load
-(10-35 µs a step seen on the loaded 2-core machine), where the step inside
-the loop follows the walk's own conditions.
+(10-35 µs a step seen on the loaded 2-core machine, up to 180 µs with four
+times as many busy processes as cores), where the step inside the loop
+follows the walk's own conditions. :func:`step_median_us` times every step
+on its own and takes the median, as the controller's tick medians do: a
+step preempted by another process is an outlier there, not part of a mean.
 
 This file uses only ``copy``, ``statistics``, ``time`` and ``mujoco``, and
 ``examples/speed_against.py`` runs this file's source inside the walks of
@@ -62,3 +65,16 @@ def step_time_us(model, data, steps: int = STEPS, rounds: int = ROUNDS) -> float
             step(model, d)
         per_round.append((clock() - t0) * 1e-3 / steps)
     return statistics.median(per_round)
+
+
+def step_median_us(model, data, steps: int = STEPS, rounds: int = ROUNDS) -> float:
+    """Median wall time of one ``mj_step`` (µs) over ``rounds`` x ``steps`` steps, each timed on its
+    own, each round replaying ``steps`` steps from a fresh copy of ``data`` (which stays unchanged)."""
+    step, clock, times = mujoco.mj_step, time.perf_counter_ns, []
+    for _ in range(rounds):
+        d = copy.copy(data)
+        for _ in range(steps):
+            t0 = clock()
+            step(model, d)
+            times.append(clock() - t0)
+    return statistics.median(times) * 1e-3

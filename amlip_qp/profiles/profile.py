@@ -82,12 +82,15 @@ class CompareRanges:
         ramp_end_mps: Speed the ramp test reaches, m/s.
         push_max_impulse_Ns: Upper end of the push bisection, N s.
         relative_cost: Relative wall-time cost of one simulated second (schedules the longest first).
+        realtime_goal: Tracker name -> the real-time factor (simulated time over wall time, median)
+            the nominal walk should reach with it in ``amlip-qp bench harness`` (none: no goal).
     """
 
     nominal_scenario: str
     ramp_end_mps: float
     push_max_impulse_Ns: float
     relative_cost: float = 1.0
+    realtime_goal: Mapping[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

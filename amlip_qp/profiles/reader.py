@@ -301,6 +301,19 @@ def _dataclass_table(t: _Table, make: Callable[..., Any], fields: Mapping[str, t
     return make(**kwargs)
 
 
+def _realtime_goal(t: _Table | None) -> dict[str, float]:
+    """``[compare] realtime_goal``: tracker name -> the nominal walk's real-time factor goal."""
+    if t is None:
+        return {}
+    goals = {}
+    for tracker in list(t.data):
+        if tracker not in TRACKER_CONFIG_BUILDERS:
+            t.fail(f"unknown tracker {tracker!r} (known: {', '.join(TRACKER_CONFIG_BUILDERS)})", tracker)
+        goals[tracker] = t.number(tracker, low=1e-3, high=1e3)
+    t.done()
+    return goals
+
+
 def _bounds(t: _Table) -> CommandBounds:
     vx = t.vector("vx_mps", 2, unit="m/s")
     kwargs = {
@@ -412,6 +425,7 @@ def read_profile(path: str | Path) -> RobotProfile:
             ramp_end_mps=compare_t.number("ramp_end_mps", low=0.0, unit="m/s"),
             push_max_impulse_Ns=compare_t.number("push_max_impulse_Ns", low=0.0, unit="N s"),
             relative_cost=compare_t.number("relative_cost", 1.0, low=1e-3, high=1e3),
+            realtime_goal=_realtime_goal(compare_t.table("realtime_goal", required=False)),
         )
         compare_t.done()
     plants_t = top.table("plants", required=False)

@@ -64,10 +64,17 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.robot import Robot
 
 
+_add_reduce = np.add.reduce
+
+
 def _finite(*arrays) -> bool:
     """True if every entry is finite (a NaN or inf makes the sum non-finite; cheaper than
-    ``np.all(np.isfinite(.))`` on these small arrays)."""
-    return all(math.isfinite(float(np.sum(a))) for a in arrays)
+    ``np.all(np.isfinite(.))`` on these small arrays; the ufunc's reduce skips the Python
+    layers of ``np.sum`` and ``ndarray.sum``)."""
+    for a in arrays:
+        if not math.isfinite(_add_reduce(a)):
+            return False
+    return True
 
 
 def _lu_solve(lu, b: np.ndarray) -> np.ndarray:
@@ -206,7 +213,7 @@ class IterativeIK:
             mu = self.settings.damping
             dq = np.linalg.solve(A.T @ A + mu * self._eye, -A.T @ F)
         nb = self._nb
-        jmax = float(np.max(np.abs(dq[nb:]))) if dq.size > nb else 0.0
+        jmax = float(abs(dq[nb:]).max()) if dq.size > nb else 0.0
         if jmax > self.settings.max_step_rad:
             dq *= self.settings.max_step_rad / jmax
         return dq
@@ -312,7 +319,7 @@ class IterativeIK:
                 y, pos, rot = self._evaluate(q, stance, heading_rad, A, v_pred)
                 F = self._residual(rows, q, y, pos, rot, h_d, fixed)
                 swap_rows(swap, q, A, F)
-                residual = float(np.max(np.abs(F)))
+                residual = float(abs(F).max())
                 lu = self._lu(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
                 if (
@@ -335,7 +342,7 @@ class IterativeIK:
                         # out of iterations, a knee straight (or short of it, at a fold) and its output
                         # out of reach: trade that output for the knee held there, and iterate on
                         swap_rows(swap, q, A, F)
-                        residual = float(np.max(np.abs(F)))
+                        residual = float(abs(F).max())
                         lu = self._lu(A)
                         n_max = it + s.cold_iterations
                         done = not exact and residual < s.tolerance

@@ -302,12 +302,12 @@ class PBCTracker(Tracker):
         if sw != 1.0:
             vdot_ctrl[lay.swing_mask] *= sw
         vdot_ctrl += a_r
-        info["tracking_error_rad"] = float(np.max(np.abs(e)))
+        info["tracking_error_rad"] = float(abs(e).max())
         try:
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
-        if not (math.isfinite(float(np.sum(tau_c))) and math.isfinite(float(np.sum(lam)))):
+        if not (math.isfinite(tau_c.sum()) and math.isfinite(lam.sum())):
             return self._fallback(kin, lay, q_r, "non_finite_torque", info, t0)
         tau = np.zeros(self._nu)
         tau[lay.ctrl] = tau_c
