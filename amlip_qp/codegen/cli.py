@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -77,19 +76,9 @@ def run_codegen(args: argparse.Namespace) -> int:
 def run_bench(args: argparse.Namespace) -> int:
     """Time c-fast / casadi-function / numpy; print a table and optionally JSON (``--json PATH|-``)."""
     from amlip_qp.codegen.bench import format_table, run_benchmark
-    from amlip_qp.output_paths import check_output_path, writing
+    from amlip_qp.output_paths import check_output_path, emit_report
 
     check_output_path("--json", args.json)
     result = run_benchmark(calls=args.calls)
-    table = format_table(result)
-    if args.json == "-":
-        sys.stderr.write(table + "\n")
-        json.dump(result, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    print(table)
-    if args.json:
-        with writing("--json", args.json):
-            Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
-        print(f"wrote {args.json}")
+    emit_report(format_table(result), result, args.json)
     return 0

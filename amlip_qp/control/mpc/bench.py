@@ -20,12 +20,9 @@ solve with the QP tracker's warm ProxQP median in ``amlip-qp bench qp`` (docs/BE
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import platform
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -33,7 +30,7 @@ from amlip_qp.alip.planner import Planner
 from amlip_qp.codegen import load_kernels
 from amlip_qp.control.mpc.factory import make_mpc_planner
 from amlip_qp.messages import Command, StateEstimate
-from amlip_qp.output_paths import check_output_path, writing
+from amlip_qp.output_paths import check_output_path, emit_report
 
 M_KG, H_M, G, T_S, DT_S = 32.0, 0.8, 9.81, 0.3, 0.0005
 OUTPUTS = (
@@ -121,15 +118,5 @@ def run_bench(args: argparse.Namespace) -> int:
     """The handler of ``amlip-qp bench mpc``: the table, and JSON with ``--json PATH|-``."""
     check_output_path("--json", args.json)
     result = run_benchmark(duration_s=args.duration)
-    table = format_table(result)
-    if args.json == "-":
-        sys.stderr.write(table + "\n")
-        json.dump(result, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    print(table)
-    if args.json:
-        with writing("--json", args.json):
-            Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
-        print(f"wrote {args.json}")
+    emit_report(format_table(result), result, args.json)
     return 0
