@@ -35,89 +35,12 @@ from amlip_qp.profiles.profile import (
     StandPose,
     sole_rectangle_corners,
 )
+from amlip_qp.profiles.toml_table import Table, check_number
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
-
-
-class _Table:
-    """One TOML table being read: each key is taken once; what is left over is an unknown key."""
-
-    def __init__(self, source: Path, where: str, data: Any):
-        self.source, self.where = source, where
-        if not isinstance(data, Mapping):
-            self.fail(f"must be a table, got {type(data).__name__}")
-        self.data = dict(data)
-        self.taken: set[str] = set()
-
-    def key_path(self, key: str) -> str:
-        return f"{self.where}.{key}" if self.where else key
-
-    def fail(self, message: str, key: str | None = None) -> Any:
-        where = self.key_path(key) if key is not None else (self.where or "top level")
-        raise ProfileError(f"{self.source}: {where}: {message}")
-
-    def has(self, key: str) -> bool:
-        return key in self.data
-
-    def raw(self, key: str, default: Any = ...) -> Any:
-        self.taken.add(key)
-        if key not in self.data:
-            if default is ...:
-                self.fail("is required", key)
-            return default
-        return self.data[key]
-
-    def table(self, key: str, required: bool = True) -> _Table | None:
-        value = self.raw(key, ... if required else None)
-        return None if value is None else _Table(self.source, self.key_path(key), value)
-
-    def string(self, key: str, default: Any = ..., choices: tuple[str, ...] = ()) -> Any:
-        value = self.raw(key, default)
-        if value is default and default is not ...:
-            return value
-        if not isinstance(value, str) or not value.strip():
-            self.fail(f"must be a non-empty string, got {value!r}", key)
-        if choices and value not in choices:
-            self.fail(f"must be one of {', '.join(choices)}, got {value!r}", key)
-        return value
-
-    def boolean(self, key: str, default: Any = ...) -> Any:
-        value = self.raw(key, default)
-        if not isinstance(value, bool):
-            self.fail(f"must be true or false, got {value!r}", key)
-        return value
-
-    def number(
-        self,
-        key: str,
-        default: Any = ...,
-        *,
-        low: float = -math.inf,
-        high: float = math.inf,
-        unit: str = "",
-        finite: bool = True,
-    ) -> Any:
-        value = self.raw(key, default)
-        if value is default and default is not ...:
-            return value
-        return _number(self, key, value, low, high, unit, finite)
-
-    def vector(self, key: str, size: int, default: Any = ..., unit: str = "") -> Any:
-        value = self.raw(key, default)
-        if value is default and default is not ...:
-            return value
-        if not isinstance(value, list) or len(value) != size:
-            self.fail(f"must be a list of {size} numbers ({unit}), got {value!r}", key)
-        return tuple(_number(self, key, v, -math.inf, math.inf, unit, True) for v in value)
-
-    def done(self) -> None:
-        unknown = sorted(set(self.data) - self.taken)
-        if unknown:
-            known = ", ".join(sorted(self.taken))
-            self.fail(f"unknown key {unknown[0]!r} (known here: {known})", None)
 
 
 def read_imu_table(source: Path, where: str, data: Any) -> ImuMount:
@@ -127,10 +50,10 @@ def read_imu_table(source: Path, where: str, data: Any) -> ImuMount:
     Raises:
         ProfileError: Not a table, an unknown key, or a bad value (naming ``source`` and the key).
     """
-    return _imu(_Table(source, where, data))
+    return _imu(Table(source, where, data))
 
 
-def _imu(t: _Table | None) -> ImuMount:
+def _imu(t: Table | None) -> ImuMount:
     """The ``[imu]`` table: ``body`` (default the base body), ``pos_m`` (that body's frame), ``quat_wxyz``."""
     if t is None:
         return ImuMount()
@@ -145,18 +68,7 @@ def _imu(t: _Table | None) -> ImuMount:
     return ImuMount(body=body, pos_m=pos, quat_wxyz=tuple(c / norm for c in quat) if norm != 1.0 else quat)
 
 
-def _number(t: _Table, key: str, value: Any, low: float, high: float, unit: str, finite: bool) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        t.fail(f"must be a number{f' ({unit})' if unit else ''}, got {value!r}", key)
-    value = float(value)
-    if math.isnan(value) or (finite and math.isinf(value)):
-        t.fail(f"must be a finite number, got {value!r}", key)
-    if not low <= value <= high:
-        t.fail(f"{value:g}{f' {unit}' if unit else ''} is outside [{low:g}, {high:g}]", key)
-    return value
-
-
-def _path(t: _Table, key: str, base: Path, default: Any = ...) -> Any:
+def _path(t: Table, key: str, base: Path, default: Any = ...) -> Any:
     text = t.string(key, default)
     if text is default and default is not ...:
         return text
@@ -166,7 +78,7 @@ def _path(t: _Table, key: str, base: Path, default: Any = ...) -> Any:
     return path
 
 
-def _side_template(t: _Table, key: str, default: Any = ...) -> Any:
+def _side_template(t: Table, key: str, default: Any = ...) -> Any:
     text = t.string(key, default)
     if text is default and default is not ...:
         return text
@@ -175,7 +87,7 @@ def _side_template(t: _Table, key: str, default: Any = ...) -> Any:
     return text
 
 
-def _model(t: _Table, base: Path) -> ModelSpec:
+def _model(t: Table, base: Path) -> ModelSpec:
     stand = None
     s = t.table("stand", required=False)
     if s is not None:
@@ -205,7 +117,7 @@ def _model(t: _Table, base: Path) -> ModelSpec:
     return spec
 
 
-def _outputs(t: _Table, planar: bool) -> tuple[str, ...]:
+def _outputs(t: Table, planar: bool) -> tuple[str, ...]:
     names = t.raw("outputs")
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         t.fail(f"must be a list of output names, got {names!r}", "outputs")
@@ -216,7 +128,7 @@ def _outputs(t: _Table, planar: bool) -> tuple[str, ...]:
     return tuple(names)
 
 
-def _feet(t: _Table | None) -> FootSpec:
+def _feet(t: Table | None) -> FootSpec:
     if t is None:
         return FootSpec()
     body = _side_template(t, "body", None)
@@ -232,7 +144,7 @@ def _feet(t: _Table | None) -> FootSpec:
     for p in raw_points:
         if not isinstance(p, list) or len(p) != 3:
             t.fail(f"each point must be 3 numbers (m), got {p!r}", "force_points_m")
-        x, y, z = (_number(t, "force_points_m", v, -math.inf, math.inf, "m", True) for v in p)
+        x, y, z = (check_number(t, "force_points_m", v, -math.inf, math.inf, "m", True) for v in p)
         points.append((x, y, z))
     rectangle = t.table("sole_rectangle_m", required=False)
     if rectangle is not None:
@@ -255,7 +167,7 @@ def _feet(t: _Table | None) -> FootSpec:
     return FootSpec(body=body, contact_point_m=contact, force_points_m=tuple(points), passive_in_stance=tuple(passive))
 
 
-def _sole_rectangle(t: _Table) -> tuple[tuple[float, float, float], ...]:
+def _sole_rectangle(t: Table) -> tuple[tuple[float, float, float], ...]:
     """The 4 corners of ``[feet] sole_rectangle_m`` (toe left, toe right, heel left, heel right), m."""
     x_front, x_back = t.number("x_front", unit="m"), t.number("x_back", unit="m")
     half_width = t.number("half_width", low=0.0, unit="m")
@@ -268,7 +180,7 @@ def _sole_rectangle(t: _Table) -> tuple[tuple[float, float, float], ...]:
     return sole_rectangle_corners(x_front, x_back, half_width, z)
 
 
-def _check_four_points(t: _Table, points: list[tuple[float, float, float]]) -> None:
+def _check_four_points(t: Table, points: list[tuple[float, float, float]]) -> None:
     """Four force points are toe left, toe right, heel left, heel right (foot frame: x forward, y left);
     the heel pair may coincide (a triangular sole), the toe pair may not."""
     (x0, y0, _), (x1, y1, _), (x2, y2, _), (x3, y3, _) = points
@@ -280,7 +192,7 @@ def _check_four_points(t: _Table, points: list[tuple[float, float, float]]) -> N
         )
 
 
-def _roles(t: _Table | None) -> dict[str, str]:
+def _roles(t: Table | None) -> dict[str, str]:
     if t is None:
         return {}
     roles = {}
@@ -292,7 +204,7 @@ def _roles(t: _Table | None) -> dict[str, str]:
     return roles
 
 
-def _dataclass_table(t: _Table, make: Callable[..., Any], fields: Mapping[str, tuple[Any, ...]]) -> Any:
+def _dataclass_table(t: Table, make: Callable[..., Any], fields: Mapping[str, tuple[Any, ...]]) -> Any:
     """Read the numbers ``fields`` (key -> (default, low, high, unit[, finite])) and call ``make``."""
     kwargs = {}
     for key, (default, low, high, unit, *finite) in fields.items():
@@ -301,7 +213,7 @@ def _dataclass_table(t: _Table, make: Callable[..., Any], fields: Mapping[str, t
     return make(**kwargs)
 
 
-def _realtime_goal(t: _Table | None) -> dict[str, float]:
+def _realtime_goal(t: Table | None) -> dict[str, float]:
     """``[compare] realtime_goal``: tracker name -> the nominal walk's real-time factor goal."""
     if t is None:
         return {}
@@ -314,7 +226,7 @@ def _realtime_goal(t: _Table | None) -> dict[str, float]:
     return goals
 
 
-def _bounds(t: _Table) -> CommandBounds:
+def _bounds(t: Table) -> CommandBounds:
     vx = t.vector("vx_mps", 2, unit="m/s")
     kwargs = {
         "vy_max_mps": t.number("vy_max_mps", low=0.0, unit="m/s"),
@@ -332,7 +244,7 @@ def _bounds(t: _Table) -> CommandBounds:
         raise
 
 
-def _verified(t: _Table | None, bounds: CommandBounds) -> VerifiedEnvelope:
+def _verified(t: Table | None, bounds: CommandBounds) -> VerifiedEnvelope:
     if t is None:
         return VerifiedEnvelope()
     vx = t.vector("vx_mps", 2, unit="m/s")
@@ -349,7 +261,7 @@ def _verified(t: _Table | None, bounds: CommandBounds) -> VerifiedEnvelope:
     return envelope
 
 
-def _trackers(t: _Table | None) -> dict[str, dict[str, Any]]:
+def _trackers(t: Table | None) -> dict[str, dict[str, Any]]:
     if t is None:
         return {}
     out = {}
@@ -381,7 +293,7 @@ def read_profile(path: str | Path) -> RobotProfile:
     except tomllib.TOMLDecodeError as exc:
         raise ProfileError(f"{source}: not a valid TOML file: {exc}") from None
     base = source.parent
-    top = _Table(source, "", data)
+    top = Table(source, "", data)
     name = top.string("name")
     description = top.string("description", "")
     planar = top.boolean("planar")
