@@ -10,6 +10,9 @@ import pytest
 from amlip_qp.control.walking.ground import MAX_DZ_M, MAX_PITCH_RAD, GroundPredictor
 from amlip_qp.exceptions import InputError
 
+#: A blade foot, from its contact point along the heading: 0.12 m ahead, 0.08 m behind, m (Cassie's).
+BLADE_M = (0.12, 0.08)
+
 SLOPE_RAD = math.radians(10.0)
 
 
@@ -96,7 +99,7 @@ def test_aware_pitch_beside_a_stair_edge_is_the_treads():
     def stairs(x_m: float, y_m: float) -> float:
         return 0.1 * math.floor(x_m / 0.3) if x_m > 0.0 else 0.0
 
-    g = GroundPredictor("aware", stairs)
+    g = GroundPredictor("aware", stairs, BLADE_M)
     g.touchdown(np.array([0.15, 0.0, 0.0]), 0.0)
     for x in (0.28, 0.32, 0.45):  # just before an edge, just after it, mid-tread
         assert g.predict(np.array([x, 0.0]), 0.0).slope_pitch_rad == 0.0
@@ -136,7 +139,7 @@ def stairs_up(x_m: float, y_m: float) -> float:
 
 def test_only_the_aware_mode_has_a_foothold_hook():
     assert GroundPredictor().foothold() is None and GroundPredictor("blind").foothold() is None
-    g = GroundPredictor("aware", stairs_up)
+    g = GroundPredictor("aware", stairs_up, BLADE_M)
     g.touchdown(np.array([0.7, 0.0, 0.0]), 0.0)
     hook = g.foothold()
     assert hook is not None
@@ -147,7 +150,7 @@ def test_a_step_over_an_edge_gets_the_rise_as_extra_clearance():
     from amlip_qp.messages import Command
 
     cmd = Command(step_time_s=0.3, com_height_m=0.8, clearance_m=0.1)
-    g = GroundPredictor("aware", stairs_up)
+    g = GroundPredictor("aware", stairs_up, BLADE_M)
     g.touchdown(np.array([0.6, 0.0, 0.0]), 0.0)
     g.touchdown(np.array([0.85, 0.2, 0.0]), 0.0)  # the swing foot lifts off at x = 0.6 m
     p = g.predict(np.array([0.78, 0.0]), 0.0)  # on the floor: no edge between
@@ -169,7 +172,7 @@ def test_a_step_over_an_edge_gets_the_rise_as_extra_clearance():
 
 def test_mpc_regions_are_the_treads_less_the_footprint():
     """Cassie's blade (0.12 m ahead of the contact, 0.08 m behind) and 0.03 m from a riser ahead, on 0.3 m treads."""
-    g = GroundPredictor("aware", stairs_up)
+    g = GroundPredictor("aware", stairs_up, BLADE_M)
     g.touchdown(np.array([0.7, 0.0, 0.0]), 0.0)
     regions = g.regions(np.array([[1.2, 0.1], [1.45, -0.1], [0.5, 0.1]]), 0.0)
     (a0, b0, c0, d0, z0), (a1, b1, _, _, z1), (a2, b2, _, _, z2) = regions

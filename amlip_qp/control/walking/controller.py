@@ -54,6 +54,7 @@ from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEsti
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, Measurement, PlannerOutput, StateEstimate
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
+from amlip_qp.robots.foot_extent import foot_extent_m
 from amlip_qp.robots.kinematics import check_stand_output_rank
 from amlip_qp.robots.outputs import output_names
 
@@ -173,7 +174,7 @@ class WalkingController:
         if ground_mode is None:
             ground_mode = "flat" if terrain_height_fn is None else "aware"
         #: The ground the steps are planned for (flat, blind or terrain-aware).
-        self.ground = GroundPredictor(ground_mode, terrain_height_fn)
+        self.ground = GroundPredictor(ground_mode, terrain_height_fn, foot_extent_m(robot))
         self.gait = GaitLogic(gait)
         #: Stance side, start and phase of the current step: the one step clock,
         #: held by the planner, which starts its steps.

@@ -38,11 +38,6 @@ SAMPLE_STEP_M = 0.01
 EDGE_RISE_M = 0.02
 #: How far ahead of and behind the raw target the selector looks for a spot, m.
 SEARCH_M = 0.3
-#: Cassie's blade from the contact point (the foot joint) along the heading, m:
-#: to the front of the toe sphere and to the back of the heel sphere (the
-#: spheres' centres are 0.02 m inside).
-CASSIE_FRONT_M = 0.12
-CASSIE_BACK_M = 0.08
 #: Clearance from a riser that rises beside the footprint (ahead of the toe or
 #: behind the heel), m: landing error and the swing's toe path. Where the ground
 #: drops beside the footprint the blade only has to stay on the tread.
@@ -62,15 +57,16 @@ class FootholdSelector:
 
     Args:
         height_fn: world ``(x, y)`` m -> ground height m (finite; the caller replaces holes).
-        front_m, back_m: the footprint from the contact point along the heading, m (>= 0).
+        front_m, back_m: the footprint from the contact point along the heading, m (>= 0; the robot's
+            own: :func:`~amlip_qp.robots.foot_extent.foot_extent_m`; 0 and 0: a point foot).
         margin_m: clearance from a rising edge (a riser wall) to the footprint, m (>= 0).
     """
 
     def __init__(
         self,
         height_fn: Callable[[float, float], float],
-        front_m: float = CASSIE_FRONT_M,
-        back_m: float = CASSIE_BACK_M,
+        front_m: float = 0.0,
+        back_m: float = 0.0,
         margin_m: float = EDGE_MARGIN_M,
     ):
         if not callable(height_fn):

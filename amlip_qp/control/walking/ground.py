@@ -102,9 +102,17 @@ class GroundPredictor:
     Args:
         mode: One of :data:`GROUND_MODES`.
         height_fn: World ``(x, y)`` m -> ground height m; required by ``"aware"``, refused otherwise.
+        foot_extent_m: ``(front, back)``: the foot from its contact point along the heading, m, that
+            ``"aware"`` fits on one tread (the robot's own:
+            :func:`~amlip_qp.robots.foot_extent.foot_extent_m`; ``(0, 0)``: a point foot).
     """
 
-    def __init__(self, mode: str = "flat", height_fn: HeightFunction | None = None):
+    def __init__(
+        self,
+        mode: str = "flat",
+        height_fn: HeightFunction | None = None,
+        foot_extent_m: tuple[float, float] = (0.0, 0.0),
+    ):
         if mode not in GROUND_MODES:
             raise InputError(f"ground mode must be one of {', '.join(GROUND_MODES)}, got {mode!r}")
         if (mode == "aware") != (height_fn is not None):
@@ -130,7 +138,8 @@ class GroundPredictor:
         self.stance_pitch_rad = 0.0
         self._liftoff_pitch = 0.0
         #: Moves swing targets off the terrain's edges ("aware" only; None otherwise).
-        self.selector = FootholdSelector(self._height) if mode == "aware" else None
+        front_m, back_m = foot_extent_m
+        self.selector = FootholdSelector(self._height, front_m, back_m) if mode == "aware" else None
         # the MPC's regions found so far (their extent along the heading's axis, m, and the region) and their heading
         self._regions_cache: list[tuple[float, float, float, tuple[float, ...]]] = []
         self._regions_heading = math.nan
