@@ -1,6 +1,7 @@
 """Run every acceptance scenario with both trackers and print the measured table (Markdown).
 
-Usage: ``python examples/acceptance_table.py [--set ideal|cc-ekf|all] [--trackers pbc,qp] [--jobs 2] [--json PATH]``
+Usage: ``python examples/acceptance_table.py [--set ideal|cc-ekf|all] [--robots cassie,g1] [--trackers pbc,qp]
+[--jobs 2] [--json PATH]``
 
 Each row is one deterministic run (seed 0) of a named scenario of
 :data:`amlip_qp.sim.scenarios.named.SCENARIOS`: by default the ideal ones (each
@@ -49,6 +50,7 @@ def main(argv=None) -> int:
         default="ideal",
         help="which scenarios: ideal (default), cc-ekf (closed-chain plant, robot sensors, EKF) or all",
     )
+    ap.add_argument("--robots", default=None, help="comma-separated robots (default: every robot's scenarios)")
     args = ap.parse_args(argv)
     ideal = ideal_scenarios()
     names = {
@@ -56,6 +58,12 @@ def main(argv=None) -> int:
         "cc-ekf": [n for n in SCENARIOS if n not in ideal and n not in TERRAIN_SCENARIOS],
         "all": list(SCENARIOS),
     }[args.set]
+    if args.robots is not None:
+        robots = args.robots.split(",")
+        unknown = sorted(set(robots) - {SCENARIOS[n].robot for n in SCENARIOS})
+        if unknown:
+            ap.error(f"no scenarios for robot {unknown[0]!r}")
+        names = [n for n in names if SCENARIOS[n].robot in robots]
     jobs = [(name, t) for name in names for t in args.trackers.split(",")]
     jobs.sort(key=lambda j: -SCENARIOS[j[0]].duration_s)  # longest first
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
