@@ -127,6 +127,15 @@ def test_an_invalid_tracker_table_is_named_when_the_configuration_is_built(tmp_p
         profile.tracker_config("mpc")
 
 
+def test_the_qp_solver_is_a_profile_key_and_a_bad_one_is_named(tmp_path):
+    good = read_profile(_profile_copy(tmp_path, CASSIE_TOML.replace("spring_weight = 1e-2", 'qp_solver = "daqp"')))
+    assert good.tracker_config("qp").qp_solver == "daqp"
+    assert read_profile(_profile_copy(tmp_path, CASSIE_TOML)).tracker_config("qp").qp_solver == "proxqp"
+    path = _profile_copy(tmp_path, CASSIE_TOML.replace("spring_weight = 1e-2", 'qp_solver = "gurobi"'))
+    with pytest.raises(InputError, match=re.escape("qp_solver must be one of proxqp, daqp, got 'gurobi'")):
+        read_profile(path).tracker_config("qp")
+
+
 def test_a_tracker_the_profile_says_cannot_run_is_refused_with_its_reason(tmp_path):
     path = _profile_copy(tmp_path, CASSIE_TOML + '\n[unsupported]\npbc = "no knees"\n')
     profile = read_profile(path)

@@ -95,6 +95,13 @@ def test_the_tracker_refuses_an_unknown_solver():
         QPTracker(load_robot("cassie"), qp_solver="gurobi")
 
 
+def test_the_profile_chooses_the_solver_and_the_argument_overrides_it():
+    """G1's profile names DAQP (``[trackers.qp] qp_solver``); Cassie's names none, ProxQP."""
+    assert isinstance(QPTracker(load_robot("g1")).solver, DAQPSolver)
+    assert QPTracker(load_robot("cassie")).qp_solver == "proxqp"
+    assert QPTracker(load_robot("g1"), qp_solver="proxqp").qp_solver == "proxqp"
+
+
 def test_the_qp_tracker_walks_with_daqp_at_the_commanded_speed():
     sc = get_scenario("cassie-1mps").with_(duration_s=6.0)
     tracker = QPTracker(load_robot("cassie"), qp_solver="daqp")

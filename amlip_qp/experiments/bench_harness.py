@@ -99,6 +99,7 @@ GOAL_TICK_PER_MUJOCO = REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / G
 VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
     "qp-gathered": ("qp", {"in_place_assembly": False}),
     "qp-daqp": ("qp", {"qp_solver": "daqp"}),
+    "qp-proxqp": ("qp", {"qp_solver": "proxqp"}),
 }
 
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.

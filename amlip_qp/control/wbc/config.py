@@ -22,6 +22,10 @@ if TYPE_CHECKING:
     from amlip_qp.robots.robot import Robot
 
 
+#: The QP solvers of the whole-body QP (:attr:`QPConfig.qp_solver`).
+QP_SOLVERS = ("proxqp", "daqp")
+
+
 @dataclass(frozen=True)
 class QPConfig:
     """Weights, gains and limits of the whole-body QP (SI units).
@@ -112,6 +116,12 @@ class QPConfig:
             pelvis to the heading. Applied to the output task's residual
             (:class:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback`); robots
             without hip-yaw outputs ignore it.
+        qp_solver: The solver of the QP, one of :data:`QP_SOLVERS`: ``"proxqp"``
+            (ProxSuite's warm-started ProxQP) or ``"daqp"`` (DAQP, a dual
+            active-set method hot-started from the last working set). Both
+            solve the same problem; the solutions differ by the solvers'
+            tolerances (docs/BENCH_QP.md). ``QPTracker(qp_solver=...)``
+            overrides it.
     """
 
     output_kp: tuple[float, ...]
@@ -145,17 +155,20 @@ class QPConfig:
     stance_foot_torque_max_Nm: float = math.inf
     stance_yaw_moment_weight: float = 0.0
     hip_yaw_feedback: float = 0.0
+    qp_solver: str = "proxqp"
 
     def __post_init__(self) -> None:
         if self.rigid_springs not in ("swing", "all", "none"):
             raise InputError(f"rigid_springs must be 'swing', 'all' or 'none', got {self.rigid_springs!r}")
+        if self.qp_solver not in QP_SOLVERS:
+            raise InputError(f"qp_solver must be one of {', '.join(QP_SOLVERS)}, got {self.qp_solver!r}")
         n = len(self.output_kp)
         if len(self.output_kd) != n or len(self.output_weight) != n:
             raise InputError("output_kp, output_kd and output_weight need one entry per output")
         scalars = {
             k: getattr(self, k)
             for k in self.__dataclass_fields__
-            if k != "rigid_springs" and getattr(self, k) is not None  # None: an upper_posture_* left unset
+            if k not in _STRINGS and getattr(self, k) is not None  # None: an upper_posture_* left unset
         }
         for name, val in scalars.items():
             arr = np.asarray(val, dtype=float)
@@ -193,7 +206,7 @@ def config_from_table(table: Mapping[str, Any]) -> QPConfig:
             if not isinstance(value, list) or not all(_is_number(v) for v in value):
                 raise InputError(f"{key} must be a list of numbers, one per output, got {value!r}")
             value = tuple(float(v) for v in value)
-        elif key == "rigid_springs":
+        elif key in _STRINGS:
             if not isinstance(value, str):
                 raise InputError(f"{key} must be a string, got {value!r}")
         elif not _is_number(value):
@@ -208,6 +221,8 @@ def config_from_table(table: Mapping[str, Any]) -> QPConfig:
 
 
 _PER_OUTPUT = ("output_kp", "output_kd", "output_weight")
+#: The fields that hold a name, not a number.
+_STRINGS = ("rigid_springs", "qp_solver")
 
 
 def _is_number(value: Any) -> bool:

@@ -41,7 +41,7 @@ from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import CompiledBuild
 from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild
-from amlip_qp.control.wbc.config import QPConfig
+from amlip_qp.control.wbc.config import QP_SOLVERS, QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
 from amlip_qp.messages import TrackerResult
@@ -53,10 +53,6 @@ if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
-
-
-#: The QP solvers a :class:`QPTracker` takes (``qp_solver``).
-QP_SOLVERS = ("proxqp", "daqp")
 
 
 class QPTracker(Tracker):
@@ -84,7 +80,10 @@ class QPTracker(Tracker):
         airborne_reduction: While the swing foot's force ramp is 0, solve the
             problem without its force variables and friction rows (same
             optimum, about a quarter less solve time; see the module doc).
-        qp_solver: ``"proxqp"`` (default: :class:`~amlip_qp.qp.solver.ProxQPSolver`,
+        qp_solver: ``None`` (default): the config's
+            :attr:`~amlip_qp.control.wbc.config.QPConfig.qp_solver` (``"proxqp"``
+            unless the profile's ``[trackers.qp]`` names another); ``"proxqp"``
+            (:class:`~amlip_qp.qp.solver.ProxQPSolver`,
             ``eps_abs`` and ``max_iter`` its settings) or ``"daqp"``
             (:class:`~amlip_qp.qp.daqp_solver.DAQPSolver`, a dual active-set
             method, hot-started from the last working set; ``max_iter`` its
@@ -131,7 +130,7 @@ class QPTracker(Tracker):
         compiled_build: bool | None = None,
         airborne_reduction: bool = False,
         in_place_assembly: bool | None = None,
-        qp_solver: str = "proxqp",
+        qp_solver: str | None = None,
     ):
         if not 0.0 <= fallback_decay <= 1.0:
             raise InputError(f"fallback_decay must be in [0, 1], got {fallback_decay!r}")
@@ -151,7 +150,7 @@ class QPTracker(Tracker):
             )
         if int(max_iter) < 1:
             raise InputError(f"max_iter must be >= 1, got {max_iter!r}")
-        if qp_solver not in QP_SOLVERS:
+        if qp_solver is not None and qp_solver not in QP_SOLVERS:
             raise InputError(f"qp_solver must be one of {', '.join(QP_SOLVERS)}, got {qp_solver!r}")
         self.robot = robot
         self.builder = WholeBodyQP(robot, config)
@@ -175,6 +174,8 @@ class QPTracker(Tracker):
                     stacklevel=2,
                 )
         self.config = self.builder.config
+        if qp_solver is None:
+            qp_solver = self.config.qp_solver
         self.qp_solver = qp_solver
         self.solver: ProxQPSolver | DAQPSolver
         if qp_solver == "daqp":
