@@ -1,4 +1,4 @@
-"""Tests of amlip_qp/sim/world/plant_modifiers.py: each modifier's physics on compiled Cassie and Rabbit plants."""
+"""Tests of sim/world/plant_modifiers.py and actuator_delay.py: each modifier's physics on compiled plants."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pytest
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.paths import MODELS_DIR
+from amlip_qp.sim.world.actuator_delay import ActuatorDelay
 from amlip_qp.sim.world.plant_modifiers import (
     PAYLOAD_BODY,
-    ActuatorDelay,
     FrictionEdit,
     MassScaleEdit,
     PlantModifiers,

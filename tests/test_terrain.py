@@ -1,4 +1,4 @@
-"""Terrain in the plant (sim.world.terrain, terrain_grids, terrain_lift): specs, MuJoCo's surface, keyframes."""
+"""Terrain in the plant (sim.world.terrain, terrain_grids, terrain_lift, terrain_rays): specs, surface, keyframes."""
 
 from __future__ import annotations
 
@@ -16,11 +16,11 @@ from amlip_qp.sim.world.plant_loader import load_plant
 from amlip_qp.sim.world.terrain import (
     START_X_M,
     TERRAIN_GEOM_GROUP,
-    ground_height_function,
     parse_terrain,
     terrain_edit,
 )
 from amlip_qp.sim.world.terrain_grids import HALF_WIDTH_M
+from amlip_qp.sim.world.terrain_rays import ground_height_function
 
 KINDS = ["slope:10", "slope:-15", "stairs:0.1:0.3", "rough:0.04:3", "waves:0.3:4"]
 

@@ -12,7 +12,7 @@ Modules, each with one job:
 - :mod:`~amlip_qp.alip.clock`: :class:`StepClock`, the stance side, step start and phase of the current step;
 - :mod:`~amlip_qp.alip.outputs`: the reference outputs ``h_d(s)`` and their names;
 - :mod:`~amlip_qp.alip.planner`: the :class:`Planner` a controller calls every tick (what goes in
-  and out of it: :mod:`amlip_qp.messages`).
+  and out of it: :mod:`amlip_qp.messages`; its inputs checked: :mod:`~amlip_qp.alip.planner_inputs`).
 - :mod:`~amlip_qp.alip.footholds`: :class:`FootholdPlane`, the ground plane from the last footholds (blind mode).
 - :mod:`~amlip_qp.alip.command_shaping`: the rate limit of the velocity command before the planner.
 - :mod:`~amlip_qp.alip.step_mpc`: the step-timing MPC's quadratic program (footholds and the step's duration);

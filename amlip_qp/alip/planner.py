@@ -74,6 +74,7 @@ from amlip_qp.alip import kernels
 from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
+from amlip_qp.alip.planner_inputs import check_settings, check_tick, ground_terms
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
@@ -85,9 +86,6 @@ __all__ = ["VZ_CLAMP_FRACTION", "Planner"]
 #: half its ``v_z = 0`` value, so a glitch in the ``v_z`` estimate cannot throw
 #: the swing foot away. The clamp is symmetric to bound glitches of either sign.
 VZ_CLAMP_FRACTION = 0.5
-
-_SPEED_REFERENCES = ("mean", "end_of_step")
-_FLAT_GROUND = (0.0, 0.0, 0.0, 0.0)
 
 
 class Planner:
@@ -136,20 +134,7 @@ class Planner:
     ):
         #: The outputs the references are for (:class:`~amlip_qp.alip.outputs.OutputSet`).
         self.outputs = O.output_set(outputs)
-        C.positive("mass_kg", mass_kg, "kg")
-        C.positive("g (gravity magnitude)", g, "m/s^2")
-        if speed_reference not in _SPEED_REFERENCES:
-            raise InputError(f"speed_reference must be one of {_SPEED_REFERENCES}, got {speed_reference!r}")
-        if plan_fn is not None and not callable(plan_fn):
-            raise InputError(f"plan_fn must be callable (16 floats -> 8 floats), got {plan_fn!r}")
-        if clock is not None and not isinstance(clock, StepClock):
-            raise InputError(f"clock must be a StepClock, got {type(clock).__name__}")
-        if reference_fn is not None and not callable(reference_fn):
-            raise InputError(f"reference_fn must be callable (15 floats -> 30 floats), got {reference_fn!r}")
-        if late_descent is not None and late_descent != "landing":
-            if isinstance(late_descent, (bool, str)) or not isinstance(late_descent, (int, float)):
-                raise InputError(f"late_descent must be None, 'landing' or a rate in m/s, got {late_descent!r}")
-            C.positive("late_descent (descent rate)", late_descent, "m/s")
+        check_settings(mass_kg, g, plan_fn, reference_fn, speed_reference, clock, late_descent)
         #: The late-descent setting (see the class doc).
         self.late_descent = late_descent
         self._descent_landing = late_descent == "landing"
@@ -282,34 +267,10 @@ class Planner:
         """
         clock = self.clock
         stance = clock.stance
-        if stance is None:
-            raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
-        if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):
-            raise InputError(
-                "update needs a StateEstimate and a Command, "
-                f"got {type(estimate).__name__} and {type(command).__name__}"
-            )
-        if estimate.stance != stance:
-            raise InputError(
-                f"estimate.stance={estimate.stance!r} but the current step has stance {stance!r}; "
-                "call start_step at touchdown before updating with the new stance"
-            )
+        check_tick(stance, estimate, command)
         T = command.step_time_s
         H = command.com_height_m
-        if terrain is None:
-            dz_next = dz_sw = 0.0
-            ground = _FLAT_GROUND
-        else:
-            if not isinstance(terrain, TerrainPrediction):
-                raise InputError(f"terrain must be a TerrainPrediction or None, got {type(terrain).__name__}")
-            dz_next, dz_sw = terrain.dz_next_m, terrain.dz_sw_m
-            ground = (terrain.dz_sw0_m, dz_sw, terrain.slope_pitch0_rad, terrain.slope_pitch_rad)
-            if not abs(dz_next) < H:
-                raise InputError(
-                    f"terrain.dz_next_m={dz_next!r} m must be smaller in size than H = {H!r} m (the CoM height over "
-                    "the stance contact); check the terrain prediction"
-                )
-            O.check_ground(ground, H, command.clearance_m)
+        dz_next, dz_sw, ground = ground_terms(terrain, H, command.clearance_m)
         m = self.mass_kg
         g = self.g
         # Inlined hot-path versions of phase.step_phase_clipped / phase.time_remaining,

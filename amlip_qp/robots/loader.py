@@ -16,7 +16,6 @@ import numpy as np
 
 from amlip_qp.exceptions import MJCFError, ModelFileError, ProfileError, UnknownRobotError
 from amlip_qp.profiles import (
-    FORCE_SITE_SUFFIXES,
     PROFILES,
     RobotProfile,
     bundled_names,
@@ -24,15 +23,13 @@ from amlip_qp.profiles import (
     looks_like_profile_path,
 )
 from amlip_qp.robots.model_edits import prepared_model_path
+from amlip_qp.robots.model_sites import check_sites_agree, foot_sites
 from amlip_qp.robots.passive import spring_rows
-from amlip_qp.robots.robot import FOOT_SIDES, ActuatorSet, Coupling, Robot
+from amlip_qp.robots.robot import ActuatorSet, Coupling, Robot
 from amlip_qp.robots.state import build_state_map, q_to_qpos, qpos_to_q
 
 #: Name of the keyframe used as the nominal standing configuration.
 STAND_KEYFRAME = "stand"
-
-# Tolerance (m) of the load-time check that both models place every site alike.
-_SITE_AGREEMENT_TOL_M = 1e-6
 
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3
 
@@ -97,57 +94,6 @@ def _name(mj_model, objtype, idx: int) -> str:
     import mujoco
 
     return mujoco.mj_id2name(mj_model, objtype, idx) or ""
-
-
-def _site_ids(mj_model, pin_model, names, path) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    import mujoco
-    import pinocchio as pin
-
-    mj_ids, pin_ids = [], []
-    for n in names:
-        mj_ids.append(mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, n))
-        if not pin_model.existFrame(n, pin.OP_FRAME):
-            raise MJCFError(f"{path}: Pinocchio has no frame for site {n!r}")
-        pin_ids.append(pin_model.getFrameId(n, pin.OP_FRAME))
-    return tuple(mj_ids), tuple(pin_ids)
-
-
-def _sites(mj_model, pin_model, path: Path):
-    """Contact and force sites per side; MJCFError naming any missing site."""
-    import mujoco
-
-    has = lambda n: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, n) >= 0  # noqa: E731
-    missing = [f"{s}-contact" for s in FOOT_SIDES if not has(f"{s}-contact")]
-    if missing:
-        raise MJCFError(
-            f"{path}: missing required contact site(s) {', '.join(missing)} "
-            "(see docs/ARCHITECTURE.md, 'Model conventions')"
-        )
-    force: dict[str, tuple[str, ...]] = {}
-    line: dict[str, tuple[str, ...]] = {}
-    for s in FOOT_SIDES:
-        toe, heel = has(f"{s}-toe"), has(f"{s}-heel")
-        if toe != heel:
-            raise MJCFError(
-                f"{path}: site {s}-{'heel' if toe else 'toe'} is missing: a blade foot needs both toe and heel sites"
-            )
-        corners = tuple(f"{s}-{suffix}" for suffix in FORCE_SITE_SUFFIXES[4])
-        present = [has(c) for c in corners]
-        if any(present) and not (all(present) and toe):
-            need = [c for c, p in zip((*corners, f"{s}-toe"), (*present, toe)) if not p]
-            raise MJCFError(
-                f"{path}: site(s) {', '.join(need)} missing: a four-point foot needs its corners "
-                f"{', '.join(corners)} and its sole line's ends {s}-toe, {s}-heel"
-            )
-        line[s] = (f"{s}-toe", f"{s}-heel") if toe else ()
-        force[s] = corners if all(present) else line[s] or (f"{s}-contact",)
-    contact = {s: f"{s}-contact" for s in FOOT_SIDES}
-    c_mj, c_pin, f_mj, f_pin, l_pin = {}, {}, {}, {}, {}
-    for s in FOOT_SIDES:
-        (c_mj[s],), (c_pin[s],) = _site_ids(mj_model, pin_model, (contact[s],), path)
-        f_mj[s], f_pin[s] = _site_ids(mj_model, pin_model, force[s], path)
-        l_pin[s] = _site_ids(mj_model, pin_model, line[s], path)[1]
-    return contact, c_mj, c_pin, force, f_mj, f_pin, line, l_pin
 
 
 def _root(mj_model, path: Path):
@@ -324,38 +270,6 @@ def _leg_joints(mj_model, contact_site_ids: dict[str, int], root_joints) -> dict
     return legs
 
 
-def _check_sites_agree(mj_model, pin_model, smap, path: Path) -> None:
-    """Both models must place every site at the same point (catches parser differences)."""
-    import mujoco
-    import pinocchio as pin
-
-    rng = np.random.default_rng(12345)
-    data = mujoco.MjData(mj_model)
-    qpos = mj_model.qpos0.copy()
-    for j in range(mj_model.njnt):
-        qa, jt = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_type[j])
-        if jt in (_SLIDE, _HINGE):
-            qpos[qa] += rng.uniform(-0.3, 0.3)
-        elif jt == _FREE:
-            qpos[qa : qa + 3] += rng.uniform(-0.3, 0.3, 3)
-            quat = rng.normal(size=4)
-            qpos[qa + 3 : qa + 7] = quat / np.linalg.norm(quat)
-    data.qpos[:] = qpos
-    mujoco.mj_kinematics(mj_model, data)
-    pin_data = pin_model.createData()
-    pin.framesForwardKinematics(pin_model, pin_data, qpos_to_q(smap, qpos))
-    for s in range(mj_model.nsite):
-        sname = _name(mj_model, mujoco.mjtObj.mjOBJ_SITE, s)
-        if not sname or not pin_model.existFrame(sname, pin.OP_FRAME):
-            continue
-        err = np.linalg.norm(pin_data.oMf[pin_model.getFrameId(sname, pin.OP_FRAME)].translation - data.site_xpos[s])
-        if err > _SITE_AGREEMENT_TOL_M:
-            raise MJCFError(
-                f"{path}: Pinocchio and MuJoCo place site {sname!r} {err:.3g} m apart; the MJCF uses "
-                "something Pinocchio's parser reads differently (e.g. a joint-less body fixed to the world)"
-            )
-
-
 def load_robot(name_or_path: str | os.PathLike) -> Robot:
     """Load a robot into MuJoCo and Pinocchio from one MJCF file.
 
@@ -381,9 +295,9 @@ def load_robot(name_or_path: str | os.PathLike) -> Robot:
     mj_model, pin_model = _compile(path)
     smap = build_state_map(mj_model, pin_model, source=str(path))
     actuated = _actuators(mj_model, smap, path)  # first: a servo is refused before anything else
-    contact, c_mj, c_pin, force, f_mj, f_pin, line, l_pin = _sites(mj_model, pin_model, path)
+    contact, c_mj, c_pin, force, f_mj, f_pin, line, l_pin = foot_sites(mj_model, pin_model, path)
     root_body, root_joints, root_names, is_floating, is_planar = _root(mj_model, path)
-    _check_sites_agree(mj_model, pin_model, smap, path)
+    check_sites_agree(mj_model, pin_model, smap, path)
 
     jt = mj_model.jnt_type
     joint_names = tuple(

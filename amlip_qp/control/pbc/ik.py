@@ -30,11 +30,11 @@ Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
 :class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
 through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
 
-Robustness: each Newton step solves ``A dq = -F`` (LU; a damped least-squares
-step ``(A^T A + mu I) dq = -A^T F`` only if the LU step is not finite), its
-joint part is limited to :attr:`IKSettings.max_step_rad`, the actuated joints
-are clamped to their ranges; any non-finite result falls back to the previous
-reference.
+Robustness: each Newton step (:mod:`~amlip_qp.control.pbc.ik_newton`) solves
+``A dq = -F`` (LU; a damped least-squares step ``(A^T A + mu I) dq = -A^T F``
+only if the LU step is not finite), its joint part is limited to
+:attr:`IKSettings.max_step_rad`, the actuated joints are clamped to their
+ranges; any non-finite result falls back to the previous reference.
 
 Cost (per warm tick): the evaluation at the final ``q_r`` of one tick (its
 values, ``A`` and the LU of ``A``) is kept and gives the first Newton step of
@@ -51,10 +51,9 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.linalg.lapack import dgetrf as _dgetrf
-from scipy.linalg.lapack import dgetrs as _dgetrs
 
 from amlip_qp.control.pbc.ik_equations import IKEquations, StanceRows
+from amlip_qp.control.pbc.ik_newton import all_finite, lu_factor, lu_solve, newton_step
 from amlip_qp.control.pbc.ik_settings import IKResult, IKSettings
 from amlip_qp.control.pbc.knee_limits import KneeLimits, swap_rows
 from amlip_qp.exceptions import InputError
@@ -62,27 +61,6 @@ from amlip_qp.exceptions import InputError
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
-
-
-_add_reduce = np.add.reduce
-
-
-def _finite(*arrays) -> bool:
-    """True if every entry is finite (a NaN or inf makes the sum non-finite; cheaper than
-    ``np.all(np.isfinite(.))`` on these small arrays; the ufunc's reduce skips the Python
-    layers of ``np.sum`` and ``ndarray.sum``)."""
-    for a in arrays:
-        if not math.isfinite(_add_reduce(a)):
-            return False
-    return True
-
-
-def _lu_solve(lu, b: np.ndarray) -> np.ndarray:
-    """Solve with LU factors from :meth:`IterativeIK._lu` (LAPACK getrs)."""
-    x, info = _dgetrs(lu[0], lu[1], b)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"getrs info {info}")
-    return x
 
 
 class IterativeIK:
@@ -208,27 +186,14 @@ class IterativeIK:
         }
 
     def _newton_step(self, F: np.ndarray, A: np.ndarray, lu) -> np.ndarray:
-        dq = -_lu_solve(lu, F) if lu is not None else np.full(F.shape, np.nan)
-        if not _finite(dq):
-            mu = self.settings.damping
-            dq = np.linalg.solve(A.T @ A + mu * self._eye, -A.T @ F)
-        nb = self._nb
-        jmax = float(abs(dq[nb:]).max()) if dq.size > nb else 0.0
-        if jmax > self.settings.max_step_rad:
-            dq *= self.settings.max_step_rad / jmax
-        return dq
+        s = self.settings
+        return newton_step(F, A, lu, s.damping, s.max_step_rad, self._nb, self._eye)
 
     def _step(self, q, dq) -> np.ndarray:
         q = self._pin.integrate(self.model, q, dq)
         aq = self._act_q
         q[aq] = np.minimum(np.maximum(q[aq], self._lo), self._hi)
         return q
-
-    @staticmethod
-    def _lu(A: np.ndarray):
-        """LU factors of ``A`` (LAPACK getrf), or ``None`` if ``A`` is singular."""
-        lu, piv, info = _dgetrf(A)
-        return (lu, piv) if info == 0 else None
 
     def solve_linear(self, rhs) -> np.ndarray:
         """``A(q_r)^-1 rhs`` with the last successful solve's matrix (sensitivity of ``q_r`` to the
@@ -239,7 +204,7 @@ class IterativeIK:
         """
         if self.lu is None:
             raise InputError("IterativeIK.solve_linear: no successful solve yet")
-        return _lu_solve(self.lu, np.asarray(rhs, dtype=float))
+        return lu_solve(self.lu, np.asarray(rhs, dtype=float))
 
     # ------------------------------------------------------------------ solve
     def solve(
@@ -282,7 +247,7 @@ class IterativeIK:
             raise InputError(f"h_d, dh_d, ddh_d must have shape ({n},)")
         if stance not in self._rows:
             raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
-        if not _finite(h_d, dh_d, ddh_d) or not math.isfinite(heading_rad):
+        if not all_finite(h_d, dh_d, ddh_d) or not math.isfinite(heading_rad):
             return self._failed(kin)
         rows = self._rows[stance]
         A = rows.A
@@ -320,7 +285,7 @@ class IterativeIK:
                 F = self._residual(rows, q, y, pos, rot, h_d, fixed)
                 swap_rows(swap, q, A, F)
                 residual = float(abs(F).max())
-                lu = self._lu(A)
+                lu = lu_factor(A)
                 done = it >= n_max or (not exact and residual < s.tolerance)
                 if (
                     done
@@ -343,7 +308,7 @@ class IterativeIK:
                         # out of reach: trade that output for the knee held there, and iterate on
                         swap_rows(swap, q, A, F)
                         residual = float(abs(F).max())
-                        lu = self._lu(A)
+                        lu = lu_factor(A)
                         n_max = it + s.cold_iterations
                         done = not exact and residual < s.tolerance
                     elif back:
@@ -362,7 +327,7 @@ class IterativeIK:
             if swap is not None:
                 for sp in swap:
                     rhs_v[sp[0]] = 0.0
-            v_r = _lu_solve(lu, rhs_v)
+            v_r = lu_solve(lu, rhs_v)
             cache = (stance, heading_rad, y, pos, rot, lu, swap)
             m = rows.n_var
             rhs = np.zeros(self.model.nv)
@@ -381,8 +346,8 @@ class IterativeIK:
             if swap is not None:
                 for sp in swap:
                     rhs[sp[0]] = 0.0
-            a_r = _lu_solve(lu, rhs)
-            if not _finite(q, v_r, a_r):
+            a_r = lu_solve(lu, rhs)
+            if not all_finite(q, v_r, a_r):
                 raise FloatingPointError("non-finite IK result")
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as exc:
             if isinstance(exc, InputError):

@@ -22,11 +22,12 @@ from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.harness import Simulation
 from amlip_qp.sim.loop.run_types import CONTROL_DT_S, PlantSetting, RunResult, SensorNoise, TickCallback
 from amlip_qp.sim.scenarios.scenarios import Scenario
+from amlip_qp.sim.world.actuator_delay import ActuatorDelay
 from amlip_qp.sim.world.imu_site import imu_mount_edit
 from amlip_qp.sim.world.plant import Plant, SpecEdit
 from amlip_qp.sim.world.plant_loader import load_plant
-from amlip_qp.sim.world.plant_modifiers import ActuatorDelay
-from amlip_qp.sim.world.terrain import ground_height_function, parse_terrain, terrain_edit
+from amlip_qp.sim.world.terrain import parse_terrain, terrain_edit
+from amlip_qp.sim.world.terrain_rays import ground_height_function
 
 #: The base estimators of ``--estimator``: the simulator's truth, or the contact-aided invariant EKF.
 ESTIMATORS: tuple[str, ...] = ("truth", "ekf")

@@ -4,8 +4,9 @@
 ``--plant-mass-scale``, ``--payload KG[@X,Y,Z]``, ``--plant-spring-scale``,
 ``--friction MU`` and ``--actuator-delay TICKS``). All but the delay are edits
 of the plant's ``mujoco.MjSpec`` applied before it is compiled
-(:meth:`PlantModifiers.spec_edits`); the delay is an :class:`ActuatorDelay` the
-harness puts between the controller and ``data.ctrl``. The controller's own
+(:meth:`PlantModifiers.spec_edits`); the delay is an
+:class:`~amlip_qp.sim.world.actuator_delay.ActuatorDelay` the harness puts
+between the controller and ``data.ctrl``. The controller's own
 (Pinocchio) model is never touched: that is the point of the mismatch.
 
 The defaults change nothing: ``PlantModifiers().spec_edits(...)`` is empty and
@@ -84,7 +85,7 @@ class PlantModifiers:
             :class:`FrictionEdit`), in [1e-5, 10]; ``None`` keeps the model's.
         actuator_delay_ticks: Whole controller ticks between the controller's
             command and the plant's actuators, in [0, 100] (see
-            :class:`ActuatorDelay`).
+            :class:`~amlip_qp.sim.world.actuator_delay.ActuatorDelay`).
 
     Raises:
         InputError: A nonsensical value (one line saying what to give).
@@ -351,55 +352,3 @@ class FrictionEdit:
                 pair.friction = [self.mu, self.mu, *pair.friction[2:]]
         if spec.option.enableflags & mujoco.mjtEnableBit.mjENBL_OVERRIDE:
             spec.option.o_friction = [self.mu, self.mu, *spec.option.o_friction[2:]]
-
-
-class ActuatorDelay:
-    """A FIFO of ``n_ticks`` controller ticks between the command and the actuators.
-
-    ``push(ctrl)`` returns the control vector pushed ``n_ticks`` pushes
-    earlier. Before that many pushes, it returns the first pushed vector: the
-    plant starts as if the controller had held its first command before the
-    run began (zeros would drop a standing robot for the first ticks).
-    ``n_ticks = 0`` is a pass-through that returns the very array it is given.
-
-    Args:
-        n_ticks: Delay, whole ticks, in [0, 100].
-        nu: Length of the control vector.
-    """
-
-    n_ticks: int
-    nu: int
-    _buffer: np.ndarray
-    _next: int
-    _started: bool
-
-    def __init__(self, n_ticks: int, nu: int):
-        PlantModifiers(actuator_delay_ticks=n_ticks)
-        if not isinstance(nu, numbers.Integral) or isinstance(nu, bool) or nu < 1:
-            raise InputError(f"ActuatorDelay needs the control vector length nu >= 1, got {nu!r}")
-        self.n_ticks = int(n_ticks)
-        self.nu = int(nu)
-        self._buffer = np.zeros((self.n_ticks, self.nu))
-        self._next = 0
-        self._started = False
-
-    def push(self, ctrl: np.ndarray) -> np.ndarray:
-        """Queue this tick's command; return the one to apply now (``n_ticks`` ticks old)."""
-        ctrl = np.asarray(ctrl)
-        if ctrl.shape != (self.nu,):
-            raise InputError(f"ActuatorDelay takes a control vector of shape ({self.nu},), got shape {ctrl.shape}")
-        if self.n_ticks == 0:
-            return ctrl
-        if not self._started:
-            self._buffer[:] = ctrl
-            self._started = True
-        out = self._buffer[self._next].copy()
-        self._buffer[self._next] = ctrl
-        self._next = (self._next + 1) % self.n_ticks
-        return out
-
-    def reset(self) -> None:
-        """Forget every queued command (the next push starts afresh)."""
-        self._buffer[:] = 0.0
-        self._next = 0
-        self._started = False
