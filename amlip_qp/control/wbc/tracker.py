@@ -261,7 +261,9 @@ class QPTracker(Tracker):
         return TrackerResult(tau_Nm=tau, ok=False, fallback=reason, info=info, outputs=outputs)
 
     def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:
-        """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN)."""
+        """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN). With the
+        in-place assembly the result carries the outputs ``h_0`` it evaluated (``outputs``, also in a
+        fallback after the build); otherwise ``outputs`` is ``None``. ``kin`` is only read."""
         info: dict = {}
         if target.stance not in self.robot.foot_sides:
             raise InputError(f"target.stance must be one of {tuple(self.robot.foot_sides)}, got {target.stance!r}")
