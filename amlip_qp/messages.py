@@ -375,9 +375,17 @@ class TrackerResult:
         fallback: Why it fell back, or ``None``.
         info: Diagnostics (solve time, iterations, contact forces, tracking
             error...), numbers only.
+        outputs: The output map ``h_0`` the tracker evaluated at this tick's state, for the
+            target's stance and heading: ``(y, J, Jdot_v)``, ``y`` the outputs (m or rad, the
+            robot's output order), shape (n_outputs,), ``J = dy/dv``, shape (n_outputs, nv),
+            ``Jdot_v`` (m/s^2 or rad/s^2), shape (n_outputs,) (as
+            :meth:`RobotKinematics.outputs <amlip_qp.robots.kinematics.RobotKinematics.outputs>`;
+            treat as read-only). The controller reports these; ``None`` (a tracker that did not
+            evaluate them): the controller asks its kinematics.
     """
 
     tau_Nm: np.ndarray
     ok: bool = True
     fallback: str | None = None
     info: dict = field(default_factory=dict)
+    outputs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None

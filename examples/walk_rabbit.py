@@ -19,7 +19,6 @@ import mujoco
 import amlip_qp
 from amlip_qp.cli.parsing import Parser, float_in
 from amlip_qp.profiles import CommandShaping
-from amlip_qp.robots import RobotKinematics
 
 
 def main(argv=None) -> int:
@@ -31,7 +30,7 @@ def main(argv=None) -> int:
     robot = amlip_qp.load_robot("rabbit")
     tracker = amlip_qp.QPTracker(robot) if args.tracker == "qp" else amlip_qp.PBCTracker(robot)
     shaping = CommandShaping(vx_accel_mps2=0.2, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf)
-    controller = amlip_qp.WalkingController(robot, tracker, RobotKinematics(robot), command_shaping=shaping)
+    controller = amlip_qp.WalkingController(robot, tracker, command_shaping=shaping)
     model, data = robot.mj_model, robot.new_mj_data("stand")
     loop = amlip_qp.MujocoLoop(robot, controller, model, data)
     stand, walk = loop.command(vx_mps=0.0), loop.command(vx_mps=0.8)  # the planner sees the shaped ramp

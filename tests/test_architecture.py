@@ -476,7 +476,7 @@ def test_the_robot_name_check_finds_a_literal():
 #: The style guide's bound on a module's length, lines ("modules under about 400 lines; one concept per file").
 MAX_MODULE_LINES = 400
 #: Modules still over the bound while they are being split, one concept per module (paths from the checkout).
-BEING_SPLIT = ("amlip_qp/cli/subcommands.py", "amlip_qp/control/walking/controller.py")
+BEING_SPLIT = ("amlip_qp/cli/subcommands.py",)
 
 
 def _long_modules(pkg: Path, limit: int) -> dict[str, int]:

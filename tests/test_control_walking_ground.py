@@ -85,8 +85,8 @@ def test_the_controller_plans_for_its_ground_mode():
     robot = load("cassie")
 
     def make(**kw):
-        kin = RobotKinematics(robot)
-        return WalkingController(robot, QPTracker(robot), kin, planner_backend="numpy", output_backend="python", **kw)
+        kin = RobotKinematics(robot)  # the Python output map
+        return WalkingController(robot, QPTracker(robot), kin, planner_backend="numpy", **kw)
 
     flat = make()
     assert flat.ground.mode == "flat" and flat.planner.late_descent is None

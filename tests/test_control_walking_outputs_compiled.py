@@ -1,11 +1,11 @@
-"""The compiled output map equals the Python reference OutputMap, and how it is installed."""
+"""The compiled output map equals the Python reference OutputMap, and how a kinematics object gets it."""
 
 import dataclasses
 
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, generate_source
+from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, generate_source, make_kinematics
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
@@ -79,12 +79,15 @@ def test_bad_side_and_heading_are_input_errors(robot, compiled):
 def test_kinematics_takes_a_drop_in_map_and_rejects_a_wrong_one(robot, compiled):
     kin = _kin(robot, np.random.default_rng(4))
     y_ref = kin.outputs("left", 0.2)[0].copy()
-    kin.output_map = compiled
-    assert kin.output_map is compiled
-    np.testing.assert_allclose(kin.outputs("left", 0.2)[0], y_ref, rtol=0, atol=1e-12)
+    fast = RobotKinematics(robot, output_map=compiled)
+    assert fast.output_map is compiled
+    fast.update(kin.q, kin.v)
+    np.testing.assert_allclose(fast.outputs("left", 0.2)[0], y_ref, rtol=0, atol=1e-12)
     other = load_robot("cassie" if robot.name == "rabbit" else "rabbit")
     with pytest.raises(InputError, match="output_map"):
-        kin.output_map = OutputMap(other)
+        RobotKinematics(robot, output_map=OutputMap(other))
+    with pytest.raises(AttributeError):
+        kin.output_map = compiled  # chosen when the object is made, not swapped later
 
 
 def test_source_depends_on_the_outputs_only():
@@ -94,22 +97,26 @@ def test_source_depends_on_the_outputs_only():
     assert generate_source(OutputMap(rabbit)) == generate_source(OutputMap(load_robot("rabbit")))
 
 
-def test_controller_installs_the_compiled_map_unless_told_otherwise():
+def test_make_kinematics_chooses_the_map_and_the_controller_keeps_the_one_it_is_given():
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
 
     robot = load_robot("rabbit")
-    kin = RobotKinematics(robot)
-    WalkingController(robot, QPTracker(robot), kin)
-    assert isinstance(kin.output_map, CompiledOutputMap)
-    kin = RobotKinematics(robot)
-    WalkingController(robot, QPTracker(robot), kin, output_backend="python")
-    assert type(kin.output_map) is OutputMap
+    assert isinstance(make_kinematics(robot).output_map, CompiledOutputMap)
+    assert type(make_kinematics(robot, output_backend="python").output_map) is OutputMap
     with pytest.raises(InputError, match="output_backend"):
-        WalkingController(robot, QPTracker(robot), kin, output_backend="fortran")
+        make_kinematics(robot, output_backend="fortran")
+    own = WalkingController(robot, QPTracker(robot))  # makes its kinematics: the compiled map
+    assert isinstance(own.kin.output_map, CompiledOutputMap)
+    kin = RobotKinematics(robot)
+    given = WalkingController(robot, QPTracker(robot), kin)
+    assert given.kin is kin and type(kin.output_map) is OutputMap
+    cassie = load_robot("cassie")
+    with pytest.raises(InputError, match="output_map must evaluate the outputs"):
+        WalkingController(robot, QPTracker(robot), RobotKinematics(cassie))
 
 
-def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
+def test_without_a_compiler_the_controller_makes_the_python_map_with_a_warning(monkeypatch):
     from amlip_qp.codegen.runtime import CodegenFallbackWarning
     from amlip_qp.control.walking.controller import WalkingController
     from amlip_qp.control.wbc.tracker import QPTracker
@@ -117,7 +124,10 @@ def test_without_a_compiler_the_controller_keeps_the_python_map(monkeypatch):
     robot = load_robot("rabbit")
     tracker = QPTracker(robot)
     monkeypatch.setenv("AMLIP_QP_CC", "none")
-    kin = RobotKinematics(robot)
+    with pytest.warns(CodegenFallbackWarning, match="Python OutputMap") as caught:
+        controller = WalkingController(robot, tracker, planner_backend="numpy")
+    assert type(controller.kin.output_map) is OutputMap
+    fallback = [w for w in caught if issubclass(w.category, CodegenFallbackWarning)]
+    assert fallback[0].filename == __file__  # the warning names the line that made the controller
     with pytest.warns(CodegenFallbackWarning, match="Python OutputMap"):
-        WalkingController(robot, tracker, kin, planner_backend="numpy")
-    assert type(kin.output_map) is OutputMap
+        assert type(make_kinematics(robot).output_map) is OutputMap

@@ -49,12 +49,13 @@ def test_one_kinematics_updated_again_and_again_stays_bound(name):
 
 
 @pytest.mark.parametrize("name", ["cassie", "rabbit"])
-def test_the_outputs_it_computes_are_the_kinematics_outputs(name):
-    """It stores h_0's (y, J, Jdot v) of the tick in the kinematics' cache (the output map is not
-    asked again): they equal the output map's, on each kinematics after a rebinding to another
-    one's data, and back."""
+def test_it_returns_the_outputs_it_computes_and_leaves_the_kinematics_alone(name):
+    """It keeps h_0's (y, J, Jdot v) of the tick in ``outputs`` (the output map's, to rounding, on
+    each kinematics after a rebinding to another one's data, and back) and does not put them into the
+    kinematics: the first ``kin.outputs`` after a build asks the kinematics' own output map."""
     robot = load_robot(name)
     compiled = InPlaceBuild(WholeBodyQP(robot))
+    assert compiled.outputs is None
     calls = []
 
     class Counted(OutputMap):
@@ -64,17 +65,21 @@ def test_the_outputs_it_computes_are_the_kinematics_outputs(name):
             calls.append(stance)
             return super().evaluate(kin, stance, heading_rad)
 
-    cases = list(random_cases(robot, 4, seed=5))
-    for kin, target in cases + cases[:2]:
-        kin.output_map = Counted(robot)
-        kin.update(kin.q.copy(), kin.v.copy())  # no cached outputs
+    cases = [(RobotKinematics(robot, output_map=Counted(robot)), other, target)
+             for other, target in random_cases(robot, 4, seed=5)]  # fmt: skip
+    for kin, other, target in cases + cases[:2]:
+        kin.update(other.q, other.v)  # no cached outputs
         compiled.build(kin, target)
-        got = kin.outputs(target.stance, target.heading_rad)
-        assert calls == []
-        fresh = RobotKinematics(robot)
-        fresh.update(kin.q, kin.v)
-        for a, b in zip(got, fresh.outputs(target.stance, target.heading_rad)):
+        got = compiled.outputs
+        assert got is not None and calls == []  # the build did not ask the kinematics' output map
+        want = kin.outputs(target.stance, target.heading_rad)
+        assert calls == [target.stance]  # nothing was cached in the kinematics: its own map evaluated them
+        calls.clear()
+        for a, b in zip(got, want):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+        previous = got
+        compiled.build(kin, target)
+        assert all(x is not y for x, y in zip(compiled.outputs, previous))  # new arrays each build
 
 
 def test_a_subclass_of_the_output_map_is_a_drop_in_unless_it_says_otherwise():
@@ -109,11 +114,10 @@ def test_a_drop_in_output_map_gets_the_python_build():
 
     kin, target = next(random_cases(robot, 1, seed=6))
     q, v = kin.q.copy(), kin.v.copy()
-    kin.output_map = Shifted()
-    kin.update(q, v)
-    got = compiled.build(kin, target).copy()
-    assert calls  # the Python build asked the drop-in
-    kin.output_map = OutputMap(robot)
+    shifted = RobotKinematics(robot, output_map=Shifted())
+    shifted.update(q, v)
+    got = compiled.build(shifted, target).copy()
+    assert calls and compiled.outputs is None  # the Python build asked the drop-in
     kin.update(q, v)
     standard = compiled.build(kin, target)
     assert len(calls) == 1 and not np.allclose(got.g, standard.g)  # the drop-in's outputs moved the cost

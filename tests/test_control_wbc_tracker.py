@@ -25,10 +25,9 @@ def walk(request):
     block while the swing foot is airborne): (robot, tracker, run result)."""
     name, airborne_reduction = request.param
     robot = load_robot(name)
-    kin = RobotKinematics(robot)
     tracker = QPTracker(robot, record=True, airborne_reduction=airborne_reduction)
     assert tracker.airborne_reduction == airborne_reduction
-    ctrl = WalkingController(robot, tracker, kin)
+    ctrl = WalkingController(robot, tracker)
     scenario = SCENARIOS["cassie-1mps" if name == "cassie" else "rabbit-0.5mps"]
     result = Simulation(robot, ctrl, scenario.command).run(0.4)
     return robot, tracker, result

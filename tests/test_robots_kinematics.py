@@ -324,21 +324,24 @@ def test_update_positions_drops_the_robot_caches_and_gives_the_outputs_without_v
         np.testing.assert_array_equal(light.contact_jdot_v(side), 0.0)
 
 
-def test_stored_outputs_are_the_cached_outputs_until_the_next_update(robot):
+def test_outputs_are_cached_per_stance_and_heading_until_the_next_update(robot):
     rng = np.random.default_rng(22)
     q = pin.integrate(robot.pin_model, robot.q_stand, rng.normal(0.0, 0.05, robot.nv))
     kin = RobotKinematics(robot)
     kin.update(q, rng.normal(0.0, 0.5, robot.nv))
     want = kin.outputs("left", 0.3)
-    stored = tuple(a + 1.0 for a in want)
-    kin.store_outputs("left", 0.3, stored)
-    assert kin.outputs("left", 0.3) is stored
-    assert kin.outputs("right", 0.3) is not stored  # another stance (or heading) is evaluated
-    kin.store_outputs("left", 0.3, stored)
+    assert kin.outputs("left", 0.3) is want
+    other = kin.outputs("right", 0.3)  # another stance (or heading) is evaluated
+    assert other is not want and kin.outputs("left", 0.3) is not want
+    turned = kin.outputs("left", -0.3)
+    assert turned is not want and kin.outputs("left", 0.3) is not turned
     kin.update(q, np.zeros(robot.nv))
-    np.testing.assert_allclose(kin.outputs("left", 0.3)[0], want[0], atol=1e-12)
+    again = kin.outputs("left", 0.3)
+    assert again is not want
+    np.testing.assert_array_equal(again[0], want[0])  # the outputs depend on q only
+    assert not hasattr(kin, "store_outputs")  # nothing but its own output map fills the cache
     with pytest.raises(InputError, match="update"):
-        RobotKinematics(robot).store_outputs("left", 0.0, stored)
+        RobotKinematics(robot).outputs("left", 0.0)
 
 
 # --------------------------------------------------------- passive forces

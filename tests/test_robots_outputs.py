@@ -244,9 +244,10 @@ def test_an_output_map_stand_in_must_evaluate_the_same_outputs_of_the_same_model
 
     with pytest.raises(InputError, match="output_map must evaluate"):
         check_output_map(cassie, NoEvaluate())
-    kin = RobotKinematics(cassie)
     with pytest.raises(InputError, match="output_map must evaluate"):
-        kin.output_map = NoEvaluate()
+        RobotKinematics(cassie, NoEvaluate())
+    with pytest.raises(InputError, match="output_map must evaluate"):
+        RobotKinematics(cassie, output_map=OutputMap(rabbit))
 
 
 def test_a_profile_declares_one_output_per_free_leg_joint():

@@ -84,7 +84,6 @@ def stand_tick(robot: Robot, tracker: str) -> TrackerResult:
     controller = WalkingController(
         robot,
         recorder,
-        RobotKinematics(robot),
         dt_s=CONTROL_DT_S,
         command_shaping=profile.shaping,
     )

@@ -3,7 +3,11 @@
 Usage: create one :class:`RobotKinematics` per controller, call
 :meth:`RobotKinematics.update` once per control tick with the Pinocchio state
 ``(q, v)`` (or :meth:`RobotKinematics.update_positions` in iterative
-kinematics); the getters afterwards read cached results.
+kinematics); the getters afterwards read cached results. The state comes in
+through the updates only: no other object writes into this one (its caches
+are filled by its own getters), and the output map is chosen when it is
+made (``RobotKinematics(robot, output_map=...)``; the compiled map with
+:func:`~amlip_qp.control.walking.outputs_compiled.make_kinematics`).
 
 The model's part (Pinocchio's passes, the frames, the CoM, the centroidal
 momentum, ``M`` and ``h``, all by frame id) is
@@ -74,11 +78,23 @@ class RobotKinematics(ModelKinematics):
         v: The velocity of the last update (copy), shape (nv,).
     """
 
-    def __init__(self, robot: Robot):
-        """Create the Pinocchio data; call :meth:`update` before any getter."""
+    def __init__(self, robot: Robot, output_map: Any = None):
+        """Create the Pinocchio data; call :meth:`update` before any getter.
+
+        Args:
+            robot: The robot.
+            output_map: The evaluator of :meth:`outputs` (:attr:`output_map`), fixed for this
+                object's life; ``None``: :class:`~amlip_qp.robots.outputs.OutputMap`.
+
+        Raises:
+            InputError: ``output_map`` does not evaluate the robot's outputs
+                (:func:`~amlip_qp.robots.outputs.check_output_map`).
+        """
+        if output_map is not None:
+            check_output_map(robot, output_map)
         self.robot = robot
         super().__init__(robot.pin_model)
-        self._output_map: Any = None  # an OutputMap or a drop-in (see output_map)
+        self._output_map: Any = output_map  # an OutputMap or a drop-in (see output_map); None: made on first use
         self._out_cache: tuple | None = None
         self._taup: np.ndarray | None = None
         self._passive_forces = _passive.PassiveForces(robot)
@@ -140,34 +156,20 @@ class RobotKinematics(ModelKinematics):
     # ------------------------------------------------------------- outputs
     @property
     def output_map(self):
-        """The evaluator of :meth:`outputs`: an :class:`~amlip_qp.robots.outputs.OutputMap`
-        (the default, created on first use) or a drop-in with the same
-        ``names`` and ``evaluate(kin, stance, heading_rad)``, e.g. the compiled
-        :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`."""
+        """The evaluator of :meth:`outputs`, given to the constructor: an
+        :class:`~amlip_qp.robots.outputs.OutputMap` (the default, created on first use) or a
+        drop-in with the same ``names`` and ``evaluate(kin, stance, heading_rad)``, e.g. the
+        compiled :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`
+        (:func:`~amlip_qp.control.walking.outputs_compiled.make_kinematics`)."""
         if self._output_map is None:
             self._output_map = OutputMap(self.robot)
         return self._output_map
 
-    @output_map.setter
-    def output_map(self, output_map) -> None:
-        check_output_map(self.robot, output_map)
-        self._output_map = output_map
-        self._out_cache = None
-
-    def store_outputs(self, stance: str, heading_rad: float, result: tuple) -> None:
-        """Keep ``result = (y, J, Jdot_v)``, the standard output map ``h_0`` evaluated
-        elsewhere at this update's state (e.g. inside the QP tracker's generated
-        assembly), as :meth:`outputs`' cached value for ``(stance, heading_rad)``
-        until the next update. Only for the output map's own quantities: the
-        caller vouches for them."""
-        self._ready()
-        self._out_cache = (stance, heading_rad, result)
-
     def outputs(self, stance: str, heading_rad: float = 0.0):
         """The output map ``h_0(q)``: ``(y, J, Jdot_v)``, see :mod:`amlip_qp.robots.outputs`.
 
-        The result is cached until the next :meth:`update` for the same
-        ``(stance, heading_rad)``: treat the returned arrays as read-only.
+        Evaluated by :attr:`output_map`; the result is cached until the next :meth:`update`
+        for the same ``(stance, heading_rad)``: treat the returned arrays as read-only.
         """
         self._ready()
         cache = self._out_cache

@@ -6,7 +6,11 @@
 - :mod:`~amlip_qp.control.walking.estimator`: the state estimate (``p_st``, filtered ``L``, ``v_z``);
 - :mod:`~amlip_qp.control.walking.gait`: touchdown detection;
 - :mod:`~amlip_qp.control.walking.speed`: the per-step integral on the speed error;
-- :mod:`~amlip_qp.control.walking.outputs_compiled`: the output map ``h_0(q)`` as generated C.
+- :mod:`~amlip_qp.control.walking.outputs_compiled`: the output map ``h_0(q)`` as generated C, and
+  :func:`~amlip_qp.control.walking.outputs_compiled.make_kinematics`, the kinematics made with it
+  (the controller's default);
+- :mod:`~amlip_qp.control.walking.planners`: the foot-placement planner by name, and its update of
+  each tick (:func:`~amlip_qp.control.walking.planners.plan_tick`).
 
 The walking loop runs any :class:`~amlip_qp.control.tracker.Tracker` and
 imports no specific one. This package's ``__init__`` imports nothing, so

@@ -21,11 +21,15 @@ One :meth:`WalkingController.step` per control tick (2 kHz by default):
    ground with the height difference to the next contact, the swing foot's
    start and end heights and pitches, and a swing foot that keeps descending
    after ``T`` until it touches down);
-5. the tracker (PBC or QP, same interface) computes joint torques;
+5. the tracker (PBC or QP, same interface) computes joint torques, and
+   returns the outputs ``h_0`` it evaluated (the controller evaluates them
+   itself for a tracker that does not);
 6. the torques are checked (never NaN: a damped fallback replaces them and the
    event is counted) and saturated at the motor limits.
 
 The controller never touches MuJoCo: it sees :class:`~amlip_qp.messages.Measurement` only.
+Data flows one way: the kinematics object is updated once per tick and only read
+afterwards (its output map fixed when it was made); the tracker returns what it computed.
 What it reports (:class:`StepRecord`, :class:`TickInfo`) is in :mod:`~amlip_qp.control.walking.records`.
 """
 
@@ -47,7 +51,7 @@ from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
-from amlip_qp.control.walking.planners import check_planner, make_planner, mpc_regions
+from amlip_qp.control.walking.planners import check_planner, make_planner, plan_tick
 from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_signals
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
@@ -56,7 +60,7 @@ from amlip_qp.messages import Command, Measurement, PlannerOutput, StateEstimate
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.foot_extent import foot_extent_m
 from amlip_qp.robots.kinematics import check_stand_output_rank
-from amlip_qp.robots.outputs import output_names
+from amlip_qp.robots.outputs import check_output_map, output_names
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -68,8 +72,13 @@ class WalkingController:
 
     Args:
         robot: A :class:`~amlip_qp.robots.robot.Robot`.
-        tracker: The tracker (shares ``kinematics``).
-        kinematics: The :class:`~amlip_qp.robots.kinematics.RobotKinematics` the tracker uses.
+        tracker: The tracker (``tracker.compute(kinematics, target)`` every tick).
+        kinematics: The :class:`~amlip_qp.robots.kinematics.RobotKinematics` the
+            controller updates and the tracker reads, with its output map. Default:
+            :func:`make_kinematics(robot) <amlip_qp.control.walking.outputs_compiled.make_kinematics>`,
+            the generated-C output map (the same outputs as the Python
+            :class:`~amlip_qp.robots.outputs.OutputMap` to rounding, about half the time; without
+            a compiler the Python map with a warning).
         dt_s: Control period, s.
         planner_backend: ``"c"`` for the code-generated kernels (fast path;
             falls back to CasADi with a warning without a compiler) or ``"numpy"``.
@@ -80,11 +89,6 @@ class WalkingController:
         speed_correction: Integral action on the step-to-step velocity error
             (:class:`SpeedCorrection`; ``SpeedCorrection(enabled=False)`` gives
             the paper's controller unchanged).
-        output_backend: ``"c"`` installs the generated-C output map
-            (:class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`, the
-            same outputs to rounding, about half the time) into
-            ``kinematics``; without a compiler it keeps the Python map with a
-            warning. ``"python"`` keeps :class:`~amlip_qp.robots.outputs.OutputMap`.
         command_shaping: Rate limits of the velocity command before the planner
             sees it (:class:`~amlip_qp.alip.command_shaping.CommandShaper`);
             default: the robot's profile (:mod:`amlip_qp.profiles`), no limit
@@ -109,7 +113,8 @@ class WalkingController:
             ``planner="mpc"`` only).
 
     Raises:
-        InputError: A bad argument.
+        InputError: A bad argument (also: ``kinematics``' output map does not evaluate
+            ``robot``'s outputs).
         MJCFError: The robot's outputs do not fit its legs
             (:func:`~amlip_qp.robots.outputs.output_names`), or their Jacobian loses rank at the
             stand pose (:func:`~amlip_qp.robots.kinematics.check_stand_output_rank`).
@@ -119,7 +124,7 @@ class WalkingController:
         self,
         robot: Robot,
         tracker: Tracker,
-        kinematics: RobotKinematics,
+        kinematics: RobotKinematics | None = None,
         dt_s: float = 0.0005,
         planner_backend: str = "c",
         kalman: bool = True,
@@ -127,7 +132,6 @@ class WalkingController:
         initial_stance: str = "left",
         fallback_damping_Nms: float = 5.0,
         speed_correction: SpeedCorrection | None = None,
-        output_backend: str = "c",
         command_shaping: CommandShaping | None = None,
         base_estimator: BaseStateEstimator | None = None,
         ground_mode: str | None = None,
@@ -140,22 +144,13 @@ class WalkingController:
             raise InputError(f"initial_stance must be 'left' or 'right', got {initial_stance!r}")
         if planner_backend not in ("c", "numpy"):
             raise InputError(f"planner_backend must be 'c' or 'numpy', got {planner_backend!r}")
-        if output_backend not in ("c", "python"):
-            raise InputError(f"output_backend must be 'c' or 'python', got {output_backend!r}")
         check_stand_output_rank(robot)  # each output movable on its own at the stand pose
-        if output_backend == "c":
-            from amlip_qp.codegen.runtime import CodegenFallbackWarning
-            from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap
-            from amlip_qp.exceptions import CompilerUnavailableError
+        if kinematics is None:
+            from amlip_qp.control.walking.outputs_compiled import make_kinematics
 
-            try:
-                kinematics.output_map = CompiledOutputMap(robot)
-            except CompilerUnavailableError as exc:
-                warnings.warn(
-                    f"no compiled output map ({exc}); using the Python OutputMap (same outputs, slower)",
-                    CodegenFallbackWarning,
-                    stacklevel=2,
-                )
+            kinematics = make_kinematics(robot, stacklevel=3)
+        else:
+            check_output_map(robot, kinematics.output_map)
         self.robot = robot
         self.tracker = tracker
         self.kin = kinematics
@@ -317,28 +312,7 @@ class WalkingController:
             com_m=est.com_m,
         )
         ground = self.ground
-        if not ground.active:
-            plan = self.planner.update(state, command)
-        else:
-            if new_step:
-                ground.touchdown(est.stance_contact_m, self.planner.heading_rad)
-                # the swing target of the new step is not known yet: plan once for it
-                first = ground.predict(est.stance_contact_m, self.planner.heading_rad)
-                plan = self.planner.update(
-                    state, ground.fit(first, command), first, ground.foothold(), **mpc_regions(self.planner, ground)
-                )
-                target_xy = plan.swing_target_world_m
-            else:
-                target_xy = self._last_plan.swing_target_world_m if self._last_plan is not None else est.swing_contact_m
-            prediction = ground.predict(target_xy, self.planner.heading_rad)
-            plan = self.planner.update(
-                state,
-                ground.fit(prediction, command),
-                prediction,
-                ground.foothold(),
-                **mpc_regions(self.planner, ground),
-            )
-        self._last_plan = plan
+        plan = self._last_plan = plan_tick(self.planner, ground, state, command, est, new_step, self._last_plan)
         target = TrackingTarget(
             stance=stance,
             phase=plan.s,
@@ -366,7 +340,8 @@ class WalkingController:
                 )
         tau = np.maximum(tau, self._tau_lo)
         np.minimum(tau, self._tau_hi, out=tau)
-        h, _, _ = kin.outputs(stance, plan.heading_rad)
+        # The outputs the tracker evaluated, else (a tracker that returns none) the kinematics' own.
+        h = result.outputs[0] if result.outputs is not None else kin.outputs(stance, plan.heading_rad)[0]
         return TickInfo(
             t_s=t,
             stance=stance,

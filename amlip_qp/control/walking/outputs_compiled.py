@@ -21,29 +21,32 @@ and ``nv``: it is compiled once into the codegen cache (see
 :mod:`amlip_qp.codegen.runtime`).
 
 It lives in the walking loop: it needs CasADi and the codegen runtime, which
-``robots`` may not import, and the walking controller is what installs it
-(``WalkingController(output_backend="c")``); every tracker then reads it
-through ``kin.outputs``.
+``robots`` may not import. A kinematics object gets it when it is made
+(:func:`make_kinematics`, what the walking controller makes by default); every
+tracker then reads it through ``kin.outputs``.
 """
 
 from __future__ import annotations
 
 import os
+import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.codegen.output_map import FUNCTION_NAME, output_map_function
-from amlip_qp.exceptions import CodegenError
+from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
+from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.outputs import OutputMap
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
 
 SOURCE_FILE = "amlip_outputs.c"
 LIBRARY_FILE = "libamlip_outputs.so"
+#: The output maps of :func:`make_kinematics`: generated C or Python.
+OUTPUT_BACKENDS = ("c", "python")
 
 
 def generate_source(output_map: OutputMap) -> bytes:
@@ -144,3 +147,39 @@ class CompiledOutputMap:
         J = self._J.copy()
         J[self._joint_rows, list(v_idx)] = 1.0
         return self._y.copy(), J, self._jdv.copy()
+
+
+def make_kinematics(
+    robot: Robot, output_backend: str = "c", cache_dir: str | os.PathLike | None = None, stacklevel: int = 2
+) -> RobotKinematics:
+    """A :class:`~amlip_qp.robots.kinematics.RobotKinematics` for the walking controller and its
+    tracker, its output map chosen here once.
+
+    Args:
+        robot: The robot.
+        output_backend: ``"c"`` (the walking controller's default): the generated-C
+            :class:`CompiledOutputMap` (the same outputs to rounding, about half the time);
+            without a C compiler the Python map with a
+            :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning`. ``"python"``:
+            :class:`~amlip_qp.robots.outputs.OutputMap`.
+        cache_dir: Overrides the codegen cache folder.
+        stacklevel: The fallback warning's, as :func:`warnings.warn`'s (2: the caller of this function).
+
+    Raises:
+        InputError: An unknown ``output_backend``.
+        CodegenError: The compiler rejected the source or the library does not load.
+    """
+    if output_backend not in OUTPUT_BACKENDS:
+        raise InputError(f"output_backend must be 'c' or 'python', got {output_backend!r}")
+    if output_backend == "python":
+        return RobotKinematics(robot)
+    try:
+        output_map = CompiledOutputMap(robot, cache_dir)
+    except CompilerUnavailableError as exc:
+        warnings.warn(
+            f"no compiled output map ({exc}); using the Python OutputMap (same outputs, slower)",
+            runtime.CodegenFallbackWarning,
+            stacklevel=stacklevel,
+        )
+        return RobotKinematics(robot)
+    return RobotKinematics(robot, output_map)

@@ -1,14 +1,20 @@
-"""The walking controller's foot-placement planner, by name: the one-step law or the step-timing MPC."""
+"""The walking controller's foot-placement planner, by name (the one-step law or the step-timing MPC),
+and how it plans each tick, on flat ground or off it (:func:`plan_tick`)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.walking.ground import GroundPredictor
 from amlip_qp.exceptions import InputError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.control.walking.estimator import Estimate
+    from amlip_qp.messages import Command, PlannerOutput, StateEstimate
 
 #: The planners (``WalkingController(planner=...)``, ``amlip-qp walk --planner``).
 PLANNERS = ("one-step", "mpc")
@@ -62,3 +68,35 @@ def mpc_regions(planner: Planner, ground: GroundPredictor) -> dict:
         return {}
     regions = ground.regions(planner.last_plan.footholds_m, planner.heading_next_rad)
     return {} if regions is None else {"regions": regions}
+
+
+def plan_tick(
+    planner: Planner,
+    ground: GroundPredictor,
+    state: StateEstimate,
+    command: Command,
+    est: Estimate,
+    new_step: bool,
+    last_plan: PlannerOutput | None,
+) -> PlannerOutput:
+    """The planner's update of one control tick. On flat ground (``ground`` inactive): for ``state`` and
+    ``command``. Off it: with the ground predicted at the swing target (``last_plan``'s; before any
+    plan the swing foot's contact, ``est.swing_contact_m``) and the command fit to it; at a new step
+    (``new_step``: the first step or a touchdown) the ground first takes the new stance foothold
+    (``est.stance_contact_m``), and the planner plans once to find the new step's swing target."""
+    if not ground.active:
+        return planner.update(state, command)
+    if new_step:
+        ground.touchdown(est.stance_contact_m, planner.heading_rad)
+        # the swing target of the new step is not known yet: plan once for it
+        first = ground.predict(est.stance_contact_m, planner.heading_rad)
+        plan = planner.update(
+            state, ground.fit(first, command), first, ground.foothold(), **mpc_regions(planner, ground)
+        )
+        target_xy = plan.swing_target_world_m
+    else:
+        target_xy = last_plan.swing_target_world_m if last_plan is not None else est.swing_contact_m
+    prediction = ground.predict(target_xy, planner.heading_rad)
+    return planner.update(
+        state, ground.fit(prediction, command), prediction, ground.foothold(), **mpc_regions(planner, ground)
+    )

@@ -22,11 +22,10 @@ Python build to rounding, with less Python a tick:
   (:meth:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback.symbolic_correction`),
   the passive forces (:mod:`~amlip_qp.control.wbc.passive_symbolic`) and,
   through :func:`~amlip_qp.control.wbc.compiled.assembly_function`, the whole
-  problem; ``H = H0 + E^T E`` stays one numpy product. It stores ``h_0``'s
-  ``(y, J, Jdot v)`` in the kinematics' output cache
-  (:meth:`RobotKinematics.store_outputs
-  <amlip_qp.robots.kinematics.RobotKinematics.store_outputs>`), so the
-  controller's ``kin.outputs`` of the same tick costs nothing.
+  problem; ``H = H0 + E^T E`` stays one numpy product. It keeps ``h_0``'s
+  ``(y, J, Jdot v)`` of the tick (:attr:`InPlaceBuild.outputs`), which the
+  QP tracker returns in its result, so the controller need not evaluate the
+  output map again. It only reads the kinematics object.
 
 ``QPTracker(in_place_assembly=False)`` gives
 :class:`~amlip_qp.control.wbc.compiled.CompiledBuild` instead. A kinematics
@@ -177,6 +176,12 @@ class InPlaceBuild:
             whose problem arrays it fills (with its inputs and dynamics buffers).
         cache_dir: Overrides the codegen cache folder.
 
+    Attributes:
+        outputs: The output map ``h_0``'s ``(y, J, Jdot_v)`` that the last :meth:`build`
+            computed (new arrays each build; shapes (n_outputs,), (n_outputs, nv),
+            (n_outputs,)), for its target's stance and heading; ``None`` before a build, and
+            after one that did not compute them (a drop-in output map, an error).
+
     Raises:
         CompilerUnavailableError: No C compiler.
         CodegenError: The compiler rejected the source or the library does not load.
@@ -206,6 +211,7 @@ class InPlaceBuild:
         self._data = None  # the Pinocchio data the functions read (bound on the first build with it)
         self._views: list = []  # keeps the bound views alive
         self._eval: dict = {}
+        self.outputs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def _bind_data(self, kin: RobotKinematics) -> None:
         """Bind the functions' inputs to ``kin``'s Pinocchio arrays (see the module doc)."""
@@ -220,6 +226,7 @@ class InPlaceBuild:
         """Fill the builder's problem for ``kin`` and ``target``; return it.
         Same contract as :meth:`WholeBodyQP.build`."""
         B = self.builder
+        self.outputs = None
         if not computes_standard_outputs(kin.output_map):
             return B.build(kin, target)  # a drop-in output map: only the Python build reads it
         kin.require_dynamics()
@@ -245,5 +252,5 @@ class InPlaceBuild:
         E = self._E
         np.add(B.constant_cost.H0, np.matmul(E.T, E, out=self._EtE), out=B.problem.H)
         B.dynamics.filled_for(stance)
-        kin.store_outputs(stance, heading, (self._y.copy(), self._J.copy(), self._jdv.copy()))
+        self.outputs = (self._y.copy(), self._J.copy(), self._jdv.copy())
         return B.problem

@@ -157,10 +157,12 @@ class QPTracker(Tracker):
         self._n_outputs = self.builder.output_task.size
         self.build_problem = self.builder.build
         self.build_backend = "python"
+        self._in_place: InPlaceBuild | None = None  # its outputs go into the result
         if compiled_build is None or compiled_build:
             try:
                 if in_place_assembly is None or in_place_assembly:
-                    self.build_problem = InPlaceBuild(self.builder).build
+                    self._in_place = InPlaceBuild(self.builder)
+                    self.build_problem = self._in_place.build
                     self.build_backend = "c-in-place"
                 else:
                     self.build_problem = CompiledBuild(self.builder).build
@@ -249,7 +251,7 @@ class QPTracker(Tracker):
             self._friction.initialize(self.builder.problem)
             self._friction_ground = None
 
-    def _fallback(self, kin: RobotKinematics, reason: str, info: dict) -> TrackerResult:
+    def _fallback(self, kin: RobotKinematics, reason: str, info: dict, outputs: tuple | None = None) -> TrackerResult:
         self.fallbacks += 1
         self._fail_streak += 1
         v_a = kin.v[self._act_v] if kin.v is not None else np.zeros_like(self._tau_prev)
@@ -257,10 +259,12 @@ class QPTracker(Tracker):
         tau = self.fallback_decay**self._fail_streak * self._tau_prev - self.fallback_kd * v_a
         tau = np.clip(np.nan_to_num(tau, nan=0.0, posinf=0.0, neginf=0.0), self._tau_lim[:, 0], self._tau_lim[:, 1])
         info.update(fallbacks=self.fallbacks, qp_ok=0.0)
-        return TrackerResult(tau_Nm=tau, ok=False, fallback=reason, info=info)
+        return TrackerResult(tau_Nm=tau, ok=False, fallback=reason, info=info, outputs=outputs)
 
     def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:
-        """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN)."""
+        """Torques (N m, actuator order) from the QP; the fallback on failure (never NaN). With the
+        in-place assembly the result carries the outputs ``h_0`` it evaluated (``outputs``, also in a
+        fallback after the build); otherwise ``outputs`` is ``None``. ``kin`` is only read."""
         info: dict = {}
         if target.stance not in self.robot.foot_sides:
             raise InputError(f"target.stance must be one of {tuple(self.robot.foot_sides)}, got {target.stance!r}")
@@ -269,12 +273,16 @@ class QPTracker(Tracker):
             raise InputError(f"target.h_d must have shape ({self._n_outputs},), got {np.shape(h_d)}")
         t0 = time.perf_counter_ns()
         self._orient_friction(target)
+        outputs = None  # the output map h_0 of the in-place assembly, for the result
         try:
             problem = self.build_problem(kin, target)
+            in_place = self._in_place
+            if in_place is not None and self.build_problem == in_place.build:
+                outputs = in_place.outputs
             self.last_problem = problem
             problem.validate()
         except QPError as exc:
-            return self._fallback(kin, f"invalid problem: {exc}", info)
+            return self._fallback(kin, f"invalid problem: {exc}", info, outputs)
         except (AmlipError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             # ArithmeticError: e.g. a degenerate (vertical) blade in a fall.
             return self._fallback(kin, f"cannot build the QP: {exc}", info)
@@ -294,11 +302,11 @@ class QPTracker(Tracker):
         except QPError as exc:
             relaxed = self._solve_relaxed(problem)
             if relaxed is not None:
-                return self._finish(kin, problem, relaxed, info, t0, t1, relaxed=True)
+                return self._finish(kin, problem, relaxed, info, (t0, t1), outputs, relaxed=True)
             if self.record:
                 self.recorded.append((problem.copy(), np.full(problem.n, np.nan)))
-            return self._fallback(kin, f"solver: {exc.status or exc}", info)
-        return self._finish(kin, problem, sol, info, t0, t1, relaxed=False)
+            return self._fallback(kin, f"solver: {exc.status or exc}", info, outputs)
+        return self._finish(kin, problem, sol, info, (t0, t1), outputs, relaxed=False)
 
     def _solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; with :attr:`airborne_reduction`, while the swing foot is airborne,
@@ -330,13 +338,20 @@ class QPTracker(Tracker):
         return sol
 
     def _finish(
-        self, kin: RobotKinematics, problem: QPProblem, sol: QPSolution, info: dict, t0: int, t1: int, relaxed: bool
+        self,
+        kin: RobotKinematics,
+        problem: QPProblem,
+        sol: QPSolution,
+        info: dict,
+        times_ns: tuple[int, int],
+        outputs: tuple | None,
+        relaxed: bool,
     ) -> TrackerResult:
         # The solver rejects a non-finite x, so the forces are finite; the torques
         # are checked before any state is updated.
         tau = self.builder.torques(sol.x)
         if not math.isfinite(sum(tau.tolist())):  # Python floats: cheaper than a numpy reduction here
-            return self._fallback(kin, "non-finite torques", info)
+            return self._fallback(kin, "non-finite torques", info, outputs)
         self.last_solution = sol.x
         if self.record:
             self.recorded.append((problem.copy(), sol.x.copy()))
@@ -345,7 +360,7 @@ class QPTracker(Tracker):
         stance_fz, swing_fz = self.builder.normal_force_totals(sol.x)
         info.update(
             qp_ok=1.0,
-            build_us=(t1 - t0) * 1e-3,
+            build_us=(times_ns[1] - times_ns[0]) * 1e-3,
             solve_us=sol.solve_time_us,
             iterations=float(sol.iterations),
             fallbacks=self.fallbacks,
@@ -356,4 +371,4 @@ class QPTracker(Tracker):
             swing_fz_N=swing_fz,
             swing_force_weight=self.builder.inputs.swing_force_weight,
         )
-        return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info)
+        return TrackerResult(tau_Nm=tau, ok=True, fallback=None, info=info, outputs=outputs)

@@ -36,7 +36,6 @@ from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.records import TickInfo
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command
-from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.sensing.sensors import PlantSensors
 from amlip_qp.sim.world.plant import Plant
@@ -83,7 +82,7 @@ class MujocoLoop:
         if isinstance(controller, Tracker):
             if getattr(controller, "robot", robot) is not robot:
                 raise InputError(f"the tracker {controller.name!r} was built for another robot than {robot.name}")
-            controller = WalkingController(robot, controller, RobotKinematics(robot))
+            controller = WalkingController(robot, controller)
         elif not isinstance(controller, WalkingController):
             raise InputError(
                 f"controller must be a tracker (QPTracker, PBCTracker) or a WalkingController, "

@@ -17,7 +17,7 @@ from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.estimation import make_base_estimator
 from amlip_qp.estimation.invariant_ekf import noise_from_table
 from amlip_qp.exceptions import InputError
-from amlip_qp.robots import RobotKinematics, load_robot
+from amlip_qp.robots import load_robot
 from amlip_qp.robots.robot import Robot
 from amlip_qp.sim.loop.harness import Simulation
 from amlip_qp.sim.loop.run_types import CONTROL_DT_S, PlantSetting, RunResult, SensorNoise, TickCallback
@@ -132,7 +132,6 @@ def build_simulation(
     trk = registry.make_tracker(tracker, robot) if isinstance(tracker, str) else tracker
     if not isinstance(trk, Tracker):
         raise InputError(f"tracker must be a name or a Tracker instance, got {type(trk).__name__}")
-    kin = RobotKinematics(robot)
     options: dict = {}
     if estimator != "truth":  # the truth needs no estimator object: the harness gives the true base
         table = robot.profile.estimator if robot.profile is not None else {}
@@ -146,7 +145,6 @@ def build_simulation(
     controller = WalkingController(
         robot,
         trk,
-        kin,
         dt_s=CONTROL_DT_S,
         planner_backend=planner_backend,
         command_shaping=scenario.shaping,
