@@ -80,17 +80,21 @@ RULES: dict[str, Rule] = {
     "amlip_qp.messages": Rule(("amlip_qp.exceptions",), HEAVY),
     "amlip_qp.paths": Rule((), HEAVY + ("numpy",)),
     "amlip_qp.output_paths": Rule(("amlip_qp.exceptions",), HEAVY + ("numpy",)),
+    # the option values' checks, shared by the command line's types and the walk options (light)
+    "amlip_qp.option_values": Rule(("amlip_qp.exceptions", "amlip_qp.profiles"), HEAVY + ("numpy",)),
     # the robot profiles: plain data read from TOML files among the package's models
     "amlip_qp.profiles": Rule(("amlip_qp.profiles", "amlip_qp.exceptions", "amlip_qp.paths"), HEAVY + ("numpy",)),
     # ``python -m amlip_qp``: the command line, nothing more
     "amlip_qp.__main__": Rule(("amlip_qp.cli",), HEAVY + ("numpy",)),
     # the command line stays light: handlers are imported by name when a subcommand runs
-    # (view's keys for its --help: a leaf module of plain data)
+    # (view's keys for its --help: a leaf module of plain data; the walk options and their value checks: light)
     "amlip_qp.cli": Rule(
         (
             "amlip_qp.cli",
             "amlip_qp.exceptions",
             "amlip_qp.profiles",
+            "amlip_qp.option_values",
+            "amlip_qp.sim.scenarios.options",
             "amlip_qp.sim.loop.live_keys",
             "amlip_qp.sim.reports.gl",
         ),
@@ -184,6 +188,7 @@ RULES: dict[str, Rule] = {
         "amlip_qp.sim.scenarios",
         (
             "amlip_qp.exceptions",
+            "amlip_qp.option_values",
             "amlip_qp.profiles",
             "amlip_qp.messages",
             "amlip_qp.alip",
