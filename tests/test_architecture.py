@@ -205,7 +205,8 @@ RULES: dict[str, Rule] = {
     ),
     # the commands' experiments sit on top of the library (and never import the sweep that runs some of them)
     "amlip_qp.experiments": Rule(("amlip_qp",), ("amlip_qp.sweep",)),
-    # the sweep runs walks: the harness, the walk parser of the CLI, the profiles
+    # the sweep runs walks: the walk options and the harness, the profiles; a cell's options are typed
+    # (sim.scenarios.options), never a command line parsed by the CLI's parser
     "amlip_qp.sweep": Rule(
         (
             "amlip_qp.sweep",
@@ -213,10 +214,9 @@ RULES: dict[str, Rule] = {
             "amlip_qp.experiments",
             "amlip_qp.exceptions",
             "amlip_qp.output_paths",
-            "amlip_qp.cli",
             "amlip_qp.profiles",
         ),
-        ("amlip_qp.control", "amlip_qp.qp", "amlip_qp.codegen", "mujoco", "pinocchio"),
+        ("amlip_qp.control", "amlip_qp.qp", "amlip_qp.codegen", "amlip_qp.cli", "mujoco", "pinocchio"),
     ),
 }
 
