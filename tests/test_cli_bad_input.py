@@ -159,7 +159,7 @@ BAD_INPUTS = [
     (["walk", "--friction", "0"], "--friction) must be a coefficient in [1e-05, 10], got 0.0"),
     (["walk", "--friction", "1e-9"], "--friction) must be a coefficient in [1e-05, 10], got 1e-09"),
     (["walk", "--actuator-delay", "-1"], "--actuator-delay) must be a whole number of ticks in [0, 100]"),
-    (["walk", "--actuator-delay", "1.5"], "argument --actuator-delay: invalid int value"),
+    (["walk", "--actuator-delay", "1.5"], "argument --actuator-delay: expected a whole number, got '1.5'"),
     (["compare", "--jobs", "1", "--friction", "-0.5"], "--friction) must be a coefficient in [1e-05, 10]"),
     (["bench", "ekf", "--scenario", "cassie-1mps"], "needs a scenario with the EKF estimator"),
     (["bench", "ekf", "--scenario", "nowhere"], "unknown scenario 'nowhere'"),

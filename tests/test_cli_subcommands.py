@@ -8,12 +8,15 @@ from amlip_qp.cli import subcommands as S
 
 def test_the_light_name_lists_match_the_heavy_modules():
     from amlip_qp.control import registry
+    from amlip_qp.control.walking import planners
     from amlip_qp.sim.scenarios import factory
+    from amlip_qp.sim.scenarios import options as O
     from amlip_qp.sim.sensing import sensors
 
-    assert S.SENSORS == sensors.SENSOR_MODELS
-    assert S.ESTIMATORS == factory.ESTIMATORS
-    assert set(S.TRACKERS) == set(registry.TRACKER_MODULES)
+    assert S.SENSORS == O.SENSORS == sensors.SENSOR_MODELS
+    assert S.ESTIMATORS == O.ESTIMATORS == factory.ESTIMATORS
+    assert set(S.TRACKERS) == set(O.TRACKERS) == set(registry.TRACKER_MODULES)
+    assert S.PLANNERS == O.PLANNERS == planners.PLANNERS
 
 
 def test_walk_and_compare_take_the_plant_options():

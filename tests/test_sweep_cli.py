@@ -104,7 +104,7 @@ def test_an_interrupted_sweep_resumes_with_only_the_missing_cell(sweeps, tmp_pat
 
 BAD = [
     (["--grid", "speed=1,2"], "unknown parameter 'speed'; known: robot, tracker, planner, scenario, vx"),
-    (["--grid", "vx=0.3,fast"], "argument --vx: expected a number, got 'fast'"),
+    (["--grid", "vx=0.3,fast"], "vx: expected a number, got 'fast'"),
     (["--grid", "vx=0.3,9"], "outside rabbit's bounds"),
     (["--grid", "vx=,"], "no values: the grid would be empty"),
     (["--metrics", "speed"], "unknown metric 'speed'; known: survived"),

@@ -9,18 +9,31 @@ import pytest
 from amlip_qp.exceptions import InputError
 from amlip_qp.sweep import run_cell as rc
 
+#: ``walk``'s options that are not parameters of a walk: its outputs, the progress bar, the handler.
+NOT_PARAMETERS = {"command", "func", "json", "log", "plot", "video", "video_fps", "no_progress"}
+
 
 def test_every_walk_option_but_the_outputs_is_a_parameter():
+    """A new ``walk`` option cannot be left unsweepable: the parameters are the CLI's options minus its outputs."""
+    from amlip_qp.cli import build_parser
+    from amlip_qp.sim.scenarios.options import WalkOptions
+
+    cli_options = set(vars(build_parser().parse_args(["walk"]))) - NOT_PARAMETERS
     names = rc.parameter_names()
+    assert set(WalkOptions.names()) == cli_options
+    assert names == (*WalkOptions.names(), *rc.PUSH_DEFAULTS) and len(set(names)) == len(names)
     assert {"tracker", "vx", "turn_rate", "plant_mass_scale", "noise", "seed", "push_impulse_Ns", "push_phase"} <= set(
         names
     )
-    assert not {"json", "log", "plot", "video", "no_progress", "func"} & set(names)
+    # the defaults are the dataclass's, and the command line's are the same
+    assert rc.walk_defaults() == {n: getattr(WalkOptions(), n) for n in WalkOptions.names()}
+    assert WalkOptions.from_namespace(build_parser().parse_args(["walk"])) == WalkOptions()
 
 
-def test_walk_argv_takes_flags_and_negative_values():
-    argv = rc.walk_argv({"vx": -0.5, "noise": True, "no_command_shaping": False, "tracker": "pbc", "push_phase": 0.2})
-    assert argv == ["--vx=-0.5", "--noise", "--tracker=pbc"]
+def test_a_cells_flags_and_negative_values_are_typed_options():
+    run = rc.walk_run({"vx": -0.5, "noise": True, "no_command_shaping": False, "tracker": "pbc", "push_phase": 0.2}, 0)
+    assert (run.tracker, run.noise, run.scenario.vx(3.0), run.scenario.shaping) == ("pbc", True, -0.5, None)
+    assert rc.walk_run({"vx": "-0.25"}, 0).scenario.vx(1.0) == -0.25  # a number as text, as on a command line
 
 
 def test_walk_run_builds_the_scenario_with_the_push():
@@ -50,9 +63,16 @@ def test_push_direction_is_the_angle_from_forward_towards_left():
     "params, needle",
     [
         ({"speed": 1.0}, "unknown parameter 'speed'; known: robot, tracker"),
-        ({"vx": "fast"}, "argument --vx: expected a number, got 'fast'"),
+        ({"vx": "fast"}, "vx: expected a number, got 'fast'"),
+        ({"vx": True}, "vx: expected a number, got True"),
         ({"vx": 9.0}, "outside cassie's bounds"),
-        ({"tracker": "lqr"}, "invalid choice: 'lqr'"),
+        ({"tracker": "lqr"}, "tracker: expected one of pbc, qp, got 'lqr'"),
+        ({"noise": "yes"}, "noise: expected true or false, got 'yes'"),
+        ({"seed": 2**32}, "seed: expected a seed in [0, 4294967295], got 4294967296"),
+        ({"actuator_delay": 1.5}, "actuator_delay: expected a whole number, got 1.5"),
+        ({"accel_limit": 0.5, "no_command_shaping": True}, "accel_limit (--accel-limit) and no_command_shaping"),
+        ({"vx": 0.5, "speed_profile": "0:0,5:1"}, "vx (--vx) and speed_profile (--speed-profile) both set"),
+        ({"push": "1:2,3:0.2"}, "push: expected T:FX,FY,FZ:DUR"),
         ({"push_impulse_Ns": -1.0}, "push_impulse_Ns >= 0"),
         ({"push_impulse_Ns": 5.0, "push_phase": 1.5}, "step phase must be in [0, 1)"),
         ({"push_impulse_Ns": 5.0, "push_phase": 0.5, "duration": 2.3}, "may start up to one step late"),
@@ -93,10 +113,12 @@ def test_a_cell_whose_walk_raises_is_recorded_not_raised(monkeypatch):
     assert len(rc.error_text(RuntimeError("x" * 400))) == 300 and rc.error_text(ValueError()) == "ValueError"
 
 
-def test_a_false_on_off_option_is_passed_as_its_no_form():
-    assert rc.walk_argv({"terrain_aware": False}) == ["--no-terrain-aware"]
-    assert rc.walk_argv({"terrain_aware": True}) == ["--terrain-aware"]
-    assert rc.walk_argv({"noise": False}) == []  # a plain flag: false is its absence
+def test_a_false_on_off_option_turns_it_off_and_a_missing_one_keeps_the_scenarios():
+    stairs = {"scenario": "cassie-stairs-10cm"}
+    assert rc.walk_run(stairs, 0).scenario.setting.terrain_aware
+    assert not rc.walk_run({**stairs, "terrain_aware": False}, 0).scenario.setting.terrain_aware
+    assert rc.walk_run({"terrain": "slope:5", "terrain_aware": True}, 0).scenario.setting.terrain_aware
+    assert not rc.walk_run({"noise": False}, 0).noise  # a plain flag: false is its default
 
 
 def test_a_crashed_cell_has_no_metrics_and_says_its_worker_died():

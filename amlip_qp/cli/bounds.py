@@ -8,12 +8,29 @@ plant (the plant modifiers: ``amlip_qp.sim.world.plant_modifiers``), to the terr
 (``amlip_qp.sim.world.terrain``) or to a sweep spec (``amlip_qp.sweep.spec``) are
 checked there, also before any work. The ones repeated here from a heavier
 module (:data:`MAX_BISECTION_ITERATIONS`, :data:`MAX_VIDEO_FPS`) are held
-equal to theirs by the tests, so ``--help`` needs no heavy import.
+equal to theirs by the tests, so ``--help`` needs no heavy import. The walk
+options' own bounds (``MAX_SEED``, ``MAX_ACCEL_LIMIT_MPS2``) are the library's
+(:mod:`amlip_qp.sim.scenarios.options`, a light module), taken from there.
 """
 
 from __future__ import annotations
 
 from amlip_qp.profiles import CommandBounds
+from amlip_qp.sim.scenarios.options import MAX_ACCEL_LIMIT_MPS2, MAX_SEED
+
+__all__ = [
+    "MAX_ACCEL_LIMIT_MPS2",
+    "MAX_BENCH_CALLS",
+    "MAX_BENCH_CELLS",
+    "MAX_BENCH_REPEATS",
+    "MAX_BENCH_TICKS",
+    "MAX_BISECTION_ITERATIONS",
+    "MAX_DURATION_S",
+    "MAX_SEED",
+    "MAX_VIDEO_FPS",
+    "MAX_WORKERS",
+    "MIN_DURATION_S",
+]
 
 #: Shortest simulated time of a walk, s: one control tick of the closed loops, 0.5 ms (2 kHz; the same
 #: as ``amlip_qp.sim.loop.run_types.CONTROL_DT_S``).
@@ -30,20 +47,11 @@ MAX_DURATION_S: float = CommandBounds.duration_max_s
 #: cluster: ``sweep --ray``.
 MAX_WORKERS = 64
 
-#: Largest ``--seed`` of ``walk`` and ``compare``: 2**32 - 1, a 32-bit seed like the terrain's
-#: ``rough:AMPLITUDE_M:SEED`` (a sweep cell derives a 31-bit one). A longer number is a typo.
-MAX_SEED = 2**32 - 1
-
 #: Most bisection iterations (``compare --push-iterations``, a sweep's ``--bisect`` / ``[bisect]``): 20.
 #: Each iteration halves the interval (20 leave 1e-6 of it, 57 uN s of Cassie's 60 N s push search)
 #: and is one more walk of several seconds per cell and push direction. The same as
 #: ``amlip_qp.experiments.robustness.MAX_BISECTION_ITERATIONS``.
 MAX_BISECTION_ITERATIONS = 20
-
-#: Largest ``walk --accel-limit``, m/s^2: 100 (about 10 g). A speed command rate-limited at 100 m/s^2
-#: reaches every speed of the robots' bounds (at most 4.14 m/s) within 42 ms, a sixth of a step: that is no shaping at
-#: all, which ``--no-command-shaping`` says.
-MAX_ACCEL_LIMIT_MPS2 = 100.0
 
 #: Largest ``walk --video-fps``, frames per s: 240. The video plays in real time, and 240 Hz is the
 #: refresh rate of the fastest common displays: more frames are never shown, yet each is rendered and

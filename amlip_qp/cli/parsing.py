@@ -1,19 +1,21 @@
 """The parsing machinery of ``amlip-qp``: its parser class, lazy handlers, and the options' value types.
 
-Every value type refuses a bad value with a one-line message (argparse then
-exits 2 through :class:`Parser`).
+The value types are the library's value checks (:mod:`amlip_qp.option_values`,
+shared with the walk options of a sweep cell); each refuses a bad value with a
+one-line message (argparse then exits 2 through :class:`Parser`).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import math
 import re
 import sys
 from collections.abc import Callable
-from typing import NoReturn
+from typing import Any, NoReturn
 
+import amlip_qp.option_values as V
+from amlip_qp.exceptions import InputError
 from amlip_qp.sim.reports.gl import prefer_offscreen_gl
 
 #: An argument argparse should read as a value, not an option: anything that starts like a
@@ -55,110 +57,46 @@ def handler(path: str, offscreen_gl: bool = False) -> Callable[[argparse.Namespa
     return run
 
 
-def parse_push_spec(text: str) -> tuple[float, tuple[float, float, float], float]:
-    """Parse ``T:FX,FY,FZ:DUR`` (s : N,N,N : s) into ``(t_s, (fx, fy, fz), duration_s)``."""
-    usage = f"expected T:FX,FY,FZ:DUR (s:N,N,N:s), e.g. 6:100,0,0:0.2, got {text!r}"
-    parts = text.split(":")
-    if len(parts) != 3:
-        raise argparse.ArgumentTypeError(usage)
-    try:
-        t = float(parts[0])
-        force = tuple(float(x) for x in parts[1].split(","))
-        dur = float(parts[2])
-    except ValueError:
-        raise argparse.ArgumentTypeError(usage) from None
-    if len(force) != 3 or not all(math.isfinite(x) for x in (t, dur, *force)):
-        raise argparse.ArgumentTypeError(usage)
-    if t < 0 or dur <= 0:
-        raise argparse.ArgumentTypeError(f"a push needs T >= 0 s and DUR > 0 s, got {text!r}")
-    return t, force, dur
+def value_type(check: V.Check) -> Callable[[str], Any]:
+    """The argparse type of a value check of :mod:`amlip_qp.option_values`: its one-line error made argparse's."""
 
-
-def finite_float(text: str) -> float:
-    """Argparse type: a finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return value
-
-
-def positive_float(text: str) -> float:
-    """Argparse type: a finite number > 0."""
-    value = finite_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def non_negative_float(text: str) -> float:
-    """Argparse type: a finite number >= 0."""
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
-
-
-def float_in(low: float, high: float, unit: str, *, low_open: bool = True):
-    """Argparse type: a finite number in ``(low, high]`` (``[low, high]`` with ``low_open=False``), in ``unit``.
-
-    The error names the interval and the unit, e.g. ``expected a number in (0, 240] frames/s, got '1e9'``.
-    """
-    interval = f"{'(' if low_open else '['}{low:g}, {high:g}] {unit}".rstrip()
-
-    def parse(text: str) -> float:
-        value = finite_float(text)
-        if not ((value > low if low_open else value >= low) and value <= high):
-            raise argparse.ArgumentTypeError(f"expected a number in {interval}, got {text!r}")
-        return value
-
-    return parse
-
-
-def int_in(low: int, high: int, what: str = "whole number"):
-    """Argparse type: an integer in ``[low, high]`` (``what`` names it in the error)."""
-
-    def parse(text: str) -> int:
+    def parse(text: str) -> Any:
         try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a {what} in [{low}, {high}], got {text!r}") from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"expected a {what} in [{low}, {high}], got {value}")
-        return value
+            return check(text)
+        except InputError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
 
+    parse.__name__ = getattr(check, "__name__", "value")
     return parse
 
 
-def name_list(allowed: tuple[str, ...]):
-    """Argparse type: a comma-separated list of names from ``allowed`` (order kept, duplicates dropped)."""
-
-    def parse(text: str) -> list[str]:
-        names = list(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
-        bad = [n for n in names if n not in allowed]
-        if not names or bad:
-            raise argparse.ArgumentTypeError(f"expected a comma-separated list from {', '.join(allowed)}, got {text!r}")
-        return names
-
-    return parse
-
-
-def int_at_least(minimum: int, what: str):
-    """Argparse type: an integer >= ``minimum`` (``what`` names it in the error)."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a {what}, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected a {what}, got {value}")
-        return value
-
-    return parse
+#: ``T:FX,FY,FZ:DUR`` (s : N,N,N : s) -> ``(t_s, (fx, fy, fz), duration_s)``.
+parse_push_spec = value_type(V.push_spec)
+#: A finite number.
+finite_float = value_type(V.finite_float)
+#: A finite number > 0.
+positive_float = value_type(V.positive_float)
+#: A finite number >= 0.
+non_negative_float = value_type(V.non_negative_float)
+positive_int = value_type(V.int_at_least(1, "positive integer"))
+non_negative_int = value_type(V.int_at_least(0, "non-negative integer"))
 
 
-positive_int = int_at_least(1, "positive integer")
-non_negative_int = int_at_least(0, "non-negative integer")
+def float_in(low: float, high: float, unit: str, *, low_open: bool = True) -> Callable[[str], Any]:
+    """Argparse type: :func:`amlip_qp.option_values.float_in`."""
+    return value_type(V.float_in(low, high, unit, low_open=low_open))
+
+
+def int_in(low: int, high: int, what: str = "whole number") -> Callable[[str], Any]:
+    """Argparse type: :func:`amlip_qp.option_values.int_in`."""
+    return value_type(V.int_in(low, high, what))
+
+
+def name_list(allowed: tuple[str, ...]) -> Callable[[str], Any]:
+    """Argparse type: :func:`amlip_qp.option_values.name_list`."""
+    return value_type(V.name_list(allowed))
+
+
+def int_at_least(minimum: int, what: str) -> Callable[[str], Any]:
+    """Argparse type: :func:`amlip_qp.option_values.int_at_least`."""
+    return value_type(V.int_at_least(minimum, what))

@@ -9,20 +9,12 @@ from __future__ import annotations
 
 import argparse
 
-from amlip_qp.exceptions import InputError, UnknownRobotError
-from amlip_qp.profiles import bundled_names, get_profile, looks_like_profile_path
+import amlip_qp.option_values as V
+from amlip_qp.cli.parsing import value_type
+from amlip_qp.profiles import bundled_names
 
-
-def robot_name_or_path(text: str) -> str:
-    """Argparse type: a bundled robot's name, or a robot profile's path (returned resolved)."""
-    name = text.strip()
-    try:
-        profile = get_profile(name if looks_like_profile_path(name) else name.lower())
-    except UnknownRobotError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    except InputError as exc:  # a profile file that is missing or invalid
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return str(profile.source) if looks_like_profile_path(name) else profile.name
+#: Argparse type: a bundled robot's name, or a robot profile's path (returned resolved).
+robot_name_or_path = value_type(V.robot_name_or_path)
 
 
 def robot_list(text: str) -> list[str]:

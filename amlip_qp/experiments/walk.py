@@ -1,5 +1,10 @@
 """Handler of ``amlip-qp walk`` (parser in :mod:`amlip_qp.cli`).
 
+The handler makes its parsed options :class:`~amlip_qp.sim.scenarios.options.WalkOptions`
+(:func:`options_from_args`) and the scenario from them with the library's one
+constructor, :func:`~amlip_qp.sim.scenarios.from_options.scenario_from_options`,
+which a sweep cell calls too.
+
 ``walk`` exit status: 0 when the run finished standing, 1 when the robot
 fell (the summary, log, plot and video are still written), 2 for bad input.
 """
@@ -9,81 +14,44 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from dataclasses import replace
 
 import numpy as np
 
 from amlip_qp.exceptions import InputError
 from amlip_qp.output_paths import check_output_path, writing
-from amlip_qp.profiles import DEFAULT_ROBOT, NO_SHAPING, get_profile
+from amlip_qp.profiles import get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
-from amlip_qp.sim.loop.run_types import PlantSetting, Push, RunResult, SensorNoise
+from amlip_qp.sim.loop.run_types import PlantSetting, RunResult, SensorNoise
 from amlip_qp.sim.reports import summary
 from amlip_qp.sim.reports.video import VideoRecorder, check_video_fps, check_video_path
 from amlip_qp.sim.scenarios import factory
-from amlip_qp.sim.scenarios.named import get_scenario
-from amlip_qp.sim.scenarios.scenarios import (
-    Scenario,
-    SpeedProfile,
-    check_scenario,
-    held_warnings,
-    release_warnings,
-)
+from amlip_qp.sim.scenarios.from_options import scenario_from_options, setting_from_options
+from amlip_qp.sim.scenarios.options import SETTING_OPTIONS, WalkOptions
+from amlip_qp.sim.scenarios.scenarios import Scenario, held_warnings, release_warnings
 from amlip_qp.sim.world.plant_loader import load_plant
-from amlip_qp.sim.world.plant_modifiers import parse_payload
-from amlip_qp.sim.world.terrain import parse_terrain
 
 #: Runs at least this long (simulated s) show a progress bar on stderr.
 PROGRESS_MIN_DURATION_S = 3.0
-#: Default simulated time of ``walk`` without a scenario, s.
-DEFAULT_WALK_DURATION_S = 10.0
+
+
+def options_from_args(args: argparse.Namespace) -> WalkOptions:
+    """The walk options of a parsed ``walk`` (or ``view``) command line: the handler's one conversion.
+
+    Raises:
+        InputError: ``--vx`` with ``--speed-profile`` or ``--accel-limit`` with
+            ``--no-command-shaping`` (argparse refuses them first).
+    """
+    return WalkOptions.from_namespace(args)
 
 
 def scenario_from_args(args: argparse.Namespace) -> Scenario:
-    """The :class:`Scenario` ``walk`` runs: ``--scenario`` (or a steady walk) with the explicit options applied.
-
-    Speeds are m/s, ``--turn-rate`` is deg/s (converted to rad/s here, once),
-    pushes come pre-parsed as ``(t_s, (fx, fy, fz), duration_s)``.
+    """The :class:`Scenario` ``walk`` runs: :func:`~amlip_qp.sim.scenarios.from_options.scenario_from_options`
+    of :func:`options_from_args` (the one constructor a sweep cell uses too).
 
     Raises:
-        InputError: An unknown scenario, a robot that contradicts it, or a
-            command, duration or push outside the robot's bounds
-            (:func:`~amlip_qp.sim.scenarios.scenarios.check_scenario`).
+        InputError: As :func:`~amlip_qp.sim.scenarios.from_options.scenario_from_options`.
     """
-    if args.scenario is not None:
-        base = get_scenario(args.scenario)
-        if args.robot is not None and args.robot != base.robot:
-            raise InputError(f"scenario {base.name!r} is for {base.robot}, but --robot {args.robot} was given")
-    else:
-        base = Scenario("custom", args.robot or DEFAULT_ROBOT, DEFAULT_WALK_DURATION_S)
-    changes: dict = {}
-    if args.speed_profile is not None:
-        changes["vx"] = SpeedProfile.parse(args.speed_profile)
-    elif args.vx is not None:
-        changes["vx"] = SpeedProfile.constant(args.vx)
-    if args.vy is not None:
-        changes["vy_mps"] = args.vy
-    if args.turn_rate is not None:
-        changes["turn_rate_radps"] = math.radians(args.turn_rate)
-        changes["turn_start_s"] = 0.0
-        changes["turn_angle_rad"] = math.inf
-    if args.duration is not None:
-        changes["duration_s"] = args.duration
-    if args.push:
-        changes["pushes"] = tuple(base.pushes) + tuple(Push(t, f, d) for t, f, d in args.push)
-    if args.no_command_shaping:
-        changes["shaping"] = NO_SHAPING
-    elif args.accel_limit is not None:
-        shaping = base.shaping or get_profile(base.robot).shaping
-        changes["shaping"] = replace(shaping, vx_accel_mps2=args.accel_limit, vy_accel_mps2=args.accel_limit)
-    setting = setting_from_args(args, base.setting)
-    if setting != base.setting:
-        changes["setting"] = setting
-    if changes and base.name != "custom":
-        changes["name"] = f"{base.name}+options"
-    scenario = base.with_(**changes) if changes else base
-    check_scenario(scenario)
-    return scenario
+    return scenario_from_options(options_from_args(args))
 
 
 def save_log(result: RunResult, path: str) -> None:
@@ -147,40 +115,14 @@ def _check_output_paths(args: argparse.Namespace) -> None:
 
 
 def setting_from_args(args: argparse.Namespace, base: PlantSetting) -> PlantSetting:
-    """``base`` (a scenario's setting, its IMU mounting kept) with ``--plant``, ``--sensors``, ``--estimator``,
-    ``--terrain``, the modifiers.
+    """``base`` with the plant options of ``args`` (``walk``'s or ``compare``'s) applied
+    (:func:`~amlip_qp.sim.scenarios.from_options.setting_from_options`).
 
     Raises:
         InputError: ``--noise`` with robot sensors, a malformed ``--payload`` or
             ``--terrain``, or a nonsensical modifier value (one line saying what to fix).
     """
-    mods: dict = {}
-    if args.plant_mass_scale is not None:
-        mods["mass_scale"] = args.plant_mass_scale
-    if args.payload is not None:
-        mods["payload_kg"], mods["payload_pos_m"] = parse_payload(args.payload)
-    if args.plant_spring_scale is not None:
-        mods["spring_scale"] = args.plant_spring_scale
-    if args.friction is not None:
-        mods["friction"] = args.friction
-    if args.actuator_delay is not None:
-        mods["actuator_delay_ticks"] = args.actuator_delay
-    terrain = base.terrain
-    if args.terrain is not None:
-        terrain = parse_terrain(args.terrain).text
-    setting = PlantSetting(
-        plant=base.plant if args.plant is None else args.plant,
-        sensors=base.sensors if args.sensors is None else args.sensors,
-        estimator=base.estimator if args.estimator is None else args.estimator,
-        modifiers=replace(base.modifiers, **mods) if mods else base.modifiers,
-        terrain=terrain,
-        terrain_aware=base.terrain_aware if args.terrain_aware is None else args.terrain_aware,
-        clearance_m=base.clearance_m if args.clearance is None else args.clearance,
-        imu=base.imu,
-    )
-    if args.noise and setting.sensors != "ideal":
-        raise InputError("--noise adds Gaussian noise to the ideal sensors; --sensors robot has its own: give one")
-    return setting
+    return setting_from_options(WalkOptions.from_namespace(args, SETTING_OPTIONS), base)
 
 
 def check_plant(scenario: Scenario) -> None:
@@ -199,13 +141,14 @@ def check_plant(scenario: Scenario) -> None:
 def run_walk(args: argparse.Namespace) -> int:
     """``amlip-qp walk``: one run, a JSON summary and optional log, plot and video."""
     with held_warnings() as unverified:  # said once the input is known good
-        scenario = scenario_from_args(args)
-        get_profile(scenario.robot).check_supported(args.tracker)
+        options = options_from_args(args)
+        scenario = scenario_from_options(options)
+        get_profile(scenario.robot).check_supported(options.tracker)
         _check_output_paths(args)
         check_plant(scenario)
     release_warnings(unverified)
-    noise = SensorNoise() if args.noise else None
-    sim = factory.build_simulation(scenario, args.tracker, seed=args.seed, noise=noise, planner=args.planner)
+    noise = SensorNoise() if options.noise else None
+    sim = factory.build_simulation(scenario, options.tracker, seed=options.seed, noise=noise, planner=options.planner)
     recorder = None
     if args.video is not None:
         recorder = VideoRecorder(sim.model, args.video, fps=args.video_fps)

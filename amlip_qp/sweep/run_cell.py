@@ -1,24 +1,26 @@
 """A sweep cell -> one deterministic walk -> its metrics.
 
-A cell's parameters are ``walk`` options by their argparse names (``vx``,
-``tracker``, ``plant_mass_scale``, ``terrain``, ...; ``--turn-rate`` is
-``turn_rate``), parsed with the ``walk`` subcommand of
-:func:`amlip_qp.cli.build_parser` and turned into a scenario by
-:func:`amlip_qp.experiments.walk.scenario_from_args` (which applies
-:func:`~amlip_qp.experiments.walk.setting_from_args`), so every ``walk`` option is
-sweepable, including options added later. A flag (``noise``) takes ``true`` or
-``false``. The push parameters (:data:`PUSH_DEFAULTS`) add one push on the
-base: ``push_impulse_Ns`` (0: no push), ``push_direction_deg`` (in the
-horizontal plane from +x, forward, towards +y, left), ``push_phase`` (the step
-phase it starts at, after ``push_time_s``; none: at ``push_time_s``),
-``push_duration_s`` and ``push_time_s``. Force = impulse / duration.
+A cell's parameters are the walk options
+(:class:`amlip_qp.sim.scenarios.options.WalkOptions`, named as ``walk``'s
+options are stored: ``vx``, ``tracker``, ``plant_mass_scale``, ``terrain``,
+...; ``--turn-rate`` is ``turn_rate``) and the push parameters. The cell's
+walk options are checked by :meth:`~amlip_qp.sim.scenarios.options.WalkOptions.from_mapping`
+(the value checks the command line's types are made of; a bad value is one
+line naming the parameter) and made a scenario by
+:func:`amlip_qp.sim.scenarios.from_options.scenario_from_options`, the
+constructor ``amlip-qp walk`` uses on its own parsed options: no command line
+is written or parsed, and every ``walk`` option but the outputs is a
+parameter (the tests hold the two lists equal). A flag (``noise``,
+``terrain_aware``) takes ``true`` or ``false``. The push parameters
+(:data:`PUSH_DEFAULTS`) add one push on the base: ``push_impulse_Ns`` (0: no
+push), ``push_direction_deg`` (in the horizontal plane from +x, forward,
+towards +y, left), ``push_phase`` (the step phase it starts at, after
+``push_time_s``; none: at ``push_time_s``), ``push_duration_s`` and
+``push_time_s``. Force = impulse / duration.
 """
 
 from __future__ import annotations
 
-import contextlib
-import functools
-import io
 import math
 import time
 import warnings
@@ -27,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
+from amlip_qp.sim.scenarios.options import WalkOptions  # light: plain data and value checks
 
 #: Push parameters and their defaults (``None``: no phase trigger, the push starts at ``push_time_s``).
 PUSH_DEFAULTS: dict[str, float | None] = {
@@ -36,9 +39,6 @@ PUSH_DEFAULTS: dict[str, float | None] = {
     "push_duration_s": 0.2,
     "push_time_s": 2.0,
 }
-#: ``walk`` options that are not part of a walk's outcome (outputs, the progress bar, the handler).
-NOT_PARAMETERS = ("command", "func", "json", "log", "plot", "video", "video_fps", "no_progress")
-
 #: Metric name -> how it is read from the JSON summary (:func:`amlip_qp.sim.reports.summary.summarize`).
 _METRIC_READERS: dict[str, Any] = {
     "survived": lambda s: not s["fell"],
@@ -75,49 +75,19 @@ DEFAULT_METRICS: tuple[str, ...] = (
 )
 
 
-@functools.cache
 def walk_defaults() -> dict[str, Any]:
-    """The sweepable ``walk`` options and their defaults (argparse destination names; built once, do not modify)."""
-    from amlip_qp.cli import build_parser
-
-    options = vars(build_parser().parse_args(["walk"]))
-    return {k: v for k, v in options.items() if k not in NOT_PARAMETERS}
+    """The sweepable walk options and their defaults (:meth:`WalkOptions.defaults
+    <amlip_qp.sim.scenarios.options.WalkOptions.defaults>`)."""
+    return WalkOptions.defaults()
 
 
 def parameter_names() -> tuple[str, ...]:
-    """Every sweepable parameter: the ``walk`` options, then the push parameters."""
-    return (*walk_defaults(), *PUSH_DEFAULTS)
+    """Every sweepable parameter: the walk options, then the push parameters."""
+    return (*WalkOptions.names(), *PUSH_DEFAULTS)
 
 
-def walk_argv(params: Mapping[str, Any]) -> list[str]:
-    """The ``walk`` arguments of ``params`` (the push parameters left out): ``--name=value``, a flag for ``true``."""
-    argv = []
-    for name, value in params.items():
-        if name in PUSH_DEFAULTS:
-            continue
-        option = "--" + name.replace("_", "-")
-        if isinstance(value, bool):
-            if value:
-                argv.append(option)
-            elif walk_defaults().get(name, False) is None:  # an on/off option (--x / --no-x) left to the scenario
-                argv.append("--no-" + option[2:])
-        else:
-            argv.append(f"{option}={value}")
-    return argv
-
-
-def _parse_walk(argv: list[str]):
-    """``argv`` parsed by the ``walk`` subparser; its one-line error as an :class:`InputError`."""
-    from amlip_qp.cli import build_parser
-
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            return build_parser().parse_args(["walk", *argv])
-    except SystemExit:
-        lines = err.getvalue().strip().splitlines() or ["invalid walk options"]
-        message = lines[-1].split(" error: ", 1)[-1].split(" (see '")[0]
-        raise InputError(f"walk {' '.join(argv)}: {message}") from None
+def _describe(params: Mapping[str, Any]) -> str:
+    return ", ".join(f"{name}={value}" for name, value in params.items()) or "defaults"
 
 
 @dataclass(frozen=True)
@@ -159,18 +129,18 @@ def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
         InputError: An unknown or malformed option or value, a command outside the
             robot's bounds, or a phase push that may not start before the walk ends.
     """
-    from amlip_qp.experiments.walk import scenario_from_args
+    from amlip_qp.sim.scenarios.from_options import scenario_from_options
     from amlip_qp.sim.scenarios.scenarios import check_scenario
 
-    unknown = [n for n in params if n not in walk_defaults() and n not in PUSH_DEFAULTS]
+    unknown = [n for n in params if n not in parameter_names()]
     if unknown:
         raise InputError(f"unknown parameter {unknown[0]!r}; known: {', '.join(parameter_names())}")
-    argv = walk_argv(params)
+    walk_params = {k: v for k, v in params.items() if k not in PUSH_DEFAULTS}
     if "seed" not in params:
-        argv.append(f"--seed={seed}")
-    args = _parse_walk(argv)
+        walk_params["seed"] = seed
+    options = WalkOptions.from_mapping(walk_params)  # its errors name the parameter
     try:
-        scenario = scenario_from_args(args)
+        scenario = scenario_from_options(options)
         push = make_push(params)
         if push is not None:
             scenario = scenario.with_(pushes=(*scenario.pushes, push))
@@ -183,8 +153,8 @@ def walk_run(params: Mapping[str, Any], seed: int) -> WalkRun:
                         f"give a duration of at least {latest_end:g} s, got {scenario.duration_s:g} s"
                     )
     except InputError as exc:
-        raise InputError(f"walk {' '.join(argv)}: {exc}") from None
-    return WalkRun(scenario, args.tracker, int(args.seed), bool(args.noise), args.planner)
+        raise InputError(f"walk {_describe(params)}: {exc}") from None
+    return WalkRun(scenario, options.tracker, options.seed, options.noise, options.planner)
 
 
 def check_plants(runs: list[WalkRun]) -> None:

@@ -51,10 +51,11 @@ else:  # pragma: no cover - Python 3.10: the same parser as a package (a depende
 
 #: Significant digits that range points are rounded to (0.6000000000000001 -> 0.6).
 RANGE_DIGITS = 12
-#: Most cells of a sweep: 100,000. Before anything runs every cell's walk options are parsed and
-#: checked, 2.8 ms a cell (10,000 Cassie cells in 28 s, measured), so 4.7 min at the bound; then each
-#: cell is a walk of seconds (about 3 days for 100,000 cells of 6 s on 2 cores, hours on a Ray
-#: cluster), and one record file in ``cells/``. A larger sweep is several sweeps, or random sampling.
+#: Most cells of a sweep: 100,000. Before anything runs every cell's walk options are checked and
+#: made a scenario, 1.2 ms a cell (10,000 Cassie cells in 12 s, measured on 2 busy cores), so about
+#: 2 min at the bound; then each cell is a walk of seconds (about 3 days for 100,000 cells of 6 s
+#: on 2 cores, hours on a Ray cluster), and one record file in ``cells/``. A larger sweep is several
+#: sweeps, or random sampling.
 MAX_CELLS = 100_000
 _SECTIONS = ("sweep", "fixed", "parameters", "bisect")
 _SWEEP_KEYS = ("sampling", "samples", "sampling_seed", "metrics")
