@@ -60,3 +60,18 @@ def test_a_bad_duration_exits_2_in_one_line_before_any_walk(name, capsys):
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "argument --duration: expected a number in (0, 600] s, got '-1'" in err
+
+
+def test_raised_starts_differ_in_the_last_bits_and_are_counted(capsys):
+    """Start k raises the base by k * 1e-12 m: the walks differ (a pass by luck of the bits would show), and
+    the table counts those that walked."""
+    module = _example("raised_starts")
+    runs = [module.walk_from(("rabbit-1mps", "qp", "one-step", 0.5, k)) for k in (0, 1)]
+    assert not any(fell for _, fell, _, _ in runs)
+    # measured: -0.2120 and -0.2127 m/s (Rabbit's first steps from rest)
+    assert runs[0][3] != runs[1][3] and abs(runs[0][3] - runs[1][3]) < 0.01
+    assert module.main(["--scenario", "rabbit-1mps", "--duration", "0.5", "--starts", "2"]) == 0
+    assert capsys.readouterr().out.strip().endswith("rabbit-1mps / qp / one-step: 2 of 2 starts walked")
+    with pytest.raises(SystemExit) as info:
+        module.main(["--starts", "0"])
+    assert info.value.code == 2
