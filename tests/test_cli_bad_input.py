@@ -209,6 +209,8 @@ BAD_INPUTS = [
     (["compare", "--jobs", "1", "--plot", "{file}/cmp.png"], "is a file, not a folder"),
     (["compare", "--robots", "cassie,atlas"], "argument --robots: unknown robot 'atlas'"),
     (["compare", "--robots", ","], "expected a comma-separated list of robots"),
+    (["compare", "--planners", "one-step,two-step"], "--planners: expected a comma-separated list from one-step, mpc"),
+    (["compare", "--planners", ","], "--planners: expected a comma-separated list from one-step, mpc, got ','"),
     (["walk", "--robot", "{tmp}/nothing.toml"], "robot profile not found"),
     (["walk", "--robot", "{no_pbc}", "--tracker", "pbc"], "the pbc tracker does not run on h1: a test reason"),
     (["walk", "--robot", "{file}.toml"], "robot profile not found"),

@@ -250,6 +250,30 @@ def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
     assert fig.stat().st_size > 10_000
 
 
+def test_compare_gives_each_tracker_per_planner_in_the_table_and_the_json(tmp_path, capsys, stand_in):
+    out_json = tmp_path / "cmp.json"
+    argv = ["compare", "--quick", "--robots", "rabbit", "--planners", "mpc,one-step", "--no-ramp", "--jobs", "1"]
+    code, out, err = _run(argv + ["--push-iterations", "0", "--json", str(out_json), "--no-plot"], capsys)
+    assert code == 0, err
+    lines = out.strip().splitlines()
+    assert [line.split("  ")[1].strip() for line in lines[2:]] == [
+        "pbc / mpc",
+        "pbc / one-step",
+        "qp / mpc",
+        "qp / one-step",
+    ]
+    data = json.loads(out_json.read_text())
+    assert [(r["tracker"], r["planner"]) for r in data["rows"]] == [
+        ("pbc", "mpc"),
+        ("pbc", "one-step"),
+        ("qp", "mpc"),
+        ("qp", "one-step"),
+    ]
+    assert all(r["fell"] is True and r["max_sagittal_impulse_Ns"] == 0.0 for r in data["rows"])  # zero torque
+    assert data["settings"]["planners"] == ["mpc", "one-step"]
+    assert cli.build_parser().parse_args(["compare"]).planners == ["one-step"]
+
+
 def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
     from amlip_qp.codegen.runtime import CodegenFallbackWarning
 

@@ -106,6 +106,14 @@ def add_compare(sub) -> None:
         help="trackers (default pbc,qp)",
     )
     p.add_argument(
+        "--planners",
+        type=name_list(PLANNERS),
+        default=["one-step"],
+        metavar="P1,P2",
+        help="foot-placement planners, one row per tracker and planner: one-step, mpc (default one-step; "
+        "each planner added doubles the run time, docs/COMMANDS.md)",
+    )
+    p.add_argument(
         "--scenario",
         action="append",
         default=[],

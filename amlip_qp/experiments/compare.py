@@ -1,7 +1,8 @@
-"""PBC vs QP: the same scenarios, the same seed, one table row per (robot, tracker).
+"""PBC vs QP: the same scenarios, the same seed, one table row per (robot, tracker, planner).
 
-Per robot and tracker, three experiments (independent runs, spread over
-``jobs`` worker processes; each run is deterministic for its seed):
+Per robot, tracker and foot-placement planner (the one-step law, the step-timing MPC), three
+experiments (independent runs, spread over ``jobs`` worker processes; each run is deterministic for
+its seed):
 
 1. the **nominal** scenario (default: the robot profile's, ``cassie-1mps`` /
    ``rabbit-0.5mps``, at most 10 s):
@@ -13,7 +14,7 @@ Per robot and tracker, three experiments (independent runs, spread over
    impulse survived, by bisection (:func:`~amlip_qp.experiments.robustness.max_survived_impulse`).
 
 The experiments' settings and scenarios are :mod:`~amlip_qp.experiments.robustness`'s;
-this module runs them, gathers the rows and prints the table.
+this module runs them; :mod:`~amlip_qp.experiments.compare_table` gathers the rows and prints the table.
 """
 
 from __future__ import annotations
@@ -23,15 +24,14 @@ import math
 import sys
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from amlip_qp.control import registry
 from amlip_qp.exceptions import InputError, UnverifiedCommandWarning
+from amlip_qp.experiments.compare_table import DEFAULT_PLANNERS, check_planners, format_table, make_row
 from amlip_qp.experiments.robustness import (
     PUSH_DURATION_S,
     QUICK,
@@ -48,7 +48,7 @@ from amlip_qp.output_paths import check_output_path, writing
 from amlip_qp.profiles import compared_robots, get_profile
 from amlip_qp.sim.loop.run_types import PlantSetting, RunResult, SensorNoise
 from amlip_qp.sim.reports import summary
-from amlip_qp.sim.reports.plots import AT_UPPER_BOUND, check_figure_path, comparison_figure
+from amlip_qp.sim.reports.plots import check_figure_path, comparison_figure
 from amlip_qp.sim.reports.summary import summarize
 from amlip_qp.sim.scenarios import factory
 from amlip_qp.sim.scenarios.named import get_scenario
@@ -67,11 +67,20 @@ class _Task:
     seed: int
     noise: bool
     setting: PlantSetting
+    planner: str = "one-step"
+
+    @property
+    def name(self) -> str:
+        return f"{self.robot}/{self.tracker}/{self.planner} {self.kind}"
 
 
-def _run(scenario: Scenario, tracker: str, seed: int, noise: bool, setting: PlantSetting) -> RunResult:
+def _run(task: _Task, scenario: Scenario) -> RunResult:
     return factory.run_scenario(
-        scenario.with_(setting=setting), tracker, seed=seed, noise=SensorNoise() if noise else None
+        scenario.with_(setting=task.setting),
+        task.tracker,
+        seed=task.seed,
+        noise=SensorNoise() if task.noise else None,
+        planner=task.planner,
     )
 
 
@@ -80,11 +89,11 @@ def _execute(task: _Task) -> dict[str, Any]:
     t0, c0 = time.perf_counter(), time.process_time()
     s = task.settings
     if task.kind == "nominal":
-        res = _run(task.scenario, task.tracker, task.seed, task.noise, task.setting)
+        res = _run(task, task.scenario)
         summ = summarize(res)
         out: dict[str, Any] = {"nominal": summ}
     elif task.kind == "ramp":
-        res = _run(task.scenario, task.tracker, task.seed, task.noise, task.setting)
+        res = _run(task, task.scenario)
         speed = highest_steady_speed(res, s.window_s, s.tolerance)
         out = {
             "highest_steady_speed_mps": speed,
@@ -98,7 +107,7 @@ def _execute(task: _Task) -> dict[str, Any]:
 
         def survives(impulse: float) -> bool:
             pushed = push_scenario(task.scenario, impulse, axis, s)
-            res = _run(pushed, task.tracker, task.seed, task.noise, task.setting)
+            res = _run(task, pushed)
             trials.append((impulse, not res.fell))
             return not res.fell
 
@@ -136,17 +145,20 @@ def build_tasks(
     ramp: bool = True,
     push: bool = True,
     setting: PlantSetting | None = None,
+    planners: Sequence[str] = DEFAULT_PLANNERS,
 ) -> list[_Task]:
-    """Every experiment of a comparison, longest first (better packing on the workers).
+    """Every experiment of a comparison, per robot, tracker and planner (``"one-step"``, ``"mpc"``).
 
     A ramp past a robot's verified envelope (its profile's ``[verified]``; Rabbit's 1.5 m/s) gives
     one :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` for the whole comparison.
 
     Raises:
         InputError: A plant that does not fit one of the robots (loaded here, once per robot),
-            or a setting the robot's gait cannot take (a swing clearance above its CoM height).
+            a setting the robot's gait cannot take (a swing clearance above its CoM height),
+            or an unknown planner.
     """
     setting = setting or PlantSetting()
+    planners = check_planners(planners)
     tasks = []
     unverified: list[str] = []
     for robot in robots:
@@ -166,13 +178,15 @@ def build_tasks(
         for trk in trackers:
             if trk in get_profile(robot).unsupported:
                 continue  # said by the handler (unsupported_pairs)
-            tasks.append(_Task("nominal", robot, trk, nominal, settings, seed, noise, setting))
-            if ramp:
-                tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), settings, seed, noise, setting))
-            if push:
-                tasks.append(_Task("push-x", robot, trk, nominal, settings, seed, noise, setting))
-                if not planar:
-                    tasks.append(_Task("push-y", robot, trk, nominal, settings, seed, noise, setting))
+            for pl in planners:
+                common = (settings, seed, noise, setting, pl)
+                tasks.append(_Task("nominal", robot, trk, nominal, *common))
+                if ramp:
+                    tasks.append(_Task("ramp", robot, trk, ramp_scenario(robot, settings), *common))
+                if push:
+                    tasks.append(_Task("push-x", robot, trk, nominal, *common))
+                    if not planar:
+                        tasks.append(_Task("push-y", robot, trk, nominal, *common))
     unknown = [n for n in scenario_names if get_scenario(n).robot not in robots]
     if unknown:
         raise InputError(f"--scenario {', '.join(unknown)} is for a robot not in --robots {','.join(robots)}")
@@ -190,47 +204,16 @@ def _expected_cost(task: _Task) -> float:
     return weight * task.scenario.duration_s
 
 
-def _row(robot: str, tracker: str, parts: list[dict[str, Any]]) -> dict[str, Any]:
-    row: dict[str, Any] = {"robot": robot, "tracker": tracker}
-    for p in parts:
-        row.update({k: v for k, v in p.items() if k not in ("nominal", "_wall_s", "_cpu_s")})
-        if "nominal" in p:
-            n = p["nominal"]
-            track = [v for v in n["output_tracking_rms"].values() if v is not None and math.isfinite(v)]
-            row.update(
-                scenario=n["scenario"],
-                fell=n["fell"],
-                steps=n["steps"],
-                velocity_error_rms=n["velocity_error_rms"],
-                foot_placement_error_rms_m=n["foot_placement_error_rms_m"],
-                L_end_of_step_error_rms=n["L_end_of_step_error_rms"],
-                output_tracking_rms=n["output_tracking_rms"],
-                output_tracking_rms_mean=float(np.mean(track)) if track else None,
-                torque_peak_Nm=n["torque_peak_Nm"],
-                torque_rms_Nm=n["torque_rms_Nm"],
-                torque_peak_max_Nm=max(n["torque_peak_Nm"].values()) if n["torque_peak_Nm"] else None,
-                torque_rms_mean_Nm=float(np.mean(list(n["torque_rms_Nm"].values()))) if n["torque_rms_Nm"] else None,
-                tick_time_median_us=n["tick_time_us"]["median"],
-                tick_time_p99_us=n["tick_time_us"]["p99"],
-                realtime_factor=n["realtime_factor"],
-                fallback_ticks=n["fallback_ticks"],
-            )
-    row.setdefault("max_lateral_impulse_Ns", None)
-    return row
-
-
 def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
-    """Execute ``tasks`` on ``jobs`` processes (1: in this process); one row per (robot, tracker), in task order."""
+    """Execute ``tasks`` on ``jobs`` processes (1: in this process); one row per (robot, tracker, planner), in
+    task order."""
     results: list[dict[str, Any] | None] = [None] * len(tasks)
     if jobs <= 1 or len(tasks) <= 1:
         for i, task in enumerate(tasks):
             row = _execute(task)
             results[i] = row
             if log:
-                log(
-                    f"  done {task.robot}/{task.tracker} {task.kind} "
-                    f"({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)"
-                )
+                log(f"  done {task.name} ({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)")
     else:
         import multiprocessing as mp
 
@@ -244,59 +227,13 @@ def run_comparison(tasks: list[_Task], jobs: int = 2, log: Callable[[str], None]
                 row = fut.result()
                 results[i] = row
                 if log:
-                    t = tasks[i]
-                    log(f"  done {t.robot}/{t.tracker} {t.kind} ({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)")
+                    log(f"  done {tasks[i].name} ({row['_wall_s']:.0f} s, CPU {row['_cpu_s']:.0f} s)")
     rows = []
-    keys = list(dict.fromkeys((t.robot, t.tracker) for t in tasks))
-    for robot, trk in keys:
-        parts = [r for t, r in zip(tasks, results) if (t.robot, t.tracker) == (robot, trk)]
-        rows.append(_row(robot, trk, parts))  # type: ignore[arg-type]
+    keys = list(dict.fromkeys((t.robot, t.tracker, t.planner) for t in tasks))
+    for key in keys:
+        parts = [r for t, r in zip(tasks, results) if (t.robot, t.tracker, t.planner) == key]
+        rows.append(make_row(*key, parts))  # type: ignore[arg-type]
     return rows
-
-
-# ----------------------------------------------------------------- table
-#: (row key, column header, format) of the printed table.
-TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
-    ("robot", "robot", "s"),
-    ("tracker", "tracker", "s"),
-    ("fell", "fell", "s"),
-    ("velocity_error_rms", "v err m/s", ".3f"),
-    ("foot_placement_error_rms_m", "foot err m", ".3f"),
-    ("L_end_of_step_error_rms", "L err Nms", ".2f"),
-    ("output_tracking_rms_mean", "track rms", ".4f"),
-    ("torque_peak_max_Nm", "tau pk Nm", ".1f"),
-    ("torque_rms_mean_Nm", "tau rms Nm", ".1f"),
-    ("highest_steady_speed_mps", "v max m/s", ".2f"),
-    ("max_sagittal_impulse_Ns", "push x Ns", ".1f"),
-    ("max_lateral_impulse_Ns", "push y Ns", ".1f"),
-    ("tick_time_median_us", "tick med us", ".0f"),
-    ("tick_time_p99_us", "tick p99 us", ".0f"),
-)
-
-
-def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
-    v = row.get(key)
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "-"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    text = format(v, fmt)
-    if key in AT_UPPER_BOUND and row.get(AT_UPPER_BOUND[key]):
-        text = ">=" + text
-    return text
-
-
-def format_table(rows: list[dict[str, Any]]) -> str:
-    """A fixed-width text table, one line per (robot, tracker)."""
-    header = [h for _, h, _ in TABLE_COLUMNS]
-    body = [[_cell(r, k, f) for k, _, f in TABLE_COLUMNS] for r in rows]
-    widths = [max(len(c) for c in col) for col in zip(header, *body)]
-    lines = [
-        "  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(line, widths)))
-        for line in [header, *body]
-    ]
-    lines.insert(1, "-" * len(lines[0]))
-    return "\n".join(lines)
 
 
 # ------------------------------------------------------------------ main
@@ -311,18 +248,19 @@ def settings_from_args(args: argparse.Namespace) -> CompareSettings:
 
 
 def prepare_generated_code(tasks: list[_Task]) -> None:
-    """Build one closed loop per (robot, tracker) of ``tasks`` here, before any worker starts.
+    """Build one closed loop per (robot, tracker, planner) of ``tasks`` here, before any worker starts.
 
     Building compiles the generated C (planner kernels, output map, QP
     assembly) into the cache once, in this process: the workers then load it,
     so a cold cache prints one first-run line rather than one per worker, and
     no two workers compile the same library at once.
     """
-    done: set[tuple[str, str]] = set()
+    done: set[tuple[str, str, str]] = set()
     for task in tasks:
-        if (task.robot, task.tracker) not in done:
-            done.add((task.robot, task.tracker))
-            factory.build_simulation(task.scenario, task.tracker)  # the generated C does not depend on the plant
+        if (task.robot, task.tracker, task.planner) not in done:
+            done.add((task.robot, task.tracker, task.planner))
+            # the generated C does not depend on the plant
+            factory.build_simulation(task.scenario, task.tracker, planner=task.planner)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -343,6 +281,7 @@ def main(args: argparse.Namespace) -> int:
             ramp=not args.no_ramp,
             push=not args.no_push,
             setting=setting,
+            planners=args.planners,
         )
         # Outputs are checked before anything runs; the figure's folder (default out/) is created.
         check_output_path("--json", args.json)
@@ -384,7 +323,7 @@ def _settings_dict(settings: CompareSettings, args: argparse.Namespace) -> dict[
     from dataclasses import asdict
 
     d = asdict(settings)
-    d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S)
+    d.update(seed=args.seed, noise=args.noise, push_duration_s=PUSH_DURATION_S, planners=list(args.planners))
     d.update(setting_from_args(args, PlantSetting()).describe())
     # the per-robot ranges of the profiles, as (robot, value) pairs
     robots = args.robots if args.robots is not None else compared_robots()

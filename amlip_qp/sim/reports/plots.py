@@ -165,6 +165,11 @@ AT_UPPER_BOUND: dict[str, str] = {
 }
 
 
+def series_label(row: dict[str, Any]) -> str:
+    """The tracker of a comparison row and, when the row names one, its planner: ``"qp / mpc"``."""
+    return f"{row['tracker']} / {row['planner']}" if row.get("planner") else str(row["tracker"])
+
+
 def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -> Path:
     """Write :func:`draw_comparison` of ``rows`` to ``path`` (PNG); returns the path."""
     check_figure_path(path)
@@ -172,9 +177,10 @@ def comparison_figure(rows: Sequence[dict[str, Any]], path: str | os.PathLike) -
 
 
 def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
-    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker.
+    """Bar charts of the comparison metrics, grouped by robot, one bar per tracker and planner.
 
-    ``rows`` are the per-(robot, tracker) dictionaries of :mod:`amlip_qp.experiments.compare`.
+    ``rows`` are the per-(robot, tracker, planner) dictionaries of :mod:`amlip_qp.experiments.compare`
+    (a bar's legend entry is :func:`series_label`, ``"qp / mpc"``).
     A value that reached the top of its search range (its flag in
     :data:`AT_UPPER_BOUND` is true) is labelled
     "≥ value" above its bar; a missing, ``None`` or non-finite value (the
@@ -182,7 +188,7 @@ def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
     labelled "n/a".
     """
     robots = list(dict.fromkeys(r["robot"] for r in rows))
-    trackers = list(dict.fromkeys(r["tracker"] for r in rows))
+    trackers = list(dict.fromkeys(series_label(r) for r in rows))
     ncol = 3
     nrow = int(np.ceil(len(COMPARISON_METRICS) / ncol))
     fig = Figure(figsize=(4.2 * ncol, 3.2 * nrow))
@@ -194,7 +200,7 @@ def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
             xs = x + (j - (len(trackers) - 1) / 2) * width
             vals, capped = [], []
             for rob in robots:
-                row = next((r for r in rows if r["robot"] == rob and r["tracker"] == trk), None)
+                row = next((r for r in rows if r["robot"] == rob and series_label(r) == trk), None)
                 v = None if row is None else row.get(key)
                 vals.append(np.nan if v is None else float(v))
                 capped.append(row is not None and key in AT_UPPER_BOUND and bool(row.get(AT_UPPER_BOUND[key])))
@@ -215,6 +221,6 @@ def draw_comparison(rows: Sequence[dict[str, Any]]) -> Figure:
     for ax in list(axes.flat)[len(COMPARISON_METRICS) :]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=8)
-    fig.suptitle("PBC vs QP tracker (≥: the top of the search range was reached)")
+    fig.suptitle("Trackers and planners (≥: the top of the search range was reached)")
     fig.tight_layout()
     return fig

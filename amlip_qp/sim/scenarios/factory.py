@@ -180,6 +180,7 @@ def run_scenario(
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
     log: str = "full",
+    planner: str = "one-step",
 ) -> RunResult:
     """Build and run ``scenario`` for its full duration (see :func:`build_simulation`).
 
@@ -196,6 +197,7 @@ def run_scenario(
         estimator=estimator,
         plant_edits=plant_edits,
         ctrl_filter=ctrl_filter,
+        planner=planner,
     )
     result = sim.run(scenario.duration_s, progress=progress, on_tick=on_tick, log=log)
     result.info["scenario"] = scenario.name
