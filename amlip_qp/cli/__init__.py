@@ -148,8 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--trackers",
         default="qp,pbc",
         metavar="NAMES",
-        help="comma-separated trackers: qp, pbc, qp-gathered (the QP with the compiled build that gathers its "
-        "inputs in Python, the default before the in-place one), qp-daqp (the QP with the DAQP solver) "
+        help="comma-separated trackers: qp (with the profile's QP solver), pbc, qp-gathered (the QP with the "
+        "compiled build that gathers its inputs in Python), qp-daqp and qp-proxqp (the QP with that solver) "
         "(default qp,pbc)",
     )
     b.set_defaults(func=handler("amlip_qp.experiments.bench_harness:run_bench"))
