@@ -88,7 +88,8 @@ TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
 )
 
 
-def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
+def table_cell(row: dict[str, Any], key: str, fmt: str) -> str:
+    """One cell of the table: the row's value at ``key`` in ``fmt``, "-" when missing, ">=" at a search's top."""
     if key == "tracker":
         return series_label(row)
     v = row.get(key)
@@ -105,7 +106,7 @@ def _cell(row: dict[str, Any], key: str, fmt: str) -> str:
 def format_table(rows: list[dict[str, Any]]) -> str:
     """A fixed-width text table, one line per row (robot, ``tracker / planner``)."""
     header = [h for _, h, _ in TABLE_COLUMNS]
-    body = [[_cell(r, k, f) for k, _, f in TABLE_COLUMNS] for r in rows]
+    body = [[table_cell(r, k, f) for k, _, f in TABLE_COLUMNS] for r in rows]
     widths = [max(len(c) for c in col) for col in zip(header, *body)]
     lines = [
         "  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(line, widths)))
