@@ -1,0 +1,321 @@
+"""Regenerate the measured blocks of docs/RESULTS.md from the commands that produce them.
+
+Usage: ``python examples/results_page.py --list | --check | --all | --only ID[,ID] [--page PATH]``
+
+Each generated block of the page sits between two markers::
+
+    <!-- results: ID -->
+    Command: `amlip-qp bench codegen`
+    Measured 2026-12-06 (11 s wall) with Python 3.11.7, MuJoCo 4.0.1, Pinocchio 4.1.0, ...
+
+    (the command's output: a Markdown table, or its text in a code block)
+    <!-- /results: ID -->
+
+:data:`MANIFEST` lists the blocks: an id, the command (an argv list; ``amlip-qp`` and ``python``
+run with this interpreter, from the repository's top folder), how its output becomes the block
+(``markdown``: its standard output is a Markdown table; ``text``: its standard output, shown as
+a code block; ``compare-json``: the JSON file ``amlip-qp compare --json`` writes, as a Markdown
+table of the library's comparison columns) and about how long it takes on 2 cores.
+
+- ``--list``: the ids, commands and rough costs.
+- ``--only ID[,ID]``: run those commands and rewrite their blocks in place (the command line,
+  the date and versions line and the output); everything outside the markers is left as it is.
+- ``--all``: every block, one after the other (each block is written as soon as it is measured).
+- ``--check``: no simulation: every marker of the page has a manifest entry and every entry a
+  block, each block is well formed and starts with the command line its entry gives.
+
+Bad input (an unknown id, a missing page, markers that do not pair) exits 2 with one line; a
+failing ``--check`` prints one line per problem and exits 1; a command that fails leaves its
+block untouched and exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.metadata
+import json
+import platform
+import re
+import shlex
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGE = ROOT / "docs" / "RESULTS.md"
+#: Where the commands that write JSON write it (the repository's ``out/`` folder is not tracked).
+JSON_DIR = "out/results"
+
+KINDS = ("markdown", "text", "compare-json")
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One generated block of the page.
+
+    Attributes:
+        id: The block's id in its markers (lower case, digits and ``-``).
+        argv: The command; ``argv[0]`` is ``amlip-qp``, ``python`` or a program on the PATH.
+        kind: How the command's output becomes the block (one of :data:`KINDS`).
+        cost_s: Roughly how long the command takes on 2 cores, wall time in seconds.
+    """
+
+    id: str
+    argv: tuple[str, ...]
+    kind: str
+    cost_s: float
+
+    def json_path(self) -> Path:
+        """For ``compare-json``: the file the command writes, its ``--json`` argument."""
+        return ROOT / self.argv[self.argv.index("--json") + 1]
+
+
+MANIFEST: tuple[Entry, ...] = (
+    Entry(
+        "compare-rabbit",
+        (
+            "amlip-qp",
+            "compare",
+            "--robots",
+            "rabbit",
+            "--jobs",
+            "1",
+            "--no-plot",
+            "--json",
+            f"{JSON_DIR}/compare-rabbit.json",
+        ),
+        "compare-json",
+        95,
+    ),
+    Entry(
+        "acceptance-ideal-rabbit",
+        ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "rabbit"),
+        "markdown",
+        80,
+    ),
+    Entry(
+        "acceptance-ideal-h1",
+        ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "h1"),
+        "markdown",
+        120,
+    ),
+    Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
+    Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
+)
+
+OPEN = re.compile(r"^<!-- results: ([a-z0-9-]+) -->$")
+CLOSE = re.compile(r"^<!-- /results: ([a-z0-9-]+) -->$")
+MEASURED = "Measured "
+
+
+class PageError(Exception):
+    """The page or the request cannot be used as it is (one line for the user)."""
+
+
+def entries() -> dict[str, Entry]:
+    """The manifest by id."""
+    return {e.id: e for e in MANIFEST}
+
+
+def command_text(entry: Entry) -> str:
+    """The command as a user types it, from the repository's top folder."""
+    return shlex.join(entry.argv)
+
+
+def command_line(entry: Entry) -> str:
+    """The block's first line: its command."""
+    return f"Command: `{command_text(entry)}`"
+
+
+def _resolved(argv: tuple[str, ...]) -> list[str]:
+    """``amlip-qp`` and ``python`` run with this interpreter, so the environment is this one."""
+    if argv[0] == "amlip-qp":
+        return [sys.executable, "-m", "amlip_qp", *argv[1:]]
+    if argv[0] == "python":
+        return [sys.executable, *argv[1:]]
+    return list(argv)
+
+
+def _version(*distributions: str) -> str:
+    for name in distributions:
+        try:
+            return importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            continue
+    return "not installed"
+
+
+def versions() -> str:
+    """The versions the measurements depend on, read now."""
+    return ", ".join(
+        [
+            f"Python {platform.python_version()}",
+            f"MuJoCo {_version('mujoco')}",
+            f"Pinocchio {_version('pin', 'pinocchio')}",
+            f"ProxSuite {_version('proxsuite')}",
+            f"daqp {_version('daqp')}",
+            f"CasADi {_version('casadi')}",
+            f"numpy {_version('numpy')}",
+        ]
+    )
+
+
+def compare_markdown(data: dict[str, Any]) -> str:
+    """``amlip-qp compare --json``'s rows as a Markdown table of the library's own columns and cells."""
+    from amlip_qp.experiments.compare_table import TABLE_COLUMNS, table_cell
+
+    lines = ["| " + " | ".join(header for _, header, _ in TABLE_COLUMNS) + " |"]
+    lines.append("|" + "---|" * len(TABLE_COLUMNS))
+    for row in data["rows"]:
+        lines.append("| " + " | ".join(table_cell(row, key, fmt) for key, _, fmt in TABLE_COLUMNS) + " |")
+    return "\n".join(lines)
+
+
+def body(entry: Entry, stdout: str) -> str:
+    """The block's output part from what the command printed (or wrote, for ``compare-json``)."""
+    if entry.kind == "markdown":
+        return stdout.strip("\n")
+    if entry.kind == "text":
+        return "```text\n" + stdout.strip("\n") + "\n```"
+    if entry.kind == "compare-json":
+        return compare_markdown(json.loads(entry.json_path().read_text()))
+    raise PageError(f"{entry.id}: unknown kind {entry.kind!r}; known: {', '.join(KINDS)}")
+
+
+def measure(entry: Entry) -> list[str]:
+    """Run the entry's command; the block's lines between its markers."""
+    if entry.kind == "compare-json":
+        entry.json_path().parent.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    proc = subprocess.run(_resolved(entry.argv), cwd=ROOT, capture_output=True, text=True)
+    wall_s = time.perf_counter() - t0
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+        raise RuntimeError(f"{entry.id}: `{command_text(entry)}` exited {proc.returncode}: {last}")
+    date = datetime.now(timezone.utc).strftime("%Y-%m-%d")
+    return [
+        command_line(entry),
+        f"{MEASURED}{date} ({wall_s:.0f} s wall) with {versions()}.",
+        "",
+        *body(entry, proc.stdout).splitlines(),
+    ]
+
+
+def blocks(lines: list[str]) -> dict[str, tuple[int, int]]:
+    """The page's blocks: id -> (index of the opening marker, index of the closing one).
+
+    Raises:
+        PageError: A marker without its partner, a block inside another or an id used twice.
+    """
+    found: dict[str, tuple[int, int]] = {}
+    open_id: str | None = None
+    start = 0
+    for i, line in enumerate(lines):
+        if m := OPEN.match(line):
+            if open_id is not None:
+                raise PageError(f"line {i + 1}: block {m.group(1)!r} opens inside block {open_id!r}")
+            if m.group(1) in found:
+                raise PageError(f"line {i + 1}: block {m.group(1)!r} appears twice")
+            open_id, start = m.group(1), i
+        elif m := CLOSE.match(line):
+            if open_id != m.group(1):
+                raise PageError(f"line {i + 1}: closing marker of {m.group(1)!r} without its opening marker")
+            found[open_id] = (start, i)
+            open_id = None
+        elif line.lstrip().startswith("<!--") and "results:" in line:
+            raise PageError(f"line {i + 1}: malformed marker {line.strip()!r}")
+    if open_id is not None:
+        raise PageError(f"line {start + 1}: block {open_id!r} is not closed")
+    return found
+
+
+def read_page(page: Path) -> list[str]:
+    if not page.is_file():
+        raise PageError(f"no results page at {page}")
+    return page.read_text().split("\n")
+
+
+def check(page: Path) -> list[str]:
+    """The page's problems against the manifest (empty: the page is consistent)."""
+    lines = read_page(page)
+    found = blocks(lines)
+    manifest = entries()
+    problems = [f"{i}: block in the page but not in the manifest" for i in found if i not in manifest]
+    problems += [f"{i}: in the manifest but no block in the page" for i in manifest if i not in found]
+    for i, (start, end) in found.items():
+        if i not in manifest:
+            continue
+        inner = lines[start + 1 : end]
+        if not inner or inner[0] != command_line(manifest[i]):
+            problems.append(f"{i}: the block does not start with {command_line(manifest[i])!r}")
+        elif len(inner) < 4 or not inner[1].startswith(MEASURED) or inner[2] != "" or not inner[3].strip():
+            problems.append(f"{i}: the block needs the command, a '{MEASURED}...' line, a blank line and the output")
+        elif manifest[i].kind == "text" and (inner[3] != "```text" or inner[-1] != "```"):
+            problems.append(f"{i}: a text block's output is one ```text code block")
+        elif manifest[i].kind != "text" and not inner[3].startswith("|"):
+            problems.append(f"{i}: the output is a Markdown table")
+    return problems
+
+
+def rewrite(page: Path, entry_id: str, inner: list[str]) -> None:
+    """Replace the lines between ``entry_id``'s markers with ``inner``; nothing else changes."""
+    lines = read_page(page)
+    start, end = blocks(lines)[entry_id]
+    page.write_text("\n".join(lines[: start + 1] + inner + lines[end:]))
+
+
+def _cost(seconds: float) -> str:
+    return f"~{seconds:.0f} s" if seconds < 90 else f"~{seconds / 60:.0f} min"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    what = ap.add_mutually_exclusive_group(required=True)
+    what.add_argument("--list", action="store_true", help="the blocks: id, command, rough cost")
+    what.add_argument("--check", action="store_true", help="markers, manifest and command lines agree (no simulation)")
+    what.add_argument("--all", action="store_true", help="run every command and rewrite every block")
+    what.add_argument("--only", metavar="ID[,ID]", help="run these blocks' commands and rewrite their blocks")
+    ap.add_argument("--page", type=Path, default=PAGE, help="the page (default docs/RESULTS.md)")
+    args = ap.parse_args(argv)
+    manifest = entries()
+    try:
+        if args.list:
+            for e in MANIFEST:
+                print(f"{e.id:<26} {_cost(e.cost_s):>8}  {command_text(e)}")
+            print(f"{'all':<26} {_cost(sum(e.cost_s for e in MANIFEST)):>8}  (one after the other, 2 cores)")
+            return 0
+        if args.check:
+            problems = check(args.page)
+            for p in problems:
+                print(p)
+            if not problems:
+                print(f"{args.page}: {len(manifest)} blocks, every one matches the manifest")
+            return 1 if problems else 0
+        ids = list(manifest) if args.all else [i for i in args.only.split(",") if i]
+        unknown = [i for i in ids if i not in manifest]
+        if unknown or not ids:
+            raise PageError(f"unknown block id {', '.join(unknown) or '(none)'}; known: {', '.join(manifest)}")
+        missing = [i for i in ids if i not in blocks(read_page(args.page))]
+        if missing:
+            raise PageError(f"{args.page} has no markers for {', '.join(missing)}; add them where the block goes")
+    except PageError as exc:
+        print(f"results_page: {exc}", file=sys.stderr)
+        return 2
+    for i in ids:
+        print(f"{i}: {command_text(manifest[i])} ...", file=sys.stderr, flush=True)
+        try:
+            inner = measure(manifest[i])
+        except RuntimeError as exc:
+            print(f"results_page: {exc}", file=sys.stderr)
+            return 1
+        rewrite(args.page, i, inner)
+        print(f"{i}: written ({inner[1]})", file=sys.stderr, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
