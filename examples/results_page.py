@@ -97,6 +97,7 @@ MANIFEST: tuple[Entry, ...] = (
         "markdown",
         80,
     ),
+    # 12 walks of 10-20 s; its cost is estimated from the QP's and the PBC's real-time factors on H1
     Entry(
         "acceptance-ideal-h1",
         ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "h1"),
