@@ -104,6 +104,13 @@ MANIFEST: tuple[Entry, ...] = (
         "markdown",
         120,
     ),
+    # 8 QP walks of 10-20 s, one process (G1's QP with the profile's DAQP)
+    Entry(
+        "acceptance-g1-qp",
+        ("python", "examples/acceptance_table.py", "--set", "all", "--robots", "g1", "--trackers", "qp", "--jobs", "1"),
+        "markdown",
+        300,
+    ),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
 )
