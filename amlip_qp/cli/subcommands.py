@@ -16,7 +16,7 @@ from amlip_qp.cli.walk_options import (
     add_shaping_options,
     add_walk,
 )
-from amlip_qp.profiles import ROBOT_NAMES
+from amlip_qp.profiles import DEFAULT_ROBOT, ROBOT_NAMES
 from amlip_qp.sim.loop.live_keys import keys_help
 from amlip_qp.sim.scenarios.options import ESTIMATORS, PLANNERS, SENSORS, TRACKERS
 
@@ -55,7 +55,7 @@ def add_view(sub) -> None:
         type=robot_name_or_path,
         metavar="NAME|PATH",
         default=None,
-        help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml); default cassie",
+        help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml); default {DEFAULT_ROBOT}",
     )
     p.add_argument("--tracker", choices=TRACKERS, default="qp", help="tracker (default qp)")
     add_command_options(p, speed_profile=False)

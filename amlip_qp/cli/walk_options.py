@@ -18,7 +18,7 @@ from typing import Any
 
 from amlip_qp.cli import bounds as B
 from amlip_qp.cli.parsing import float_in, handler, parse_push_spec, value_type
-from amlip_qp.profiles import ROBOT_NAMES
+from amlip_qp.profiles import DEFAULT_ROBOT, ROBOT_NAMES
 from amlip_qp.sim.scenarios.options import ESTIMATORS, PLANNERS, SENSORS, TRACKERS, WalkOptions
 
 #: The walk options' defaults (``walk``'s where it has its own default).
@@ -81,7 +81,7 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         type=_type("clearance"),
         metavar="M",
         default=None,
-        help="swing-foot clearance at mid-step, m (default: the scenario's gait's, Cassie 0.10)",
+        help="swing-foot clearance at mid-step, m (default: the robot's [gait] clearance_m, or the scenario's)",
     )
     m = p.add_argument_group("plant modifiers (model mismatch; the controller keeps its own model)")
     m.add_argument(
@@ -189,7 +189,7 @@ def add_walk(sub) -> None:
         metavar="NAME|PATH",
         default=None,
         help=f"a bundled robot ({', '.join(ROBOT_NAMES)}) or a robot profile file (.toml); "
-        "default cassie, or the scenario's",
+        f"default {DEFAULT_ROBOT}, or the scenario's",
     )
     p.add_argument("--tracker", choices=TRACKERS, default=_DEFAULTS.tracker, help="tracker (default qp)")
     p.add_argument(
