@@ -127,6 +127,17 @@ MANIFEST: tuple[Entry, ...] = (
     ),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
+    # 20-26 s measured
+    Entry("bench-qp", ("amlip-qp", "bench", "qp"), "text", 25),
+    # 11 s measured on a quiet machine, 86 s on a loaded one
+    Entry("bench-ekf", ("amlip-qp", "bench", "ekf"), "text", 30),
+    # two 7-s walks and their figures: 101 s measured with other jobs on the machine
+    Entry("prediction-study", ("python", "examples/prediction_study.py"), "text", 100),
+    # each 11-22 s measured (the checks and a 3-s walk in place)
+    Entry("check-robot-cassie", ("amlip-qp", "check-robot", "cassie"), "text", 20),
+    Entry("check-robot-rabbit", ("amlip-qp", "check-robot", "rabbit"), "text", 20),
+    Entry("check-robot-h1", ("amlip-qp", "check-robot", "h1"), "text", 20),
+    Entry("check-robot-g1", ("amlip-qp", "check-robot", "g1"), "text", 20),
 )
 
 OPEN = re.compile(r"^<!-- results: ([a-z0-9-]+) -->$")

@@ -22,3 +22,34 @@ def shared_cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = root / "amlip_qp_cache"
     path.mkdir(exist_ok=True)
     return path
+
+
+def _simulated(*args, **kwargs):
+    raise AssertionError("a simulation or benchmark ran although the input was bad")
+
+
+@pytest.fixture
+def no_simulation(monkeypatch):
+    """Make every way of simulating (walk, compare, the benchmarks) or generating code fail the test."""
+    from amlip_qp.codegen import bench as codegen_bench
+    from amlip_qp.codegen import generate
+    from amlip_qp.experiments import bench_ekf, bench_harness, compare
+    from amlip_qp.sim.scenarios import factory
+    from amlip_qp.sweep import bench as sweep_bench
+
+    monkeypatch.setattr(factory, "build_simulation", _simulated)
+    monkeypatch.setattr(factory, "run_scenario", _simulated)
+    monkeypatch.setattr(compare, "run_comparison", _simulated)
+    monkeypatch.setattr(codegen_bench, "run_benchmark", _simulated)
+    from amlip_qp.control.mpc import bench as mpc_bench
+
+    monkeypatch.setattr(mpc_bench, "run_benchmark", _simulated)
+    from amlip_qp.experiments import bench_qp
+
+    monkeypatch.setattr(bench_qp, "run", _simulated)
+    monkeypatch.setattr(bench_qp, "format_report", _simulated)
+    monkeypatch.setattr(bench_ekf, "build_simulation", _simulated)
+    monkeypatch.setattr(bench_harness, "build_simulation", _simulated)
+    monkeypatch.setattr(sweep_bench, "bench_cells", _simulated)
+    monkeypatch.setattr(generate, "generate_files", _simulated)
+    monkeypatch.setattr(generate, "write_files", _simulated)

@@ -12,10 +12,9 @@
 - The ALIP notes are cited where they are, ``docs/ALIP_NOTES.md``, not at the
   shared folder they were copied from.
 - The README links the guides a user reads next.
-- ``docs/NEW_ROBOT.md`` names every key a robot profile may have.
-- Shipped files speak to users (:data:`SHIPPED`): no issue numbers, no
-  "session N" / "stop N" / "pass N" history and no commit hashes; in the tests,
-  their names and docstrings.
+
+``docs/NEW_ROBOT.md``'s list of profile keys is checked in ``tests/test_docs_profile_keys.py``,
+the shipped files' freedom from development history in ``tests/test_docs_process_words.py``.
 """
 
 from __future__ import annotations
@@ -72,31 +71,6 @@ README_LINKS = (
     "docs/NEW_ROBOT.md",
     "CONTRIBUTING.md",
 )
-#: The shipped files whose whole text must be free of process words (the tests: names and docstrings).
-SHIPPED = (
-    "README.md",
-    "CHANGELOG.md",
-    "CONTRIBUTING.md",
-    "docs/*.md",
-    "amlip_qp/**/*.py",
-    "amlip_qp/**/*.md",
-    "examples/**/*.py",
-    "examples/**/*.toml",
-    "examples/**/*.md",
-    "models/**/*.py",
-    "models/**/*.md",
-)
-#: Work history in prose: an issue number ("issue 12", "issue #13", "issue-11"), "the issue's",
-#: "session 3", "stop 2", "pass 4", and "the fifth pass" / "the previous stop".
-PROCESS_WORDS = re.compile(
-    r"\b(?:issues?[ -]?#?\d+|issue's|(?:session|stop|pass)\s+#?\d+\b"
-    r"|(?:first|second|third|fourth|fifth|sixth|seventh|eighth|ninth|tenth|last|previous|next)\s+(?:pass|stop|session)\b)",
-    re.I,
-)
-#: A commit-hash-looking token: 7 to 40 hex digits with a letter and a digit, standing alone. Not a
-#: hex constant (``0x...``), not part of a longer token (a 64-digit sha256, a path, an identifier),
-#: not a float's mantissa (``4.96654564e-07``, ``1234567e-3``).
-COMMIT_HASH = re.compile(r"(?<![\w.#-])(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}(?![\w.-])")
 
 
 def _backticked(text: str) -> list[str]:
@@ -272,132 +246,6 @@ def test_the_checks_report_stale_references(tmp_path):
     assert broken_links(links, page) == ["../shared/ALIP_NOTES.md"]
 
 
-def process_words(text: str) -> list[str]:
-    """The issue numbers, history words and commit-hash-looking tokens of ``text``."""
-    found = [m.group(0) for m in PROCESS_WORDS.finditer(text)]
-    return found + [t for t in COMMIT_HASH.findall(text) if not re.fullmatch(r"\d+e", t)]
-
-
-def _test_names_and_docstrings(path: Path) -> str:
-    """A test file's function and class names and its docstrings, one a line."""
-    tree = ast.parse(path.read_text())
-    parts = []
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-            parts.append(node.name)
-        if isinstance(node, (ast.Module, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-            parts.append(ast.get_docstring(node) or "")
-    return "\n".join(parts)
-
-
 def test_the_readme_links_the_guides():
     links = set(LINK.findall((ROOT / "README.md").read_text()))
     assert [page for page in README_LINKS if page not in links] == []
-
-
-def test_shipped_files_carry_no_process_words():
-    pages = sorted({p for pattern in SHIPPED for p in ROOT.glob(pattern) if p.is_file()})
-    assert len(pages) > 100  # the package's modules are read, not skipped
-    found = {str(p.relative_to(ROOT)): process_words(p.read_text()) for p in pages}
-    for path in sorted(ROOT.glob("tests/*.py")):
-        found[str(path.relative_to(ROOT))] = process_words(_test_names_and_docstrings(path))
-    assert {page: words for page, words in found.items() if words} == {}
-
-
-def test_the_process_word_check_reports_history_and_spares_numbers():
-    """Each kind of history is reported; hex constants, hashes of files, floats and words are not."""
-    history = (
-        "as measured in issue 14; issue #13's terrain; the issue-11 baseline; the issue's goal; "
-        "session 3; stop 2 found; pass 4; after the fifth pass; the previous stop; at 3f125b1; (82a46cd)"
-    )
-    assert process_words(history) == [
-        "issue 14",
-        "issue #13",
-        "issue-11",
-        "issue's",
-        "session 3",
-        "stop 2",
-        "pass 4",
-        "fifth pass",
-        "previous stop",
-        "3f125b1",
-        "82a46cd",
-    ]
-    legit = (
-        "mask 0x1f2e3d4c; sha256 e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855; "
-        "inertia 4.96654564e-07 and 1234567e-3; 1500000 calls; a deadbeat step; cells/baebed2166a5_x.json; "
-        "tests pass; the swing foot's stop; a Ray session"
-    )
-    assert process_words(legit) == []
-
-
-#: A key added to a profile table to make the reader list the table's keys in its refusal.
-PROBE = "zz_probe"
-#: The tables whose keys are names the profile chooses (joints, plants): not probed.
-FREE_TABLES = ("model.stand.joints", "plants")
-
-
-def _keys_listed(message: str) -> list[str]:
-    """The keys an "unknown key" refusal lists: ``(known: a, b)``, ``(known here: a, b)`` or ``a table of a, b``."""
-    m = re.search(r"\(known(?: here)?: ([^)]*)\)", message) or re.search(r"must be a table of (.*)$", message)
-    return [k.strip() for k in m.group(1).split(",")] if m else []
-
-
-def profile_keys(tmp_path: Path) -> dict[str, set[str]]:
-    """Table (``""`` for the top level, ``"model.stand"``, ``"trackers.qp"`` ...) -> every key the
-    profile reader accepts in it, as the reader itself lists them: a probe key added to each table of
-    each bundled profile is refused with the list of the table's keys (the tracker tables when the
-    tracker's configuration is built)."""
-    from amlip_qp.estimation.invariant_ekf import noise_from_table
-    from amlip_qp.exceptions import InputError
-    from amlip_qp.paths import MODELS_DIR
-    from amlip_qp.profiles import bundled_names, read_profile
-    from amlip_qp.sim.scenarios.scenario_tables import profile_scenarios
-
-    found: dict[str, set[str]] = {}
-    for name in bundled_names():
-        text = (MODELS_DIR / f"{name}.toml").read_text()
-        text = re.sub(r'"([^"]+\.xml)"', lambda m: f'"{(MODELS_DIR / m.group(1)).resolve()}"', text)
-        tables = [t for t in re.findall(r"^\[([\w.]+)\]$", text, re.M) if t not in FREE_TABLES]
-        probes = {"": f"{PROBE} = 1\n{text}", "trackers": f"{text}\n[trackers.{PROBE}]\n"}
-        for table in tables:
-            probes[table] = text.replace(f"[{table}]\n", f"[{table}]\n{PROBE} = 1\n", 1)
-        for table, probed in probes.items():
-            path = tmp_path / f"{name}-{table or 'top'}.toml"
-            path.write_text(probed)
-            try:
-                profile = read_profile(path)
-                if table.split(".")[0] in ("scenarios", "settings", "mismatches"):
-                    profile_scenarios(profile)  # these tables are checked when the scenarios are built
-                elif table == "estimator":
-                    noise_from_table(profile.estimator)
-                else:
-                    tracker = table.split(".")[1] if table.startswith("trackers.") else None
-                    assert tracker is not None, f"{table}: the probe key was accepted"
-                    profile.tracker_config(tracker)
-                raise AssertionError(f"{table}: the probe key was accepted")
-            except InputError as exc:
-                keys = _keys_listed(str(exc))
-                assert keys, f"{table}: no key list in {exc}"
-                table = re.sub(r"^(scenarios|settings)\..*", r"\1.KEY", table)  # one entry per kind
-                found.setdefault(table, set()).update(keys)
-    return found
-
-
-def test_the_new_robot_guide_names_every_profile_key(tmp_path):
-    keys = profile_keys(tmp_path)
-    tables = {"", "model", "model.stand", "roles", "feet", "imu", "gait", "bounds", "verified", "shaping", "compare"}
-    tables |= {"trackers", "trackers.qp", "trackers.pbc", "trackers.pbc.spring_model_linkage"}
-    tables |= {"scenarios.KEY", "settings.KEY", "mismatches", "estimator"}
-    assert set(keys) == tables  # each table was probed, in some bundled profile (none has [unsupported])
-    assert sum(len(k) for k in keys.values()) > 90
-    assert {"step_time_s", "servos", "passive_in_stance", "pos_m", "quat_wxyz"} <= set().union(*keys.values())
-    text = (ROOT / "docs" / "NEW_ROBOT.md").read_text()
-    missing = [
-        f"[{table}] {key}" if table else key
-        for table, names in sorted(keys.items())
-        for key in sorted(names)
-        if f"`{key}`" not in text and f"[{table + '.' if table else ''}{key}]" not in text
-    ]
-    missing += [f"[{table}]" for table in sorted(keys) if table and f"[{table}]" not in text]
-    assert missing == []

@@ -1,135 +1,44 @@
 """amlip_qp/models/cassie.xml: the 20-DOF Cassie MJCF shared by MuJoCo and Pinocchio.
 
-Reference numbers (``SHEET_*``) are Agility Robotics' Cassie parameters as given in the
-project's parameter sheet (``cassie_parameters.json``); ``test_constants_match_sheet``
-cross-checks them against the sheet (``models/reference/cassie_parameters.json``).
+Reference numbers (``SHEET_*``, :mod:`cassie_sheet`) are Agility Robotics' Cassie parameters as
+given in the project's parameter sheet; ``test_constants_match_sheet`` cross-checks them against
+the sheet (``models/reference/cassie_parameters.json``).
 """
 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.paths import MODELS_DIR
-
-MODEL = MODELS_DIR / "cassie.xml"
-#: The parameter sheet vendored in the repository (models/reference/, credits in NOTICE).
-SHEET_PATH = Path(__file__).resolve().parents[1] / "models" / "reference" / "cassie_parameters.json"
-
-SIDES = ("left", "right")
-LEG = ("hip-roll", "hip-yaw", "hip-pitch", "knee", "shin", "tarsus", "foot")
-JOINTS = [f"{s}-{j}" for s in SIDES for j in LEG]
-MOTORS = [f"{s}-{j}" for s in SIDES for j in ("hip-roll", "hip-yaw", "hip-pitch", "knee", "foot")]
-SITES = [f"{s}-{t}" for s in SIDES for t in ("toe", "heel", "contact")]
-CONTACT_RADIUS = 0.02
-COUPLING_REST = 0.226893  # knee + tarsus at heel-spring rest (13 deg = sum of the sheet's refs)
-
-SHEET_TOTAL_MASS = 33.312
-SHEET_PELVIS_MASS = 10.33
-#: Per-leg body masses of the sheet (identical for both legs).
-SHEET_LEG_MASSES = {
-    "hip-roll": 1.82,
-    "hip-yaw": 1.171,
-    "hip-pitch": 5.52,
-    "achilles-rod": 0.1567,
-    "knee": 0.7578,
-    "knee-spring": 0.186,
-    "shin": 0.577,
-    "tarsus": 0.782,
-    "heel-spring": 0.126,
-    "foot-crank": 0.1261,
-    "plantar-rod": 0.1186,
-    "foot": 0.1498,
-}
-#: Sheet bodies in the subtree of the knee joint.
-SHEET_BELOW_KNEE = ("knee", "knee-spring", "shin", "tarsus", "heel-spring", "foot-crank", "plantar-rod", "foot")
-SHEET_GEAR = {"hip-roll": 25.0, "hip-yaw": 25.0, "hip-pitch": 16.0, "knee": 16.0, "foot": 50.0}
-SHEET_MOTOR_LIMIT = {"hip-roll": 4.5, "hip-yaw": 4.5, "hip-pitch": 12.2, "knee": 12.2, "foot": 0.9}
-SHEET_RANGE = {
-    "left-hip-roll": (-0.261799, 0.392699),
-    "right-hip-roll": (-0.392699, 0.261799),
-    "hip-yaw": (-0.392699, 0.392699),
-    "hip-pitch": (-0.872665, 1.396263),
-    "knee": (-2.86234, -0.645772),
-    "shin": (-0.349066, 0.349066),
-    "tarsus": (0.872665, 2.96706),
-    "foot": (-2.443461, -0.523599),
-}
-#: The sheet's 35-element standing qpos (achilles-rod ball joints, heel spring, foot crank,
-#: plantar rod included).
-SHEET_STANDING_QPOS = [
-    0,
-    0,
-    1.0059301,
-    1,
-    0,
-    0,
-    0,
-    0.00449956,
-    0,
-    0.497301,
-    0.97861,
-    -0.0164104,
-    0.0177766,
-    -0.204298,
-    -1.1997,
-    0,
-    1.42671,
-    -2.25907e-06,
-    -1.52439,
-    1.50645,
-    -1.59681,
-    -0.00449956,
-    0,
-    0.497301,
-    0.97874,
-    0.0038687,
-    -0.0151572,
-    -0.204509,
-    -1.1997,
-    0,
-    1.42671,
-    0,
-    -1.52439,
-    1.50645,
-    -1.59681,
-]
-#: Whole-robot CoM (world) and inertia about it (world axes) of the sheet's full 35-qpos tree
-#: (all 31 bodies) at SHEET_STANDING_QPOS, computed by forward kinematics over the sheet.
-SHEET_STANDING_COM = np.array([-1.755477085639e-02, 1.182208353924e-04, 8.773866413215e-01])
-SHEET_STANDING_INERTIA = np.array(
-    [
-        [2.233339970233e00, -2.290130190445e-04, -3.876202677841e-01],
-        [-2.290130190445e-04, 1.875362294852e00, -1.028483501288e-03],
-        [-3.876202677841e-01, -1.028483501288e-03, 8.641190259791e-01],
-    ]
+from cassie_sheet import (
+    CONTACT_RADIUS,
+    COUPLING_REST,
+    JOINTS,
+    LEG,
+    MODEL,
+    MOTORS,
+    SHEET_BELOW_KNEE,
+    SHEET_GEAR,
+    SHEET_LEG_MASSES,
+    SHEET_MOTOR_LIMIT,
+    SHEET_PATH,
+    SHEET_PELVIS_MASS,
+    SHEET_STANDING_COM,
+    SHEET_STANDING_INERTIA,
+    SHEET_STANDING_QPOS,
+    SHEET_TOTAL_MASS,
+    SIDES,
+    SITES,
+    mj_composite,
+    mj_to_pin,
+    pin_composite,
+    sheet_qpos21,
+    sheet_range,
 )
-
-
-def sheet_range(joint):
-    side, short = joint.split("-", 1)
-    return SHEET_RANGE.get(joint, SHEET_RANGE.get(short))
-
-
-def sheet_qpos21():
-    """The sheet's standing qpos reduced to the 21 entries of this model."""
-    q = SHEET_STANDING_QPOS
-    keep = [0, 1, 2, 3, 4, 5, 6]
-    for start in (7, 21):
-        # hip-roll, hip-yaw, hip-pitch, [achilles quat 4], knee, shin, tarsus, [heel, crank, plantar], foot
-        keep += [start, start + 1, start + 2, start + 7, start + 8, start + 9, start + 13]
-    return np.array([q[i] for i in keep], float)
-
-
-def mj_to_pin(qpos):
-    q = np.array(qpos, float).copy()
-    q[3:7] = qpos[[4, 5, 6, 3]]  # wxyz -> xyzw
-    return q
 
 
 @pytest.fixture(scope="module")
@@ -142,39 +51,6 @@ def mj():
 def pn():
     model = pin.buildModelFromMJCF(str(MODEL))
     return model, model.createData()
-
-
-def composite(masses, coms, inertias):
-    """Total mass, CoM and inertia about the CoM from per-body world quantities."""
-    M = sum(masses)
-    c = sum(m * x for m, x in zip(masses, coms)) / M
-    I = np.zeros((3, 3))
-    for m, x, Ii in zip(masses, coms, inertias):
-        d = x - c
-        I += Ii + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return M, c, I
-
-
-def mj_composite(m, d):
-    bodies = range(1, m.nbody)
-    masses = [m.body_mass[b] for b in bodies]
-    coms = [d.xipos[b].copy() for b in bodies]
-    inertias = []
-    for b in bodies:
-        R = d.ximat[b].reshape(3, 3)
-        inertias.append(R @ np.diag(m.body_inertia[b]) @ R.T)
-    return composite(masses, coms, inertias)
-
-
-def pin_composite(model, data):
-    masses, coms, inertias = [], [], []
-    for j in range(1, model.njoints):
-        Y = model.inertias[j]
-        oMi = data.oMi[j]
-        masses.append(Y.mass)
-        coms.append(oMi.act(Y.lever))
-        inertias.append(oMi.rotation @ Y.inertia @ oMi.rotation.T)
-    return composite(masses, coms, inertias)
 
 
 # ------------------------------------------------------------------ structure
@@ -421,65 +297,6 @@ def test_mass_matrix_agrees(mj, pn):
     Mp = np.triu(Mp) + np.triu(Mp, 1).T
     # Leg block: joint coordinates are identical in both (base velocity conventions differ).
     np.testing.assert_allclose(Mp[6:, 6:], Mmj[6:, 6:], atol=1e-9)
-
-
-# ------------------------------------------------------------------ physics
-def static_feedforward(m, d):
-    """Motor torques (joint side) that hold the current pose statically on four contact points.
-
-    Solves qfrc_bias - qfrc_passive = S tau + Jc^T f by least squares with torques on all 14
-    leg joints; the tarsus torque is then supplied by the achilles tendon, whose reaction acts on
-    the knee with the same sign, so the knee motor carries tau_knee - tau_tarsus.
-    """
-    dofs = [m.jnt_dofadr[m.joint(n).id] for n in JOINTS]
-    S = np.zeros((m.nv, len(JOINTS)))
-    S[dofs, range(len(JOINTS))] = 1.0
-    jacs = []
-    for s in SIDES:
-        for t in ("toe", "heel"):
-            jp = np.zeros((3, m.nv))
-            mujoco.mj_jacSite(m, d, jp, None, m.site(f"{s}-{t}").id)
-            jacs.append(jp)
-    A = np.hstack([S, np.vstack(jacs).T])
-    x = np.linalg.lstsq(A, d.qfrc_bias - d.qfrc_passive, rcond=None)[0]
-    tau = dict(zip(JOINTS, x[: len(JOINTS)]))
-    out = []
-    for name in MOTORS:
-        t = tau[name]
-        if name.endswith("knee"):
-            t -= tau[name.replace("knee", "tarsus")]
-        out.append(t)
-    return np.array(out)
-
-
-def test_stands_for_one_second_with_pd_hold():
-    m = mujoco.MjModel.from_xml_path(str(MODEL))
-    d = mujoco.MjData(m)
-    mujoco.mj_resetDataKeyframe(m, d, m.key("stand").id)
-    mujoco.mj_forward(m, d)
-    q0 = d.qpos.copy()
-    ff = static_feedforward(m, d)
-    qa = np.array([m.jnt_qposadr[m.actuator_trnid[i, 0]] for i in range(m.nu)])
-    va = np.array([m.jnt_dofadr[m.actuator_trnid[i, 0]] for i in range(m.nu)])
-    gear = m.actuator_gear[:, 0]
-    kp, kd = 400.0, 20.0
-    z = []
-    for _ in range(int(round(1.0 / m.opt.timestep))):
-        tau = kp * (q0[qa] - d.qpos[qa]) - kd * d.qvel[va] + ff
-        d.ctrl[:] = np.clip(tau / gear, m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1])
-        mujoco.mj_step(m, d)
-        z.append(d.qpos[2])
-    z = np.array(z) - q0[2]
-    assert np.all(np.isfinite(d.qpos))
-    assert np.abs(z).max() < 0.05
-    assert np.linalg.norm(d.qpos[:2] - q0[:2]) < 0.10
-    up = d.xmat[m.body("cassie-pelvis").id].reshape(3, 3)[:, 2]
-    assert up[2] > np.cos(np.radians(10))
-    # Both blades still on the floor, penetration below 1 mm.
-    heights = [d.site(f"{s}-{t}").xpos[2] for s in SIDES for t in ("toe", "heel")]
-    np.testing.assert_allclose(heights, CONTACT_RADIUS, atol=1e-3)
-    assert d.ncon == 4
-    assert min(d.contact.dist[: d.ncon]) > -1e-3
 
 
 # ------------------------------------------------------------------ sheet cross-check

@@ -1,4 +1,4 @@
-"""Tests of sim/world/plant_modifiers.py and actuator_delay.py: each modifier's physics on compiled plants."""
+"""Tests of sim/world/plant_modifiers.py: each modifier's physics on compiled plants."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import pytest
 
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.paths import MODELS_DIR
-from amlip_qp.sim.world.actuator_delay import ActuatorDelay
 from amlip_qp.sim.world.plant_modifiers import (
     PAYLOAD_BODY,
     FrictionEdit,
@@ -263,38 +262,6 @@ def test_friction_overrides_explicit_pairs_and_priorities():
     spec.add_pair(geomname1="floor", geomname2="right-foot", friction=[2.0, 2.0, 0.005, 1e-4, 1e-4], condim=3)
     FrictionEdit(0.6)(spec)
     np.testing.assert_array_equal(floor_contact_frictions(spec.compile())[:, :2], 0.6)
-
-
-# --- actuator delay -------------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("n", [1, 3])
-def test_delay_returns_the_input_n_ticks_earlier(n):
-    rng = np.random.default_rng(0)
-    inputs = rng.normal(size=(12, 4))
-    delay = ActuatorDelay(n, 4)
-    outputs = []
-    for u in inputs:
-        buf = u.copy()
-        outputs.append(delay.push(buf))
-        buf[:] = np.nan  # the caller reuses its array: the queue must have kept a copy
-    for k, out in enumerate(outputs):
-        np.testing.assert_array_equal(out, inputs[max(k - n, 0)])  # the first command holds until then
-    delay.reset()
-    np.testing.assert_array_equal(delay.push(inputs[5]), inputs[5])
-
-
-def test_zero_delay_is_a_pass_through():
-    delay = ActuatorDelay(0, 3)
-    u = np.array([1.0, -2.0, 3.0])
-    assert delay.push(u) is u
-
-
-def test_delay_checks_the_vector_length():
-    with pytest.raises(InputError, match=r"shape \(4,\)"):
-        ActuatorDelay(1, 4).push(np.zeros(3))
-    with pytest.raises(InputError, match="actuator delay"):
-        ActuatorDelay(-1, 4)
 
 
 # --- validation, parsing, description -------------------------------------------------------------------------

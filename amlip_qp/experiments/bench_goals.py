@@ -12,7 +12,8 @@ harness`` also gives the figures over the step alone
 - :data:`GOAL_CONTROLLER_STEPS`: the whole-body QP controller's whole tick
   (estimate, plan, track), median;
 - :data:`GOAL_QP_TRACKER_STEPS`: the QP tracker's own work in a tick (the
-  kinematics update, the problem's build, the solve: :class:`TrackerWork`),
+  kinematics update, the problem's build, the solve, as the controller's
+  :class:`~amlip_qp.control.walking.stage_timer.StageTimer` records them),
   median;
 - :data:`GOAL_PBC_STEPS`: the PBC controller's whole tick, median;
 - the real-time factor of each robot's nominal walk per tracker: its
@@ -23,13 +24,7 @@ harness`` also gives the figures over the step alone
 
 from __future__ import annotations
 
-import time
-from typing import TYPE_CHECKING
-
 from amlip_qp.profiles import get_profile
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.sim.loop.harness import Simulation
 
 #: The whole-body QP controller's tick, median, at most this many MuJoCo steps.
 GOAL_CONTROLLER_STEPS = 3.0
@@ -39,39 +34,6 @@ GOAL_QP_TRACKER_STEPS = 2.0
 
 #: The PBC controller's tick, median, at most this many MuJoCo steps.
 GOAL_PBC_STEPS = 6.0
-
-
-class TrackerWork:
-    """Times the tracker's own work in each tick of a simulation: the controller's kinematics
-    update plus the tracker's ``compute`` (for the QP tracker: the build and the solve), µs.
-
-    The two calls are wrapped on the simulation's controller (its kinematics' ``update`` and
-    its tracker's ``compute``, as instance attributes) for the simulation's lifetime; the
-    wrappers cost well under a microsecond a tick.
-    """
-
-    def __init__(self, sim: Simulation):
-        self.times_us: list[float] = []
-        ctrl = sim.controller
-        kin, tracker = ctrl.kin, ctrl.tracker
-        update, compute = kin.update, tracker.compute
-        clock = time.perf_counter_ns
-        pending = [0]
-
-        def timed_update(q, v):
-            t0 = clock()
-            update(q, v)
-            pending[0] += clock() - t0
-
-        def timed_compute(kin_, target):
-            t0 = clock()
-            result = compute(kin_, target)
-            self.times_us.append((clock() - t0 + pending[0]) * 1e-3)
-            pending[0] = 0
-            return result
-
-        kin.update = timed_update  # type: ignore[method-assign]
-        tracker.compute = timed_compute  # type: ignore[method-assign]
 
 
 def tracker_base(name: str, variants: dict[str, tuple[str, dict[str, object]]]) -> str:

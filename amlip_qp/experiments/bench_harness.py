@@ -37,8 +37,8 @@ lives in ``sim``.
 
 The controller's own speed goals (:mod:`amlip_qp.experiments.bench_goals`) are judged
 per row in MuJoCo steps: the controller's tick and the tracker's own work per
-tick (the kinematics update and the tracker's ``compute``,
-:class:`~amlip_qp.experiments.bench_goals.TrackerWork`) over MuJoCo's step in the
+tick (the kinematics update and the tracker's ``compute``, recorded by the controller's
+:class:`~amlip_qp.control.walking.stage_timer.StageTimer`) over MuJoCo's step in the
 same tick of the loop, medians over the ticks (the goals' unit: MuJoCo's step
 inside the walking loop, 35-40 µs for Cassie on the development machine; both
 parts of a tick see the same machine state); and the real-time factor against
@@ -58,8 +58,9 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from amlip_qp.control.registry import TRACKER_MODULES, tracker_class
+from amlip_qp.control.walking.stage_timer import StageTimer
 from amlip_qp.exceptions import InputError
-from amlip_qp.experiments.bench_goals import TrackerWork, realtime_goal, tick_goals, tracker_base
+from amlip_qp.experiments.bench_goals import realtime_goal, tick_goals, tracker_base
 from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_median_us, step_time_us
 from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
@@ -162,8 +163,8 @@ def run(
         for tracker in trackers:
             for mode in LOG_MODES:
                 key = f"{tracker}/{mode}"
-                sim = build_simulation(sc, tracker_for(sc, tracker))
-                work = TrackerWork(sim)
+                timer = StageTimer()
+                sim = build_simulation(sc, tracker_for(sc, tracker), stage_timer=timer)
                 result = sim.run(duration_s, log=mode)
                 alone = step_time_us(*states[tracker])
                 step_us = step_median_us(*states[tracker]) * sim.substeps  # a tick's MuJoCo steps, each timed
@@ -176,12 +177,12 @@ def run(
                 ratios["tick"].append(result.wall_time_s * 1e6 / len(result.tick_time_us) / tick_alone)
                 ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
                 ratios["controller"].append(float(np.median(result.tick_time_us)) / step_us)
-                ratios["tracker"].append(float(np.median(work.times_us)) / step_us)
+                ratios["tracker"].append(float(np.median(timer.tracker_work_us)) / step_us)
                 got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": [], "tracker": []})
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))
                 got["harness"].append(np.asarray(result.harness_time_us))
-                got["tracker"].append(np.asarray(work.times_us))
+                got["tracker"].append(np.asarray(timer.tracker_work_us))
                 rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
                 wall[key] = wall.get(key, 0.0) + result.wall_time_s
                 fell[key] = fell.get(key, False) or bool(result.fell)

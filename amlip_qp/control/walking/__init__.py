@@ -4,7 +4,9 @@
   (its step clock is :class:`amlip_qp.alip.clock.StepClock`, shared with the planner);
 - :mod:`~amlip_qp.control.walking.records`: what it reports, per step and per tick;
 - :mod:`~amlip_qp.control.walking.estimator`: the state estimate (``p_st``, filtered ``L``, ``v_z``);
-- :mod:`~amlip_qp.control.walking.gait`: touchdown detection;
+- :mod:`~amlip_qp.control.walking.gait`: touchdown detection and the swing foot's contact weight;
+- :mod:`~amlip_qp.control.walking.stage_timer`: the per-tick wall time of the kinematics update and
+  the tracker, recorded when the controller is given a :class:`~amlip_qp.control.walking.stage_timer.StageTimer`;
 - :mod:`~amlip_qp.control.walking.speed`: the per-step integral on the speed error;
 - :mod:`~amlip_qp.control.walking.outputs_compiled`: the output map ``h_0(q)`` as generated C, and
   :func:`~amlip_qp.control.walking.outputs_compiled.make_kinematics`, the kinematics made with it

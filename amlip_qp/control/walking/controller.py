@@ -36,6 +36,7 @@ What it reports (:class:`StepRecord`, :class:`TickInfo`) is in :mod:`~amlip_qp.c
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from typing import TYPE_CHECKING
 
@@ -49,11 +50,12 @@ from amlip_qp.alip.mpc_planner import MPCSettings
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.control.walking.estimator import Estimate, Estimator
-from amlip_qp.control.walking.gait import GaitLogic, GaitParams
+from amlip_qp.control.walking.gait import GaitLogic, GaitParams, swing_contact_weight
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
 from amlip_qp.control.walking.planners import check_planner, make_planner, plan_tick
 from amlip_qp.control.walking.records import StepRecord, TickInfo, nan_tick_signals
 from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, SpeedIntegrator
+from amlip_qp.control.walking.stage_timer import StageTimer
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, Measurement, PlannerOutput, StateEstimate
@@ -111,6 +113,8 @@ class WalkingController:
             docs/ALIP_MPC.md), which plans the step's end on the step clock.
         mpc_settings: The MPC's limits and weights (:class:`~amlip_qp.alip.mpc_planner.MPCSettings`;
             ``planner="mpc"`` only).
+        stage_timer: Records each tick's kinematics update and tracker ``compute`` wall times
+            (:class:`~amlip_qp.control.walking.stage_timer.StageTimer`); ``None`` (default): no timing.
 
     Raises:
         InputError: A bad argument (also: ``kinematics``' output map does not evaluate
@@ -138,6 +142,7 @@ class WalkingController:
         terrain_height_fn: HeightFunction | None = None,
         planner: str = "one-step",
         mpc_settings: MPCSettings | None = None,
+        stage_timer: StageTimer | None = None,
     ):
         check_planner(planner, mpc_settings)
         if initial_stance not in ("left", "right"):
@@ -155,6 +160,8 @@ class WalkingController:
         self.tracker = tracker
         self.kin = kinematics
         self.dt_s = float(dt_s)
+        #: Receives the stage times of each tick, or ``None``.
+        self.stage_timer = stage_timer
         self.estimator = Estimator(kinematics, dt_s, kalman=kalman)
         #: The base-state estimator (called first in every :meth:`step`).
         self.base_estimator: BaseStateEstimator = base_estimator or TruthBaseEstimator()
@@ -272,7 +279,10 @@ class WalkingController:
         self._in_safe_mode = False
         command = self.shaper.update(command, t)
         estimator = self.estimator
+        timer = self.stage_timer
+        t0_ns = time.perf_counter_ns() if timer is not None else 0
         estimator.observe(measurement)
+        update_ns = time.perf_counter_ns() - t0_ns if timer is not None else 0
         kin = self.kin
         touchdown = False
         new_step = False  # a first step or a touchdown: the ground gets a new stance foothold
@@ -320,10 +330,13 @@ class WalkingController:
             h_d=plan.h_d,
             dh_d=plan.dh_d,
             ddh_d=plan.ddh_d,
-            swing_contact_weight=self._swing_contact_weight(plan.s),
+            swing_contact_weight=swing_contact_weight(plan.s),
             stance_ground_pitch_rad=ground.stance_pitch_rad if ground.active else None,
         )
+        t0_ns = time.perf_counter_ns() if timer is not None else 0
         result = self.tracker.compute(kin, target)
+        if timer is not None:
+            timer.record(update_ns, time.perf_counter_ns() - t0_ns)
         tau = result.tau_Nm
         ok = result.ok
         # A finite sum implies finite entries; only if it is not (or overflows), look closer.
@@ -384,10 +397,3 @@ class WalkingController:
         if self._nan_tick_parts is None:
             self._nan_tick_parts = nan_tick_signals(len(self.planner.output_names))
         return self._nan_tick_parts
-
-    @staticmethod
-    def _swing_contact_weight(phase: float) -> float:
-        """0 in the air; rises over the last 10% of the step so trackers can blend forces in."""
-        if phase <= 0.9:
-            return 0.0
-        return min(1.0, (phase - 0.9) / 0.1) if math.isfinite(phase) else 0.0

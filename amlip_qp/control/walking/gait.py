@@ -72,3 +72,10 @@ class GaitLogic:
             else:
                 self.late += 1
         return bool(landed)
+
+
+def swing_contact_weight(phase: float) -> float:
+    """0 in the air; rises over the last 10% of the step so trackers can blend forces in."""
+    if phase <= 0.9:
+        return 0.0
+    return min(1.0, (phase - 0.9) / 0.1) if math.isfinite(phase) else 0.0

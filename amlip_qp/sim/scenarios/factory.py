@@ -14,6 +14,7 @@ import numpy as np
 from amlip_qp.control import registry
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.walking.controller import WalkingController
+from amlip_qp.control.walking.stage_timer import StageTimer
 from amlip_qp.estimation import make_base_estimator
 from amlip_qp.estimation.invariant_ekf import noise_from_table
 from amlip_qp.exceptions import InputError
@@ -88,6 +89,7 @@ def build_simulation(
     plant_edits: Sequence[SpecEdit] = (),
     ctrl_filter: Callable[[np.ndarray], np.ndarray] | None = None,
     planner: str = "one-step",
+    stage_timer: StageTimer | None = None,
 ) -> Simulation:
     """The :class:`Simulation` of ``scenario`` with ``tracker`` (a name or an instance).
 
@@ -112,6 +114,8 @@ def build_simulation(
             after the scenario's actuator delay; see :class:`Simulation`.
         planner: The controller's foot-placement planner, ``"one-step"`` or ``"mpc"``
             (``WalkingController(planner=...)``).
+        stage_timer: Receives the controller's stage times per tick
+            (``WalkingController(stage_timer=...)``); ``None``: no timing.
     """
     setting = scenario.setting
     plant = setting.plant if plant is None else plant
@@ -149,6 +153,7 @@ def build_simulation(
         planner_backend=planner_backend,
         command_shaping=scenario.shaping,
         planner=planner,
+        stage_timer=stage_timer,
         **options,
     )
     return Simulation(

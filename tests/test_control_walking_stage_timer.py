@@ -1,0 +1,50 @@
+"""The walking controller's stage timer: one entry per tick that ran the tracker, nothing else changed."""
+
+import numpy as np
+
+from amlip_qp.control.walking.controller import WalkingController
+from amlip_qp.control.walking.gait import swing_contact_weight
+from amlip_qp.control.walking.stage_timer import StageTimer
+from amlip_qp.control.wbc.tracker import QPTracker
+from amlip_qp.messages import Command, Measurement
+from amlip_qp.robots import load_robot
+
+
+def _ticks(timer, ticks=8, nan_at=None):
+    cassie = load_robot("cassie")
+    controller = WalkingController(cassie, QPTracker(cassie), stage_timer=timer)
+    gait = cassie.profile.gait
+    command = Command(
+        step_time_s=gait.step_time_s, com_height_m=gait.com_height_m, clearance_m=gait.clearance_m, vx_mps=0.5
+    )
+    rng = np.random.default_rng(5)
+    taus = []
+    for k in range(ticks):
+        q, v = cassie.q_stand.copy(), rng.normal(0.0, 0.05, cassie.nv)
+        if k == nan_at:
+            q[0] = np.nan
+        taus.append(controller.step(Measurement(k * controller.dt_s, q, v), command).tau_Nm)
+    return np.array(taus)
+
+
+def test_the_timer_gets_both_stages_of_every_tick_and_changes_no_torque():
+    timer = StageTimer()
+    timed = _ticks(timer)
+    assert len(timer.kinematics_us) == len(timer.tracker_us) == 8
+    assert all(t > 0.0 for t in timer.kinematics_us + timer.tracker_us)
+    assert timer.tracker_work_us == [k + t for k, t in zip(timer.kinematics_us, timer.tracker_us)]
+    np.testing.assert_array_equal(timed, _ticks(None))
+    timer.clear()
+    assert timer.kinematics_us == timer.tracker_us == timer.tracker_work_us == []
+
+
+def test_a_safe_mode_tick_runs_no_tracker_and_records_nothing():
+    timer = StageTimer()
+    _ticks(timer, ticks=6, nan_at=3)
+    assert len(timer.tracker_us) == 5
+
+
+def test_the_swing_contact_weight_rises_over_the_last_tenth_of_the_step():
+    weights = [swing_contact_weight(s) for s in (0.0, 0.9, 0.95, 1.0, 1.3)]
+    np.testing.assert_allclose(weights, [0.0, 0.0, 0.5, 1.0, 1.0], rtol=0, atol=1e-12)
+    assert swing_contact_weight(float("nan")) == 0.0
