@@ -1,4 +1,4 @@
-"""Tests of amlip_qp.alip.command_shaping: the rate limit of the velocity command."""
+"""Tests of amlip_qp.alip.command_shaping: the rate limit of the velocity command, the gait schedule, the cap."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from amlip_qp.alip.command_shaping import CommandShaper
+from amlip_qp.alip.command_shaping import CommandShaper, gait_scales
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command
 from amlip_qp.profiles import PROFILES, CommandShaping
@@ -133,15 +133,16 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
     # The rates of the bundled robots let every acceptance scenario's command
     # through bit for bit (the invariant of the command shaping). Sampled
     # every 10 ticks: a ramp within the limit over 10 ticks is within it over each.
-    # The one change a named scenario may see is the step-length cap's: a scenario
-    # faster than max_step_length_m / T (Cassie's 3 m/s ramp) gets shorter steps,
-    # T = max_step_length_m / |vx|, and nothing else.
+    # The changes a named scenario may see: a gait schedule's above its first speed
+    # (Rabbit's ramp to 1.5 m/s: T, H and z_cl scaled, nothing else), then the
+    # step-length cap's: a scenario faster than max_step_length_m / T (Cassie's
+    # 3 m/s ramp) gets shorter steps, T = max_step_length_m / |vx|, and nothing else.
     from dataclasses import replace
 
     from amlip_qp.sim.scenarios.named import SCENARIOS
 
     dt = 10 * DT
-    capped = set()
+    capped, scheduled = set(), set()
     for scenario in SCENARIOS.values():
         shaping = PROFILES[scenario.robot].shaping
         shaper = CommandShaper(shaping)
@@ -150,13 +151,80 @@ def test_every_named_scenario_reaches_the_planner_unchanged():
             raw = scenario.command(t)
             out = shaper.update(raw, t)
             if out is not raw:
+                speed, rows, expected = abs(raw.vx_mps), shaping.gait_scale_by_speed, raw
+                if rows and speed > rows[0][0]:
+                    sT, sH, sz = gait_scales(rows, speed)
+                    expected = replace(
+                        raw,
+                        step_time_s=raw.step_time_s * sT,
+                        com_height_m=raw.com_height_m * sH,
+                        clearance_m=raw.clearance_m * sz,
+                    )
+                    scheduled.add(scenario.name)
                 L = shaping.max_step_length_m
-                assert abs(raw.vx_mps) * raw.step_time_s > L, (scenario.name, t)
-                assert out.step_time_s == pytest.approx(L / abs(raw.vx_mps), rel=1e-12), (scenario.name, t)
-                assert replace(out, step_time_s=raw.step_time_s) == raw, (scenario.name, t)
-                capped.add(scenario.name)
+                if speed * expected.step_time_s > L:
+                    expected = replace(expected, step_time_s=L / speed)
+                    capped.add(scenario.name)
+                assert out == expected, (scenario.name, t)
             t += dt
     assert capped == {"cassie-3mps", "cassie-3mps-cc-ekf"}
+    assert scheduled == {"rabbit-ramp-1.5"}
+
+
+def test_the_gait_schedule_scales_T_H_and_the_clearance_with_the_shaped_speed():
+    rows = ((1.0, 1.0, 1.0, 1.0), (1.5, 1.2, 0.8, 2.0), (2.0, 1.2, 0.7, 2.0))
+    shaping = CommandShaping(
+        vx_accel_mps2=math.inf, vy_accel_mps2=math.inf, turn_accel_radps2=math.inf, gait_scale_by_speed=rows
+    )
+    shaper = CommandShaper(shaping)
+    t = 0.0
+    for vx in (0.0, 0.5, 1.0, -1.0):  # at or below the first row's speed: the command itself
+        raw = _cmd(vx=vx, T=0.35)
+        assert shaper.update(raw, t) is raw
+        t += DT
+    # (speed, expected scales): linear between the rows, held after the last, the same backwards
+    for vx, (sT, sH, sz) in ((1.25, (1.1, 0.9, 1.5)), (-1.25, (1.1, 0.9, 1.5)), (1.5, (1.2, 0.8, 2.0)),
+                             (1.75, (1.2, 0.75, 2.0)), (3.0, (1.2, 0.7, 2.0))):  # fmt: skip
+        out = shaper.update(_cmd(vx=vx, vy=0.1, T=0.35), t)
+        t += DT
+        assert out.step_time_s == pytest.approx(0.35 * sT, rel=1e-12)
+        assert out.com_height_m == pytest.approx(0.8 * sH, rel=1e-12)
+        assert out.clearance_m == pytest.approx(0.1 * sz, rel=1e-12)
+        assert (out.vx_mps, out.vy_mps, out.step_width_m) == (vx, 0.1, 0.0)
+    assert gait_scales(rows, 0.3) == (1.0, 1.0, 1.0)
+
+
+def test_the_step_length_cap_applies_to_the_scheduled_step_time():
+    # The schedule lengthens T to 0.42 s at 1.5 m/s (0.63 m steps); the cap at 0.6 m shortens it to 0.4 s.
+    rows = ((1.0, 1.0, 1.0, 1.0), (1.5, 1.2, 0.8, 1.0))
+    shaping = CommandShaping(
+        vx_accel_mps2=math.inf,
+        vy_accel_mps2=math.inf,
+        turn_accel_radps2=math.inf,
+        max_step_length_m=0.6,
+        gait_scale_by_speed=rows,
+    )
+    out = CommandShaper(shaping).update(_cmd(vx=1.5, T=0.35), 0.0)
+    assert out.step_time_s == pytest.approx(0.4, rel=1e-12)
+    assert out.com_height_m == pytest.approx(0.64, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "rows, message",
+    [
+        (((1.0, 1.0, 1.0, 1.0),), "at least two rows"),
+        (((1.0, 1.0, 1.0), (2.0, 1.0, 1.0)), "at least two rows"),
+        (((1.0, 1.0, 1.0, 1.0), (2.0, 1.0, math.nan, 1.0)), "at least two rows"),
+        (((1.0, 1.0, 0.9, 1.0), (2.0, 1.0, 0.8, 1.0)), "first row's scales must be 1"),
+        (((1.0, 1.0, 1.0, 1.0), (1.0, 1.0, 0.8, 1.0)), "increasing"),
+        (((-1.0, 1.0, 1.0, 1.0), (1.0, 1.0, 0.8, 1.0)), "increasing"),
+        (((1.0, 1.0, 1.0, 1.0), (2.0, -1.0, 0.8, 1.0)), "positive"),
+        ([(1.0, 1.0, 1.0, 1.0), (2.0, 1.0, 0.8, 1.0)], "must be a tuple"),
+    ],
+)
+def test_bad_gait_schedules_are_input_errors(rows, message):
+    with pytest.raises(InputError, match=f"gait_scale_by_speed: .*{message}"):
+        CommandShaping(vx_accel_mps2=1.0, vy_accel_mps2=1.0, turn_accel_radps2=1.0, gait_scale_by_speed=rows)
 
 
 @pytest.mark.parametrize(

@@ -44,6 +44,9 @@ def test_the_bundled_profile_reads_the_values_its_file_gives():
     assert pbc.kd_stance_ps == 44.72 and pbc.spring_model_linkage.heel_stiffness_Nmprad == 1250.0
     assert p.compare is not None and p.compare.realtime_goal == {"qp": 2.5, "pbc": 1.5}
     assert get_profile("rabbit").compare.realtime_goal == {}  # no goal: the key is optional
+    assert p.shaping.gait_scale_by_speed == ()  # no gait schedule: the key is optional
+    rows = get_profile("rabbit").shaping.gait_scale_by_speed  # 0.35 -> 0.40 s, 0.68 -> 0.56 m, 0.06 -> 0.12 m
+    assert rows[0] == (1.0, 1.0, 1.0, 1.0) and rows[1] == pytest.approx((1.5, 0.40 / 0.35, 0.56 / 0.68, 2.0), rel=1e-15)
 
 
 def test_a_copy_of_a_bundled_profile_reads_alike(tmp_path):
@@ -105,6 +108,26 @@ def test_an_imu_quaternion_near_unit_norm_is_normalised_and_an_imu_body_the_mode
         ("realtime_goal = { qp = 2.5,", "realtime_goal = { lqr = 2.5,", "compare.realtime_goal.lqr: unknown tracker"),
         ("realtime_goal = { qp = 2.5,", "realtime_goal = { qp = 0.0,", "compare.realtime_goal.qp: 0 is outside"),
         ("realtime_goal = { qp = 2.5,", 'realtime_goal = { qp = "fast",', "compare.realtime_goal.qp: must be a number"),
+        (
+            "[shaping]\n",
+            "[shaping]\ngait_scale_by_speed = [[1.0, 1.0, 1.0]]\n",
+            "shaping.gait_scale_by_speed: must be a list of rows of 4",
+        ),
+        (
+            "[shaping]\n",
+            "[shaping]\ngait_scale_by_speed = [[1.0, 1.1, 1.0, 1.0], [2.0, 1.2, 0.9, 1.5]]\n",
+            "shaping.gait_scale_by_speed: the first row's scales must be 1",
+        ),
+        (
+            "[shaping]\n",
+            "[shaping]\ngait_scale_by_speed = [[1.0, 1.0, 1.0, 1.0], [0.5, 1.2, 0.9, 1.5]]\n",
+            "shaping.gait_scale_by_speed: the speeds must be >= 0 and increasing",
+        ),
+        (
+            "[shaping]\n",
+            "[shaping]\ngait_scale_by_speed = [[1.0, 1.0, 1.0, 1.0], [2.0, 1.2, 0.0, 1.5]]\n",
+            "shaping.gait_scale_by_speed: every scale must be positive",
+        ),
     ],
 )
 def test_each_bad_key_is_named_in_one_line(tmp_path, old, new, message):

@@ -1,4 +1,4 @@
-"""Command shaping: a rate limit on the velocity command, as on the robot's radio, and a step-length cap.
+"""Command shaping: a rate limit on the velocity command (as on a radio), a step-length cap, a gait schedule.
 
 A user's ``--vx 2`` is a step from rest; the ALIP planner turns a step of the
 commanded speed into one large foot placement that the legs cannot follow (the
@@ -23,6 +23,15 @@ step ``|vx| T`` (``vx`` shaped) longer than ``max_step_length_m``, ``T``
 becomes ``max_step_length_m / |vx|`` (faster walking with a higher step
 frequency). A command whose steps are not longer than the cap (up to the same
 relative slack) keeps its ``T``.
+
+Gait schedule: above the first row's speed of
+:attr:`~amlip_qp.profiles.CommandShaping.gait_scale_by_speed`, the command's
+step time ``T``, CoM height ``H`` and clearance ``z_cl`` are scaled with the
+shaped ``|vx|`` (:func:`gait_scales`), before the step-length cap. At a fixed
+``T`` the steps grow with the speed and straighten the legs, and the swing
+hip's torque grows as ``|vx| / T``; a schedule trades them (the numbers behind
+a robot's schedule: ``docs/TUNING.md``). At or below the first row's speed
+the command's gait is kept, so the walks there are unchanged bit for bit.
 
 The shaped command starts at rest (zero velocities) at the first
 :meth:`CommandShaper.update` after :meth:`CommandShaper.reset`: the robot
@@ -119,10 +128,36 @@ class CommandShaper:
             else:
                 value[i] = value[i] + math.copysign(step, diff)
                 changes[SHAPED_FIELDS[i]] = value[i]
-        L_max = self.shaping.max_step_length_m
         speed = abs(value[0])
-        if speed * command.step_time_s > L_max * (1.0 + RATE_RTOL):
+        rows = self.shaping.gait_scale_by_speed
+        T = command.step_time_s
+        if rows and speed > rows[0][0]:
+            T_scale, H_scale, cl_scale = gait_scales(rows, speed)
+            T = T * T_scale
+            changes["step_time_s"] = T
+            changes["com_height_m"] = command.com_height_m * H_scale
+            changes["clearance_m"] = command.clearance_m * cl_scale
+        L_max = self.shaping.max_step_length_m
+        if speed * T > L_max * (1.0 + RATE_RTOL):
             changes["step_time_s"] = L_max / speed
         if not changes:
             return command
         return replace(command, **changes)
+
+
+def gait_scales(rows: tuple[tuple[float, float, float, float], ...], speed_mps: float) -> tuple[float, float, float]:
+    """The ``(T, H, z_cl)`` scales of a gait schedule at the forward speed ``speed_mps`` (m/s) (module doc).
+
+    ``rows``: ``(speed m/s, T scale, H scale, z_cl scale)``, speeds increasing
+    (:attr:`~amlip_qp.profiles.CommandShaping.gait_scale_by_speed`); the first
+    row's scales below its speed, linear between the rows, the last row's after it.
+    """
+    v0, *s0 = rows[0]
+    if speed_mps <= v0:
+        return s0[0], s0[1], s0[2]
+    for v1, *s1 in rows[1:]:
+        if speed_mps <= v1:
+            w = (speed_mps - v0) / (v1 - v0)
+            return s0[0] + (s1[0] - s0[0]) * w, s0[1] + (s1[1] - s0[1]) * w, s0[2] + (s1[2] - s0[2]) * w
+        v0, s0 = v1, s1
+    return s0[0], s0[1], s0[2]

@@ -230,23 +230,61 @@ class CommandShaping:
     ``max_step_length_m / |vx|``: fast walking with a higher step frequency,
     as the paper did at 2.1 m/s. ``inf``: ``T`` is never changed.
 
+    Gait schedule: rows ``(speed, T scale, H scale, z_cl scale)`` with the
+    shaped forward speed ``|vx|``; the command's step time ``T``, CoM height
+    ``H`` and clearance ``z_cl`` are multiplied by the scales, linear between
+    the rows and held after the last. The first row's scales are 1 and at or
+    below its speed the command passes unchanged. Why a robot may want one: at
+    a fixed ``T`` the steps ``|vx| T`` grow with the speed and straighten the
+    legs (a lower ``H`` gives them the reach), and the swing foot's travel
+    ``2 |vx| T`` in ``T`` asks the swing hip for a torque that grows as
+    ``|vx| / T`` (a longer ``T`` lowers it). ``()``: no schedule.
+
     Attributes:
         vx_accel_mps2: Largest rate of change of the forward-speed command, m/s².
         vy_accel_mps2: Largest rate of change of the lateral-speed command, m/s².
         turn_accel_radps2: Largest rate of change of the turn-rate command, rad/s².
         max_step_length_m: Longest mean step length ``|vx| T``, m.
+        gait_scale_by_speed: Rows ``(|vx| m/s, T scale, H scale, z_cl scale)``, speeds
+            increasing, the first row's scales 1, every scale positive (dimensionless).
     """
 
     vx_accel_mps2: float
     vy_accel_mps2: float
     turn_accel_radps2: float
     max_step_length_m: float = math.inf
+    gait_scale_by_speed: tuple[tuple[float, float, float, float], ...] = ()
 
     def __post_init__(self) -> None:
         for name in ("vx_accel_mps2", "vy_accel_mps2", "turn_accel_radps2", "max_step_length_m"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
                 raise InputError(f"CommandShaping.{name} must be a positive number (inf: no limit), got {value!r}")
+        check_gait_schedule(self.gait_scale_by_speed)
+
+
+def check_gait_schedule(rows: object) -> None:
+    """Raise :class:`InputError` unless ``rows`` is a valid :attr:`CommandShaping.gait_scale_by_speed`."""
+
+    def number(v: object) -> bool:
+        return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+
+    def bad(why: str) -> InputError:
+        return InputError(f"CommandShaping.gait_scale_by_speed: {why}, got {rows!r}")
+
+    if not isinstance(rows, tuple):
+        raise bad("must be a tuple of (speed m/s, T scale, H scale, clearance scale) rows")
+    if not rows:
+        return
+    if len(rows) < 2 or not all(isinstance(r, tuple) and len(r) == 4 and all(map(number, r)) for r in rows):
+        raise bad("needs at least two rows of 4 finite numbers (speed m/s, T scale, H scale, clearance scale)")
+    speeds = [r[0] for r in rows]
+    if speeds[0] < 0.0 or any(b <= a for a, b in zip(speeds, speeds[1:])):
+        raise bad("the speeds must be >= 0 and increasing")
+    if rows[0][1:] != (1.0, 1.0, 1.0):
+        raise bad("the first row's scales must be 1 (the gait's own up to its speed)")
+    if not all(min(r[1:]) > 0.0 for r in rows):
+        raise bad("every scale must be positive")
 
 
 #: Command shaping that changes nothing (no rate limit, no step-length cap).

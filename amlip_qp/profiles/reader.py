@@ -11,6 +11,7 @@ its configuration is built (:meth:`RobotProfile.tracker_config`).
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 from collections.abc import Callable, Mapping
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from amlip_qp.exceptions import InputError, ProfileError
-from amlip_qp.profiles.commands import CommandBounds, CommandShaping, VerifiedEnvelope
+from amlip_qp.profiles.commands import CommandBounds, CommandShaping, VerifiedEnvelope, check_gait_schedule
 from amlip_qp.profiles.outputs import output_primitives
 from amlip_qp.profiles.profile import (
     FORCE_POINT_COUNTS,
@@ -319,9 +320,14 @@ def read_profile(path: str | Path) -> RobotProfile:
     verified = _verified(top.table("verified", required=False), bounds)
     shaping_t = top.table("shaping")
     assert shaping_t is not None
+    rows = shaping_t.rows("gait_scale_by_speed", 4, (), unit="m/s, dimensionless")
+    try:
+        check_gait_schedule(rows)
+    except InputError as exc:
+        shaping_t.fail(str(exc).split(": ", 1)[1], "gait_scale_by_speed")
     shaping = _dataclass_table(
         shaping_t,
-        CommandShaping,
+        functools.partial(CommandShaping, gait_scale_by_speed=rows),
         {
             "vx_accel_mps2": (..., 1e-9, math.inf, "m/s^2", False),
             "vy_accel_mps2": (..., 1e-9, math.inf, "m/s^2", False),

@@ -86,6 +86,15 @@ class Table:
             self.fail(f"must be a list of {size} numbers ({unit}), got {value!r}", key)
         return tuple(check_number(self, key, v, -math.inf, math.inf, unit, True) for v in value)
 
+    def rows(self, key: str, size: int, default: Any = ..., unit: str = "") -> Any:
+        """A list of rows of ``size`` numbers as a tuple of float tuples (``[]`` gives ``()``)."""
+        value = self.raw(key, default)
+        if value is default and default is not ...:
+            return value
+        if not isinstance(value, list) or not all(isinstance(r, list) and len(r) == size for r in value):
+            self.fail(f"must be a list of rows of {size} numbers ({unit}), got {value!r}", key)
+        return tuple(tuple(check_number(self, key, v, -math.inf, math.inf, unit, True) for v in r) for r in value)
+
     def done(self) -> None:
         unknown = sorted(set(self.data) - self.taken)
         if unknown:
