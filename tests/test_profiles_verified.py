@@ -29,7 +29,7 @@ def _scenario(argv):
         ["--vx", "3.0"],
         ["--vx", "-0.5"],
         ["--vx", "1.0", "--vy", "-1.0", "--turn-rate", "45"],
-        ["--robot", "rabbit", "--vx", "1.0"],
+        ["--robot", "rabbit", "--vx", "1.5"],
         ["--robot", "h1", "--vx", "1.5", "--vy", "0.2"],
     ],
 )
@@ -47,7 +47,7 @@ def test_a_verified_command_runs_without_a_warning(argv):
         (["--speed-profile", "0:0,10:3.5,12:3.2"], "forward speed 3.5 m/s"),
         (["--vx", "1.0", "--vy", "1.2"], "lateral speed 1.2 m/s (verified |vy| <= 1 m/s)"),
         (["--vx", "1.0", "--turn-rate", "-60"], "turn rate -60 deg/s (verified <= 45 deg/s)"),
-        (["--robot", "rabbit", "--vx", "1.5"], "inside rabbit's physical bounds but not verified"),
+        (["--robot", "rabbit", "--vx", "1.6"], "inside rabbit's physical bounds but not verified"),
         (["--robot", "g1", "--vx", "1.0", "--turn-rate", "90"], "turn rate 90 deg/s"),
     ],
 )
@@ -106,28 +106,40 @@ def test_bad_input_after_an_unverified_command_is_one_error_line_and_no_warning(
 
 
 def test_a_sweep_warns_once_for_all_its_unverified_cells(tmp_path, capsys):
-    argv = ["sweep", "--grid", "vx=1.2,1.4,1.6", "--set", "robot=rabbit", "--set", "no_command_shaping=true"]
+    argv = ["sweep", "--grid", "vx=1.55,1.6,1.65", "--set", "robot=rabbit", "--set", "no_command_shaping=true"]
     code = cli.main([*argv, "--duration", "0.0005", "--no-progress", "--workers", "1", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     warned = [line for line in err.splitlines() if "warning" in line]
     assert code == 0
     assert len(warned) == 1, err
-    assert warned[0].startswith("amlip-qp: warning: cell 0 (vx=1.2): forward speed 1.2 m/s")
+    assert warned[0].startswith("amlip-qp: warning: cell 0 (vx=1.55): forward speed 1.55 m/s")
     assert warned[0].endswith("(and 2 more walks outside the verified envelope)")
 
 
-def test_a_comparison_warns_once_for_the_ramps_past_the_verified_envelope():
-    from amlip_qp.experiments import compare
+def test_a_comparison_warns_once_for_the_ramps_past_the_verified_envelope(monkeypatch):
+    import dataclasses
+
+    from amlip_qp.experiments import compare, robustness
     from amlip_qp.experiments.robustness import CompareSettings
 
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # every robot's own ramp end is verified
+        compare.build_tasks(["cassie", "rabbit", "h1", "g1"], ["qp"], [], CompareSettings())
+    ranges = robustness.compare_ranges
+    past = {"rabbit": 1.7, "h1": 1.7}  # 0.2 m/s past their verified 1.5 m/s, inside their physical bounds
+
+    def ramps_past_the_envelope(robot):
+        own = ranges(robot)
+        return dataclasses.replace(own, ramp_end_mps=past.get(robot, own.ramp_end_mps))
+
+    monkeypatch.setattr(robustness, "compare_ranges", ramps_past_the_envelope)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         compare.build_tasks(["cassie", "rabbit", "h1"], ["qp"], [], CompareSettings())
     assert [w.category for w in caught] == [UnverifiedCommandWarning]
     text = str(caught[0].message)
-    # Rabbit's ramp ends at 1.5 m/s, its acceptance verifies 1.0; Cassie's 2.1 and H1's 1.5 are verified
-    assert text.startswith("rabbit's ramp: forward speed 1.5 m/s (verified 0 to 1 m/s)") and "\n" not in text
-    assert "cassie" not in text.split(":")[0] and "h1's ramp" not in text
+    assert text.startswith("rabbit's ramp: forward speed 1.7 m/s (verified 0 to 1.5 m/s)") and "\n" not in text
+    assert "; h1's ramp: forward speed 1.7 m/s (verified 0 to 1.5 m/s)" in text and "cassie's ramp" not in text
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         compare.build_tasks(["rabbit"], ["qp"], [], CompareSettings(), ramp=False)
@@ -145,7 +157,7 @@ def test_the_envelope_names_every_unverified_command_once():
 
 def test_a_verified_envelope_outside_the_bounds_is_a_profile_error(tmp_path):
     src = get_profile("rabbit").source
-    text = src.read_text().replace("vx_mps = [0.0, 1.0]", "vx_mps = [0.0, 2.0]")
+    text = src.read_text().replace("vx_mps = [0.0, 1.5]", "vx_mps = [0.0, 2.0]")
     assert "vx_mps = [0.0, 2.0]" in text
     path = tmp_path / "rabbit.toml"
     path.write_text(text)

@@ -149,7 +149,7 @@ def build_tasks(
 ) -> list[_Task]:
     """Every experiment of a comparison, per robot, tracker and planner (``"one-step"``, ``"mpc"``).
 
-    A ramp past a robot's verified envelope (its profile's ``[verified]``; Rabbit's 1.5 m/s) gives
+    A ramp past a robot's verified envelope (its profile's ``[verified]``; no shipped profile's) gives
     one :class:`~amlip_qp.exceptions.UnverifiedCommandWarning` for the whole comparison.
 
     Raises:
