@@ -96,10 +96,11 @@ def test_the_tracker_refuses_an_unknown_solver():
 
 
 def test_the_profile_chooses_the_solver_and_the_argument_overrides_it():
-    """G1's profile names DAQP (``[trackers.qp] qp_solver``); Cassie's names none, ProxQP."""
-    assert isinstance(QPTracker(load_robot("g1")).solver, DAQPSolver)
-    assert QPTracker(load_robot("cassie")).qp_solver == "proxqp"
-    assert QPTracker(load_robot("g1"), qp_solver="proxqp").qp_solver == "proxqp"
+    """Every bundled profile names DAQP (``[trackers.qp] qp_solver``); an explicit name overrides it."""
+    for name in ("cassie", "rabbit", "h1", "g1"):
+        assert isinstance(QPTracker(load_robot(name)).solver, DAQPSolver), name
+    forced = QPTracker(load_robot("cassie"), qp_solver="proxqp")
+    assert forced.qp_solver == "proxqp" and isinstance(forced.solver, ProxQPSolver)
 
 
 def test_the_qp_tracker_walks_with_daqp_at_the_commanded_speed():

@@ -1,7 +1,8 @@
 """``amlip-qp bench qp``: replay recorded tracker QPs through every installed QP solver.
 
 :func:`record_walk` runs a scenario with the whole-body QP tracker (the
-tracker named ``"qp"`` in :data:`amlip_qp.control.registry.TRACKER_MODULES`) and
+tracker named ``"qp"`` in :data:`amlip_qp.control.registry.TRACKER_MODULES`, with ProxQP whatever
+the profile's solver: :data:`RECORD_QP_SOLVER`) and
 copies every tick's problem, keeping the whole controller tick times
 (estimate, plan, build, solve) and MuJoCo's state at the end of the walk.
 :func:`bench_solvers` replays the recorded sequence through every solver of
@@ -50,7 +51,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amlip_qp.control.registry import make_tracker
+from amlip_qp.control.registry import tracker_class
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.experiments import qp_solver_list
 from amlip_qp.experiments.bench_qp_report import agreement, format_report, time_stats
@@ -84,13 +85,19 @@ REFERENCE_EPS = (1e-12, 1e-11, 1e-10, 1e-9)
 REFERENCE_MAX_ITER = 1000
 
 
+#: The solver of the recording tracker, whichever the robot's profile names: ProxQP, the path whose
+#: warm solve is the reference of the time ratios, so the recorded walk is the one that solver drove.
+RECORD_QP_SOLVER = "proxqp"
+
+
 def _make_qp_tracker(robot: Robot) -> QPTracker:
-    """A new :data:`QP_TRACKER` for ``robot``, typed as the whole-body QP tracker it is."""
+    """A new :data:`QP_TRACKER` for ``robot`` with :data:`RECORD_QP_SOLVER`, typed as the whole-body QP
+    tracker it is."""
     from amlip_qp.control.wbc.tracker import QPTracker
 
-    tracker = make_tracker(QP_TRACKER, robot)
-    assert isinstance(tracker, QPTracker), f"tracker {QP_TRACKER!r} is a {type(tracker).__name__}"
-    return tracker
+    cls = tracker_class(QP_TRACKER)
+    assert cls is QPTracker, f"tracker {QP_TRACKER!r} is a {cls.__name__}"
+    return QPTracker(robot, qp_solver=RECORD_QP_SOLVER)
 
 
 def record_walk(

@@ -2,7 +2,8 @@
 
 Accelerations and contact forces are the decision variables; tasks,
 contacts and limits become the costs and constraints of one dense QP per
-control tick, solved by a persistent warm-started ProxQP.
+control tick, solved by one persistent solver: the hot-started DAQP the
+bundled robots' profiles name, or the warm-started ProxQP (``QPConfig.qp_solver``).
 
 - :mod:`~amlip_qp.control.wbc.config`: weights, gains, limits; the tuned configurations;
 - :mod:`~amlip_qp.control.wbc.layout`: the decision variables;

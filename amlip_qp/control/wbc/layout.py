@@ -9,7 +9,7 @@
   foot); a four-point sole: its corners, toe left, toe right, heel left,
   heel right (12 per foot); Rabbit (planar): the point foot, ``(f_x, f_z)``
   (2 per foot). The stance foot's block always comes first, so the dimensions never change
-  and one persistent ProxQP serves the whole walk (two with
+  and one persistent solver serves the whole walk (two with
   ``QPTracker(airborne_reduction=True)``: the problem without the airborne
   swing foot's block is the other).
 

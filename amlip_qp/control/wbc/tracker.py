@@ -1,16 +1,17 @@
 """The task-space whole-body QP tracker.
 
 Every tick: build the QP of :mod:`amlip_qp.control.wbc.builder` for the
-current state and references, solve it with ONE persistent warm-started
-:class:`~amlip_qp.qp.solver.ProxQPSolver`, check the status, and recover the
+current state and references, solve it with ONE persistent solver (the
+profile's: the hot-started :class:`~amlip_qp.qp.daqp_solver.DAQPSolver` or the
+warm-started :class:`~amlip_qp.qp.solver.ProxQPSolver`), check the status, and recover the
 joint torques from the actuated rows of the dynamics.
 
 While the swing foot is in the air (force ramp ``w = 0``) its force
 variables are pinned to zero and its friction rows are lifted; with
 ``airborne_reduction=True`` the tracker then solves the problem without them
 (:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`: the same
-optimum, a smaller KKT system, about a quarter less solve time) with a second
-persistent ProxQP; both stay warm-started. It is off by default: the
+optimum, a smaller KKT system, about a quarter less solve time) as a second
+persistent problem shape of the same solver; both stay warm-started. It is off by default: the
 trajectories then differ from the full solve's within the solver's tolerance,
 and the closed-chain 2.5 m/s walk with the robot's sensors and the EKF
 (seed 0) ends with a lateral speed of 0.179 m/s, above the acceptance's 0.15
