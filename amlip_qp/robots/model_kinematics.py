@@ -135,7 +135,7 @@ class ModelKinematics:
         self.q = q = np.array(q, dtype=float)
         self.v = v = np.array(v, dtype=float)
         # The CoM Jacobian's pass computes the joint placements and Jacobians too (as update_positions);
-        # the second pass adds the velocities and the drift accelerations (the placements the same bits).
+        # forwardKinematics then adds the velocities and the drift accelerations (the same placements).
         pin.jacobianCenterOfMass(m, d, q, False)
         pin.forwardKinematics(m, d, q, v, self._zero_a)
         pin.updateFramePlacements(m, d)
