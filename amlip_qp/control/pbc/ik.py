@@ -19,21 +19,16 @@ stacked Jacobians of these equations):
   as 0. The drift ``Adot v`` is exact (a finite difference of ``A`` along
   ``v_r``) on cold solves and whenever ``iterations`` is given; on warm
   default solves it is the analytic drift of the output map and contact frame
-  at the previous tick's ``v_r`` (one kinematics update at ``(q, v_r^-)``
+  at the previous tick's ``v_r`` (one full kinematics update at ``(q, v_r^-)``
   replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
   in ``v``, so the error is about ``2 |dAdot/dv| |v_r| |v_r - v_r^-|``, i.e.
   of the order of ``|a_r| dt`` relative to the drift (checked in
   tests/test_control_pbc_ik.py).
 
-Evaluation: ``h_0(q)``, its Jacobian and drift come from the output map of
-the kinematics given to :meth:`IterativeIK.solve` (the walking controller's
-generated-C map, or :class:`amlip_qp.robots.outputs.OutputMap`), evaluated
-on the IK's own :class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own
-Pinocchio data) through the light
-:meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions` or, with
-a velocity, the kinematics-only
-:meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_kinematics` (no
-mass matrix or nonlinear effects: the IK needs none).
+Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
+:class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
+:class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
+through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
 
 Robustness: each Newton step (:mod:`~amlip_qp.control.pbc.ik_newton`) solves
 ``A dq = -F`` (LU; a damped least-squares step ``(A^T A + mu I) dq = -A^T F``
@@ -77,8 +72,7 @@ class IterativeIK:
 
     Attributes:
         kin: The IK's own :class:`~amlip_qp.robots.kinematics.RobotKinematics`
-            (light updates at the iterates), with the output map of the kinematics
-            last given to :meth:`solve`.
+            (light position updates at the iterates).
         size: Number of outputs.
 
     Raises:
@@ -96,9 +90,7 @@ class IterativeIK:
         self.robot = robot
         self.settings = settings or IKSettings()
         self.model = m = robot.pin_model
-        self._kinematics = RobotKinematics
         self.kin = RobotKinematics(robot)
-        self._output_map = None  # the output map self.kin was made with (None: its default)
         self.size = OutputMap(robot).size
         nv = m.nv
         #: The equations of the system (held coordinates and their rows per stance).
@@ -137,14 +129,14 @@ class IterativeIK:
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
         """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
 
-        With a velocity ``v`` the IK's kinematics get a kinematics update at ``(q, v)``
+        With a velocity ``v`` the IK's kinematics get a full update at ``(q, v)``
         (then :meth:`_drift` gives ``Adot v``); without, the light position update.
         """
         kin = self.kin
         if v is None:
             kin.update_positions(q)
         else:
-            kin.update_kinematics(q, v)
+            kin.update(q, v)
         y, J, _ = kin.outputs(stance, heading)
         n = self.size
         A[:n] = J
@@ -259,12 +251,6 @@ class IterativeIK:
         rows = self._rows[stance]
         A = rows.A
         s = self.settings
-        output_map = kin.output_map
-        if output_map is not self._output_map:
-            # evaluate h_0 as the caller's kinematics does (the walking controller's: generated C)
-            self.kin = self._kinematics(self.robot, output_map)
-            self._output_map = output_map
-            self._cache = None
         try:
             fixed = self._fixed_from(kin, stance)
             if held_springs is not None:
