@@ -323,3 +323,29 @@ def test_position_only_drifts_are_read_only_shared_zeros(robot):
     assert np.all(a == 0.0)
     with pytest.raises(ValueError):
         a[0] = 1.0  # would corrupt every later drift
+
+
+def test_update_kinematics_gives_the_kinematics_of_the_full_update_without_the_dynamics(robot):
+    """update_kinematics(q, v): every frame and CoM quantity the same bits as after update(q, v)
+    (the CoM Jacobian within 1e-15: Pinocchio sums it in another order); the dynamics raise."""
+    full, light = ModelKinematics(robot.pin_model), ModelKinematics(robot.pin_model)
+    m = robot.pin_model
+    for _, _, q, v in random_states(robot, 3, seed=17):
+        full.update(q, v)
+        light.update(q, v)  # a full update first: the light one must drop its dynamics
+        light.mass_matrix()
+        light.update_kinematics(q, v)
+        np.testing.assert_array_equal(light.state()[0], q)
+        np.testing.assert_array_equal(light.state()[1], v)
+        for f in range(m.nframes):
+            np.testing.assert_array_equal(light.frame_position(f), full.frame_position(f))
+            np.testing.assert_array_equal(light.frame_rotation(f), full.frame_rotation(f))
+            np.testing.assert_array_equal(light.frame_jacobian6(f), full.frame_jacobian6(f))
+            np.testing.assert_array_equal(light.frame_jdot_v6(f), full.frame_jdot_v6(f))
+        np.testing.assert_array_equal(light.com(), full.com())
+        np.testing.assert_array_equal(light.com_velocity(), full.com_velocity())
+        np.testing.assert_array_equal(light.com_jdot_v(), full.com_jdot_v())
+        np.testing.assert_allclose(light.com_jacobian(), full.com_jacobian(), rtol=0.0, atol=1e-15)
+        for getter in (light.mass_matrix, light.nonlinear_effects, light.centroidal_momentum_matrix):
+            with pytest.raises(InputError, match="update_kinematics"):
+                getter()

@@ -16,6 +16,8 @@ costs about a microsecond per item, a control tick needs dozens).
 :meth:`ModelKinematics.update_positions` is a lighter update for iterative
 kinematics (the IK): positions, Jacobians and the CoM at ``q`` with ``v = 0``;
 drifts and momenta are then zero and the dynamics getters raise.
+:meth:`ModelKinematics.update_kinematics` is the kinematics of :meth:`ModelKinematics.update`
+at ``(q, v)`` (positions, Jacobians, drifts, the CoM terms) without the dynamics.
 
 All vectors are in world axes and SI units. Jacobians are world-aligned
 (Pinocchio's ``LOCAL_WORLD_ALIGNED``) and map Pinocchio's ``v``; a
@@ -73,6 +75,8 @@ class ModelKinematics:
         self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
+        self._dynamics = False  # True after update(q, v) only
+        self._zero_a = np.zeros(self.model.nv)  # the zero vdot of update_kinematics' drift pass
         # Shared zero drifts of update_positions(): read-only, as callers get views.
         self._zero3 = np.zeros(3)
         self._zero6 = np.zeros(6)
@@ -103,6 +107,37 @@ class ModelKinematics:
         # accelerations for vdot = 0 (bitwise the same as a separate
         # forwardKinematics(q, v, 0)); the frame drifts and acom use them.
         pin.computeAllTerms(m, d, q, v)
+        pin.updateFramePlacements(m, d)
+        pin.centerOfMass(m, d, self._com_acc_level, False)
+        self._invalidate(False)
+        self._dynamics = True
+
+    def update_kinematics(self, q, v) -> None:
+        """Kinematics-only update at the state ``(q, v)``: no dynamics.
+
+        Runs the joint placements and Jacobians with the CoM Jacobian, the joint
+        velocities and their accelerations at zero ``vdot`` (the drifts), the
+        frame placements and the CoM's position, velocity and drift: every
+        frame and CoM getter and :meth:`outputs` with its drift read as after
+        :meth:`update` (the same bits, but for the CoM Jacobian, which
+        Pinocchio sums in another order: within 1e-15). The dynamics (CRBA, the
+        nonlinear effects, the centroidal momentum) are not computed:
+        ``mass_matrix``, ``nonlinear_effects``, the momenta and
+        ``centroidal_momentum_matrix`` raise :class:`~amlip_qp.exceptions.InputError`
+        until the next :meth:`update`. For iterative kinematics that needs the
+        drifts (the IK's last iterate); ``q`` and ``v`` are not checked (a hot
+        path): pass finite arrays of shapes (nq,), (nv,).
+        """
+        pin = self._pin
+        m, d = self.model, self.data
+        if d is not self._views_data:
+            self._bind_views()
+        self.q = q = np.array(q, dtype=float)
+        self.v = v = np.array(v, dtype=float)
+        # The CoM Jacobian's pass computes the joint placements and Jacobians too (as update_positions);
+        # forwardKinematics then adds the velocities and the drift accelerations (the same placements).
+        pin.jacobianCenterOfMass(m, d, q, False)
+        pin.forwardKinematics(m, d, q, v, self._zero_a)
         pin.updateFramePlacements(m, d)
         pin.centerOfMass(m, d, self._com_acc_level, False)
         self._invalidate(False)
@@ -165,6 +200,7 @@ class ModelKinematics:
         self._acc3.clear()
         self._M = None
         self.positions_only = positions_only
+        self._dynamics = False
 
     def _ready(self) -> None:
         if self.q is None or self.v is None:  # state()'s test, without its call (a dozen getters a tick)
@@ -180,8 +216,11 @@ class ModelKinematics:
     def require_dynamics(self) -> None:
         """Raise :class:`InputError` unless the last update was a full ``update(q, v)``."""
         self._ready()
-        if self.positions_only:
-            raise InputError(f"{type(self).__name__}: dynamics not computed by update_positions(); call update(q, v)")
+        if not self._dynamics:
+            raise InputError(
+                f"{type(self).__name__}: dynamics not computed by update_positions() or update_kinematics();"
+                " call update(q, v)"
+            )
 
     # ------------------------------------------------------------- frames
     def frame_position(self, frame_id: int) -> np.ndarray:

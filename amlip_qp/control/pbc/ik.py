@@ -142,11 +142,10 @@ class IterativeIK:
         A[:n] = J
         cid = self.robot.contact_frame_ids[stance]
         A[n : n + len(self._pose_rows)] = kin.frame_jacobian6(cid)[self._pose_rows]
-        oMf = kin.data.oMf[cid]
-        return y, oMf.translation.copy(), oMf.rotation.copy()
+        return y, kin.frame_position(cid), kin.frame_rotation(cid)
 
     def _drift(self, stance: str, heading: float, out: np.ndarray) -> None:
-        """``Adot v`` of the varying rows at the last full :meth:`_evaluate` (its ``v``) into ``out``."""
+        """``Adot v`` of the varying rows at the last :meth:`_evaluate` with a ``v`` into ``out``."""
         kin = self.kin
         n = self.size
         out[:n] = kin.outputs(stance, heading)[2]
@@ -156,14 +155,14 @@ class IterativeIK:
         """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
         F, n = rows.F, self.size
         np.subtract(y, h_d, out=F[:n])
-        p_err = pos - fixed["contact_pos"]
         r_err = self._pin.log3(rot @ fixed["contact_rot"].T)
         if self._planar:
+            p_err = pos - fixed["contact_pos"]
             F[n], F[n + 1], F[n + 2] = p_err[0], p_err[2], r_err[1]
         else:
-            F[n : n + 3] = p_err
+            np.subtract(pos, fixed["contact_pos"], out=F[n : n + 3])
             F[n + 3 : n + 6] = r_err
-        F[rows.n_var :] = rows.lin_q @ q - fixed["lin"]
+        np.subtract(rows.lin_q @ q, fixed["lin"], out=F[rows.n_var :])
         return F
 
     def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:

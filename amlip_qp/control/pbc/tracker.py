@@ -204,8 +204,7 @@ class PBCTracker(Tracker):
             return
         # the two rotation axes normal to the blade u: n1 = u x z (or u x x), n2 = u x n1 (scalar math)
         toe_id, heel_id = robot.sole_line_frame_ids[stance]
-        oMf = kin.data.oMf
-        t, h = oMf[toe_id].translation, oMf[heel_id].translation
+        t, h = kin.frame_translation_view(toe_id).tolist(), kin.frame_translation_view(heel_id).tolist()
         ux, uy, uz = t[0] - h[0], t[1] - h[1], t[2] - h[2]
         nu = math.sqrt(ux * ux + uy * uy + uz * uz)
         ux, uy, uz = ux / nu, uy / nu, uz / nu

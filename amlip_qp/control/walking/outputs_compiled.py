@@ -98,7 +98,9 @@ class CompiledOutputMap:
         self._points = {stance: ref.points(stance) for stance in sides}
         self._rotating = {stance: ref.rotating_frames(stance) for stance in sides}
         self._joints = {stance: ref.joint_indices(stance) for stance in sides}
-        self._joint_rows = list(ref.joint_rows)
+        # the joint outputs' Jacobian entries (row, v index) as index arrays, per stance
+        rows_idx = np.array(ref.joint_rows, dtype=np.intp)
+        self._joint_entries = {stance: (rows_idx, np.array(self._joints[stance][1], dtype=np.intp)) for stance in sides}
         # Views of the inputs each primitive is copied into (``view[...] = x`` is the cheapest copy).
         JT, p = self._JT, self._p
         self._in_base = (JT[0:3], JT[3:6], p[0:9].reshape(3, 3), p[9:12], p[12:15], p[15:18])
@@ -138,14 +140,14 @@ class CompiledOutputMap:
             R_in[...] = kin.frame_rotation_view(fid)
             alpha_in[...] = acc(fid)[3:]
         p, at = self._p, self._at
-        q_idx, v_idx = self._joints[stance]
+        q_idx = self._joints[stance][0]
         for k, qi in enumerate(q_idx):
             p[at + k] = q[qi]
         p[at + len(q_idx)] = heading_rad
         self._in_v[...] = v
         self._eval()
         J = self._J.copy()
-        J[self._joint_rows, list(v_idx)] = 1.0
+        J[self._joint_entries[stance]] = 1.0
         return self._y.copy(), J, self._jdv.copy()
 
 
