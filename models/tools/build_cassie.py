@@ -26,6 +26,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+
 from cassie_sheet import (
     CONTACT_RADIUS,
     CONTACT_SOLIMP,

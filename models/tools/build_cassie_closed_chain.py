@@ -23,6 +23,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+
 from cassie_sheet import (
     CONTACT_SOLIMP,
     CONTACT_SOLREF,
