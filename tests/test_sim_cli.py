@@ -21,6 +21,7 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.messages import TrackerResult
 from amlip_qp.sim.reports.summary import TIMING_FIELDS
 from amlip_qp.sim.scenarios import factory
+from cli_bad_input_support import run_main
 
 SUMMARY_KEYS = {
     "robot", "tracker", "scenario", "seed", "noise", "duration_s", "sim_time_s", "fell", "fall_time_s", "steps",
@@ -48,15 +49,6 @@ def stand_in(monkeypatch):
     """Every tracker name builds the zero-torque stand-in."""
     monkeypatch.setattr(registry, "make_tracker", lambda name, robot: ZeroTracker(robot))
     monkeypatch.setattr(registry, "tracker_class", lambda name: ZeroTracker)
-
-
-def _run(argv, capsys):
-    try:
-        code = cli.main(argv)
-    except SystemExit as exc:  # argparse errors
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.mark.parametrize(
@@ -91,7 +83,7 @@ def _run(argv, capsys):
     ],
 )
 def test_bad_input_exits_2_with_one_line(argv, capsys, stand_in):
-    code, out, err = _run(argv, capsys)
+    code, out, err = run_main(argv, capsys)
     assert code == 2, err
     assert len(err.strip().splitlines()) == 1, err
     assert err.startswith("amlip-qp")
@@ -108,7 +100,7 @@ def test_bad_input_in_a_subprocess_has_no_traceback():
 def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
     log, plot, summary_path = tmp_path / "run.npz", tmp_path / "run.png", tmp_path / "s.json"
     argv = ["walk", "--robot", "rabbit", "--duration", "0.05", "--vx", "0.3", "--push", "0.01:20,0,0:0.02"]
-    code, out, err = _run(argv + ["--json", "-", "--log", str(log), "--plot", str(plot)], capsys)
+    code, out, err = run_main(argv + ["--json", "-", "--log", str(log), "--plot", str(plot)], capsys)
     assert code == 0, err
     data = json.loads(out)
     assert set(data) == SUMMARY_KEYS
@@ -127,7 +119,7 @@ def test_walk_json_schema_and_outputs(tmp_path, capsys, stand_in):
         assert npz["log_push"][:, 0].max() == 20.0
         assert list(npz["output_names"]) == list(data["output_tracking_rms"])
     assert plot.stat().st_size > 10_000
-    code, out, err = _run(argv + ["--json", str(summary_path)], capsys)
+    code, out, err = run_main(argv + ["--json", str(summary_path)], capsys)
     assert code == 0 and "rabbit/zero walked" in out
     assert json.loads(summary_path.read_text())["steps"] == data["steps"]
 
@@ -137,7 +129,7 @@ def test_walk_log_modes_give_the_same_summary_and_write_no_file(tmp_path, capsys
     argv = ["walk", "--robot", "cassie", "--duration", "0.05", "--vx", "0.3", "--json", "-"]
     runs = {}
     for mode in ("summary", "full"):
-        code, out, err = _run(argv + ["--log", mode], capsys)
+        code, out, err = run_main(argv + ["--log", mode], capsys)
         assert code == 0, err
         runs[mode] = {k: v for k, v in json.loads(out).items() if k not in TIMING_FIELDS}
     assert runs["summary"] == runs["full"] and list(tmp_path.iterdir()) == []
@@ -145,9 +137,9 @@ def test_walk_log_modes_give_the_same_summary_and_write_no_file(tmp_path, capsys
 
 def test_walk_is_deterministic_with_noise(capsys, stand_in):
     argv = ["walk", "--robot", "cassie", "--duration", "0.05", "--noise", "--seed", "3", "--json", "-"]
-    a = json.loads(_run(argv, capsys)[1])
-    b = json.loads(_run(argv, capsys)[1])
-    c = json.loads(_run(argv[:-4] + ["--seed", "4", "--json", "-"], capsys)[1])
+    a = json.loads(run_main(argv, capsys)[1])
+    b = json.loads(run_main(argv, capsys)[1])
+    c = json.loads(run_main(argv[:-4] + ["--seed", "4", "--json", "-"], capsys)[1])
     timing = set(TIMING_FIELDS)
     assert {k: v for k, v in a.items() if k not in timing} == {k: v for k, v in b.items() if k not in timing}
     assert a["output_tracking_rms"] != c["output_tracking_rms"]
@@ -155,17 +147,17 @@ def test_walk_is_deterministic_with_noise(capsys, stand_in):
 
 def test_walk_with_the_robot_sensors_records_the_setting(capsys, stand_in):
     argv = ["walk", "--duration", "0.05", "--plant", "cassie", "--sensors", "robot", "--seed", "3"]
-    code, out, err = _run(argv, capsys)
+    code, out, err = run_main(argv, capsys)
     assert code == 0 and "cassie/zero (plant cassie, robot sensors, truth estimator) walked" in out, err
-    a = json.loads(_run(argv + ["--json", "-"], capsys)[1])
-    b = json.loads(_run(argv + ["--json", "-"], capsys)[1])
+    a = json.loads(run_main(argv + ["--json", "-"], capsys)[1])
+    b = json.loads(run_main(argv + ["--json", "-"], capsys)[1])
     assert (a["plant"], a["sensors"], a["estimator"]) == ("cassie", "robot", "truth")
     assert a["base_velocity_error_rms_mps"] == 0.0 and a["yaw_estimate_error_deg"] == 0.0
     assert a["output_tracking_rms"] == b["output_tracking_rms"]  # deterministic for a seed
 
 
 def test_walk_reports_a_fall_with_exit_1(capsys, stand_in):
-    code, out, err = _run(["walk", "--robot", "rabbit", "--duration", "2", "--no-progress", "--json", "-"], capsys)
+    code, out, err = run_main(["walk", "--robot", "rabbit", "--duration", "2", "--no-progress", "--json", "-"], capsys)
     assert code == 1
     data = json.loads(out)
     assert data["fell"] is True and 0 < data["fall_time_s"] < 2 and data["sim_time_s"] < 2
@@ -176,7 +168,7 @@ def test_walk_video_gif(tmp_path, capsys, stand_in):
     import imageio.v3 as iio
 
     path = tmp_path / "walk.gif"
-    code, out, err = _run(
+    code, out, err = run_main(
         ["walk", "--robot", "cassie", "--duration", "0.2", "--video", str(path), "--video-fps", "20"], capsys
     )
     assert code == 0, err
@@ -229,7 +221,7 @@ def test_command_shaping_options_reach_the_controller():
 def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
     out_json, fig = tmp_path / "cmp.json", tmp_path / "figures" / "cmp.png"  # the figure's folder is created
     argv = ["compare", "--quick", "--robots", "rabbit,cassie", "--jobs", "1", "--push-iterations", "2"]
-    code, out, err = _run(argv + ["--json", str(out_json), "--plot", str(fig)], capsys)
+    code, out, err = run_main(argv + ["--json", str(out_json), "--plot", str(fig)], capsys)
     assert code == 0, err
     lines = out.strip().splitlines()
     assert lines[0].split()[:3] == ["robot", "tracker", "fell"] and len(lines) == 2 + 4
@@ -253,7 +245,7 @@ def test_compare_quick_with_stand_in(tmp_path, capsys, stand_in):
 def test_compare_gives_each_tracker_per_planner_in_the_table_and_the_json(tmp_path, capsys, stand_in):
     out_json = tmp_path / "cmp.json"
     argv = ["compare", "--quick", "--robots", "rabbit", "--planners", "mpc,one-step", "--no-ramp", "--jobs", "1"]
-    code, out, err = _run(argv + ["--push-iterations", "0", "--json", str(out_json), "--no-plot"], capsys)
+    code, out, err = run_main(argv + ["--push-iterations", "0", "--json", str(out_json), "--no-plot"], capsys)
     assert code == 0, err
     lines = out.strip().splitlines()
     assert [line.split("  ")[1].strip() for line in lines[2:]] == [
@@ -298,7 +290,7 @@ def test_compare_lets_warnings_of_a_run_reach_the_user(capsys, monkeypatch):
         "--no-plot",
     ]
     with pytest.warns(CodegenFallbackWarning, match="no C compiler"):
-        code, out, err = _run(argv, capsys)
+        code, out, err = run_main(argv, capsys)
     assert code == 0, err
 
 
