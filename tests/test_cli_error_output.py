@@ -6,13 +6,11 @@ from __future__ import annotations
 import subprocess
 import sys
 
-import numpy as np
 import pytest
 
 from amlip_qp.control import registry
-from amlip_qp.control.tracker import Tracker
-from amlip_qp.messages import TrackerResult
 from cli_bad_input_support import run_main
+from stand_ins import ZeroTracker
 
 
 @pytest.mark.parametrize(
@@ -32,16 +30,6 @@ from cli_bad_input_support import run_main
 def test_bad_input_in_a_subprocess_prints_exactly_one_line(argv, stderr):
     proc = subprocess.run([sys.executable, "-m", "amlip_qp.cli", *argv], capture_output=True, text=True, timeout=120)
     assert (proc.returncode, proc.stderr, proc.stdout) == (2, stderr, "")
-
-
-class ZeroTracker(Tracker):
-    name = "zero"
-
-    def __init__(self, robot):
-        self.nu = robot.nu
-
-    def compute(self, kin, target):
-        return TrackerResult(tau_Nm=np.zeros(self.nu))
 
 
 @pytest.mark.parametrize("option, name", [("--json", "s.json"), ("--log", "run.npz"), ("--plot", "fig.png")])

@@ -14,7 +14,6 @@ import re
 import numpy as np
 import pytest
 
-from amlip_qp import cli
 from amlip_qp.experiments import conformance as C
 from amlip_qp.experiments import conformance_cli
 from amlip_qp.experiments import conformance_control as CC
@@ -22,6 +21,7 @@ from amlip_qp.paths import MODELS_DIR
 from amlip_qp.profiles import bundled_names, get_profile
 from amlip_qp.robots import OutputMap
 from amlip_qp.sim.scenarios import factory
+from cli_bad_input_support import run_main
 
 #: Every check that runs without the walk, in order.
 MODEL_AND_TICK_NAMES = [name for name, _ in C.MODEL_CHECKS] + [CC.tick_name(t) for t in CC.TICK_TRACKERS]
@@ -31,15 +31,6 @@ MODEL_AND_TICK_NAMES = [name for name, _ in C.MODEL_CHECKS] + [CC.tick_name(t) f
 def bundled_results():
     """Robot name -> check name -> result, for every bundled robot, without the walk."""
     return {name: {r.name: r for r in conformance_cli.conformance_checks(name, walk=False)} for name in bundled_names()}
-
-
-def _main(argv, capsys):
-    try:
-        code = cli.main(argv)
-    except SystemExit as exc:  # argparse errors
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _profile_copy(tmp_path, robot: str, changes: dict[str, str] | None = None, model_file: str | None = None) -> str:
@@ -125,7 +116,7 @@ def test_the_walk_in_place_does_not_fall(robot):
 
 def test_the_command_prints_one_line_per_check_and_writes_the_json(capsys, tmp_path):
     path = tmp_path / "checks.json"
-    code, out, err = _main(["check-robot", "rabbit", "--no-walk", "--json", str(path)], capsys)
+    code, out, err = run_main(["check-robot", "rabbit", "--no-walk", "--json", str(path)], capsys)
     assert code == 0, err
     lines = _lines(out)
     assert list(lines) == MODEL_AND_TICK_NAMES and {s for s, _ in lines.values()} == {"PASS"}
@@ -139,7 +130,7 @@ def test_the_command_prints_one_line_per_check_and_writes_the_json(capsys, tmp_p
 
 def test_json_to_stdout_moves_the_lines_to_stderr(capsys, tmp_path):
     profile = _profile_copy(tmp_path, "h1", {"[trackers.pbc]\n": ""})  # no PBC table: its tick is skipped
-    code, out, err = _main(["check-robot", profile, "--no-walk", "--json", "-"], capsys)
+    code, out, err = run_main(["check-robot", profile, "--no-walk", "--json", "-"], capsys)
     assert code == 0
     report = json.loads(out)
     skipped = [c for c in report["checks"] if c["status"] == "skip"]
@@ -154,7 +145,7 @@ def _failed(out: str) -> dict[str, str]:
 
 def test_feet_in_the_air_fail_the_floor_check(capsys, tmp_path):
     profile = _profile_copy(tmp_path, "h1", {"base_pos_m = [0.0, 0.0, 0.982]": "base_pos_m = [0.0, 0.0, 1.282]"})
-    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    code, out, _ = run_main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1
     failed = _failed(out)
     assert list(failed) == [C.FLOOR_NAME]
@@ -173,14 +164,14 @@ def test_straight_legs_fail_the_rank_check(capsys, tmp_path):
     for name in (C.MASS_NAME, C.SITES_NAME, C.BODIES_NAME, C.ROLES_NAME, C.FLOOR_NAME):
         assert results[name].status == C.PASS, results[name].detail
     assert abs(results[C.FLOOR_NAME].value) < 1e-9
-    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    code, out, _ = run_main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1 and C.RANK_NAME in _failed(out)
 
 
 def test_an_unnamed_free_joint_fails_the_joint_name_check(capsys, tmp_path):
     """Menagerie's H1 leaves its free joint unnamed; without ``free_joint_name`` the plant cannot be mapped."""
     profile = _profile_copy(tmp_path, "h1", {'free_joint_name = "floating_base"': "# no free_joint_name"})
-    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    code, out, _ = run_main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1
     failed = _failed(out)
     assert list(failed) == [C.NAMES_NAME]
@@ -189,7 +180,7 @@ def test_an_unnamed_free_joint_fails_the_joint_name_check(capsys, tmp_path):
 
 def test_a_role_naming_no_joint_fails_the_role_check(capsys, tmp_path):
     profile = _profile_copy(tmp_path, "h1", {'knee = "{side}_knee"': 'knee = "{side}_shin"'})
-    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    code, out, _ = run_main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1
     failed = _failed(out)
     assert C.ROLES_NAME in failed
@@ -199,7 +190,7 @@ def test_a_role_naming_no_joint_fails_the_role_check(capsys, tmp_path):
 def test_a_check_that_raises_fails_with_its_reason_and_the_others_still_run(capsys, tmp_path):
     """Without hip-yaw joints the hip-yaw outputs have no joint: the checks that need the outputs raise."""
     profile = _profile_copy(tmp_path, "h1", {'hip_yaw = "{side}_hip_yaw"': 'hip_yaw = "{side}_yaw"'})
-    code, out, _ = _main(["check-robot", profile, "--no-walk"], capsys)
+    code, out, _ = run_main(["check-robot", profile, "--no-walk"], capsys)
     assert code == 1
     lines = _lines(out)
     assert list(lines) == MODEL_AND_TICK_NAMES
@@ -230,7 +221,7 @@ def test_tiny_torque_limits_fail_the_pbc_tick(tmp_path):
 
 @pytest.mark.slow
 def test_tiny_torque_limits_fail_the_walk(capsys, tmp_path):
-    code, out, _ = _main(["check-robot", _weak_rabbit(tmp_path)], capsys)
+    code, out, _ = run_main(["check-robot", _weak_rabbit(tmp_path)], capsys)
     assert code == 1
     failed = _failed(out)
     assert set(failed) == {CC.tick_name("pbc"), CC.WALK_NAME}
@@ -264,7 +255,7 @@ def test_bad_input_exits_2_with_one_line_before_any_check(capsys, tmp_path, argv
         "bad_joint": _profile_copy(tmp_path, "h1", {"left_knee = 0.8": "left_shin = 0.8"}),
         "bad_gain": _profile_copy(tmp_path, "h1", {"output_weight = ": "output_gain = "}),
     }
-    code, out, err = _main([a.format(**fill) for a in argv], capsys)
+    code, out, err = run_main([a.format(**fill) for a in argv], capsys)
     assert code == 2
     assert out == ""  # no check ran
     assert len(err.strip().splitlines()) == 1 and message in err
