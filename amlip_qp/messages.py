@@ -105,13 +105,30 @@ class Command:
         ):
             # anything else: the constructor's checks (and errors) through replace (a finite sum: both finite)
             return replace(self, vx_mps=vx_mps, turn_rate_radps=turn_rate_radps)
+        return self._with_motion(vx_mps, self.vy_mps, turn_rate_radps)
+
+    def with_velocity(self, vx_mps: float, vy_mps: float) -> Command:
+        """``dataclasses.replace(self, vx_mps=vx_mps, vy_mps=vy_mps)`` of a Command, cheaper (tested):
+        the speed-corrected command, every tick while the command or the correction changes.
+
+        Only the two new values are checked, as in :meth:`with_speeds`.
+
+        Raises:
+            InputError: As the constructor, for the two values.
+        """
+        if type(vx_mps) is not float or type(vy_mps) is not float or not math.isfinite(vx_mps + vy_mps):
+            return replace(self, vx_mps=vx_mps, vy_mps=vy_mps)  # the constructor's checks and errors
+        return self._with_motion(vx_mps, vy_mps, self.turn_rate_radps)
+
+    def _with_motion(self, vx_mps: float, vy_mps: float, turn_rate_radps: float) -> Command:
+        """This command with the three motion fields replaced, unchecked (the callers check them)."""
         new = object.__new__(Command)
         put_T, put_H, put_cl, put_vx, put_vy, put_turn, put_w = _COMMAND_SETTERS  # the frozen fields' own setters
         put_T(new, self.step_time_s)
         put_H(new, self.com_height_m)
         put_cl(new, self.clearance_m)
         put_vx(new, vx_mps)
-        put_vy(new, self.vy_mps)
+        put_vy(new, vy_mps)
         put_turn(new, turn_rate_radps)
         put_w(new, self.step_width_m)
         return new

@@ -54,6 +54,20 @@ def test_with_speeds_is_replace_checking_the_two_speeds():
             c.with_speeds(vx, turn)
 
 
+def test_with_velocity_is_replace_checking_the_two_speeds():
+    from dataclasses import replace
+
+    c = cmd(turn_rate_radps=0.2, vy_mps=0.1)
+    for vx, vy in ((1.25, -0.0), (-0.0, 0.3), (np.float64(0.7), 2)):
+        got, ref = c.with_velocity(vx, vy), replace(c, vx_mps=vx, vy_mps=vy)
+        assert type(got) is type(ref) and got == ref and repr(got) == repr(ref)
+        assert [type(getattr(got, f)) for f in got.__slots__] == [type(getattr(ref, f)) for f in ref.__slots__]
+    assert math.copysign(1.0, c.with_velocity(0.5, -0.0).vy_mps) == -1.0
+    for vx, vy, match in ((np.nan, 0.0, "vx_mps"), (1.0, -np.inf, "vy_mps"), (0.0, False, "vy_mps")):
+        with pytest.raises(InputError, match=f"Command.{match} must be a finite number"):
+            c.with_velocity(vx, vy)
+
+
 def test_with_step_time_is_replace_checking_the_time():
     from dataclasses import replace
 

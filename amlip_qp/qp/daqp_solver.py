@@ -44,46 +44,54 @@ _SOLVED = (1, 2)
 
 
 _max_reduce = np.maximum.reduce
+_minimum, _maximum, _subtract, _dot, _copyto = np.minimum, np.maximum, np.subtract, np.dot, np.copyto
 
 
 class _Shape:
-    """The stacked arrays and the ``daqp.Model`` of one problem shape."""
+    """The stacked arrays and the ``daqp.Model`` of one problem shape.
+
+    The blocks of the stacked arrays are views made once: per call, slicing would cost more than
+    the small copies themselves."""
 
     def __init__(self, problem: QPProblem):
         n, n_in, n_eq = problem.n, problem.n_in, problem.n_eq
+        m = n + n_in + n_eq
         self.A = np.zeros((n_in + n_eq, n))
-        self.bu = np.zeros(n + n_in + n_eq)
-        self.bl = np.zeros(n + n_in + n_eq)
-        self.sense = np.zeros(n + n_in + n_eq, dtype=np.intc)
+        self.bu = np.zeros(m)
+        self.bl = np.zeros(m)
+        self.sense = np.zeros(m, dtype=np.intc)
         self.sense[n + n_in :] = SENSE_EQUALITY
         self.model: Any = None
         # the residual check's buffers: z = (x, C x, A x), then the bounds' violations
-        self.z = np.zeros(n + n_in + n_eq)
-        self.gap = np.zeros(n + n_in + n_eq)
+        self.z = np.zeros(m)
+        self.gap = np.zeros(m)
+        self._A_in, self._A_eq = self.A[:n_in], self.A[n_in:]
+        self._bu_box, self._bu_in, self._bu_eq = self.bu[:n], self.bu[n : n + n_in], self.bu[n + n_in :]
+        self._bl_box, self._bl_in, self._bl_eq = self.bl[:n], self.bl[n : n + n_in], self.bl[n + n_in :]
+        self._z_x, self._z_rows = self.z[:n], self.z[n:]
 
     def violation(self, x: np.ndarray) -> float:
         """Largest violation at ``x`` of the problem last :meth:`fill`-ed (bounds, inequalities,
         equalities; the stacked rows and bounds DAQP solved, so an infinite bound, held as
         :data:`BIG_BOUND`, is never violated): :meth:`QPProblem.residuals
         <amlip_qp.qp.problem.QPProblem.residuals>`' largest entry, in one product and two passes."""
-        z, gap, n = self.z, self.gap, x.shape[0]
-        z[:n] = x
-        np.dot(self.A, x, out=z[n:])
-        np.subtract(self.bl, z, out=gap)
+        z, gap = self.z, self.gap
+        _copyto(self._z_x, x)
+        _dot(self.A, x, out=self._z_rows)
+        _subtract(self.bl, z, out=gap)
         below = _max_reduce(gap)
-        np.subtract(z, self.bu, out=gap)
+        _subtract(z, self.bu, out=gap)
         return max(below, _max_reduce(gap), 0.0)
 
     def fill(self, p: QPProblem) -> None:
-        n, n_in = p.n, p.n_in
-        self.A[:n_in] = p.C
-        self.A[n_in:] = p.A
-        np.minimum(p.ub, BIG_BOUND, out=self.bu[:n])
-        np.minimum(p.u, BIG_BOUND, out=self.bu[n : n + n_in])
-        self.bu[n + n_in :] = p.b
-        np.maximum(p.lb, -BIG_BOUND, out=self.bl[:n])
-        np.maximum(p.l, -BIG_BOUND, out=self.bl[n : n + n_in])
-        self.bl[n + n_in :] = p.b
+        _copyto(self._A_in, p.C)
+        _copyto(self._A_eq, p.A)
+        _minimum(p.ub, BIG_BOUND, out=self._bu_box)
+        _minimum(p.u, BIG_BOUND, out=self._bu_in)
+        _copyto(self._bu_eq, p.b)
+        _maximum(p.lb, -BIG_BOUND, out=self._bl_box)
+        _maximum(p.l, -BIG_BOUND, out=self._bl_in)
+        _copyto(self._bl_eq, p.b)
 
 
 class DAQPSolver:

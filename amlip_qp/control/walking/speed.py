@@ -12,7 +12,7 @@ adds the correction to the command the planner sees;
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -136,6 +136,6 @@ class CorrectedCommand:
         key = (command, cx, cy)
         corrected = self._corrected
         if key != self._key or corrected is None:
-            corrected = replace(command, vx_mps=command.vx_mps + cx, vy_mps=command.vy_mps + cy)
+            corrected = command.with_velocity(command.vx_mps + cx, command.vy_mps + cy)
             self._key, self._corrected = key, corrected
         return corrected
