@@ -93,10 +93,8 @@ class Command:
         """``dataclasses.replace(self, vx_mps=vx_mps, turn_rate_radps=turn_rate_radps)`` of a Command, cheaper (tested).
 
         Only the two new values are checked (the others were when ``self`` was made, and
-        neither takes part in the checks between fields): a run's commands while the speed ramps.
-
-        Raises:
-            InputError: As the constructor, for the two values.
+        neither takes part in the checks between fields), with the constructor's InputError:
+        a run's commands while the speed ramps.
         """
         if (
             type(vx_mps) is not float
@@ -108,14 +106,8 @@ class Command:
         return self._with_motion(vx_mps, self.vy_mps, turn_rate_radps)
 
     def with_velocity(self, vx_mps: float, vy_mps: float) -> Command:
-        """``dataclasses.replace(self, vx_mps=vx_mps, vy_mps=vy_mps)`` of a Command, cheaper (tested):
-        the speed-corrected command, every tick while the command or the correction changes.
-
-        Only the two new values are checked, as in :meth:`with_speeds`.
-
-        Raises:
-            InputError: As the constructor, for the two values.
-        """
+        """``dataclasses.replace(self, vx_mps=vx_mps, vy_mps=vy_mps)``, cheaper (tested; the speed-corrected
+        command). Only the two new values are checked, as in :meth:`with_speeds` (InputError)."""
         if type(vx_mps) is not float or type(vy_mps) is not float or not math.isfinite(vx_mps + vy_mps):
             return replace(self, vx_mps=vx_mps, vy_mps=vy_mps)  # the constructor's checks and errors
         return self._with_motion(vx_mps, vy_mps, self.turn_rate_radps)
