@@ -88,8 +88,12 @@ def sample_mpc_qp(rng, robot, n):
         lat * rng.uniform(-np.pi, np.pi, n), lat * rng.uniform(-0.3, 0.3, n), rng.choice([-1.0, 1.0], n),
         m, H, T, rng.uniform(*r["W"], n), np.full(n, 9.81), tau_nom, tau_lo, tau_hi, tau_bar,
         0.55 * H, 0.5 * H if lat else big, 0.1 * H if lat else big, H, 0.05 * H if lat else -big,
-        0.75 * H if lat else big, rng.uniform(0.5, 10, n), rng.uniform(0.5, 3, n),
+        0.75 * H if lat else big, rng.uniform(0.5, 10, n), rng.uniform(0.5, 3, n), 0.6 * T, 1.4 * T,
+        rng.uniform(0.5, 100, n),
     ]  # fmt: skip
+    cols += [rng.uniform(0.6, 1.4, n) * T for _ in range(step_mpc.MPC_STEPS)]  # T_bar_j
+    for _ in range(step_mpc.MPC_STEPS):  # d_bar_j
+        cols += [rng.uniform(-0.2, 0.6, n), lat * rng.uniform(-0.4, 0.4, n)]
     cols += [rng.uniform(-0.15, 0.15, n) for _ in range(step_mpc.MPC_STEPS)]  # dz_j
     for j in range(step_mpc.MPC_STEPS):
         x0, y0 = rng.uniform(-0.5, 1.5, n) * (j + 1), rng.uniform(-0.5, 0.5, n)

@@ -92,19 +92,28 @@ def test_foothold_region_is_respected():
     assert probe.last_plan.solved
 
 
-def test_linearisation_is_exact_at_its_point():
-    """The QP's affine prediction of L at the end of the next step at sigma = sigma_bar equals the flow."""
-    u = np.zeros(len(S.MPC_QP_INPUTS))
+def _qp_inputs(**vals) -> np.ndarray:
+    """MPC_QP's inputs: ``vals`` by name, no foothold boxes, the rest 0."""
     names = S.MPC_QP_INPUTS
-    vals = dict(p_st_x=0.05, p_st_y=-0.1, L_x=1.5, L_y=20.0, m=M, H=H, T=T, W=0.2, g=G, next_stance_sign=1.0,
-                tau_nom=0.2, tau_lo=0.1, tau_hi=0.3, tau_bar=0.17, reach_x=1.0, reach_out=1.0, reach_in=1.0,
-                step_x=1.0, width_min=0.0, step_out=1.0, w_time=0.0, w_terminal=1.0)  # fmt: skip
+    u = np.zeros(len(names))
     for k, v in vals.items():
         u[names.index(k)] = v
     u[names.index("x_lo_1") :: 4] = -S.NO_BOUND
     u[names.index("x_hi_1") :: 4] = S.NO_BOUND
     u[names.index("y_lo_1") :: 4] = -S.NO_BOUND
     u[names.index("y_hi_1") :: 4] = S.NO_BOUND
+    return u
+
+
+LINEARISED = dict(p_st_x=0.05, p_st_y=-0.1, L_x=1.5, L_y=20.0, m=M, H=H, T=T, W=0.2, g=G, next_stance_sign=1.0,
+                  tau_nom=0.2, tau_lo=0.1, tau_hi=0.3, tau_bar=0.17, reach_x=1.0, reach_out=1.0, reach_in=1.0,
+                  step_x=1.0, width_min=0.0, step_out=1.0, w_time=0.0, w_terminal=1.0, T_lo=0.6 * T, w_time_later=0.0,
+                  T_hi=1.4 * T)  # fmt: skip
+
+
+def test_linearisation_is_exact_at_its_point():
+    """The QP's affine prediction of the CoM over the next foot at sigma = sigma_bar equals the flow."""
+    u = _qp_inputs(**LINEARISED, **{f"T_bar_{j}": T for j in range(1, S.MPC_STEPS + 1)})
     Hq, g, Cq, lower, upper = S.split_qp(S.mpc_qp(u))
     lb, hi, ub = lower[: S.N_VAR], upper[S.N_VAR :], upper[: S.N_VAR]
     # row 0 is p_sw,x of touchdown 1 in the heading frame (heading 0) minus d_1x: at d = 0 and
@@ -115,8 +124,39 @@ def test_linearisation_is_exact_at_its_point():
     p_end = math.cosh(LAM * 0.17) * 0.05 + math.sinh(LAM * 0.17) / (M * H * LAM) * 20.0
     assert Cq[0] @ x + (1.0 - hi[0]) == pytest.approx(p_end, abs=1e-12)  # reach_x = 1 bound
     assert lb[0] == pytest.approx(math.exp(LAM * 0.1)) and ub[0] == pytest.approx(math.exp(LAM * 0.3))
+    assert lb[S.I_SIGMA_LATER] == pytest.approx(math.exp(LAM * 0.6 * T))
+    assert ub[-1] == pytest.approx(math.exp(LAM * 1.4 * T))
     np.testing.assert_allclose(Hq, Hq.T, atol=1e-12)
-    assert np.all(np.linalg.eigvalsh(Hq[1:, 1:]) > 0.0)
+    # the steps' block is positive definite (the L errors); the later durations' needs w_time > 0
+    steps = slice(1, S.I_SIGMA_LATER)
+    assert np.all(np.linalg.eigvalsh(Hq[steps, steps]) > 0.0)
+
+
+def _touchdown_2_prediction(T_1: float, d_1x: float) -> tuple[float, float]:
+    """(the QP's p(T_2-) - d_2x at d_2 = 0, the flow's) after the current step of 0.17 s at its
+    linearisation point, touchdown 1 with the step (d_1x, 0.1) and a step of duration ``T_1``,
+    the QP linearised about T_bar_1 = 0.25 s and d_bar_1 = (0.2, 0.1)."""
+    u = _qp_inputs(**LINEARISED, T_bar_1=0.25, d_bar_x_1=0.2, d_bar_y_1=0.1,
+                   **{f"T_bar_{j}": T for j in range(2, S.MPC_STEPS + 1)})  # fmt: skip
+    _, _, Cq, _, upper = S.split_qp(S.mpc_qp(u))
+    x = np.zeros(S.N_VAR)
+    x[0], x[1], x[2], x[S.I_SIGMA_LATER] = math.exp(LAM * 0.17), d_1x, 0.1, math.exp(LAM * T_1)
+    c, s_ = math.cosh(LAM * 0.17), math.sinh(LAM * 0.17)
+    p1 = c * 0.05 + s_ / (M * H * LAM) * 20.0 - d_1x  # after touchdown 1 (v_z = 0, flat)
+    L1 = M * H * LAM * s_ * 0.05 + c * 20.0
+    p2 = math.cosh(LAM * T_1) * p1 + math.sinh(LAM * T_1) / (M * H * LAM) * L1
+    row = S.ROWS_PER_STEP  # touchdown 2's reach row: p_sw,x = p(T_2-) - d_2x (reach_x = 1)
+    return float(Cq[row] @ x + (1.0 - upper[S.N_VAR + row])), p2
+
+
+def test_later_step_linearisation_is_exact_at_its_duration_and_second_order_about_it():
+    """A later step's flow: exact where sigma_1 = sigma_bar_1, whatever the steps; at the last
+    plan's steps its error is second order in the duration's change."""
+    for d_1x in (0.2, 0.31, -0.1):
+        got, want = _touchdown_2_prediction(0.25, d_1x)
+        assert got == pytest.approx(want, abs=1e-12)
+    errors = [abs(np.subtract(*_touchdown_2_prediction(0.25 + dt, 0.2))) for dt in (0.04, 0.02)]
+    assert errors[0] > 1e-6 and errors[0] / errors[1] == pytest.approx(4.0, rel=0.1)
 
 
 def test_a_late_step_keeps_its_planned_duration():

@@ -11,7 +11,7 @@ from amlip_qp.codegen import symbolic
 
 
 @pytest.mark.parametrize(
-    "name, n_in, n_out", [("alip_plan", 16, 8), ("swing_reference", 15, 30), ("alip_mpc_qp", 47, 372)]
+    "name, n_in, n_out", [("alip_plan", 16, 8), ("swing_reference", 15, 30), ("alip_mpc_qp", 62, 568)]
 )
 def test_function_signature_is_dense(name, n_in, n_out):
     f = symbolic.function(name)

@@ -1,4 +1,4 @@
-"""The step-timing MPC planner: footholds and the current step's duration, several steps ahead.
+"""The step-timing MPC planner: footholds and step durations, several steps ahead.
 
 :class:`MPCPlanner` is a :class:`~amlip_qp.alip.planner.Planner` whose foot placement
 and step duration come from the quadratic program of :mod:`amlip_qp.alip.step_mpc`
@@ -6,10 +6,11 @@ and step duration come from the quadratic program of :mod:`amlip_qp.alip.step_mp
 
 1. builds the QP (``MPC_QP``: the numpy reference, or the generated C passed as
    ``mpc_fn``) from the estimate, the command and the limits (:class:`MPCSettings`),
-   linearised about the last planned duration;
+   linearised about the last planned durations and steps (those of the tick before; at a
+   step's start the previous step's plan, shifted by one step);
 2. solves it with ``solve_fn`` (the solver is the caller's: this package is numpy
    only; :mod:`amlip_qp.control.mpc` passes a hot-started DAQP), re-linearising
-   ``iterations`` times at most;
+   ``iterations`` times at most, while a planned duration moves;
 3. writes the planned duration ``T_0`` on the step clock
    (:meth:`~amlip_qp.alip.clock.StepClock.plan_step_time`) and runs the one-step
    planner's tick with ``T = T_0`` (phase, prediction, references) and the first
@@ -49,6 +50,9 @@ SolveFunction = Callable[..., np.ndarray]
 #: A foothold region: world box ``(x_lo, x_hi, y_lo, y_hi)`` and the ground height ``z`` in it, m.
 Region = tuple[float, float, float, float, float]
 _I_TAU_BAR = S.MPC_QP_INPUTS.index("tau_bar")
+_I_T_BAR = S.MPC_QP_INPUTS.index("T_bar_1")
+_I_D_BAR = S.MPC_QP_INPUTS.index("d_bar_x_1")
+_I_REGIONS = S.MPC_QP_INPUTS.index("dz_1")
 #: A planned duration this close to the command's ``T`` (s) is ``T`` itself.
 NOMINAL_TOL_S = 1e-9
 #: The region inputs without regions: flat, boxes of +-NO_BOUND.
@@ -60,8 +64,9 @@ class MPCSettings:
     """Limits and weights of the step-timing MPC (docs/ALIP_MPC.md). Lengths in units of ``H``.
 
     Attributes:
-        step_time_min: shortest current step, in units of the command's ``T`` (> 0).
-        step_time_max: longest current step, in units of ``T`` (>= step_time_min).
+        step_time_min: shortest step (the current one and every later one), in units of the
+            command's ``T`` (> 0).
+        step_time_max: longest step, in units of ``T`` (>= step_time_min).
         min_time_left_s: the least time left a re-plan may give the current step, s (>= 0).
         reach_x: ``|p_sw|`` along the heading at touchdown, at most this times ``H`` (> 0).
         reach_out: the landing foot's lateral distance outward from the CoM, at most this times ``H``.
@@ -71,6 +76,7 @@ class MPCSettings:
             (feet not crossing; >= 0).
         step_out: the step's lateral component at most this times ``H`` (> width_min).
         weight_time: the cost of ``(T_0 - T)^2`` against ``(L error / (m H))^2``, 1/s^2 (> 0).
+        weight_time_later: the cost of each later step's ``(T_j - T)^2``, 1/s^2 (> 0).
         weight_terminal: the last step's weight against 1 for the others (> 0).
         iterations: linearisations per tick (>= 1).
     """
@@ -86,10 +92,20 @@ class MPCSettings:
     step_out: float = 0.75
     weight_time: float = 4.0
     weight_terminal: float = 1.0
+    weight_time_later: float = 400.0
     iterations: int = 2
 
     def __post_init__(self):
-        for name in ("step_time_min", "reach_x", "reach_out", "step_x", "step_out", "weight_time", "weight_terminal"):
+        for name in (
+            "step_time_min",
+            "reach_x",
+            "reach_out",
+            "step_x",
+            "step_out",
+            "weight_time",
+            "weight_terminal",
+            "weight_time_later",
+        ):
             C.positive(f"MPCSettings.{name}", getattr(self, name), "")
         for name in ("min_time_left_s", "reach_in", "width_min"):
             C.non_negative(f"MPCSettings.{name}", getattr(self, name), "")
@@ -110,12 +126,15 @@ class MPCPlan:
     Attributes:
         step_time_s: the current step's planned duration ``T_0``, s.
         footholds_m: ``(MPC_STEPS, 2)`` planned contact points ``r_1 .. r_N`` (x, y), world, m.
+        later_step_times_s: ``(MPC_STEPS,)`` planned durations ``T_1 .. T_N`` of the steps after
+            each of those touchdowns, s.
         iterations: linearisations used.
         solved: False when the solve failed and the one-step law planned this tick.
     """
 
     step_time_s: float
     footholds_m: np.ndarray
+    later_step_times_s: np.ndarray
     iterations: int
     solved: bool
 
@@ -164,6 +183,9 @@ class MPCPlanner(Planner):
         #: The last tick's solution (``None`` before the first update of a step).
         self.last_plan: MPCPlan | None = None
         self._T_plan: float | None = None
+        # the last plan's later durations T_j (s; NaN: the nominal T) and steps d_j (m, world)
+        self._T_later: np.ndarray | None = None
+        self._d_later: np.ndarray | None = None
         kwargs = dict(planner_kwargs)
         if g is not None:
             kwargs["g"] = g
@@ -173,13 +195,18 @@ class MPCPlanner(Planner):
         """As :meth:`Planner.reset`; also forgets the planned duration and the failure count."""
         super().reset(heading_rad)
         self._T_plan = None
+        self._T_later = self._d_later = None
         self.last_plan = None
         self.failures = 0
 
     def start_step(self, stance: str, t_start_s: float, h0_start, heading_rad: float | None = None) -> None:
-        """As :meth:`Planner.start_step`; the new step's duration is planned afresh."""
+        """As :meth:`Planner.start_step`; the new step's duration is planned afresh, the later
+        ones are linearised about the last plan's, shifted by one step."""
         super().start_step(stance, t_start_s, h0_start, heading_rad)
         self._T_plan = None
+        if self._T_later is not None and self._d_later is not None:
+            self._T_later = np.append(self._T_later[1:], math.nan)
+            self._d_later = np.concatenate([self._d_later[1:], self._d_later[-1:]])
         self.last_plan = None
 
     def update(
@@ -273,19 +300,26 @@ class MPCPlanner(Planner):
             vy, W = command.vy_mps * factor, command.step_width_m
             heading, turn = self.heading_next_rad, command.turn_rate_radps * T
             lateral = (st.reach_out * H, st.reach_in * H, st.width_min * H, st.step_out * H)
+        N = S.MPC_STEPS
+        T_lo, T_hi = st.step_time_min * T, st.step_time_max * T
         u = self._u_mpc
-        n_fixed = len(S.MPC_QP_INPUTS) - 5 * S.MPC_STEPS
-        u[:n_fixed] = (
+        u[:_I_T_BAR] = (
             p0, p1, L0, L1, v_z, command.vx_mps * factor, vy, heading, turn, sign, m, H, T, W, g,
             tau_nom, tau_lo, tau_hi, tau_bar, st.reach_x * H, lateral[0], lateral[1], st.step_x * H,
-            lateral[2], lateral[3], st.weight_time, st.weight_terminal,
+            lateral[2], lateral[3], st.weight_time, st.weight_terminal, T_lo, T_hi, st.weight_time_later,
         )  # fmt: skip
-        u[n_fixed:] = region_inputs
+        if self._T_later is None or self._d_later is None:
+            u[_I_T_BAR:_I_D_BAR] = T
+            u[_I_D_BAR:_I_REGIONS] = 0.0
+        else:
+            u[_I_T_BAR:_I_D_BAR] = np.clip(np.where(np.isnan(self._T_later), T, self._T_later), T_lo, T_hi)
+            u[_I_D_BAR:_I_REGIONS] = self._d_later.reshape(-1)
+        u[_I_REGIONS:] = region_inputs
         if terrain is not None:
-            u[n_fixed] = terrain.dz_next_m  # the first transfer's height: the one-step law's
+            u[_I_REGIONS] = terrain.dz_next_m  # the first transfer's height: the one-step law's
         if planar:
-            u[n_fixed + S.MPC_STEPS + 2 :: 4] = -big
-            u[n_fixed + S.MPC_STEPS + 3 :: 4] = big
+            u[_I_REGIONS + N + 2 :: 4] = -big
+            u[_I_REGIONS + N + 3 :: 4] = big
         x = None
         it = 0
         t0 = time.perf_counter_ns()
@@ -295,17 +329,21 @@ class MPCPlanner(Planner):
                 if y.size != S.MPC_QP_N_OUT:
                     raise InputError(f"mpc_fn returned {y.size} values; MPC_QP has {S.MPC_QP_N_OUT} outputs")
                 x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
-                tau = math.log(max(x[0], 1e-300)) / l
-                if abs(tau - u[_I_TAU_BAR]) < 1e-9 or it == st.iterations:
+                taus = np.log(np.maximum(x[[0, *range(S.I_SIGMA_LATER, S.N_VAR)]], 1e-300)) / l
+                moved = max(abs(taus[0] - u[_I_TAU_BAR]), float(np.max(np.abs(taus[1:] - u[_I_T_BAR:_I_D_BAR]))))
+                if moved < 1e-9 or it == st.iterations:
                     break
-                u[_I_TAU_BAR] = min(max(tau, tau_lo), tau_hi)  # re-linearise at the new duration
+                # re-linearise at the new durations and steps
+                u[_I_TAU_BAR] = min(max(taus[0], tau_lo), tau_hi)
+                u[_I_T_BAR:_I_D_BAR] = np.clip(taus[1:], T_lo, T_hi)
+                u[_I_D_BAR:_I_REGIONS] = x[1 : S.I_SIGMA_LATER]
         except QPError:
             x = None
         self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if x is None or not math.isfinite(sum(x.tolist())):
             self.failures += 1
             T_kept = T if self._T_plan is None else self._T_plan
-            return MPCPlan(T_kept, np.full((S.MPC_STEPS, 2), np.nan), it, False)
+            return MPCPlan(T_kept, np.full((N, 2), np.nan), np.full(N, np.nan), it, False)
         if committed and self._T_plan is not None:
             T_plan = self._T_plan
         else:
@@ -313,6 +351,9 @@ class MPCPlanner(Planner):
             # the nominal end to the solver's precision is the nominal end (the one-step law's phase, bit for bit)
             T_plan = T if abs(t_in + tau - T) < NOMINAL_TOL_S else t_in + tau
         self._T_plan = T_plan
-        steps = x[1:].reshape(S.MPC_STEPS, 2)
+        T_later = np.clip(np.log(np.maximum(x[S.I_SIGMA_LATER :], 1e-300)) / l, T_lo, T_hi)
+        T_later[np.abs(T_later - T) < NOMINAL_TOL_S] = T  # the nominal duration, as for the current step
+        steps = x[1 : S.I_SIGMA_LATER].reshape(N, 2)
+        self._T_later, self._d_later = T_later, steps.copy()
         footholds = r0[:2] + np.cumsum(steps, axis=0)
-        return MPCPlan(T_plan, footholds, it, True)
+        return MPCPlan(T_plan, footholds, T_later, it, True)

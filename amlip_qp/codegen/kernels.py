@@ -7,7 +7,7 @@ Use::
     kernels = load_kernels()          # compiles on first use, then cached
     y = kernels.alip_plan(u16)        # 16 inputs -> 8 outputs
     h = kernels.swing_reference(u15)  # 15 inputs -> 30 outputs
-    q = kernels.alip_mpc_qp(u47)      # the step-timing MPC's QP: 47 inputs -> 372 outputs
+    q = kernels.alip_mpc_qp(u62)      # the step-timing MPC's QP: 62 inputs -> 568 outputs
     kernels.backend                   # "c" (compiled) or "casadi" (fallback)
 
 Layouts and units are those of :mod:`amlip_qp.alip.kernels`. The library is
@@ -120,7 +120,7 @@ class Kernels:
     Attributes:
         alip_plan: :class:`FastFunction` ``u[16] -> y[8]``.
         swing_reference: :class:`FastFunction` ``u[15] -> y[30]``.
-        alip_mpc_qp: :class:`FastFunction` ``u[47] -> y[372]``, the step-timing MPC's QP
+        alip_mpc_qp: :class:`FastFunction` ``u[62] -> y[568]``, the step-timing MPC's QP
             (:mod:`amlip_qp.alip.step_mpc`).
         backend: ``"c"`` or ``"casadi"``.
         library_path: the compiled library, or ``None`` on the fallback.

@@ -12,7 +12,7 @@ vector) and one dense output ``y``:
   ``kernels.ALIP_PLAN_OUTPUTS``; SI units, see :mod:`amlip_qp.alip.kernels`).
 - ``swing_reference``: ``u[15] -> y[30]`` (layout:
   ``kernels.SWING_REFERENCE_INPUTS``; ``h_d``, ``dh_d/dt``, ``d2h_d/dt2``).
-- ``alip_mpc_qp``: ``u[47] -> y[372]``, the step-timing MPC's QP (layout:
+- ``alip_mpc_qp``: ``u[62] -> y[568]``, the step-timing MPC's QP (layout:
   ``step_mpc.MPC_QP_INPUTS``, ``step_mpc.MPC_QP_BLOCKS``; :mod:`amlip_qp.alip.step_mpc`).
 
 Physical parameters (mass, CoM height, step time, width, gravity, clearance)

@@ -109,7 +109,7 @@ class WalkingController:
             (default mode then; given with another mode: InputError).
         planner: ``"one-step"`` (default): the one-step deadbeat law
             (:class:`~amlip_qp.alip.planner.Planner`); ``"mpc"``: the step-timing MPC, footholds
-            four steps ahead and the current step's duration (:class:`~amlip_qp.alip.mpc_planner.MPCPlanner`,
+            and step durations four steps ahead (:class:`~amlip_qp.alip.mpc_planner.MPCPlanner`,
             docs/ALIP_MPC.md), which plans the step's end on the step clock.
         mpc_settings: The MPC's limits and weights (:class:`~amlip_qp.alip.mpc_planner.MPCSettings`;
             ``planner="mpc"`` only).
