@@ -51,10 +51,10 @@ def test_qp_walks_the_terrain_at_the_commanded_speed(name):
     assert s["fallback_ticks"] == 0
 
 
-#: Starts of the stairs walk other than the scenario's own: moved forward (world x, m) and raised (m).
-#: Moved 0.04 and 0.28 m the one-step law at the fixed step time ran off the stairs at 0.566 and
-#: 0.621 m/s; the raised start is one of ``examples/raised_starts.py``'s.
-STAIRS_STARTS = ((0.04, 0.0), (0.28, 0.0), (0.0, 13e-12))
+#: Starts of the stairs walk other than the scenario's own: moved forward (world x, m) and raised (m), as
+#: ``examples/raised_starts.py --forward 0.04`` (k = 1, 7) and without it (k = 13) make them. Moved 0.04
+#: and 0.28 m the one-step law at the fixed step time ran off the stairs at 0.566 and 0.621 m/s.
+STAIRS_STARTS = ((1 * 0.04, 0.0), (7 * 0.04, 0.0), (0.0, 13 * 1e-12))
 
 
 @pytest.mark.parametrize(("forward_m", "raised_m"), STAIRS_STARTS)
