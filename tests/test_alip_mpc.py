@@ -15,6 +15,7 @@ from alip_point_mass import LAM, OUTPUTS, REACH_M, G, H, M, T, Walk, reach_clip_
 from amlip_qp.alip import Planner, StepClock
 from amlip_qp.alip import step_mpc as S
 from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
+from amlip_qp.alip.step_timing import StepTiming
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.messages import Command
 from amlip_qp.qp.small_qp import SmallQPSolver
@@ -214,6 +215,8 @@ def test_bad_planner_arguments_raise():
         p.update(est(), cmd(), regions=[(0, 1, 0, 1, 0)])
     with pytest.raises(InputError, match="x_lo <= x_hi"):
         p.update(est(), cmd(), regions=[(1, 0, 0, 1, 0)] * 4)
+    with pytest.raises(InputError, match="plans the step's duration itself"):
+        p.update(est(), cmd(), timing=StepTiming())
 
 
 def test_a_failed_solve_falls_back_to_the_one_step_law():

@@ -192,3 +192,20 @@ def test_mpc_regions_are_the_treads_less_the_footprint():
     assert turned[0][0] < -100.0 and turned[0][1] > 100.0
     assert g.regions(np.array([[1.2, 0.1]]), math.radians(45.0)) is None
     assert GroundPredictor("blind").regions(np.array([[1.2, 0.1]]), 0.0) is None
+
+
+def test_the_one_step_planner_times_its_steps_only_in_the_aware_mode():
+    """Flat and blind ground give the planner no timing (their walks are the one-step law's at ``T``);
+    the aware mode gives the one-step planner the step timing of a moved foothold, and the MPC none (it
+    plans its own duration)."""
+    from amlip_qp.alip import Planner, StepClock
+    from amlip_qp.control.mpc import make_mpc_planner
+    from amlip_qp.control.walking.planners import FOOTHOLD_TIMING, extra
+
+    names = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+    one = Planner(names, 31.0)
+    assert extra(one, GroundPredictor()) == extra(one, GroundPredictor("blind")) == {}
+    assert extra(one, GroundPredictor("aware", stairs_up, BLADE_M)) == {"timing": FOOTHOLD_TIMING}
+    assert FOOTHOLD_TIMING.step_time_min == 1.0 and FOOTHOLD_TIMING.step_time_max > 1.0
+    mpc = make_mpc_planner(names, 31.0, backend="numpy", clock=StepClock())
+    assert extra(mpc, GroundPredictor("aware", stairs_up, BLADE_M)) == {}  # no plan yet: no regions either

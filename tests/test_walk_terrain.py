@@ -49,3 +49,31 @@ def test_qp_walks_the_terrain_at_the_commanded_speed(name):
     assert abs(vx - scenario.vx.final_mps) <= SPEED_TOLERANCE_MPS, f"{name}: mean speed {vx:.3f} m/s"
     assert abs(vy) <= SPEED_TOLERANCE_MPS, f"{name}: lateral drift {vy:.3f} m/s"
     assert s["fallback_ticks"] == 0
+
+
+#: Starts of the stairs walk other than the scenario's own: moved forward (world x, m) and raised (m), as
+#: ``examples/raised_starts.py --forward 0.04`` (k = 1, 7) and without it (k = 13) make them. Moved 0.04
+#: and 0.28 m the one-step law at the fixed step time ran off the stairs at 0.566 and 0.621 m/s.
+STAIRS_STARTS = ((1 * 0.04, 0.0), (7 * 0.04, 0.0), (0.0, 13 * 1e-12))
+
+
+@pytest.mark.parametrize(("forward_m", "raised_m"), STAIRS_STARTS)
+def test_qp_walks_the_stairs_from_other_starts_with_its_steps_timed(forward_m, raised_m):
+    """The stairs from a start that meets the edges with another phase of the gait: no fall, the speed
+    within the band, and steps onto a tread further than the law wanted take longer than ``T`` (the step
+    timing of a moved foothold, :mod:`amlip_qp.alip.step_timing`)."""
+    from amlip_qp.sim.reports.summary import mean_velocity_heading
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
+
+    scenario = SCENARIOS["cassie-stairs-10cm"]
+    sim = build_simulation(scenario, "qp")
+    sim.data.qpos[0] += forward_m
+    sim.data.qpos[2] += raised_m
+    res = sim.run(scenario.duration_s, log="summary")
+    assert not res.fell, f"fell at {res.fall_time_s} s"
+    vx = float(mean_velocity_heading(res, 3.0)[0])
+    assert abs(vx - scenario.vx.final_mps) <= SPEED_TOLERANCE_MPS, f"mean speed {vx:.3f} m/s"
+    T = 0.3  # Cassie's step time at 0.4 m/s
+    durations = [s.t_end_s - s.t_start_s for s in res.steps]
+    assert max(durations) > 1.2 * T  # at the fixed T the scenario's own walk has none over 0.333 s

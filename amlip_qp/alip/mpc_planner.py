@@ -41,6 +41,7 @@ import numpy as np
 from amlip_qp.alip import _checks as C
 from amlip_qp.alip import step_mpc as S
 from amlip_qp.alip.planner import VZ_CLAMP_FRACTION, Planner
+from amlip_qp.alip.step_timing import StepTiming
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
@@ -216,6 +217,8 @@ class MPCPlanner(Planner):
         terrain: TerrainPrediction | None = None,
         foothold: Callable[[float, float, float, float], tuple[float, float]] | None = None,
         regions: Sequence[Region] | None = None,
+        *,
+        timing: StepTiming | None = None,
     ) -> PlannerOutput:
         """Plan with the MPC, then as :meth:`Planner.update` with the planned ``T`` and foothold.
 
@@ -224,7 +227,10 @@ class MPCPlanner(Planner):
             foothold: applied to the MPC's first foothold (as to the law's target in :meth:`Planner.update`).
             regions: ``MPC_STEPS`` foothold regions, one per touchdown ahead (:data:`Region`, world, m),
                 or ``None`` (anywhere, flat).
+            timing: refused (not ``None``): the MPC plans the step's duration itself.
         """
+        if timing is not None:
+            raise InputError("the MPC plans the step's duration itself: pass no timing to MPCPlanner.update")
         if self.clock.stance is None:
             raise InputError("Planner.update called before start_step(); call start_step at the first touchdown")
         if not isinstance(estimate, StateEstimate) or not isinstance(command, Command):

@@ -75,6 +75,7 @@ from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
 from amlip_qp.alip.planner_inputs import check_settings, check_tick, ground_terms
+from amlip_qp.alip.step_timing import StepTiming, retime
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
@@ -248,6 +249,8 @@ class Planner:
         command: Command,
         terrain: TerrainPrediction | None = None,
         foothold: Callable[[float, float, float, float], tuple[float, float]] | None = None,
+        *,
+        timing: StepTiming | None = None,
     ) -> PlannerOutput:
         """Plan the foot placement and evaluate ``h_d`` for one control tick.
 
@@ -261,6 +264,9 @@ class Planner:
             foothold: ``(x, y, heading_next, s) -> (x, y)``: the law's target (world, m) -> where the foot
                 goes instead (a terrain-aware controller moves targets off stair edges; the next step's
                 placement corrects for it). ``None``: the law's target.
+            timing: with ``foothold``: when it moves the target, the current step ends when the law's
+                target is the moved foothold, within these bounds (:mod:`amlip_qp.alip.step_timing`; the
+                duration is planned on the step clock). ``None``: the step time stays the command's.
 
         Returns:
             A :class:`PlannerOutput`.
@@ -334,7 +340,19 @@ class Planner:
         if foothold is not None:
             # The target is CoM - p_st + p_hat - p_sw (world); a moved target moves p_sw the other way.
             tx, ty = c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w
-            fx, fy = C.placed_foothold(foothold, tx, ty, heading_next, s)
+            s_hook = s if timing is None else min(t_in / clock.step_time_s(T), 1.0)
+            fx, fy = C.placed_foothold(foothold, tx, ty, heading_next, s_hook)
+            if timing is not None and (fx != tx or fy != ty or clock.planned_step_time_s is not None):
+                T_cur = retime(timing, clock, self.plan_fn, u, y, fx - (c0 - p0), fy - (c1 - p1), T, t_in)
+                s, t_rem = min(t_in / T_cur, 1.0), max(T_cur - t_in, 0.0)
+                yl = y.tolist()
+                y2, y3 = yl[2], yl[3]
+                tx, ty = c0 - p0 + y2 - yl[6], c1 - p1 + y3 - yl[7]
+                c, sn = math.cos(heading_next), math.sin(heading_next)
+                along = c * (fx - tx) + sn * (fy - ty)  # the foothold's place along the heading, the law's across
+                fx, fy = tx + along * c, ty + along * sn
+                T = T_cur
+            px_w, py_w = yl[6], yl[7]
             if fx != tx or fy != ty:
                 px_w, py_w = px_w - (fx - tx), py_w - (fy - ty)
                 y[6], y[7] = px_w, py_w

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.mpc_planner import MPCPlanner, MPCSettings
 from amlip_qp.alip.planner import Planner
+from amlip_qp.alip.step_timing import StepTiming
 from amlip_qp.control.walking.ground import GroundPredictor
 from amlip_qp.exceptions import InputError
 
@@ -18,6 +19,9 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 #: The planners (``WalkingController(planner=...)``, ``amlip-qp walk --planner``).
 PLANNERS = ("one-step", "mpc")
+#: The one-step planner's step time when the terrain-aware mode moves its target onto a tread
+#: (:mod:`amlip_qp.alip.step_timing`): 0.6 to 1.4 times the command's, as the MPC's.
+FOOTHOLD_TIMING = StepTiming(step_time_min=1.0)
 
 
 def check_planner(name: str, mpc_settings: MPCSettings | None) -> None:
@@ -70,6 +74,15 @@ def mpc_regions(planner: Planner, ground: GroundPredictor) -> dict:
     return {} if regions is None else {"regions": regions}
 
 
+def extra(planner: Planner, ground: GroundPredictor) -> dict:
+    """The keywords of a planner's update off flat ground beyond the foothold hook: the MPC's regions
+    (:func:`mpc_regions`); for the one-step planner in the ``"aware"`` mode the step timing of a moved
+    foothold (:data:`FOOTHOLD_TIMING`)."""
+    if isinstance(planner, MPCPlanner):
+        return mpc_regions(planner, ground)
+    return {"timing": FOOTHOLD_TIMING} if ground.foothold() is not None else {}
+
+
 def plan_tick(
     planner: Planner,
     ground: GroundPredictor,
@@ -90,13 +103,11 @@ def plan_tick(
         ground.touchdown(est.stance_contact_m, planner.heading_rad)
         # the swing target of the new step is not known yet: plan once for it
         first = ground.predict(est.stance_contact_m, planner.heading_rad)
-        plan = planner.update(
-            state, ground.fit(first, command), first, ground.foothold(), **mpc_regions(planner, ground)
-        )
+        plan = planner.update(state, ground.fit(first, command), first, ground.foothold(), **extra(planner, ground))
         target_xy = plan.swing_target_world_m
     else:
         target_xy = last_plan.swing_target_world_m if last_plan is not None else est.swing_contact_m
     prediction = ground.predict(target_xy, planner.heading_rad)
     return planner.update(
-        state, ground.fit(prediction, command), prediction, ground.foothold(), **mpc_regions(planner, ground)
+        state, ground.fit(prediction, command), prediction, ground.foothold(), **extra(planner, ground)
     )
