@@ -125,6 +125,8 @@ MANIFEST: tuple[Entry, ...] = (
         "markdown",
         340,
     ),
+    # 18 walks of 4-14 s (QP tracker, both planners), one process: 224 s measured on the shared machine
+    Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
     # 20-26 s measured
