@@ -127,6 +127,8 @@ MANIFEST: tuple[Entry, ...] = (
     ),
     # 18 walks of 4-14 s (QP tracker, both planners), one process: 224 s measured on the shared machine
     Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
+    # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
+    Entry("paper-claims", ("python", "examples/paper_claims.py", "--jobs", "1"), "markdown", 810),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
     # 20-26 s measured
