@@ -145,6 +145,14 @@ MANIFEST: tuple[Entry, ...] = (
     Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
     # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
     Entry("paper-claims", ("python", "examples/paper_claims.py", "--jobs", "1"), "markdown", 810),
+    # the terrain-map sweep (56 walks of at most 10 s) on one worker, and its figure: 1131 s measured on the shared
+    # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
+    Entry(
+        "terrain-map",
+        ("python", "examples/terrain_map.py", "--workers", "1", "--figure", "docs/media/terrain_map.png"),
+        "markdown",
+        1130,
+    ),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
     # 20-26 s measured
