@@ -1,7 +1,7 @@
 """Run every acceptance scenario with both trackers and print the measured table (Markdown).
 
 Usage: ``python examples/acceptance_table.py [--set ideal|cc-ekf|all] [--robots cassie,g1] [--trackers pbc,qp]
-[--jobs 2] [--json PATH]``
+[--estimator-columns] [--jobs 2] [--json PATH]``
 
 Each row is one deterministic run (seed 0) of a named scenario of
 :data:`amlip_qp.sim.scenarios.named.SCENARIOS`: by default the ideal ones (each
@@ -11,7 +11,10 @@ model mismatches; the terrain scenarios have their own table,
 ``examples/terrain_table.py``); the numbers are the
 run summary's (``docs/SUMMARY_SCHEMA.md``): whether the robot fell, the
 mean velocity over the last 3 s in the heading frame, the CoM drift (in
-place), the yaw change (turn), and the controller tick time. The
+place), the yaw change (turn), and the controller tick time; with
+``--estimator-columns`` also the foot placement error RMS, the base velocity
+estimate's error RMS against the truth, the yaw estimate's error at the end
+and the ticks in safe mode (for the ``cc-ekf`` set). The
 pass/fail thresholds live in ``tests/test_walk_pbc.py`` and
 ``tests/test_walk_qp.py``; this script only measures. About 2.5 minutes on
 2 cores.
@@ -39,6 +42,11 @@ def _run(job: tuple[str, str]) -> dict:
     return to_jsonable(row)
 
 
+def _number(value: float | None, digits: int) -> str:
+    """``value`` with ``digits`` decimals; ``-`` where the summary has none (a planar robot's yaw)."""
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trackers", default="pbc,qp", help="comma-separated trackers (default pbc,qp)")
@@ -51,6 +59,11 @@ def main(argv=None) -> int:
         help="which scenarios: ideal (default), cc-ekf (closed-chain plant, robot sensors, EKF) or all",
     )
     ap.add_argument("--robots", default=None, help="comma-separated robots (default: every robot's scenarios)")
+    ap.add_argument(
+        "--estimator-columns",
+        action="store_true",
+        help="add the foot placement error, the base estimate's velocity and yaw errors and the safe-mode ticks",
+    )
     args = ap.parse_args(argv)
     ideal = ideal_scenarios()
     names = {
@@ -68,20 +81,29 @@ def main(argv=None) -> int:
     jobs.sort(key=lambda j: -SCENARIOS[j[0]].duration_s)  # longest first
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = dict(zip(jobs, pool.map(_run, jobs)))
+    extra = args.estimator_columns
     print(
         "| scenario | tracker | fell | mean v (x, y) m/s | command m/s | drift m | yaw change deg "
-        "| tick median / p99 µs |"
+        + ("| foot err m | EKF v err m/s | EKF yaw err deg | safe-mode ticks " if extra else "")
+        + "| tick median / p99 µs |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|" + ("---|---|---|---|" if extra else ""))
     for name in names:
         for t in args.trackers.split(","):
             r = rows[(name, t)]
             fell = f"yes, {r['fall_time_s']:.1f} s" if r["fell"] else "no"
             vx, vy = r["mean_velocity"]
             cx, cy = r["commanded_velocity"]
+            estimate = (
+                f"{r['foot_placement_error_rms_m']:.3f} | {_number(r['base_velocity_error_rms_mps'], 4)} | "
+                f"{_number(r['yaw_estimate_error_deg'], 2)} | {r['safe_mode_ticks']} | "
+                if extra
+                else ""
+            )
             print(
                 f"| {name} | {t} | {fell} | {vx:.3f}, {vy:.3f} | {cx:.2f}, {cy:.2f} | {r['drift_m']:.3f} | "
-                f"{r['heading_change_deg']:.1f} | {r['tick_time_us']['median']:.0f} / {r['tick_time_us']['p99']:.0f} |"
+                f"{r['heading_change_deg']:.1f} | {estimate}"
+                f"{r['tick_time_us']['median']:.0f} / {r['tick_time_us']['p99']:.0f} |"
             )
     if args.json:
         with open(args.json, "w") as f:

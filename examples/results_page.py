@@ -91,6 +91,17 @@ MANIFEST: tuple[Entry, ...] = (
         "compare-json",
         95,
     ),
+    # Cassie's two trackers on the closed-chain plant with the robot's sensors and the EKF, one process:
+    # 1049 s measured on the shared machine (load average 5-8 on its 2 cores; 74 s with 2 processes when quiet)
+    Entry(
+        "compare-cassie-cc-ekf",
+        tuple(
+            "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf --jobs 1"
+            f" --no-plot --json {JSON_DIR}/compare-cassie-cc-ekf.json".split()
+        ),
+        "compare-json",
+        1050,
+    ),
     # 20 walks of 4-20 s on 2 worker processes: 166 s measured
     Entry(
         "acceptance-ideal-cassie",
@@ -98,12 +109,17 @@ MANIFEST: tuple[Entry, ...] = (
         "markdown",
         170,
     ),
-    # 30 walks of 9-20 s on the closed-chain plant with the EKF, 2 worker processes: 310 s measured
+    # 30 walks of 9-20 s on the closed-chain plant with the EKF, one process: 1405 s measured on the shared
+    # machine (load average about 5 on its 2 cores; 531 s with 2 processes before)
     Entry(
         "acceptance-cc-ekf-cassie",
-        ("python", "examples/acceptance_table.py", "--set", "cc-ekf", "--robots", "cassie"),
+        (
+            "python",
+            "examples/acceptance_table.py",
+            *"--set cc-ekf --robots cassie --estimator-columns --jobs 1".split(),
+        ),
         "markdown",
-        310,
+        1400,
     ),
     Entry(
         "acceptance-ideal-rabbit",
@@ -124,6 +140,18 @@ MANIFEST: tuple[Entry, ...] = (
         ("python", "examples/acceptance_table.py", "--set", "all", "--robots", "g1", "--trackers", "qp", "--jobs", "1"),
         "markdown",
         340,
+    ),
+    # 18 walks of 4-14 s (QP tracker, both planners), one process: 224 s measured on the shared machine
+    Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
+    # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
+    Entry("paper-claims", ("python", "examples/paper_claims.py", "--jobs", "1"), "markdown", 810),
+    # the terrain-map sweep (56 walks of at most 10 s) on one worker, and its figure: 1131 s measured on the shared
+    # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
+    Entry(
+        "terrain-map",
+        ("python", "examples/terrain_map.py", "--workers", "1", "--figure", "docs/media/terrain_map.png"),
+        "markdown",
+        1130,
     ),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
