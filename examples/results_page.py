@@ -109,8 +109,8 @@ MANIFEST: tuple[Entry, ...] = (
             cost_s,
         )
         # one worker on the 2 cores shared with other jobs: Cassie 290 s measured (load average 4.5-5),
-        # H1 789 s (load average 5-9)
-        for robot, cost_s in (("cassie", 290), ("h1", 790))
+        # H1 789 s, G1 548 s (load average 5-9)
+        for robot, cost_s in (("cassie", 290), ("h1", 790), ("g1", 550))
     ),
     # 20 walks of 4-20 s on 2 worker processes: 166 s measured
     Entry(
