@@ -74,6 +74,14 @@ class Entry:
         return ROOT / self.argv[self.argv.index("--json") + 1]
 
 
+def argv(command: str) -> tuple[str, ...]:
+    """A manifest command written as one line, split as a shell splits it."""
+    return tuple(shlex.split(command))
+
+
+#: ``amlip-qp compare``'s options in the blocks but the JSON file's name and ending.
+COMPARE_OPTIONS = f"--jobs 1 --no-plot --json {JSON_DIR}/compare"
+
 MANIFEST: tuple[Entry, ...] = (
     Entry(
         "compare-rabbit",
@@ -94,23 +102,21 @@ MANIFEST: tuple[Entry, ...] = (
     *(
         Entry(
             f"compare-{robot}",
-            (
-                "amlip-qp",
-                "compare",
-                "--robots",
-                robot,
-                "--jobs",
-                "1",
-                "--no-plot",
-                "--json",
-                f"{JSON_DIR}/compare-{robot}.json",
-            ),
+            argv(f"amlip-qp compare --robots {robot} {COMPARE_OPTIONS}-{robot}.json"),
             "compare-json",
             cost_s,
         )
         # one worker on the 2 cores shared with other jobs: Cassie 290 s measured (load average 4.5-5),
         # H1 789 s, G1 548 s (load average 5-9)
         for robot, cost_s in (("cassie", 290), ("h1", 790), ("g1", 550))
+    ),
+    # both trackers with both planners on Cassie, 16 experiments, one process: 1123 s measured on the
+    # 2 cores shared with other jobs (load average 6-9)
+    Entry(
+        "compare-planners-cassie",
+        argv(f"amlip-qp compare --robots cassie --planners one-step,mpc {COMPARE_OPTIONS}-planners-cassie.json"),
+        "compare-json",
+        1120,
     ),
     # 20 walks of 4-20 s on 2 worker processes: 166 s measured
     Entry(
@@ -153,18 +159,8 @@ MANIFEST: tuple[Entry, ...] = (
     # measured on the 2 cores shared with other jobs (load average 4.5-6)
     Entry(
         "raised-starts-stairs",
-        (
-            "python",
-            "examples/raised_starts.py",
-            "--scenario",
-            "cassie-stairs-10cm",
-            "--tracker",
-            "qp",
-            "--planner",
-            "one-step,mpc",
-            "--jobs",
-            "1",
-        ),
+        argv("python examples/raised_starts.py --scenario cassie-stairs-10cm --tracker qp --planner one-step,mpc")
+        + ("--jobs", "1"),
         "markdown",
         1060,
     ),
