@@ -74,73 +74,77 @@ class Entry:
         return ROOT / self.argv[self.argv.index("--json") + 1]
 
 
+def argv(command: str) -> tuple[str, ...]:
+    """A manifest command written as one line, split as a shell splits it."""
+    return tuple(shlex.split(command))
+
+
+#: ``amlip-qp compare``'s options in the blocks but the JSON file's name and ending.
+COMPARE_OPTIONS = f"--jobs 1 --no-plot --json {JSON_DIR}/compare"
+
 MANIFEST: tuple[Entry, ...] = (
-    Entry(
-        "compare-rabbit",
-        (
-            "amlip-qp",
-            "compare",
-            "--robots",
-            "rabbit",
-            "--jobs",
-            "1",
-            "--no-plot",
-            "--json",
-            f"{JSON_DIR}/compare-rabbit.json",
-        ),
-        "compare-json",
-        95,
+    *(
+        Entry(
+            f"compare-{robot}",
+            argv(f"amlip-qp compare --robots {robot} {COMPARE_OPTIONS}-{robot}.json"),
+            "compare-json",
+            cost_s,
+        )  # fmt: skip
+        # one worker on the 2 cores shared with other jobs: Rabbit 95 s, Cassie 290 s measured (load average
+        # 4.5-5), H1 789 s, G1 548 s (load average 5-9)
+        for robot, cost_s in (("rabbit", 95), ("cassie", 290), ("h1", 790), ("g1", 550))
     ),
     # Cassie's two trackers on the closed-chain plant with the robot's sensors and the EKF, one process:
     # 1049 s measured on the shared machine (load average 5-8 on its 2 cores; 74 s with 2 processes when quiet)
     Entry(
         "compare-cassie-cc-ekf",
-        tuple(
-            "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf --jobs 1"
-            f" --no-plot --json {JSON_DIR}/compare-cassie-cc-ekf.json".split()
+        argv(
+            "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf "
+            f"{COMPARE_OPTIONS}-cassie-cc-ekf.json"
         ),
         "compare-json",
         1050,
+    ),  # fmt: skip
+    # both trackers with both planners on Cassie, 16 experiments, one process: 1123 s measured on the
+    # 2 cores shared with other jobs (load average 6-9)
+    Entry(
+        "compare-planners-cassie",
+        argv(f"amlip-qp compare --robots cassie --planners one-step,mpc {COMPARE_OPTIONS}-planners-cassie.json"),
+        "compare-json",
+        1120,
     ),
     # 20 walks of 4-20 s on 2 worker processes: 166 s measured
     Entry(
         "acceptance-ideal-cassie",
-        ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "cassie"),
+        argv("python examples/acceptance_table.py --set ideal --robots cassie"),
         "markdown",
         170,
-    ),
+    ),  # fmt: skip
     # 30 walks of 9-20 s on the closed-chain plant with the EKF, one process: 1405 s measured on the shared
     # machine (load average about 5 on its 2 cores; 531 s with 2 processes before)
     Entry(
         "acceptance-cc-ekf-cassie",
-        (
-            "python",
-            "examples/acceptance_table.py",
-            *"--set cc-ekf --robots cassie --estimator-columns --jobs 1".split(),
-        ),
+        argv("python examples/acceptance_table.py --set cc-ekf --robots cassie --estimator-columns --jobs 1"),
         "markdown",
         1400,
     ),
     Entry(
         "acceptance-ideal-rabbit",
-        ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "rabbit"),
+        argv("python examples/acceptance_table.py --set ideal --robots rabbit"),
         "markdown",
         80,
-    ),
+    ),  # fmt: skip
     # 12 walks of 10-20 s on 2 worker processes: 188 s measured
     Entry(
-        "acceptance-ideal-h1",
-        ("python", "examples/acceptance_table.py", "--set", "ideal", "--robots", "h1"),
-        "markdown",
-        190,
-    ),
+        "acceptance-ideal-h1", argv("python examples/acceptance_table.py --set ideal --robots h1"), "markdown", 190
+    ),  # fmt: skip
     # 8 QP walks of 10-20 s, one process (G1's QP with the profile's DAQP): 337 s measured
     Entry(
         "acceptance-g1-qp",
-        ("python", "examples/acceptance_table.py", "--set", "all", "--robots", "g1", "--trackers", "qp", "--jobs", "1"),
+        argv("python examples/acceptance_table.py --set all --robots g1 --trackers qp --jobs 1"),
         "markdown",
         340,
-    ),
+    ),  # fmt: skip
     # 18 walks of 4-14 s (QP tracker, both planners), one process: 224 s measured on the shared machine
     Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
     # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
@@ -149,10 +153,24 @@ MANIFEST: tuple[Entry, ...] = (
     # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
     Entry(
         "terrain-map",
-        ("python", "examples/terrain_map.py", "--workers", "1", "--figure", "docs/media/terrain_map.png"),
+        argv("python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png"),
         "markdown",
         1130,
+    ),  # fmt: skip
+    # 14 terrain scenarios x both trackers, 28 walks of 14-20 s, one worker process: 1249 s measured on
+    # the 2 cores shared with other jobs (load average 5-8)
+    Entry("terrain", ("python", "examples/terrain_table.py", "--jobs", "1"), "markdown", 1250),
+    # 32 walks of 14 s on the stairs (16 raised starts x both planners), QP tracker, one process: 1059 s
+    # measured on the 2 cores shared with other jobs (load average 4.5-6)
+    Entry(
+        "raised-starts-stairs",
+        argv("python examples/raised_starts.py --scenario cassie-stairs-10cm --tracker qp --planner one-step,mpc")
+        + ("--jobs", "1"),
+        "markdown",
+        1060,
     ),
+    # 14 walks of 10 s from rest, one process: 379 s measured on the 2 cores shared with other jobs
+    Entry("step-commands", ("python", "examples/step_commands.py", "--jobs", "1"), "markdown", 380),
     Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
     Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
     # 20-26 s measured

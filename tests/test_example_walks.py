@@ -72,6 +72,20 @@ def test_raised_starts_differ_in_the_last_bits_and_are_counted(capsys):
     assert runs[0][3] != runs[1][3] and abs(runs[0][3] - runs[1][3]) < 0.01
     assert module.main(["--scenario", "rabbit-1mps", "--duration", "0.5", "--starts", "2"]) == 0
     assert capsys.readouterr().out.strip().endswith("rabbit-1mps / qp / one-step: 2 of 2 starts walked")
+    assert (
+        module.main(["--scenario", "rabbit-1mps", "--duration", "0.5", "--starts", "1", "--planner", "one-step,mpc"])
+        == 0
+    )
+    header, rule, row, *counts = [line for line in capsys.readouterr().out.splitlines() if line]
+    assert header.count("one-step:") == 2 and header.count("mpc:") == 2 and rule.count("---") == 5
+    assert row.startswith("| 0 | no | ") and row.count("| no |") == 2  # both planners walked the 0.5 s
+    assert counts == [
+        "rabbit-1mps / qp / one-step: 1 of 1 starts walked",
+        "rabbit-1mps / qp / mpc: 1 of 1 starts walked",
+    ]
     with pytest.raises(SystemExit) as info:
         module.main(["--starts", "0"])
+    assert info.value.code == 2
+    with pytest.raises(SystemExit) as info:
+        module.main(["--planner", "one-step,deadbeat"])
     assert info.value.code == 2
