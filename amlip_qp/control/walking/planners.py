@@ -20,7 +20,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 #: The planners (``WalkingController(planner=...)``, ``amlip-qp walk --planner``).
 PLANNERS = ("one-step", "mpc")
 #: The one-step planner's step time when the terrain-aware mode moves its target onto a tread
-#: (:mod:`amlip_qp.alip.step_timing`): 0.6 to 1.4 times the command's, as the MPC's.
+#: (:mod:`amlip_qp.alip.step_timing`): 1.0 to 1.4 times the command's (lengthened, never shortened:
+#: docs/TUNING.md, "Terrain").
 FOOTHOLD_TIMING = StepTiming(step_time_min=1.0)
 
 
