@@ -104,6 +104,10 @@ def sample_mpc_qp(rng, robot, n):
     return u
 
 
+#: Largest error relative to max(1, |reference|) per kernel (default 1e-12). The MPC's Hessian sums
+#: products of up to about 1e6 that cancel to order 1 (the later steps' time weights reach 100 here): the
+#: C's and numpy's orders of operations differ there by up to 2.3e-12 on Cassie's samples.
+TOLERANCE = {"alip_mpc_qp": 1e-11}
 #: Numpy references are slow for the MPC's QP (about 1.5 ms a call): fewer samples of it.
 N_SAMPLES = {"alip_mpc_qp": 300}
 SAMPLERS = {
@@ -122,4 +126,4 @@ def assert_matches_reference(fn: FastFunction, robot: str, seed: int):
         y = fn(u).copy()
         ref = reference(u)
         err = np.abs(y - ref) / np.maximum(1.0, np.abs(ref))
-        assert err.max() <= 1e-12, (fn.name, robot, u, y, ref)
+        assert err.max() <= TOLERANCE.get(fn.name, 1e-12), (fn.name, robot, u, y, ref)
