@@ -129,8 +129,17 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--json", default=None, help="also write the rows as JSON to this path")
     args = ap.parse_args(argv)
-    seeds = [int(s) for s in args.seeds.split(",")]
-    across_seeds = [int(s) for s in args.across_seeds.split(",")]
+    if not 1 <= args.jobs <= 64:
+        ap.error(f"--jobs must be 1 to 64, got {args.jobs}")
+    try:
+        seeds = [int(s) for s in args.seeds.split(",")]
+        across_seeds = [int(s) for s in args.across_seeds.split(",")]
+    except ValueError:
+        ap.error(
+            f"--seeds and --across-seeds take comma-separated integers, got {args.seeds!r} and {args.across_seeds!r}"
+        )
+    if min(seeds + across_seeds) < 0 or len(seeds) + len(across_seeds) > 64:
+        ap.error("seeds must be integers >= 0, at most 64 of them in all")
     jobs = [(name, "", s) for name in NAMED for s in seeds]
     jobs += [(VALLEY, "across", s) for s in across_seeds]
     jobs += [(VALLEY, v, 0) for v in ACROSS_VARIANTS]

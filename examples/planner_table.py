@@ -64,6 +64,8 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--json", default=None, help="also write the summaries as JSON to this path")
     args = ap.parse_args(argv)
+    if not 1 <= args.jobs <= 64:
+        ap.error(f"--jobs must be 1 to 64, got {args.jobs}")
     walks = [w for key, ws in ROWS.items() if args.rows in ("all", key) for w in ws]
     jobs = [(w, p) for w in walks for p in PLANNERS]
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:

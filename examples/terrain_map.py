@@ -69,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
     parser.add_argument("--figure", type=Path, default=None, help=f"copy the sweep's {FIGURE} to this path")
     args = parser.parse_args(argv)
+    if args.workers is not None and not 1 <= args.workers <= 64:
+        parser.error(f"--workers must be 1 to 64, got {args.workers}")
     with tempfile.TemporaryDirectory(prefix="terrain_map_") as tmp:
         folder = args.source or args.out or Path(tmp)
         if args.source is None:
