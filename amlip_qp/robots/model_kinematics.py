@@ -77,7 +77,6 @@ class ModelKinematics:
         self._acc3: dict[int, np.ndarray] = {}  # linear part of _acc (views)
         self._bind_views()
         self._M: np.ndarray | None = None
-        self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
         self._dynamics = False  # True after update(q, v) only
@@ -382,10 +381,9 @@ class ModelKinematics:
         """
         self.require_dynamics()
         if self._M is None:
-            # CRBA fills the upper triangle; mirror it once per update.
-            M = self.data.M.copy()
-            M[self._lower] = M.T[self._lower]
-            self._M = M
+            # CRBA fills the upper triangle; Pinocchio's Python computeAllTerms mirrors it into the lower
+            # one (tests/test_robots_model_kinematics.py checks M == M^T bit for bit): a copy is enough.
+            self._M = self.data.M.copy()
         return self._M
 
     def nonlinear_effects(self) -> np.ndarray:
