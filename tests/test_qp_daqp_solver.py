@@ -7,12 +7,12 @@ import pytest
 from amlip_qp.control.wbc.tracker import QPTracker
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.experiments.bench_qp import record_walk
-from amlip_qp.qp import DAQPSolver, ProxQPSolver
+from amlip_qp.qp import DAQPSolver, ProxQPSolver, QPProblem
 from amlip_qp.robots import load_robot
 from amlip_qp.sim.reports.summary import summarize
 from amlip_qp.sim.scenarios.factory import build_simulation
 from amlip_qp.sim.scenarios.named import get_scenario
-from test_qp_problem import random_problem
+from test_qp_problem import allocated_problem, random_problem
 
 
 @pytest.fixture(scope="module")
@@ -125,3 +125,41 @@ def test_a_hot_start_on_a_contradictory_row_is_refused_not_reported_solved():
     solver.solve(ok)
     with pytest.raises(QPError):
         solver.solve(bad)
+
+
+def _allocated_copy(p):
+    """``p`` in an allocated problem (its rows and bounds stacked: DAQP reads them in place)."""
+    a = QPProblem.allocate(p.n, p.n_eq, p.n_in)
+    for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+        getattr(a, name)[...] = getattr(p, name)
+    assert a.stacked() is not None
+    return a
+
+
+def test_an_allocated_problem_read_in_place_gives_the_bits_of_the_same_problem_apart(walk_problems):
+    """The tracker's problems are allocated (rows and bounds stacked): the solutions, hot-started in
+    order, are bit for bit those of the same problems held in separate arrays."""
+    apart, in_place = DAQPSolver(), DAQPSolver()
+    for p in walk_problems:
+        assert p.stacked() is None  # recorded copies
+        np.testing.assert_array_equal(in_place.solve(_allocated_copy(p)).x, apart.solve(p).x)
+
+
+def test_the_stacked_path_checks_solutions_and_refuses_a_contradictory_row():
+    """An allocated problem: the solution check gives the problem's residual (an infinite bound of each
+    kind), and a hot start on 0 = 1 is refused."""
+    from amlip_qp.qp.daqp_solver import _Shape
+
+    p = allocated_problem(6, 2, 3)
+    p.u[0], p.lb[1] = np.inf, -np.inf
+    shape = _Shape(p)
+    shape.fill(p)
+    x0 = p.solve_with("quadprog")
+    for x in (x0, x0 + 0.5):
+        assert shape.violation(x) == pytest.approx(max(max(p.residuals(x).values()), 0.0), rel=1e-12, abs=1e-12)
+    solver = DAQPSolver()
+    solver.solve(p)
+    p.A[0] = 0.0
+    p.b[0] = 1.0
+    with pytest.raises(QPError):
+        solver.solve(p)

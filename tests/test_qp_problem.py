@@ -151,6 +151,26 @@ def test_allocate_makes_zero_views_of_shared_buffers_with_the_problem_shapes():
         QPProblem.allocate(0, 1, 1)
 
 
+def test_stacked_gives_the_rows_and_bounds_of_an_allocated_problem_as_views_in_the_solvers_order():
+    """``[C; A]``, ``[lb; l]``, ``[ub; u]`` as views of the problem's own buffers (a solver reads them
+    in place); ``None`` for a copy or once an array is replaced (its arrays then lie apart)."""
+    p = allocated_problem(6, 2, 3)
+    rows, lower, upper = p.stacked()
+    np.testing.assert_array_equal(rows, np.vstack([p.C, p.A]))
+    np.testing.assert_array_equal(lower, np.concatenate([p.lb, p.l]))
+    np.testing.assert_array_equal(upper, np.concatenate([p.ub, p.u]))
+    assert rows.shape == (5, 6) and rows.flags.c_contiguous
+    for view, fields in ((rows, ("C", "A")), (lower, ("lb", "l")), (upper, ("ub", "u"))):
+        assert all(np.shares_memory(view, getattr(p, k)) for k in fields)
+    p.C[1, 2] = 7.0
+    p.l[0] = -3.0
+    assert rows[1, 2] == 7.0 and lower[6] == -3.0  # live views
+    assert p.copy().stacked() is None
+    p.C = p.C.copy()
+    assert p.stacked() is None
+    assert random_problem(1).stacked() is None
+
+
 @pytest.mark.parametrize(
     ("field", "index", "value"),
     [("H", (1, 2), np.inf), ("g", (0,), np.nan), ("A", (1, 0), np.nan), ("b", (1,), -np.inf), ("C", (2, 5), np.nan)],

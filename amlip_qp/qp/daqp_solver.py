@@ -10,7 +10,11 @@ either (``QPTracker(qp_solver="daqp")``).
 
 The problem is handed over as DAQP takes it: the bounds ``lb <= x <= ub`` as
 its simple bounds, then ``l <= C x <= u``, then ``A x = b`` (sense 5: an
-equality), each infinite bound replaced by :data:`BIG_BOUND`. One
+equality), each infinite bound replaced by :data:`BIG_BOUND`. A problem made
+by :meth:`QPProblem.allocate <amlip_qp.qp.problem.QPProblem.allocate>` (the
+QP tracker's) already holds ``[C; A]`` as one block (:meth:`QPProblem.stacked
+<amlip_qp.qp.problem.QPProblem.stacked>`): DAQP reads it in place, and the
+bounds are stacked with two clamps and two copies of ``b``. One
 ``daqp.Model`` per problem shape lives as long as the solver; each solve
 ``update``-s it and starts from the previous solve's working set (a hot
 start). DAQP is a deterministic sequence of floating-point operations: the
@@ -69,6 +73,9 @@ class _Shape:
         self._bu_box, self._bu_in, self._bu_eq = self.bu[:n], self.bu[n : n + n_in], self.bu[n + n_in :]
         self._bl_box, self._bl_in, self._bl_eq = self.bl[:n], self.bl[n : n + n_in], self.bl[n + n_in :]
         self._z_x, self._z_rows = self.z[:n], self.z[n:]
+        self._bu_rows, self._bl_rows = self.bu[: n + n_in], self.bl[: n + n_in]
+        #: The rows ``[C; A]`` DAQP solves: the problem's own block when it is stacked, else :attr:`A`.
+        self.rows = self.A
 
     def violation(self, x: np.ndarray) -> float:
         """Largest violation at ``x`` of the problem last :meth:`fill`-ed (bounds, inequalities,
@@ -77,13 +84,24 @@ class _Shape:
         <amlip_qp.qp.problem.QPProblem.residuals>`' largest entry, in one product and two passes."""
         z, gap = self.z, self.gap
         _copyto(self._z_x, x)
-        _dot(self.A, x, out=self._z_rows)
+        _dot(self.rows, x, out=self._z_rows)
         _subtract(self.bl, z, out=gap)
         below = _max_reduce(gap)
         _subtract(z, self.bu, out=gap)
         return max(below, _max_reduce(gap), 0.0)
 
     def fill(self, p: QPProblem) -> None:
+        """Stack ``p``'s rows and bounds as DAQP takes them (:attr:`rows`, :attr:`bu`, :attr:`bl`)."""
+        stacked = p.stacked()
+        if stacked is not None:
+            # the rows in place; the box and inequality bounds lie stacked already (the same clamps)
+            self.rows, lower, upper = stacked
+            _minimum(upper, BIG_BOUND, out=self._bu_rows)
+            _copyto(self._bu_eq, p.b)
+            _maximum(lower, -BIG_BOUND, out=self._bl_rows)
+            _copyto(self._bl_eq, p.b)
+            return
+        self.rows = self.A
         _copyto(self._A_in, p.C)
         _copyto(self._A_eq, p.A)
         _minimum(p.ub, BIG_BOUND, out=self._bu_box)
@@ -143,7 +161,7 @@ class DAQPSolver:
         H, f = np.ascontiguousarray(problem.H), np.ascontiguousarray(problem.g)
         if shape.model is None or not self.warm_start:
             shape.model = self._daqp.Model()
-            code = shape.model.setup(H, f, shape.A, shape.bu, shape.bl, shape.sense)
+            code = shape.model.setup(H, f, shape.rows, shape.bu, shape.bl, shape.sense)
             shape.model.settings = {"iter_limit": self.iter_limit, "primal_tol": PRIMAL_TOL}
             self.n_init += 1
             if code[0] < 0:
@@ -151,7 +169,7 @@ class DAQPSolver:
                 status = f"DAQP_SETUP_{code[0]}"
                 raise QPError(f"DAQP set-up failed with code {code[0]}", problem=problem, status=status)
         else:
-            shape.model.update(H=H, f=f, A=shape.A, bupper=shape.bu, blower=shape.bl)
+            shape.model.update(H=H, f=f, A=shape.rows, bupper=shape.bu, blower=shape.bl)
         x, _, flag, info = shape.model.solve()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         # A hot-started update skips the set-up's checks (a zero constraint row that contradicts its

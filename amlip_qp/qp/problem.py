@@ -10,10 +10,12 @@ Rows and variables carry names, so a failing problem can be read by a person:
 ``problem.eq_rows`` and ``problem.in_rows`` list ``(name, slice)`` blocks.
 
 A problem made by :meth:`QPProblem.allocate` keeps its arrays as views of
-three contiguous buffers (``H, g, A, b, C``; the lower bounds ``l, lb``; the
-upper bounds ``u, ub``), so that :meth:`QPProblem.validate`, once per control
+three contiguous buffers (``H, g, C, A, b``; the lower bounds ``lb, l``; the
+upper bounds ``ub, u``), so that :meth:`QPProblem.validate`, once per control
 tick, checks finiteness with one reduction and the bound order with one
-comparison while the fields are still those views.
+comparison while the fields are still those views, and a solver that takes
+the rows and bounds stacked (DAQP: the box, then ``C``, then ``A``) reads them
+as they lie (:meth:`QPProblem.stacked`).
 """
 
 from __future__ import annotations
@@ -79,16 +81,17 @@ class QPProblem:
         (a replaced array is still validated, by the general path)."""
         if min(n, n_eq, n_in) < 0 or n == 0:
             raise QPError(f"allocate({n}, {n_eq}, {n_in}): sizes must be >= 0 and n > 0")
-        sizes = (n * n, n, n_eq * n, n_eq, n_in * n)
+        sizes = (n * n, n, n_in * n, n_eq * n, n_eq)
         data = np.zeros(sum(sizes))
-        H, g, A, b, C = np.split(data, np.cumsum(sizes)[:-1])
-        lower, upper = np.zeros(n_in + n), np.zeros(n_in + n)
+        H, g, C, A, b = np.split(data, np.cumsum(sizes)[:-1])
+        lower, upper = np.zeros(n + n_in), np.zeros(n + n_in)
         problem = cls(
             H.reshape(n, n), g, A.reshape(n_eq, n), b, C.reshape(n_in, n),
-            lower[:n_in], upper[:n_in], lower[n_in:], upper[n_in:],
+            lower[n:], upper[n:], lower[:n], upper[:n],
             variables=dict(variables or {}), eq_rows=list(eq_rows or []), in_rows=list(in_rows or []),
         )  # fmt: skip
-        problem._packed = _Packed(data, lower, upper, problem)
+        rows = data[n * n + n : n * n + n + (n_in + n_eq) * n].reshape(n_in + n_eq, n)
+        problem._packed = _Packed(data, lower, upper, rows, problem)
         return problem
 
     @property
@@ -125,6 +128,17 @@ class QPProblem:
             eq_rows=list(self.eq_rows),
             in_rows=list(self.in_rows),
         )
+
+    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """For a problem made by :meth:`allocate` whose arrays are still its views: ``(rows, lower,
+        upper)``, views of its buffers (no copies; read only): ``rows`` = ``[C; A]``, shape
+        (n_in + n_eq, n); ``lower`` = ``[lb; l]`` and ``upper`` = ``[ub; u]``, shape (n + n_in,).
+        ``None`` for any other problem (its arrays lie apart)."""
+        packed = self._packed
+        H, g, A, b, C, l, u, lb, ub = self.H, self.g, self.A, self.b, self.C, self.l, self.u, self.lb, self.ub
+        if packed is None or not packed.holds(H, g, A, b, C, l, u, lb, ub):
+            return None
+        return packed.rows, packed.lower, packed.upper
 
     def validate(self) -> None:
         """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
@@ -284,10 +298,10 @@ class QPProblem:
 class _Packed:
     """The buffers of an :meth:`QPProblem.allocate` problem and its nine views, by identity."""
 
-    __slots__ = ("data", "lower", "upper", "_views")
+    __slots__ = ("data", "lower", "upper", "rows", "_views")
 
-    def __init__(self, data: np.ndarray, lower: np.ndarray, upper: np.ndarray, problem: QPProblem):
-        self.data, self.lower, self.upper = data, lower, upper
+    def __init__(self, data: np.ndarray, lower: np.ndarray, upper: np.ndarray, rows: np.ndarray, problem: QPProblem):
+        self.data, self.lower, self.upper, self.rows = data, lower, upper, rows
         p = problem
         self._views = (p.H, p.g, p.A, p.b, p.C, p.l, p.u, p.lb, p.ub)
 

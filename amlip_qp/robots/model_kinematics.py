@@ -63,6 +63,11 @@ class ModelKinematics:
         self._v_shape = (self.model.nv,)
         self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         self._com_acc_level = pin.KinematicLevel.ACCELERATION
+        # computeAllTerms' total mass (its sum of the bodies' masses, in its order; q-independent),
+        # the divisor of its CoM Jacobian (update_kinematics forms that Jacobian the same way).
+        scratch = model.createData()
+        pin.computeAllTerms(model, scratch, pin.neutral(model), np.zeros(model.nv))
+        self._cat_mass = float(scratch.mass[0])
         self.q: np.ndarray | None = None
         self.v: np.ndarray | None = None
         # Per-update caches (cleared by _invalidate), filled on first use.
@@ -72,7 +77,6 @@ class ModelKinematics:
         self._acc3: dict[int, np.ndarray] = {}  # linear part of _acc (views)
         self._bind_views()
         self._M: np.ndarray | None = None
-        self._lower = np.tril_indices(self.model.nv, -1)
         #: True after :meth:`update_positions` (no dynamics, zero velocity).
         self.positions_only = False
         self._dynamics = False  # True after update(q, v) only
@@ -119,8 +123,9 @@ class ModelKinematics:
         velocities and their accelerations at zero ``vdot`` (the drifts), the
         frame placements and the CoM's position, velocity and drift: every
         frame and CoM getter and :meth:`outputs` with its drift read as after
-        :meth:`update` (the same bits, but for the CoM Jacobian, which
-        Pinocchio sums in another order: within 1e-15). The dynamics (CRBA, the
+        :meth:`update`, to the last bit (the CoM Jacobian as ``computeAllTerms``
+        forms it: the linear rows of the centroidal map over the total mass, not
+        ``jacobianCenterOfMass``'s sum, which differs by about 1e-16). The dynamics (CRBA, the
         nonlinear effects, the centroidal momentum) are not computed:
         ``mass_matrix``, ``nonlinear_effects``, the momenta and
         ``centroidal_momentum_matrix`` raise :class:`~amlip_qp.exceptions.InputError`
@@ -134,9 +139,12 @@ class ModelKinematics:
             self._bind_views()
         self.q = q = np.array(q, dtype=float)
         self.v = v = np.array(v, dtype=float)
-        # The CoM Jacobian's pass computes the joint placements and Jacobians too (as update_positions);
-        # forwardKinematics then adds the velocities and the drift accelerations (the same placements).
-        pin.jacobianCenterOfMass(m, d, q, False)
+        # The centroidal map's pass computes the joint placements and Jacobians (data.J) and the
+        # composite inertias' map Ag as computeAllTerms does (the same bits); computeAllTerms' CoM
+        # Jacobian is its linear rows over the total mass. forwardKinematics then adds the velocities
+        # and the drift accelerations (the same placements).
+        pin.computeCentroidalMap(m, d, q)
+        np.divide(self._ag_linear, self._cat_mass, out=self._jcom_view)
         pin.forwardKinematics(m, d, q, v, self._zero_a)
         pin.updateFramePlacements(m, d)
         pin.centerOfMass(m, d, self._com_acc_level, False)
@@ -186,6 +194,8 @@ class ModelKinematics:
         self._views_data = d
         #: Read-only live view of the CoM position (m); copy it at once, never keep or write it.
         self.com_view = d.com[0]
+        self._jcom_view = d.Jcom
+        self._ag_linear = d.Ag[:3]
         self._vcom_view = d.vcom[0]
         self._acom_view = d.acom[0]
         self._hg_view = d.hg.vector  # (m v_c, L_c)
@@ -371,10 +381,9 @@ class ModelKinematics:
         """
         self.require_dynamics()
         if self._M is None:
-            # CRBA fills the upper triangle; mirror it once per update.
-            M = self.data.M.copy()
-            M[self._lower] = M.T[self._lower]
-            self._M = M
+            # CRBA fills the upper triangle; Pinocchio's Python computeAllTerms mirrors it into the lower
+            # one (tests/test_robots_model_kinematics.py checks M == M^T bit for bit): a copy is enough.
+            self._M = self.data.M.copy()
         return self._M
 
     def nonlinear_effects(self) -> np.ndarray:

@@ -281,9 +281,8 @@ class OutputMap:
             heading_rad: Step heading ``D`` (rad).
 
         Returns:
-            ``(y, J, Jdot_v)`` with shapes (n,), (n, nv), (n,): outputs (rad or
-            m), their Jacobian on Pinocchio's ``v`` and their drift ``Jdot v``
-            (rad/s^2 or m/s^2). New arrays on every call.
+            ``(y, J, Jdot_v)`` with shapes (n,), (n, nv), (n,): outputs (rad or m), their Jacobian on
+            Pinocchio's ``v`` and their drift ``Jdot v`` (rad/s^2 or m/s^2). New arrays on every call.
 
         Raises:
             InputError: Bad side or a non-finite heading.
@@ -293,8 +292,7 @@ class OutputMap:
         q, v = kin.state()
         jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
         n = len(self.names)
-        J = np.zeros((n, v.shape[0]))
-        y, jdv = np.zeros(n), np.zeros(n)
+        J, y, jdv = np.zeros((n, v.shape[0])), np.zeros(n), np.zeros(n)
 
         # Base orientation: R, world angular velocity w = Jw v (rad/s), drift alpha (rad/s^2).
         base = robot.base_frame_id
@@ -308,6 +306,7 @@ class OutputMap:
         cD, sD = math.cos(heading_rad), math.sin(heading_rad)
         legs = {"stance": stance, "swing": swing}
         rel: dict[str, tuple] = {}  # contact -> (CoM minus it, its drift, its Jacobian)
+        rotated = None  # the contact whose heading-frame products _rot_products holds
         q_idx, v_idx = self._joints[stance]
         joint_k = 0
         for i, prim in enumerate(self.primitives):
@@ -342,8 +341,10 @@ class OutputMap:
                     y[i] = world_to_heading_xy(p_rel[0], p_rel[1], cD, sD)[k]
                     jdv[i] = world_to_heading_xy(d_rel[0], d_rel[1], cD, sD)[k]
                     rot, prod = self._rot, self._rot_products
-                    rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
-                    np.multiply(rot, J_rel[:2], out=prod)  # prod[i, j] = rot[i, j] * J_rel[j]
+                    if rotated != prim.side:  # once per contact: its x and y rows share the products
+                        rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
+                        np.multiply(rot, J_rel[:2], out=prod)  # prod[i, j] = rot[i, j] * J_rel[j]
+                        rotated = prim.side
                     np.add(prod[k, 0], prod[k, 1], out=J[i])
             elif prim.axis == "pitch":
                 chain = self._toe_pitch(kin, swing)

@@ -19,7 +19,7 @@ stacked Jacobians of these equations):
   as 0. The drift ``Adot v`` is exact (a finite difference of ``A`` along
   ``v_r``) on cold solves and whenever ``iterations`` is given; on warm
   default solves it is the analytic drift of the output map and contact frame
-  at the previous tick's ``v_r`` (one full kinematics update at ``(q, v_r^-)``
+  at the previous tick's ``v_r`` (one kinematics update at ``(q, v_r^-)``
   replaces the finite difference's extra evaluation). ``Adot v`` is quadratic
   in ``v``, so the error is about ``2 |dAdot/dv| |v_r| |v_r - v_r^-|``, i.e.
   of the order of ``|a_r| dt`` relative to the drift (checked in
@@ -129,14 +129,15 @@ class IterativeIK:
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
         """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
 
-        With a velocity ``v`` the IK's kinematics get a full update at ``(q, v)``
-        (then :meth:`_drift` gives ``Adot v``); without, the light position update.
+        With a velocity ``v`` the IK's kinematics get the kinematics-only update at ``(q, v)``
+        (the same bits as the full update's kinematics; then :meth:`_drift` gives ``Adot v``);
+        without, the light position update.
         """
         kin = self.kin
         if v is None:
             kin.update_positions(q)
         else:
-            kin.update(q, v)
+            kin.update_kinematics(q, v)
         y, J, _ = kin.outputs(stance, heading)
         n = self.size
         A[:n] = J
