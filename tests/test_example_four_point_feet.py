@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import pytest
-from sole_cases import SOLES, sole_profile
 
 from amlip_qp.paths import MODELS_DIR
 from amlip_qp.profiles import read_profile
+from sole_cases import SOLES, sole_profile
 
 #: Per robot, its four-point soles (each four force points).
 FOUR_POINTS = {"g1": ("four spheres",), "h1": ("rectangle", "triangle")}
