@@ -117,11 +117,16 @@ def summary_table(folder: Path) -> str:
         ratio = f"Per cell QP / PBC: median {np.median(r):.2f} ({r.min():.2f} – {r.max():.2f}); {same} cells the same. "
     lines = ["| | " + " | ".join(t.upper() for t in trackers) + " |", "|---|" + "---|" * len(trackers)]
     lines += [f"| {name} | " + " | ".join(values) + " |" for name, values in rows.items()]
+    # every cell's own wall time, also of the cells an earlier run of the sweep measured
+    cells_s = [json.loads(f.read_text()).get("wall_s", 0.0) for f in sorted((folder / "cells").glob("*.json"))]
+    cell_s = sum(cells_s) or summary["cell_wall_s_total"]
     with open(folder / "results.csv", newline="") as fh:
         walks = sum(int(r["bisect_walks"]) for r in csv.DictReader(fh) if r.get("bisect_walks"))
-    cost = (
-        f"{summary['cells']} cells, {walks} walks: {summary['wall_time_s'] / 60:.0f} min wall on "
-        f"{summary['workers']} worker(s), {summary['cell_wall_s_total']:.0f} s of cell time."
+    cost = f"{summary['cells']} cells, {walks} walks, {cell_s:.0f} s of cell time; " + (
+        f"the sweep: {summary['wall_time_s'] / 60:.0f} min wall on {summary['workers']} worker(s)."
+        if not summary.get("resumed")
+        else f"its last run: {summary['ran']} cells in {summary['wall_time_s'] / 60:.0f} min wall on "
+        f"{summary['workers']} worker(s), {summary['resumed']} cells run before."
     )
     return "\n".join(lines) + "\n\n" + ratio + cost
 

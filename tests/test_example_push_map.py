@@ -58,7 +58,7 @@ def test_it_draws_a_finished_sweep_with_a_failed_cell(push_map, tmp_path, capsys
         "| cells where it survives more than the other tracker | 0 | 3 |",
         "",
         "Per cell QP / PBC: median 1.86 (1.62 – 2.00); 0 cells the same. "
-        "8 cells, 0 walks: 1 min wall on 2 worker(s), 110 s of cell time.",
+        "8 cells, 0 walks, 110 s of cell time; the sweep: 1 min wall on 2 worker(s).",
     ]
     records = push_map.read_records(tmp_path / "sweep")
     assert [r["metrics"][push_map.VALUE] for r in records][:4] == [30.0, 35.0, 48.0, 53.0]
@@ -72,10 +72,12 @@ def test_out_draws_a_finished_sweep_without_running_it_again(push_map, tmp_path,
     rows = (tmp_path / "sweep" / "results.csv").read_text().replace(",,RuntimeError: x", ",99.0,")
     (tmp_path / "sweep" / "results.csv").write_text(rows)
     summary = json.loads((tmp_path / "sweep" / "summary.json").read_text())
-    (tmp_path / "sweep" / "summary.json").write_text(json.dumps({**summary, "failed": 0}))
+    (tmp_path / "sweep" / "summary.json").write_text(json.dumps({**summary, "failed": 0, "ran": 1, "resumed": 7}))
     assert push_map.finished(tmp_path / "sweep")
     assert push_map.main(["--out", str(tmp_path / "sweep")]) == 0
-    assert "| cells measured (failed) | 4 (0) | 4 (0) |" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "| cells measured (failed) | 4 (0) | 4 (0) |" in out
+    assert out.endswith("its last run: 1 cells in 1 min wall on 2 worker(s), 7 cells run before.\n")
 
 
 @pytest.mark.parametrize(
