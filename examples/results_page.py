@@ -158,6 +158,8 @@ MANIFEST: tuple[Entry, ...] = (
         400,
         "text",
     ),
+    # 6 cells of 2 s with 1 and with 2 workers, 3 times
+    entry("bench-sweep", "amlip-qp bench sweep", 120, "text"),
     # two 7-s walks and their figures: 101 s measured with other jobs on the machine
     entry("prediction-study", "python examples/prediction_study.py", 100, "text"),
     # each 11-22 s measured (the checks and a 3-s walk in place)
