@@ -87,6 +87,12 @@ def _ns(value: float, high: float) -> str:
     return f"≥ {high:g}" if value >= high else f"{value:.1f}"
 
 
+def cell_time_s(folder: Path, summary: dict) -> float:
+    """Every cell's own wall time, s, also of the cells an earlier run of the sweep measured."""
+    cells_s = [json.loads(f.read_text()).get("wall_s", 0.0) for f in sorted((folder / "cells").glob("*.json"))]
+    return sum(cells_s) or summary["cell_wall_s_total"]
+
+
 def summary_table(folder: Path) -> str:
     """The map's summary: a Markdown table per tracker, then the per-cell ratio and the sweep's cost."""
     records = read_records(folder)
@@ -117,9 +123,7 @@ def summary_table(folder: Path) -> str:
         ratio = f"Per cell QP / PBC: median {np.median(r):.2f} ({r.min():.2f} – {r.max():.2f}); {same} cells the same. "
     lines = ["| | " + " | ".join(t.upper() for t in trackers) + " |", "|---|" + "---|" * len(trackers)]
     lines += [f"| {name} | " + " | ".join(values) + " |" for name, values in rows.items()]
-    # every cell's own wall time, also of the cells an earlier run of the sweep measured
-    cells_s = [json.loads(f.read_text()).get("wall_s", 0.0) for f in sorted((folder / "cells").glob("*.json"))]
-    cell_s = sum(cells_s) or summary["cell_wall_s_total"]
+    cell_s = cell_time_s(folder, summary)
     with open(folder / "results.csv", newline="") as fh:
         walks = sum(int(r["bisect_walks"]) for r in csv.DictReader(fh) if r.get("bisect_walks"))
     cost = f"{summary['cells']} cells, {walks} walks, {cell_s:.0f} s of cell time; " + (
@@ -167,8 +171,7 @@ def draw(folder: Path, figure: Path) -> None:
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="ratio")
     fig.suptitle(
         f"Cassie at 1 m/s, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
-        f"{summary['ran']} cells in {summary['wall_time_s'] / 60:.1f} min on {summary['workers']} worker(s), "
-        f"{summary['backend']}",
+        f"{summary['cells']} cells, {cell_time_s(folder, summary) / 60:.0f} min of cell time",
         fontsize=9,
     )
     fig.tight_layout()
