@@ -5,17 +5,28 @@ Runs the shipped spec (``examples/sweeps/push_map.toml``: Cassie at 1 m/s,
 trackers) with ``amlip-qp sweep`` into ``--out``, or reads a finished sweep
 folder (``--from``), and draws one polar heat map per tracker (the largest
 impulse survived, N s; direction from forward, drawn up, towards left; phase
-as the radius) and one of their ratio (QP / PBC)::
+as the radius) and one of their ratio (QP / PBC). It prints the summary as
+a Markdown table (per tracker the median, mean, least and largest impulse
+survived over the cells, the cells at the top of the range and those where
+it survives more than the other tracker), then one line with the per-cell
+ratio QP / PBC and the sweep's cost::
 
     python examples/push_map.py --out out/push_map              # run the sweep (resumes), then draw
     python examples/push_map.py --from out/push_map --figure docs/media/push_map.png
+
+``--out`` does not run a sweep its folder already holds finished (every cell
+measured, none failed): it draws it, and the sweep's own wall time stays in
+its ``summary.json``; delete the folder to measure again. ``--csv PATH``
+copies the sweep's ``results.csv`` to ``PATH``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -64,6 +75,66 @@ def check_sweep_folder(folder: Path) -> str | None:
     return None
 
 
+def finished(folder: Path) -> bool:
+    """Whether ``folder`` holds a push-map sweep with every cell measured and none failed."""
+    if check_sweep_folder(folder) is not None:
+        return False
+    summary = json.loads((folder / "summary.json").read_text())
+    return summary.get("failed") == 0 and all(r["metrics"][VALUE] == r["metrics"][VALUE] for r in read_records(folder))
+
+
+def _ns(value: float, high: float) -> str:
+    return f"≥ {high:g}" if value >= high else f"{value:.1f}"
+
+
+def cell_time_s(folder: Path, summary: dict) -> float:
+    """Every cell's own wall time, s, also of the cells an earlier run of the sweep measured."""
+    cells_s = [json.loads(f.read_text()).get("wall_s", 0.0) for f in sorted((folder / "cells").glob("*.json"))]
+    return sum(cells_s) or summary["cell_wall_s_total"]
+
+
+def summary_table(folder: Path) -> str:
+    """The map's summary: a Markdown table per tracker, then the per-cell ratio and the sweep's cost."""
+    records = read_records(folder)
+    summary = json.loads((folder / "summary.json").read_text())
+    high = json.loads((folder / "spec.json").read_text())["bisect"]["high"]
+    trackers = list(dict.fromkeys(r["params"]["tracker"] for r in records))
+    cells: dict[str, dict[tuple[float, float], float]] = {t: {} for t in trackers}
+    for r in records:
+        p = r["params"]
+        cells[p["tracker"]][(p["push_direction_deg"], p["push_phase"])] = r["metrics"][VALUE]
+    got = {t: np.array([v for v in cells[t].values() if v == v]) for t in trackers}  # NaN: a failed cell
+    rows = {
+        "largest impulse survived, median over the cells, N s": [_ns(float(np.median(got[t])), high) for t in trackers],
+        "mean (least – largest), N s": [
+            f"{np.mean(got[t]):.1f} ({_ns(got[t].min(), high)} – {_ns(got[t].max(), high)})" for t in trackers
+        ],
+        f"cells at the top of the range (≥ {high:g} N s)": [str(int(np.sum(got[t] >= high))) for t in trackers],
+        "cells measured (failed)": [f"{got[t].size} ({len(cells[t]) - got[t].size})" for t in trackers],
+    }
+    ratio = ""
+    if trackers == ["pbc", "qp"]:
+        pairs = [(cells["qp"][k], cells["pbc"][k]) for k in cells["qp"] if k in cells["pbc"]]
+        pairs = [(q, p) for q, p in pairs if q == q and p == p]
+        more = [sum(p > q for q, p in pairs), sum(q > p for q, p in pairs)]
+        rows["cells where it survives more than the other tracker"] = [str(n) for n in more]
+        r = np.array([q / p for q, p in pairs if p > 0])
+        same = len(pairs) - sum(more)
+        ratio = f"Per cell QP / PBC: median {np.median(r):.2f} ({r.min():.2f} – {r.max():.2f}); {same} cells the same. "
+    lines = ["| | " + " | ".join(t.upper() for t in trackers) + " |", "|---|" + "---|" * len(trackers)]
+    lines += [f"| {name} | " + " | ".join(values) + " |" for name, values in rows.items()]
+    cell_s = cell_time_s(folder, summary)
+    with open(folder / "results.csv", newline="") as fh:
+        walks = sum(int(r["bisect_walks"]) for r in csv.DictReader(fh) if r.get("bisect_walks"))
+    cost = f"{summary['cells']} cells, {walks} walks, {cell_s:.0f} s of cell time; " + (
+        f"the sweep: {summary['wall_time_s'] / 60:.0f} min wall on {summary['workers']} worker(s)."
+        if not summary.get("resumed")
+        else f"its last run: {summary['ran']} cells in {summary['wall_time_s'] / 60:.0f} min wall on "
+        f"{summary['workers']} worker(s), {summary['resumed']} cells run before."
+    )
+    return "\n".join(lines) + "\n\n" + ratio + cost
+
+
 def refuse(message: str) -> int:
     """Bad input: one line on stderr, exit status 2 (as ``amlip-qp``), before any work."""
     sys.stderr.write(f"push_map.py: error: {message}\n")
@@ -100,14 +171,13 @@ def draw(folder: Path, figure: Path) -> None:
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="ratio")
     fig.suptitle(
         f"Cassie at 1 m/s, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
-        f"{summary['ran']} cells in {summary['wall_time_s'] / 60:.1f} min on {summary['workers']} worker(s), "
-        f"{summary['backend']}",
+        f"{summary['cells']} cells, {cell_time_s(folder, summary) / 60:.0f} min of cell time",
         fontsize=9,
     )
     fig.tight_layout()
     figure.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(figure, dpi=130)
-    print(f"wrote {figure}")
+    print(f"wrote {figure}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -118,7 +188,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--spec", type=Path, default=SPEC, help=f"the sweep spec (default {SPEC.name})")
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
     parser.add_argument("--figure", type=Path, default=None, help="figure path (default: FOLDER/push_map.png)")
+    parser.add_argument("--csv", type=Path, default=None, help="also copy the sweep's results.csv to this path")
     args = parser.parse_args(argv)
+    if args.workers is not None and not 1 <= args.workers <= 64:
+        return refuse(f"--workers must be 1 to 64, got {args.workers}")
     folder = args.source
     problem = check_sweep_folder(folder) if folder is not None else None
     if problem:
@@ -126,18 +199,27 @@ def main(argv: list[str] | None = None) -> int:
     try:  # the default figure of --out goes into the sweep's folder, which the sweep makes
         figure = args.figure or (folder / "push_map.png" if folder else None)
         check_output_path("--figure", None if figure is None else str(figure), create_folder=True)
+        check_output_path("--csv", None if args.csv is None else str(args.csv), create_folder=True)
     except InputError as exc:
         return refuse(str(exc))
+    code = 0
     if args.out is not None:
         folder = args.out
-        extra = ["--workers", str(args.workers)] if args.workers else []
-        code = amlip_qp_main(["sweep", str(args.spec), "--out", str(folder), *extra])
-        if code not in (0, 1):  # 1: some cell failed; the map shows it as missing
-            return code
-        draw(folder, args.figure or folder / "push_map.png")
-        return code
+        if finished(folder):
+            print(
+                f"{folder} holds the sweep finished: drawing it (delete the folder to measure again)", file=sys.stderr
+            )
+        else:
+            extra = ["--workers", str(args.workers)] if args.workers else []
+            with contextlib.redirect_stdout(sys.stderr):  # standard output is the summary table
+                code = amlip_qp_main(["sweep", str(args.spec), "--out", str(folder), "--no-progress", *extra])
+            if code not in (0, 1):  # 1: some cell failed; the map shows it as missing
+                return code
     draw(folder, args.figure or folder / "push_map.png")
-    return 0
+    if args.csv is not None:
+        shutil.copyfile(folder / "results.csv", args.csv)
+    print(summary_table(folder))
+    return code
 
 
 if __name__ == "__main__":

@@ -22,7 +22,8 @@ table of the library's comparison columns) and about how long it takes on 2 core
   the date and versions line and the output); everything outside the markers is left as it is.
 - ``--all``: every block, one after the other (each block is written as soon as it is measured).
 - ``--check``: no simulation: every marker of the page has a manifest entry and every entry a
-  block, each block is well formed and starts with the command line its entry gives.
+  block, each block is well formed and starts with the command line its entry gives, and no
+  Markdown table lies outside the blocks (the page's measurements are all generated).
 
 Bad input (an unknown id, a missing page, markers that do not pair) exits 2 with one line; a
 failing ``--check`` prints one line per problem and exits 1; a command that fails leaves its
@@ -79,111 +80,101 @@ def argv(command: str) -> tuple[str, ...]:
     return tuple(shlex.split(command))
 
 
+def entry(entry_id: str, command: str, cost_s: float, kind: str = "markdown") -> Entry:
+    """A manifest entry from its command written as one line."""
+    return Entry(entry_id, argv(command), kind, cost_s)
+
+
 #: ``amlip-qp compare``'s options in the blocks but the JSON file's name and ending.
-COMPARE_OPTIONS = f"--jobs 1 --no-plot --json {JSON_DIR}/compare"
+COMPARE = f"--jobs 1 --no-plot --json {JSON_DIR}/compare"
+ACCEPTANCE = "python examples/acceptance_table.py"
 
 MANIFEST: tuple[Entry, ...] = (
+    # one worker on the 2 cores shared with other jobs: Rabbit 95 s, Cassie 290 s measured (load average
+    # 4.5-5), H1 789 s, G1 548 s (load average 5-9)
     *(
-        Entry(
-            f"compare-{robot}",
-            argv(f"amlip-qp compare --robots {robot} {COMPARE_OPTIONS}-{robot}.json"),
-            "compare-json",
-            cost_s,
-        )  # fmt: skip
-        # one worker on the 2 cores shared with other jobs: Rabbit 95 s, Cassie 290 s measured (load average
-        # 4.5-5), H1 789 s, G1 548 s (load average 5-9)
+        entry(f"compare-{robot}", f"amlip-qp compare --robots {robot} {COMPARE}-{robot}.json", cost_s, "compare-json")
         for robot, cost_s in (("rabbit", 95), ("cassie", 290), ("h1", 790), ("g1", 550))
     ),
     # Cassie's two trackers on the closed-chain plant with the robot's sensors and the EKF, one process:
     # 1049 s measured on the shared machine (load average 5-8 on its 2 cores; 74 s with 2 processes when quiet)
-    Entry(
+    entry(
         "compare-cassie-cc-ekf",
-        argv(
-            "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf "
-            f"{COMPARE_OPTIONS}-cassie-cc-ekf.json"
-        ),
-        "compare-json",
+        "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf "
+        f"{COMPARE}-cassie-cc-ekf.json",
         1050,
-    ),  # fmt: skip
+        "compare-json",
+    ),
     # both trackers with both planners on Cassie, 16 experiments, one process: 1123 s measured on the
     # 2 cores shared with other jobs (load average 6-9)
-    Entry(
+    entry(
         "compare-planners-cassie",
-        argv(f"amlip-qp compare --robots cassie --planners one-step,mpc {COMPARE_OPTIONS}-planners-cassie.json"),
-        "compare-json",
+        f"amlip-qp compare --robots cassie --planners one-step,mpc {COMPARE}-planners-cassie.json",
         1120,
+        "compare-json",
     ),
     # 20 walks of 4-20 s on 2 worker processes: 166 s measured
-    Entry(
-        "acceptance-ideal-cassie",
-        argv("python examples/acceptance_table.py --set ideal --robots cassie"),
-        "markdown",
-        170,
-    ),  # fmt: skip
+    entry("acceptance-ideal-cassie", f"{ACCEPTANCE} --set ideal --robots cassie", 170),
     # 30 walks of 9-20 s on the closed-chain plant with the EKF, one process: 1405 s measured on the shared
     # machine (load average about 5 on its 2 cores; 531 s with 2 processes before)
-    Entry(
-        "acceptance-cc-ekf-cassie",
-        argv("python examples/acceptance_table.py --set cc-ekf --robots cassie --estimator-columns --jobs 1"),
-        "markdown",
-        1400,
-    ),
-    Entry(
-        "acceptance-ideal-rabbit",
-        argv("python examples/acceptance_table.py --set ideal --robots rabbit"),
-        "markdown",
-        80,
-    ),  # fmt: skip
+    entry("acceptance-cc-ekf-cassie", f"{ACCEPTANCE} --set cc-ekf --robots cassie --estimator-columns --jobs 1", 1400),
+    # 6 walks of 10-20 s on 2 worker processes: 151 s measured with other work on the machine
+    entry("acceptance-ideal-rabbit", f"{ACCEPTANCE} --set ideal --robots rabbit", 150),
     # 12 walks of 10-20 s on 2 worker processes: 188 s measured
-    Entry(
-        "acceptance-ideal-h1", argv("python examples/acceptance_table.py --set ideal --robots h1"), "markdown", 190
-    ),  # fmt: skip
-    # 8 QP walks of 10-20 s, one process (G1's QP with the profile's DAQP): 337 s measured
-    Entry(
-        "acceptance-g1-qp",
-        argv("python examples/acceptance_table.py --set all --robots g1 --trackers qp --jobs 1"),
-        "markdown",
-        340,
-    ),  # fmt: skip
+    entry("acceptance-ideal-h1", f"{ACCEPTANCE} --set ideal --robots h1", 190),
+    # 16 walks of 10-20 s, both trackers, one process (the QP's 8 alone: 337 s measured)
+    entry("acceptance-g1", f"{ACCEPTANCE} --set all --robots g1 --jobs 1", 800),
+    # 15 QP walks of 10-20 s on the humanoids' two- and four-point soles, one process
+    entry("four-point-feet", "python examples/four_point_feet.py --jobs 1", 700),
     # 18 walks of 4-14 s (QP tracker, both planners), one process: 224 s measured on the shared machine
-    Entry("planner-table", ("python", "examples/planner_table.py", "--jobs", "1"), "markdown", 230),
+    entry("planner-table", "python examples/planner_table.py --jobs 1", 230),
     # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
-    Entry("paper-claims", ("python", "examples/paper_claims.py", "--jobs", "1"), "markdown", 810),
+    entry("paper-claims", "python examples/paper_claims.py --jobs 1", 810),
     # the terrain-map sweep (56 walks of at most 10 s) on one worker, and its figure: 1131 s measured on the shared
     # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
-    Entry(
-        "terrain-map",
-        argv("python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png"),
-        "markdown",
-        1130,
-    ),  # fmt: skip
+    entry("terrain-map", "python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png", 1130),
+    # the push-map sweep (80 cells, about 465 walks of at most 5.5 s) on 2 workers, then its figure, table and summary:
+    # 31 min measured on a quiet machine; only the drawing when out/push_map holds the sweep finished
+    entry(
+        "push-map",
+        "python examples/push_map.py --out out/push_map --workers 2 --figure docs/media/push_map.png "
+        "--csv docs/media/push_map_results.csv",
+        3300,
+    ),
     # 14 terrain scenarios x both trackers, 28 walks of 14-20 s, one worker process: 1249 s measured on
     # the 2 cores shared with other jobs (load average 5-8)
-    Entry("terrain", ("python", "examples/terrain_table.py", "--jobs", "1"), "markdown", 1250),
+    entry("terrain", "python examples/terrain_table.py --jobs 1", 1250),
     # 32 walks of 14 s on the stairs (16 raised starts x both planners), QP tracker, one process: 1059 s
     # measured on the 2 cores shared with other jobs (load average 4.5-6)
-    Entry(
+    entry(
         "raised-starts-stairs",
-        argv("python examples/raised_starts.py --scenario cassie-stairs-10cm --tracker qp --planner one-step,mpc")
-        + ("--jobs", "1"),
-        "markdown",
+        "python examples/raised_starts.py --scenario cassie-stairs-10cm --tracker qp --planner one-step,mpc --jobs 1",
         1060,
     ),
     # 14 walks of 10 s from rest, one process: 379 s measured on the 2 cores shared with other jobs
-    Entry("step-commands", ("python", "examples/step_commands.py", "--jobs", "1"), "markdown", 380),
-    Entry("bench-mpc", ("amlip-qp", "bench", "mpc"), "text", 5),
-    Entry("bench-codegen", ("amlip-qp", "bench", "codegen"), "text", 10),
+    entry("step-commands", "python examples/step_commands.py --jobs 1", 380),
+    entry("bench-mpc", "amlip-qp bench mpc", 5, "text"),
+    entry("bench-codegen", "amlip-qp bench codegen", 10, "text"),
     # 20-26 s measured
-    Entry("bench-qp", ("amlip-qp", "bench", "qp"), "text", 25),
+    entry("bench-qp", "amlip-qp bench qp", 25, "text"),
     # 11 s measured on a quiet machine, 86 s on a loaded one
-    Entry("bench-ekf", ("amlip-qp", "bench", "ekf"), "text", 30),
+    entry("bench-ekf", "amlip-qp bench ekf", 30, "text"),
+    # 32 walks of 4 s (4 robots x 2 trackers x 2 log modes x 2 repeats), the yardstick after each
+    entry(
+        "bench-harness",
+        "amlip-qp bench harness --scenario robots --trackers qp,pbc --duration 4 --repeats 2",
+        400,
+        "text",
+    ),
+    # 6 cells of 2 s with 1 and with 2 workers, 3 times
+    entry("bench-sweep", "amlip-qp bench sweep", 120, "text"),
     # two 7-s walks and their figures: 101 s measured with other jobs on the machine
-    Entry("prediction-study", ("python", "examples/prediction_study.py"), "text", 100),
+    entry("prediction-study", "python examples/prediction_study.py", 100, "text"),
     # each 11-22 s measured (the checks and a 3-s walk in place)
-    Entry("check-robot-cassie", ("amlip-qp", "check-robot", "cassie"), "text", 20),
-    Entry("check-robot-rabbit", ("amlip-qp", "check-robot", "rabbit"), "text", 20),
-    Entry("check-robot-h1", ("amlip-qp", "check-robot", "h1"), "text", 20),
-    Entry("check-robot-g1", ("amlip-qp", "check-robot", "g1"), "text", 20),
+    *(
+        entry(f"check-robot-{robot}", f"amlip-qp check-robot {robot}", 20, "text")
+        for robot in ("cassie", "rabbit", "h1", "g1")
+    ),
 )
 
 OPEN = re.compile(r"^<!-- results: ([a-z0-9-]+) -->$")
@@ -325,6 +316,12 @@ def check(page: Path) -> list[str]:
     manifest = entries()
     problems = [f"{i}: block in the page but not in the manifest" for i in found if i not in manifest]
     problems += [f"{i}: in the manifest but no block in the page" for i in manifest if i not in found]
+    inside = {k for start, end in found.values() for k in range(start, end + 1)}
+    problems += [
+        f"line {k + 1}: a table outside the generated blocks (every table is a block's command's output)"
+        for k, line in enumerate(lines)
+        if line.startswith("|") and k not in inside and not (k and lines[k - 1].startswith("|"))
+    ]
     for i, (start, end) in found.items():
         if i not in manifest:
             continue

@@ -32,19 +32,52 @@ def _finished_sweep(folder: Path) -> None:
                 rows.append(f"{k},c{k},{tracker},{direction},{phase},{k},{value},{'RuntimeError: x' if failed else ''}")
                 k += 1
     (folder / "results.csv").write_text("\n".join(rows) + "\n")
-    summary = {"ran": 8, "wall_time_s": 60.0, "workers": 2, "backend": "process pool"}
+    summary = {
+        "cells": 8, "ran": 8, "failed": 1, "wall_time_s": 60.0, "workers": 2, "backend": "process pool",
+        "cell_wall_s_total": 110.0,
+    }  # fmt: skip
     (folder / "summary.json").write_text(json.dumps(summary))
     (folder / "spec.json").write_text(json.dumps({"bisect": {"high": 100.0}}))
 
 
-def test_it_draws_a_finished_sweep_with_a_failed_cell(push_map, tmp_path):
+def test_it_draws_a_finished_sweep_with_a_failed_cell(push_map, tmp_path, capsys):
     _finished_sweep(tmp_path / "sweep")
     figure = tmp_path / "figs" / "map.png"
-    assert push_map.main(["--from", str(tmp_path / "sweep"), "--figure", str(figure)]) == 0
+    table = tmp_path / "figs" / "results.csv"
+    assert push_map.main(["--from", str(tmp_path / "sweep"), "--figure", str(figure), "--csv", str(table)]) == 0
     assert figure.stat().st_size > 10_000
+    assert table.read_text() == (tmp_path / "sweep" / "results.csv").read_text()
+    # PBC 30, 35, 48, 53; QP 60, 65, 78 and a failed cell: the summary table on standard output
+    assert capsys.readouterr().out.splitlines() == [
+        "| | PBC | QP |",
+        "|---|---|---|",
+        "| largest impulse survived, median over the cells, N s | 41.5 | 65.0 |",
+        "| mean (least – largest), N s | 41.5 (30.0 – 53.0) | 67.7 (60.0 – 78.0) |",
+        "| cells at the top of the range (≥ 100 N s) | 0 | 0 |",
+        "| cells measured (failed) | 4 (0) | 3 (1) |",
+        "| cells where it survives more than the other tracker | 0 | 3 |",
+        "",
+        "Per cell QP / PBC: median 1.86 (1.62 – 2.00); 0 cells the same. "
+        "8 cells, 0 walks, 110 s of cell time; the sweep: 1 min wall on 2 worker(s).",
+    ]
     records = push_map.read_records(tmp_path / "sweep")
     assert [r["metrics"][push_map.VALUE] for r in records][:4] == [30.0, 35.0, 48.0, 53.0]
     assert sum(r["metrics"][push_map.VALUE] != r["metrics"][push_map.VALUE] for r in records) == 1  # the NaN
+
+
+def test_out_draws_a_finished_sweep_without_running_it_again(push_map, tmp_path, monkeypatch, capsys):
+    _finished_sweep(tmp_path / "sweep")
+    monkeypatch.setattr(push_map, "amlip_qp_main", lambda argv: pytest.fail("ran the sweep"))
+    assert not push_map.finished(tmp_path / "sweep")  # a failed cell: --out runs the sweep to retry it
+    rows = (tmp_path / "sweep" / "results.csv").read_text().replace(",,RuntimeError: x", ",99.0,")
+    (tmp_path / "sweep" / "results.csv").write_text(rows)
+    summary = json.loads((tmp_path / "sweep" / "summary.json").read_text())
+    (tmp_path / "sweep" / "summary.json").write_text(json.dumps({**summary, "failed": 0, "ran": 1, "resumed": 7}))
+    assert push_map.finished(tmp_path / "sweep")
+    assert push_map.main(["--out", str(tmp_path / "sweep")]) == 0
+    out = capsys.readouterr().out
+    assert "| cells measured (failed) | 4 (0) | 4 (0) |" in out
+    assert out.endswith("its last run: 1 cells in 1 min wall on 2 worker(s), 7 cells run before.\n")
 
 
 @pytest.mark.parametrize(
@@ -53,6 +86,8 @@ def test_it_draws_a_finished_sweep_with_a_failed_cell(push_map, tmp_path):
         (["--from", "{tmp}/missing"], "not a finished sweep folder (no results.csv, summary.json, spec.json)"),
         (["--from", "{tmp}/other"], "results.csv has no column tracker, push_direction_deg, push_phase, max_push"),
         (["--from", "{tmp}/sweep", "--figure", "/proc/no/such/map.png"], "--figure /proc/no/such/map.png"),
+        (["--from", "{tmp}/sweep", "--csv", "/proc/no/such/results.csv"], "--csv /proc/no/such/results.csv"),
+        (["--out", "{tmp}/new", "--workers", "0"], "--workers must be 1 to 64, got 0"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(push_map, tmp_path, capsys, argv, needle):

@@ -107,6 +107,22 @@ def test_check_reports_a_block_whose_command_drifted(results_page, page, capsys)
     assert capsys.readouterr().out.startswith("bench-mpc: the block does not start with")
 
 
+def test_check_reports_a_table_outside_the_blocks(results_page, page, capsys):
+    """A hand-written table, one line or several, is reported once by its first line; inside a block it is not."""
+    text = page.read_text()
+    lines = text.split("\n")
+    assert results_page.check(page) == []
+    hand = "| run | result |\n|---|---|\n| by hand | walked |"
+    page.write_text(
+        text.replace("<!-- results: bench-mpc -->", f"{hand}\n\n| one line |\n<!-- results: bench-mpc -->", 1)
+    )
+    at = lines.index("<!-- results: bench-mpc -->") + 1
+    assert results_page.main(["--check", "--page", str(page)]) == 1
+    out = capsys.readouterr().out.splitlines()
+    assert [o.split(":")[0] for o in out] == [f"line {at}", f"line {at + 4}"]
+    assert all("a table outside the generated blocks" in o for o in out)
+
+
 def test_check_reports_blocks_missing_from_either_side(results_page, monkeypatch, page, capsys):
     manifest = tuple(e for e in results_page.MANIFEST if e.id != "bench-mpc")
     monkeypatch.setattr(results_page, "MANIFEST", (*manifest, results_page.Entry("extra", ("true",), "text", 1)))
