@@ -130,6 +130,8 @@ MANIFEST: tuple[Entry, ...] = (
     entry("planner-table", "python examples/planner_table.py --jobs 1", 230),
     # 29 walks on the closed-chain plant with the EKF, 4-20 s, one process: 810 s measured on the shared machine
     entry("paper-claims", "python examples/paper_claims.py --jobs 1", 810),
+    # two 8-s walks across the Wave Field (floor friction 1 and 3), MuJoCo contact forces per tick: 14-49 s measured
+    entry("friction-demand", "python examples/friction_demand.py --friction 1,3", 50),
     # the terrain-map sweep (56 walks of at most 10 s) on one worker, and its figure: 1131 s measured on the shared
     # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
     entry("terrain-map", "python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png", 1130),
