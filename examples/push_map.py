@@ -1,4 +1,4 @@
-"""The push map: the largest push survived over direction x phase of the step, per tracker, and their ratio.
+"""The push map: the largest push survived over direction x phase of the step, per tracker or planner, and their ratio.
 
 Runs the shipped spec (``examples/sweeps/push_map.toml``: Cassie at 1 m/s,
 0.2 s pushes, 8 directions x 5 phases, bisection of the impulse, both
@@ -9,10 +9,14 @@ as the radius) and one of their ratio (QP / PBC). It prints the summary as
 a Markdown table (per tracker the median, mean, least and largest impulse
 survived over the cells, the cells at the top of the range and those where
 it survives more than the other tracker), then one line with the per-cell
-ratio QP / PBC and the sweep's cost::
+ratio QP / PBC and the sweep's cost. A sweep whose cells vary the planner
+(``examples/sweeps/push_map_planners.toml``: the QP tracker with the
+one-step law and with the step-timing MPC) is compared by planner instead,
+MPC / one-step, with the ratios of the medians and of the weakest cells::
 
     python examples/push_map.py --out out/push_map              # run the sweep (resumes), then draw
     python examples/push_map.py --from out/push_map --figure docs/media/push_map.png
+    python examples/push_map.py --spec examples/sweeps/push_map_planners.toml --out out/push_map_planners
 
 ``--out`` does not run a sweep its folder already holds finished (every cell
 measured, none failed): it draws it, and the sweep's own wall time stays in
@@ -44,6 +48,8 @@ from amlip_qp.sweep.figures import grid_values, polar_map
 
 SPEC = Path(__file__).resolve().parent / "sweeps" / "push_map.toml"
 VALUE = "max_push_impulse_Ns"
+#: How the groups a map compares are named in its tables and figures.
+LABELS = {"pbc": "PBC", "qp": "QP", "mpc": "MPC"}
 
 
 def read_records(folder: Path) -> list[dict]:
@@ -57,6 +63,8 @@ def read_records(folder: Path) -> list[dict]:
             "push_direction_deg": float(r["push_direction_deg"]),
             "push_phase": float(r["push_phase"]),
         }
+        if "planner" in r:
+            params["planner"] = r["planner"]
         out.append({"params": params, "metrics": {VALUE: float(r[VALUE]) if r[VALUE] else float("nan")}})
     return out
 
@@ -83,6 +91,15 @@ def finished(folder: Path) -> bool:
     return summary.get("failed") == 0 and all(r["metrics"][VALUE] == r["metrics"][VALUE] for r in read_records(folder))
 
 
+def grouping(records: list[dict]) -> tuple[str, list[str]]:
+    """What the map compares: ``planner`` when its cells vary the planner, else ``tracker``; and the values."""
+    for key in ("planner", "tracker"):
+        values = list(dict.fromkeys(r["params"].get(key) for r in records))
+        if key == "tracker" or (len(values) > 1 and None not in values):
+            return key, values
+    raise AssertionError("unreachable")
+
+
 def _ns(value: float, high: float) -> str:
     return f"≥ {high:g}" if value >= high else f"{value:.1f}"
 
@@ -94,15 +111,15 @@ def cell_time_s(folder: Path, summary: dict) -> float:
 
 
 def summary_table(folder: Path) -> str:
-    """The map's summary: a Markdown table per tracker, then the per-cell ratio and the sweep's cost."""
+    """The map's summary: a Markdown table per tracker (or planner), then the per-cell ratio and the sweep's cost."""
     records = read_records(folder)
     summary = json.loads((folder / "summary.json").read_text())
     high = json.loads((folder / "spec.json").read_text())["bisect"]["high"]
-    trackers = list(dict.fromkeys(r["params"]["tracker"] for r in records))
+    key, trackers = grouping(records)
     cells: dict[str, dict[tuple[float, float], float]] = {t: {} for t in trackers}
     for r in records:
         p = r["params"]
-        cells[p["tracker"]][(p["push_direction_deg"], p["push_phase"])] = r["metrics"][VALUE]
+        cells[p[key]][(p["push_direction_deg"], p["push_phase"])] = r["metrics"][VALUE]
     got = {t: np.array([v for v in cells[t].values() if v == v]) for t in trackers}  # NaN: a failed cell
     rows = {
         "largest impulse survived, median over the cells, N s": [_ns(float(np.median(got[t])), high) for t in trackers],
@@ -113,15 +130,25 @@ def summary_table(folder: Path) -> str:
         "cells measured (failed)": [f"{got[t].size} ({len(cells[t]) - got[t].size})" for t in trackers],
     }
     ratio = ""
-    if trackers == ["pbc", "qp"]:
-        pairs = [(cells["qp"][k], cells["pbc"][k]) for k in cells["qp"] if k in cells["pbc"]]
+    if len(trackers) == 2:
+        first, second = trackers
+        a, b = LABELS.get(first, first), LABELS.get(second, second)
+        pairs = [(cells[second][k], cells[first][k]) for k in cells[second] if k in cells[first]]
         pairs = [(q, p) for q, p in pairs if q == q and p == p]
         more = [sum(p > q for q, p in pairs), sum(q > p for q, p in pairs)]
-        rows["cells where it survives more than the other tracker"] = [str(n) for n in more]
+        rows[f"cells where it survives more than the other {key}"] = [str(n) for n in more]
         r = np.array([q / p for q, p in pairs if p > 0])
         same = len(pairs) - sum(more)
-        ratio = f"Per cell QP / PBC: median {np.median(r):.2f} ({r.min():.2f} – {r.max():.2f}); {same} cells the same. "
-    lines = ["| | " + " | ".join(t.upper() for t in trackers) + " |", "|---|" + "---|" * len(trackers)]
+        ratio = (
+            f"Per cell {b} / {a}: median {np.median(r):.2f} ({r.min():.2f} – {r.max():.2f}); {same} cells the same. "
+        )
+        if key == "planner":
+            ratio += (
+                f"{b} / {a}: the medians {np.median(got[second]) / np.median(got[first]):.2f}, "
+                f"the weakest cells {got[second].min() / got[first].min():.2f}. "
+            )
+    labels = [LABELS.get(t, t) for t in trackers]
+    lines = ["| | " + " | ".join(labels) + " |", "|---|" + "---|" * len(trackers)]
     lines += [f"| {name} | " + " | ".join(values) + " |" for name, values in rows.items()]
     cell_s = cell_time_s(folder, summary)
     with open(folder / "results.csv", newline="") as fh:
@@ -142,35 +169,39 @@ def refuse(message: str) -> int:
 
 
 def draw(folder: Path, figure: Path) -> None:
-    """One polar map per tracker in the sweep, and the QP / PBC ratio when both are there."""
+    """One polar map per tracker (or planner) in the sweep, and the ratio of the two when there are two."""
     records = read_records(folder)
-    trackers = list(dict.fromkeys(r["params"]["tracker"] for r in records))
+    key, trackers = grouping(records)
     summary = json.loads((folder / "summary.json").read_text())
     spec = json.loads((folder / "spec.json").read_text())
     high = spec["bisect"]["high"]
-    maps = {t: grid_values(records, "push_direction_deg", "push_phase", VALUE, {"tracker": t}) for t in trackers}
-    panels = len(trackers) + (1 if {"pbc", "qp"} <= set(trackers) else 0)
+    maps = {t: grid_values(records, "push_direction_deg", "push_phase", VALUE, {key: t}) for t in trackers}
+    panels = len(trackers) + (1 if len(trackers) == 2 else 0)
     fig = plt.figure(figsize=(4.4 * panels, 4.6))
     for i, t in enumerate(trackers):
         ds, ps, z = maps[t]
         ax = fig.add_subplot(1, panels, i + 1, projection="polar")
         mesh = polar_map(ax, ds, ps, z, cmap="viridis", vmin=0.0, vmax=high)
         capped = int(np.sum(z >= high))
-        ax.set_title(f"{t.upper()}: largest impulse survived\n({capped} of {z.size} cells >= {high:g} N s)", fontsize=9)
+        ax.set_title(
+            f"{LABELS.get(t, t)}: largest impulse survived\n({capped} of {z.size} cells >= {high:g} N s)", fontsize=9
+        )
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="N s")
     if panels > len(trackers):
-        ds, ps, zq = maps["qp"]
-        _, _, zp = maps["pbc"]
+        ds, ps, zq = maps[trackers[1]]
+        _, _, zp = maps[trackers[0]]
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = np.where(zp > 0, zq / zp, np.nan)
         ax = fig.add_subplot(1, panels, panels, projection="polar")
         finite = ratio[np.isfinite(ratio)]
         top = max(2.0, float(np.max(finite))) if finite.size else 2.0
         mesh = polar_map(ax, ds, ps, ratio, cmap="RdBu", norm=TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=top))
-        ax.set_title("QP / PBC (blue: QP survives more)", fontsize=9)
+        a, b = (LABELS.get(t, t) for t in trackers)
+        ax.set_title(f"{b} / {a} (blue: {b} survives more)", fontsize=9)
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1, label="ratio")
+    tracker = f", {LABELS.get(records[0]['params']['tracker'])} tracker" if key == "planner" else ""
     fig.suptitle(
-        f"Cassie at 1 m/s, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
+        f"Cassie at 1 m/s{tracker}, 0.2 s pushes (direction: 0° forward, 90° left; radius: step phase); "
         f"{summary['cells']} cells, {cell_time_s(folder, summary) / 60:.0f} min of cell time",
         fontsize=9,
     )

@@ -88,16 +88,15 @@ def entry(entry_id: str, command: str, cost_s: float, kind: str = "markdown") ->
 #: ``amlip-qp compare``'s options in the blocks but the JSON file's name and ending.
 COMPARE = f"--jobs 1 --no-plot --json {JSON_DIR}/compare"
 ACCEPTANCE = "python examples/acceptance_table.py"
+PUSH_MAP, MEDIA = "python examples/push_map.py --workers 2", "docs/media"
 
 MANIFEST: tuple[Entry, ...] = (
-    # one worker on the 2 cores shared with other jobs: Rabbit 95 s, Cassie 290 s measured (load average
-    # 4.5-5), H1 789 s, G1 548 s (load average 5-9)
+    # one worker, the 2 cores shared with other jobs: Rabbit 95 s, Cassie 290 s, H1 789 s, G1 548 s measured
     *(
         entry(f"compare-{robot}", f"amlip-qp compare --robots {robot} {COMPARE}-{robot}.json", cost_s, "compare-json")
         for robot, cost_s in (("rabbit", 95), ("cassie", 290), ("h1", 790), ("g1", 550))
     ),
-    # Cassie's two trackers on the closed-chain plant with the robot's sensors and the EKF, one process:
-    # 1049 s measured on the shared machine (load average 5-8 on its 2 cores; 74 s with 2 processes when quiet)
+    # the closed-chain plant with the robot's sensors and the EKF, one process: 1049 s measured at load 5-8
     entry(
         "compare-cassie-cc-ekf",
         "amlip-qp compare --robots cassie --plant cassie-closed-chain --sensors robot --estimator ekf "
@@ -105,8 +104,7 @@ MANIFEST: tuple[Entry, ...] = (
         1050,
         "compare-json",
     ),
-    # both trackers with both planners on Cassie, 16 experiments, one process: 1123 s measured on the
-    # 2 cores shared with other jobs (load average 6-9)
+    # both trackers with both planners on Cassie, 16 experiments, one process: 1123-1795 s measured at load 6-12
     entry(
         "compare-planners-cassie",
         f"amlip-qp compare --robots cassie --planners one-step,mpc {COMPARE}-planners-cassie.json",
@@ -132,22 +130,25 @@ MANIFEST: tuple[Entry, ...] = (
     entry("paper-claims", "python examples/paper_claims.py --jobs 1", 810),
     # two 8-s walks across the Wave Field (floor friction 1 and 3), MuJoCo contact forces per tick: 14-49 s measured
     entry("friction-demand", "python examples/friction_demand.py --friction 1,3", 50),
-    # the terrain-map sweep (56 walks of at most 10 s) on one worker, and its figure: 1131 s measured on the shared
-    # machine (load average 5-7 on its 2 cores; 4.0 min with 2 workers when quiet)
+    # the terrain-map sweep (56 walks of at most 10 s), one worker, and its figure: 1131 s measured at load 5-7
     entry("terrain-map", "python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png", 1130),
-    # the push-map sweep (80 cells, about 465 walks of at most 5.5 s) on 2 workers, then its figure, table and summary:
-    # 31 min measured on a quiet machine; only the drawing when out/push_map holds the sweep finished
-    entry(
-        "push-map",
-        "python examples/push_map.py --out out/push_map --workers 2 --figure docs/media/push_map.png "
-        "--csv docs/media/push_map_results.csv",
-        3300,
+    # the push maps (80 cells, 410-470 walks of at most 5.5 s, 2 workers; 31 min for the trackers' on a quiet machine),
+    # then the figure, cells' table and summary; only the drawing when out/FOLDER holds the sweep finished
+    *(
+        entry(
+            f"push-map{tag}",
+            f"{PUSH_MAP} {spec}--out out/{name} --figure {MEDIA}/{name}.png --csv {MEDIA}/{name}_results.csv",
+            cost_s,
+        )
+        for tag, spec, name, cost_s in (
+            ("", "", "push_map", 3300),
+            ("-planners", "--spec examples/sweeps/push_map_planners.toml ", "push_map_planners", 3600),
+        )
     ),
     # 14 terrain scenarios x both trackers, 28 walks of 14-20 s, one worker process: 1249 s measured on
     # the 2 cores shared with other jobs (load average 5-8)
     entry("terrain", "python examples/terrain_table.py --jobs 1", 1250),
-    # 32 walks of 14 s on the stairs (16 raised starts x both planners), QP tracker, one process: 1059 s
-    # measured on the 2 cores shared with other jobs (load average 4.5-6)
+    # 32 walks of 14 s on the stairs (16 starts x both planners), QP, one process: 1059 s measured at load 4.5-6
     entry(
         "raised-starts-stairs",
         "python examples/raised_starts.py --scenario cassie-stairs-10cm --tracker qp --planner one-step,mpc --jobs 1",
@@ -322,7 +323,7 @@ def check(page: Path) -> list[str]:
     problems += [
         f"line {k + 1}: a table outside the generated blocks (every table is a block's command's output)"
         for k, line in enumerate(lines)
-        if line.startswith("|") and k not in inside and not (k and lines[k - 1].startswith("|"))
+        if line.lstrip().startswith("|") and k not in inside and not (k and lines[k - 1].lstrip().startswith("|"))
     ]
     for i, (start, end) in found.items():
         if i not in manifest:

@@ -26,7 +26,7 @@ OUTPUTS = (
 FALL_M = 1.5
 #: The leg's reach: half sizes (m) of the box about the CoM at touchdown, along and across the
 #: heading (the MPC's default limits, ``MPCSettings.reach_x`` and ``reach_out`` times ``H``).
-REACH_M = (0.55 * H, 0.5 * H)
+REACH_M = (0.55 * H, 0.65 * H)
 
 
 def flow_xy(p, v, tau):

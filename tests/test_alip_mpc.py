@@ -79,6 +79,28 @@ def test_push_that_the_reach_limited_one_step_law_cannot_recover_from():
     np.testing.assert_allclose(np.abs(mpc.steps[-1][5]), np.abs(calm.steps[-1][5]), atol=1e-3)
 
 
+#: The lateral limits the MPC had before crossover steps (docs/TUNING.md, "The step-timing MPC"):
+#: the feet 0.05 H apart at least, the landing foot 0.1 H inside and 0.5 H outside the CoM, steps of 0.75 H.
+NO_CROSSING = MPCSettings(width_min=0.05, reach_in=0.1, reach_out=0.5, step_out=0.75)
+#: 0.05 s into the fourth step (right stance, the left foot swinging), 2 m/s to the right.
+LATERAL_PUSH = (0.95, np.array([0.0, -2.0]))
+
+
+def test_lateral_push_towards_the_stance_foot_is_recovered_with_a_crossover_step():
+    """Pushed towards its stance side, the swing foot can catch the CoM only by crossing the stance foot."""
+    old = Walk(mpc_planner(settings=NO_CROSSING), COMMAND, reach_m=(0.55 * H, 0.5 * H)).run(4.0, push=LATERAL_PUSH)
+    assert old.fell  # the law's own step would cross: without it the MPC falls (its largest push here: 1.13 m/s)
+    mpc = Walk(mpc_planner(), COMMAND, reach_m=REACH_M).run(4.0, push=LATERAL_PUSH)
+    assert not mpc.fell and mpc.planner.failures == 0
+    assert max(s[3] for s in mpc.steps) < 1e-3  # every foothold within reach (to the 2 ms tick)
+    # the pushed step's left foot lands right of the right stance foot: a crossover step
+    (_, _, r_right, *_), (_, _, r_left, *_) = mpc.steps[2], mpc.steps[3]
+    assert r_left[1] < r_right[1] - 0.05
+    # back on the commanded gait within 3 s of the push
+    calm = Walk(mpc_planner(), COMMAND).run(4.0)
+    np.testing.assert_allclose(np.abs(mpc.steps[-1][5]), np.abs(calm.steps[-1][5]), atol=0.02)
+
+
 def test_foothold_region_is_respected():
     """A box that excludes the law's first foothold: the MPC lands in it, at the box's edge."""
     probe = MPCPlanner(OUT3, 31.0, SmallQPSolver(S.N_VAR, S.N_ROWS, S.SOFT_ROWS))
@@ -195,7 +217,7 @@ def test_step_clock_takes_a_planned_duration():
     [
         (dict(step_time_min=0.0), "step_time_min"),
         (dict(step_time_min=1.2, step_time_max=1.0), "step_time_max"),
-        (dict(width_min=-0.1), "width_min"),
+        (dict(width_min=math.nan), "width_min"),
         (dict(step_out=0.01, width_min=0.05), "step_out"),
         (dict(iterations=0), "iterations"),
         (dict(weight_time=math.nan), "weight_time"),

@@ -65,6 +65,28 @@ def test_it_draws_a_finished_sweep_with_a_failed_cell(push_map, tmp_path, capsys
     assert sum(r["metrics"][push_map.VALUE] != r["metrics"][push_map.VALUE] for r in records) == 1  # the NaN
 
 
+def test_a_sweep_that_varies_the_planner_is_compared_by_planner(push_map, tmp_path, capsys):
+    """One tracker, two planners: the groups are the planners, the ratio MPC / one-step, with its medians and
+    weakest cells (one-step 30, 40, 50; MPC 45, 50, 60: medians 1.25, weakest cells 1.5)."""
+    folder = tmp_path / "sweep"
+    folder.mkdir()
+    rows = ["cell,id,tracker,planner,push_direction_deg,push_phase,seed,max_push_impulse_Ns,error"]
+    values = {"one-step": (30.0, 40.0, 50.0), "mpc": (45.0, 50.0, 60.0)}
+    for planner, impulses in values.items():
+        for direction, value in zip((0, 90, 180), impulses):
+            rows.append(f"{len(rows)},c{len(rows)},qp,{planner},{direction},0.0,0,{value!r},")
+    (folder / "results.csv").write_text("\n".join(rows) + "\n")
+    summary = {"cells": 6, "ran": 6, "failed": 0, "wall_time_s": 60.0, "workers": 1, "cell_wall_s_total": 60.0}
+    (folder / "summary.json").write_text(json.dumps(summary))
+    (folder / "spec.json").write_text(json.dumps({"bisect": {"high": 100.0}}))
+    assert push_map.main(["--from", str(folder), "--figure", str(tmp_path / "map.png")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "| | one-step | MPC |"
+    assert out[2] == "| largest impulse survived, median over the cells, N s | 40.0 | 50.0 |"
+    assert out[6] == "| cells where it survives more than the other planner | 0 | 3 |"
+    assert "MPC / one-step: the medians 1.25, the weakest cells 1.50." in out[-1]
+
+
 def test_out_draws_a_finished_sweep_without_running_it_again(push_map, tmp_path, monkeypatch, capsys):
     _finished_sweep(tmp_path / "sweep")
     monkeypatch.setattr(push_map, "amlip_qp_main", lambda argv: pytest.fail("ran the sweep"))

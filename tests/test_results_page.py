@@ -123,6 +123,15 @@ def test_check_reports_a_table_outside_the_blocks(results_page, page, capsys):
     assert all("a table outside the generated blocks" in o for o in out)
 
 
+def test_check_reports_a_table_indented_under_a_list_item(results_page, page, capsys):
+    text = page.read_text()
+    at = text.split("\n").index("<!-- results: bench-mpc -->") + 1
+    table = "- a list item with a table:\n\n  | run | result |\n  |---|---|\n  | by hand | walked |\n"
+    page.write_text(text.replace("<!-- results: bench-mpc -->", f"{table}<!-- results: bench-mpc -->", 1))
+    assert results_page.main(["--check", "--page", str(page)]) == 1
+    assert capsys.readouterr().out.splitlines()[0].startswith(f"line {at + 2}: a table outside the generated blocks")
+
+
 def test_check_reports_blocks_missing_from_either_side(results_page, monkeypatch, page, capsys):
     manifest = tuple(e for e in results_page.MANIFEST if e.id != "bench-mpc")
     monkeypatch.setattr(results_page, "MANIFEST", (*manifest, results_page.Entry("extra", ("true",), "text", 1)))

@@ -74,7 +74,8 @@ class MPCSettings:
         reach_in: its distance inward (under and past the CoM), at most this times ``H`` (>= 0).
         step_x: the step along the heading, at most this times ``H`` (> 0).
         width_min: the landing foot at least this times ``H`` to its side of the stance foot
-            (feet not crossing; >= 0).
+            (>= 0: the feet do not cross; negative: a crossover step, the landing foot at most
+            ``-width_min H`` past the stance foot; finite).
         step_out: the step's lateral component at most this times ``H`` (> width_min).
         weight_time: the cost of ``(T_0 - T)^2`` against ``(L error / (m H))^2``, 1/s^2 (> 0).
         weight_time_later: the cost of each later step's ``(T_j - T)^2``, 1/s^2 (> 0).
@@ -86,11 +87,11 @@ class MPCSettings:
     step_time_max: float = 1.4
     min_time_left_s: float = 0.05
     reach_x: float = 0.55
-    reach_out: float = 0.5
-    reach_in: float = 0.1
+    reach_out: float = 0.65
+    reach_in: float = 0.2
     step_x: float = 1.0
-    width_min: float = 0.05
-    step_out: float = 0.75
+    width_min: float = -0.2
+    step_out: float = 1.25
     weight_time: float = 4.0
     weight_terminal: float = 1.0
     weight_time_later: float = 400.0
@@ -108,8 +109,9 @@ class MPCSettings:
             "weight_time_later",
         ):
             C.positive(f"MPCSettings.{name}", getattr(self, name), "")
-        for name in ("min_time_left_s", "reach_in", "width_min"):
+        for name in ("min_time_left_s", "reach_in"):
             C.non_negative(f"MPCSettings.{name}", getattr(self, name), "")
+        C.finite("MPCSettings.width_min", self.width_min)
         if not self.step_time_max >= self.step_time_min:
             raise InputError(
                 f"MPCSettings.step_time_max ({self.step_time_max!r}) must be >= step_time_min ({self.step_time_min!r})"

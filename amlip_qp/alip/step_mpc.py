@@ -35,7 +35,8 @@ Constraints, for each touchdown ``j`` in its heading frame ``D_j`` (``s_j = +1``
 the landing foot is the left one): leg reach ``|p_sw,x| <= reach_x`` and
 ``-reach_in <= -s_j p_sw,y <= reach_out`` with ``p_sw = p(T_j-) - d_j`` the CoM over the
 landing foot; step ``|d_x| <= step_x``, ``width_min <= s_j d_y <= step_out`` (the feet do
-not cross); the foothold ``r_j - r_0 = d_1 + ... + d_j`` in a world box;
+not cross when ``width_min >= 0``; a negative one allows a crossover step); the foothold
+``r_j - r_0 = d_1 + ... + d_j`` in a world box;
 ``tau_lo <= tau_0 <= tau_hi`` as ``exp(l tau_lo) <= sigma <= exp(l tau_hi)``; and
 ``T_lo <= T_j <= T_hi`` likewise.
 
