@@ -163,20 +163,20 @@ class IterativeIK:
         else:
             np.subtract(pos, fixed["contact_pos"], out=F[n : n + 3])
             F[n + 3 : n + 6] = r_err
-        np.subtract(rows.lin_q @ q, fixed["lin"], out=F[rows.n_var :])
+        np.subtract(np.dot(rows.lin_q, q), fixed["lin"], out=F[rows.n_var :])
         return F
 
     def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:
         """The held quantities and their estimated rates, from the updated kinematics."""
         rows = self._rows[stance]
-        q, v = kin.q, kin.v
+        q, v = kin.state()
         cid = self.robot.contact_frame_ids[stance]
-        twist = kin.frame_jacobian6(cid) @ v
+        twist = np.dot(kin.frame_jacobian6(cid), v)
         rates = np.empty(self.model.nv - self.size)
         npose = len(self._pose_rows)
         rates[:npose] = twist[self._pose_rows]
-        rates[npose:] = rows.lin_rate @ v
-        lin = rows.lin_q @ q
+        rates[npose:] = np.dot(rows.lin_rate, v)
+        lin = np.dot(rows.lin_q, q)
         lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
         return {
             "contact_pos": kin.frame_position(cid),

@@ -217,7 +217,7 @@ class PBCTracker(Tracker):
         bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
         Jw = J6[3:]
         N = np.array(((ax, ay, az), (bx, by, bz)))
-        J_out[3:5] = N @ Jw
+        J_out[3:5] = np.dot(N, Jw)
         w = a6[3:]
         a_out[3] = ax * w[0] + ay * w[1] + az * w[2]
         a_out[4] = bx * w[0] + by * w[1] + bz * w[2]
@@ -346,7 +346,7 @@ class PBCTracker(Tracker):
         rhs = self._rhs_comp
         rhs[rows] = c * (y[rows] - target.h_d[rows])
         dq = self.ik.solve_linear(rhs)
-        rhs[rows] = c * (J[rows] @ kin.v - target.dh_d[rows])
+        rhs[rows] = c * (np.dot(J[rows], kin.state()[1]) - target.dh_d[rows])
         dv = self.ik.solve_linear(rhs)
         rhs[rows] = 0.0
         sw = lay.swing_mask
