@@ -95,7 +95,9 @@ class IterativeIK:
         nv = m.nv
         #: The equations of the system (held coordinates and their rows per stance).
         self.equations = eq = IKEquations(robot, self.size)
-        self._pose_rows = eq.pose_rows
+        # the same rows as a slice (x, z, pitch: every other row; all six), read as a view
+        self._pose = slice(0, 5, 2) if robot.is_planar else slice(0, 6)
+        self._npose = len(eq.pose_rows)
         self._planar = robot.is_planar
         self._rows = eq.rows
         # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap)
@@ -142,7 +144,7 @@ class IterativeIK:
         n = self.size
         A[:n] = J
         cid = self.robot.contact_frame_ids[stance]
-        A[n : n + len(self._pose_rows)] = kin.frame_jacobian6(cid)[self._pose_rows]
+        A[n : n + self._npose] = kin.frame_jacobian6(cid)[self._pose]
         return y, kin.frame_position(cid), kin.frame_rotation(cid)
 
     def _drift(self, stance: str, heading: float, out: np.ndarray) -> None:
@@ -150,7 +152,7 @@ class IterativeIK:
         kin = self.kin
         n = self.size
         out[:n] = kin.outputs(stance, heading)[2]
-        out[n : n + len(self._pose_rows)] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose_rows]
+        out[n : n + self._npose] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose]
 
     def _residual(self, rows: StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
         """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
@@ -173,8 +175,8 @@ class IterativeIK:
         cid = self.robot.contact_frame_ids[stance]
         twist = np.dot(kin.frame_jacobian6(cid), v)
         rates = np.empty(self.model.nv - self.size)
-        npose = len(self._pose_rows)
-        rates[:npose] = twist[self._pose_rows]
+        npose = self._npose
+        rates[:npose] = twist[self._pose]
         rates[npose:] = np.dot(rows.lin_rate, v)
         lin = np.dot(rows.lin_q, q)
         lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
