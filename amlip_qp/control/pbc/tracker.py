@@ -225,9 +225,9 @@ class PBCTracker(Tracker):
         Jw = J6[3:]
         N = np.array(((ax, ay, az), (bx, by, bz)))
         J_out[3:5] = np.dot(N, Jw)
-        w = a6[3:]
-        a_out[3] = ax * w[0] + ay * w[1] + az * w[2]
-        a_out[4] = bx * w[0] + by * w[1] + bz * w[2]
+        _, _, _, w0, w1, w2 = a6.tolist()
+        a_out[3] = ax * w0 + ay * w1 + az * w2
+        a_out[4] = bx * w0 + by * w1 + bz * w2
 
     def contact_constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
