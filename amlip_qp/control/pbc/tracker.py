@@ -62,6 +62,7 @@ from scipy.linalg.lapack import dgesv as _dgesv
 from amlip_qp.alip import other_side
 from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
+from amlip_qp.control.pbc.ik_newton import all_finite
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
@@ -312,7 +313,7 @@ class PBCTracker(Tracker):
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
-        if not (math.isfinite(tau_c.sum()) and math.isfinite(lam.sum())):
+        if not all_finite(tau_c, lam):
             return self._fallback(kin, lay, q_r, "non_finite_torque", info, t0)
         tau = np.zeros(self._nu)
         tau[lay.ctrl] = tau_c
