@@ -168,6 +168,14 @@ class OutputMap:
         self._rot_products = {side: np.empty((2, 2, nv)) for side in ("stance", "swing")}
         self._J_blade = np.empty((3, nv))
         self._rot = np.empty((2, 2, 1))
+        # Per stance: the Jacobian filled in place (its joint rows preset: a 1 at the joint's v index;
+        # every other row overwritten whole by each evaluate, which returns a copy) and its row views.
+        self._J = {stance: np.zeros((self.size, nv)) for stance in self._swing_of}
+        for stance, plan in self._plans.items():
+            for code, i, _, b in plan:
+                if code == _JOINT:
+                    self._J[stance][i, b] = 1.0
+        self._J_rows = {stance: tuple(J) for stance, J in self._J.items()}
 
     def _plan(self, stance: str) -> tuple[tuple, ...]:
         """The outputs of ``stance``, in order, as ``(code, row, a, b)``: a base angle ``(_PITCH |
@@ -247,7 +255,8 @@ class OutputMap:
         q, v = kin.state()
         jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6  # world-aligned (linear, angular), cached per update
         n = len(self.names)
-        J, y, jdv = np.zeros((n, v.shape[0])), np.zeros(n), np.zeros(n)
+        y, jdv = np.zeros(n), np.zeros(n)
+        J = self._J_rows[stance]  # row views of this stance's Jacobian buffer
 
         # Base orientation: R, world angular velocity w = Jw v (rad/s), drift alpha (rad/s^2).
         base = self.robot.base_frame_id
@@ -261,9 +270,8 @@ class OutputMap:
         cD, sD = math.cos(heading_rad), math.sin(heading_rad)
         rel: dict[str, list] = {}  # contact -> [CoM minus it, its drift, its Jacobian, heading-frame values]
         for code, i, a, b in self._plans[stance]:
-            if code == _JOINT:  # a joint coordinate
+            if code == _JOINT:  # a joint coordinate (its Jacobian row is preset)
                 y[i] = q[a]
-                J[i, b] = 1.0
             elif code == _COM:
                 side, fid = a
                 entry = rel.get(side)
@@ -274,7 +282,7 @@ class OutputMap:
                     entry = rel[side] = [p_rel, (dc[0] - ar[0], dc[1] - ar[1], dc[2] - ar[2]), J_rel, None]
                 if b == 2:
                     y[i], jdv[i] = entry[0][2], entry[1][2]
-                    J[i] = entry[2][2]
+                    J[i][...] = entry[2][2]
                     continue
                 # the step's heading frame: x_D = (cos D, sin D), y_D = (-sin D, cos D)
                 heading = entry[3]
@@ -314,7 +322,7 @@ class OutputMap:
                     chain = atan2_chain(R02, R22)
                 np.dot(chain[2:5], Jw, out=J[i])
                 y[i], jdv[i] = chain[0], chain[5]
-        return y, J, jdv
+        return y, self._J[stance].copy(), jdv
 
     def _toe_pitch(self, kin: ModelKinematics, swing: str, v: np.ndarray) -> tuple:
         """The swing foot's pitch from its blade vector ``d = toe - heel`` (m, the ends of its sole
