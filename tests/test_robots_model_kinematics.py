@@ -34,6 +34,15 @@ def test_mass_and_com_match_mujoco(robot):
         np.testing.assert_allclose(kin.com_velocity(), d.subtree_linvel[0], atol=TOL_MJ)
 
 
+def test_the_mass_taken_once_has_the_bits_of_every_update(robot):
+    """mass_kg is read once: Pinocchio's total mass has the same bits at every configuration and after
+    each kind of update (the full one, the kinematics-only one, the positions-only one)."""
+    kin = ModelKinematics(robot.pin_model)
+    for k, (_, _, q, v) in enumerate(random_states(robot, 6, seed=11)):
+        (kin.update, kin.update_kinematics, lambda q, v: kin.update_positions(q))[k % 3](q, v)
+        assert float(kin.data.mass[0]).hex() == kin.mass_kg.hex()
+
+
 def test_mass_matrix_matches_mujoco_including_armature(robot):
     kin = ModelKinematics(robot.pin_model)
     m = robot.mj_model

@@ -57,7 +57,7 @@ class PelvisYawFeedback:
         base = kin.robot.base_frame_id
         R = kin.frame_rotation_view(base)
         psi = math.atan2(R[1, 0], R[0, 0])
-        psi_dot = float(kin.frame_jacobian6(base)[5] @ v)  # the angular row about world z
+        psi_dot = float(np.dot(kin.frame_jacobian6(base)[5], v))  # the angular row about world z
         e = psi - (target.heading_rad - float(target.h_d[i_st]))
         e = (e + math.pi) % (2.0 * math.pi) - math.pi
         return -k * e, -k * (psi_dot + float(target.dh_d[i_st]))

@@ -313,8 +313,9 @@ class ModelKinematics:
     # ------------------------------------------------------- centre of mass
     @property
     def mass_kg(self) -> float:
-        """Total mass (kg)."""
-        return float(self.data.mass[0])
+        """Total mass (kg): Pinocchio's sum of the bodies' masses, taken once (it does not depend on
+        ``q``; every update's ``data.mass[0]`` has the same bits, tests/test_robots_model_kinematics.py)."""
+        return self._cat_mass
 
     def com(self) -> np.ndarray:
         """Centre of mass ``c`` (m), shape (3,)."""

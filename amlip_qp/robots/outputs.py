@@ -36,79 +36,11 @@ from amlip_qp.alip.formulas import world_to_heading_xy
 from amlip_qp.exceptions import InputError, MJCFError
 from amlip_qp.profiles.outputs import OutputPrimitive, output_primitives
 from amlip_qp.robots.model_kinematics import ModelKinematics
+from amlip_qp.robots.output_chain import atan2_chain, hypot_chain, neg_chain, rotation_column, rotation_entry_z
 from amlip_qp.robots.robot import Robot
 
-# A "chain scalar" is a tuple ``(val, rate, c0, c1, c2, jdv)``: a scalar
-# function of the state with its value, its time derivative ``J v``, its
-# Jacobian as three coefficients ``(c0, c1, c2)`` on the rows of a 3 x nv basis
-# Jacobian chosen by the caller (the base's angular Jacobian for rotation
-# entries, the toe-minus-heel point Jacobian for the foot pitch) and its drift
-# ``Jdot v``. Units follow the quantity (rad or m; per s; per s^2).
-
-
-def _atan2(a: tuple, b: tuple) -> tuple:
-    """``atan2(a, b)`` of two chain scalars, with the chain rule.
-
-    ``y' = (b a' - a b') / r^2`` and
-    ``y'' = (b a'' - a b'') / r^2 - 2 (b a' - a b') (a a' + b b') / r^4``.
-    """
-    av, ar, a0, a1, a2, aj = a
-    bv, br, b0, b1, b2, bj = b
-    r2 = av * av + bv * bv
-    num = bv * ar - av * br
-    ka, kb = bv / r2, -av / r2
-    jdv = (bv * aj - av * bj) / r2 - 2.0 * num * (av * ar + bv * br) / (r2 * r2)
-    return (math.atan2(av, bv), num / r2, ka * a0 + kb * b0, ka * a1 + kb * b1, ka * a2 + kb * b2, jdv)
-
-
-def _hypot(a: tuple, b: tuple) -> tuple:
-    """``sqrt(a^2 + b^2)`` of two chain scalars, with the chain rule.
-
-    ``rho' = (a a' + b b') / rho`` and
-    ``rho'' = (a a'' + b b'' + a'^2 + b'^2) / rho - (a a' + b b')^2 / rho^3``.
-    """
-    av, ar, a0, a1, a2, aj = a
-    bv, br, b0, b1, b2, bj = b
-    rho = math.hypot(av, bv)
-    dot = av * ar + bv * br
-    ka, kb = av / rho, bv / rho
-    jdv = (av * aj + bv * bj + ar * ar + br * br) / rho - dot * dot / rho**3
-    return (rho, dot / rho, ka * a0 + kb * b0, ka * a1 + kb * b1, ka * a2 + kb * b2, jdv)
-
-
-def _neg(a: tuple) -> tuple:
-    """``-a`` of a chain scalar."""
-    return (-a[0], -a[1], -a[2], -a[3], -a[4], -a[5])
-
-
-def _rotation_column(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
-    """Entries ``(R_0j, R_1j, R_2j)`` of a body's world rotation ``R`` (nested lists) as chain scalars.
-
-    The basis is the body's angular Jacobian. With ``w`` the world angular
-    velocity (rad/s) and ``alpha`` the angular acceleration drift (rad/s^2),
-    the column ``r = r_j`` moves as ``dr = w x r``, its second-derivative drift
-    is ``alpha x r + w x dr``, and ``d/dt R_ij = (r x e_i) . w`` gives the
-    coefficients ``r x e_i``.
-    """
-    w0, w1, w2 = w
-    a0, a1, a2 = alpha
-    r0, r1, r2 = R[0][j], R[1][j], R[2][j]
-    dr0, dr1, dr2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0
-    return (
-        (r0, dr0, 0.0, r2, -r1, (a1 * r2 - a2 * r1) + (w1 * dr2 - w2 * dr1)),
-        (r1, dr1, -r2, 0.0, r0, (a2 * r0 - a0 * r2) + (w2 * dr0 - w0 * dr2)),
-        (r2, dr2, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0)),
-    )
-
-
-def _rotation_entry_z(R: list, j: int, w: tuple, alpha: tuple) -> tuple:
-    """The entry ``R_2j`` alone of :func:`_rotation_column` (the same arithmetic, fewer terms)."""
-    w0, w1, w2 = w
-    a0, a1, _ = alpha
-    r0, r1, r2 = R[0][j], R[1][j], R[2][j]
-    dr0, dr1 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2
-    return (r2, w0 * r1 - w1 * r0, r1, -r0, 0.0, (a0 * r1 - a1 * r0) + (w0 * dr1 - w1 * dr0))
-
+# The codes of OutputMap's evaluation plan (OutputMap._plan).
+_PITCH, _ROLL, _PITCH_PLANAR, _JOINT, _COM, _TOE_PITCH, _FOOT_ROLL = range(7)
 
 #: The outputs of a 3-D model without a profile that has hip-yaw joints and toe/heel force points.
 DEFAULT_OUTPUTS_3D: tuple[str, ...] = (
@@ -228,12 +160,44 @@ class OutputMap:
                 tuple(smap.joint_pin_v[j] for j in joints),  # type: ignore[index]
             )
         nv = robot.nv
-        # Scratch (overwritten by every evaluate): J_c - J_contact and J_toe - J_heel (3 x nv each),
-        # the heading rotation [[cD, sD], [-sD, cD]] and its products with the first two rows of J_c - J_sw.
+        # Per stance: the evaluation plan, one ``(code, row, a, b)`` per output (see _plan).
+        self._plans = {stance: self._plan(stance) for stance in self._swing_of}
+        # Scratch (overwritten by every evaluate), per contact ("stance", "swing"): J_c - J_contact (3 x nv)
+        # and its first two rows times the heading rotation [[cD, sD], [-sD, cD]] (2 x 2 x nv); J_toe - J_heel.
         self._J_rel = {side: np.empty((3, nv)) for side in ("stance", "swing")}
+        self._rot_products = {side: np.empty((2, 2, nv)) for side in ("stance", "swing")}
         self._J_blade = np.empty((3, nv))
         self._rot = np.empty((2, 2, 1))
-        self._rot_products = np.empty((2, 2, nv))
+        # Per stance: the Jacobian filled in place (its joint rows preset: a 1 at the joint's v index;
+        # every other row overwritten whole by each evaluate, which returns a copy) and its row views.
+        self._J = {stance: np.zeros((self.size, nv)) for stance in self._swing_of}
+        for stance, plan in self._plans.items():
+            for code, i, _, b in plan:
+                if code == _JOINT:
+                    self._J[stance][i, b] = 1.0
+        self._J_rows = {stance: tuple(J) for stance, J in self._J.items()}
+
+    def _plan(self, stance: str) -> tuple[tuple, ...]:
+        """The outputs of ``stance``, in order, as ``(code, row, a, b)``: a base angle ``(_PITCH |
+        _ROLL | _PITCH_PLANAR, i, None, None)``; a joint ``(_JOINT, i, its q index, its v index)``; a
+        CoM component ``(_COM, i, (contact "stance"/"swing", its frame id), axis 0 x, 1 y or 2 z)``;
+        the swing foot's angle ``(_TOE_PITCH | _FOOT_ROLL, i, None, None)``."""
+        legs = {"stance": stance, "swing": self._swing_of[stance]}
+        q_idx, v_idx = self._joints[stance]
+        plan: list[tuple] = []
+        for i, prim in enumerate(self.primitives):
+            if prim.kind == "base_angle":
+                code = _ROLL if prim.axis != "pitch" else (_PITCH_PLANAR if self.planar else _PITCH)
+                plan.append((code, i, None, None))
+            elif prim.kind == "joint":
+                k = self.joint_rows.index(i)
+                plan.append((_JOINT, i, q_idx[k], v_idx[k]))
+            elif prim.kind == "com_over_contact":
+                axis = {"x": 0, "y": 1, "z": 2}[prim.axis]
+                plan.append((_COM, i, (prim.side, self.robot.contact_frame_ids[legs[prim.side]]), axis))
+            else:
+                plan.append((_TOE_PITCH if prim.axis == "pitch" else _FOOT_ROLL, i, None, None))
+        return tuple(plan)
 
     @property
     def size(self) -> int:
@@ -288,97 +252,94 @@ class OutputMap:
             InputError: Bad side or a non-finite heading.
         """
         swing = self.checked_swing(stance, heading_rad)
-        robot = self.robot
         q, v = kin.state()
-        jac = kin.frame_jacobian6  # world-aligned (linear rows, angular rows), cached per update
+        jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6  # world-aligned (linear, angular), cached per update
         n = len(self.names)
-        J, y, jdv = np.zeros((n, v.shape[0])), np.zeros(n), np.zeros(n)
+        y, jdv = np.zeros(n), np.zeros(n)
+        J = self._J_rows[stance]  # row views of this stance's Jacobian buffer
 
         # Base orientation: R, world angular velocity w = Jw v (rad/s), drift alpha (rad/s^2).
-        base = robot.base_frame_id
+        base = self.robot.base_frame_id
         Jw = jac(base)[3:]
-        w = tuple((Jw @ v).tolist())
-        alpha = tuple(kin.frame_jdot_v6(base)[3:].tolist())
+        w = np.dot(Jw, v).tolist()
+        alpha = acc(base).tolist()[3:]
         R = kin.frame_rotation_view(base).tolist()
         c = kin.com_view.tolist()
         dc = kin.com_jdot_v().tolist()
         Jc = np.ascontiguousarray(kin.com_jacobian())  # Pinocchio's is column-major; rows are used here
         cD, sD = math.cos(heading_rad), math.sin(heading_rad)
-        legs = {"stance": stance, "swing": swing}
-        rel: dict[str, tuple] = {}  # contact -> (CoM minus it, its drift, its Jacobian)
-        rotated = None  # the contact whose heading-frame products _rot_products holds
-        q_idx, v_idx = self._joints[stance]
-        joint_k = 0
-        for i, prim in enumerate(self.primitives):
-            if prim.kind == "base_angle":
-                if prim.axis == "pitch" and self.planar:
-                    R02, _, R22 = _rotation_column(R, 2, w, alpha)
-                    chain = _atan2(R02, R22)
-                elif prim.axis == "pitch":  # z-y-x Euler angles of the base
-                    R00, R10, R20 = _rotation_column(R, 0, w, alpha)
-                    chain = _atan2(_neg(R20), _hypot(R00, R10))
-                else:
-                    chain = _atan2(_rotation_entry_z(R, 1, w, alpha), _rotation_entry_z(R, 2, w, alpha))
-                np.dot(chain[2:5], Jw, out=J[i])
-                y[i], jdv[i] = chain[0], chain[5]
-            elif prim.kind == "joint":  # a joint coordinate
-                y[i] = q[q_idx[joint_k]]
-                J[i, v_idx[joint_k]] = 1.0
-                joint_k += 1
-            elif prim.kind == "com_over_contact":
-                if prim.side not in rel:
-                    fid = robot.contact_frame_ids[legs[prim.side]]
-                    r, a = kin.frame_translation_view(fid).tolist(), kin.frame_jdot_v6(fid).tolist()
-                    J_rel = np.subtract(Jc, jac(fid)[:3], out=self._J_rel[prim.side])
+        rel: dict[str, list] = {}  # contact -> [CoM minus it, its drift, its Jacobian, heading-frame values]
+        for code, i, a, b in self._plans[stance]:
+            if code == _JOINT:  # a joint coordinate (its Jacobian row is preset)
+                y[i] = q[a]
+            elif code == _COM:
+                side, fid = a
+                entry = rel.get(side)
+                if entry is None:
+                    r, ar = kin.frame_translation_view(fid).tolist(), acc(fid).tolist()
+                    J_rel = np.subtract(Jc, jac(fid)[:3], out=self._J_rel[side])
                     p_rel = (c[0] - r[0], c[1] - r[1], c[2] - r[2])
-                    rel[prim.side] = (p_rel, (dc[0] - a[0], dc[1] - a[1], dc[2] - a[2]), J_rel)
-                p_rel, d_rel, J_rel = rel[prim.side]
-                if prim.axis == "z":
-                    y[i], jdv[i] = p_rel[2], d_rel[2]
-                    J[i] = J_rel[2]
-                else:  # the step's heading frame: x_D = (cos D, sin D), y_D = (-sin D, cos D)
-                    k = 0 if prim.axis == "x" else 1
-                    y[i] = world_to_heading_xy(p_rel[0], p_rel[1], cD, sD)[k]
-                    jdv[i] = world_to_heading_xy(d_rel[0], d_rel[1], cD, sD)[k]
-                    rot, prod = self._rot, self._rot_products
-                    if rotated != prim.side:  # once per contact: its x and y rows share the products
-                        rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
-                        np.multiply(rot, J_rel[:2], out=prod)  # prod[i, j] = rot[i, j] * J_rel[j]
-                        rotated = prim.side
-                    np.add(prod[k, 0], prod[k, 1], out=J[i])
-            elif prim.axis == "pitch":
-                chain = self._toe_pitch(kin, swing)
+                    entry = rel[side] = [p_rel, (dc[0] - ar[0], dc[1] - ar[1], dc[2] - ar[2]), J_rel, None]
+                if b == 2:
+                    y[i], jdv[i] = entry[0][2], entry[1][2]
+                    J[i][...] = entry[2][2]
+                    continue
+                # the step's heading frame: x_D = (cos D, sin D), y_D = (-sin D, cos D)
+                heading = entry[3]
+                if heading is None:  # once per contact: its x and y rows share the products
+                    p_rel, d_rel, J_rel, _ = entry
+                    rot, prod = self._rot, self._rot_products[side]
+                    rot[0, 0, 0], rot[0, 1, 0], rot[1, 0, 0], rot[1, 1, 0] = cD, sD, -sD, cD
+                    np.multiply(rot, J_rel[:2], out=prod)  # prod[i, j] = rot[i, j] * J_rel[j]
+                    heading = entry[3] = (
+                        world_to_heading_xy(p_rel[0], p_rel[1], cD, sD),
+                        world_to_heading_xy(d_rel[0], d_rel[1], cD, sD),
+                        prod,
+                    )
+                y[i], jdv[i] = heading[0][b], heading[1][b]
+                np.add(heading[2][b, 0], heading[2][b, 1], out=J[i])
+            elif code == _TOE_PITCH:
+                chain = self._toe_pitch(kin, swing, v)
                 np.dot(chain[2:5], self._J_blade, out=J[i])
                 y[i], jdv[i] = chain[0], chain[5]
-            else:  # the swing foot's roll, from its contact frame's rotation (z-y-x Euler angles)
-                fid = robot.contact_frame_ids[swing]
+            elif code == _FOOT_ROLL:  # the swing foot's roll, from its contact frame's rotation (z-y-x Euler angles)
+                fid = self.robot.contact_frame_ids[swing]
                 Jf = jac(fid)[3:]
-                wf = tuple((Jf @ v).tolist())
-                af = tuple(kin.frame_jdot_v6(fid)[3:].tolist())
+                wf = np.dot(Jf, v).tolist()
+                af = acc(fid).tolist()[3:]
                 Rf = kin.frame_rotation_view(fid).tolist()
-                chain = _atan2(_rotation_entry_z(Rf, 1, wf, af), _rotation_entry_z(Rf, 2, wf, af))
+                chain = atan2_chain(rotation_entry_z(Rf, 1, wf, af), rotation_entry_z(Rf, 2, wf, af))
                 np.dot(chain[2:5], Jf, out=J[i])
                 y[i], jdv[i] = chain[0], chain[5]
-        return y, J, jdv
+            else:  # a base angle
+                if code == _PITCH:  # z-y-x Euler angles of the base
+                    R00, R10, R20 = rotation_column(R, 0, w, alpha)
+                    chain = atan2_chain(neg_chain(R20), hypot_chain(R00, R10))
+                elif code == _ROLL:
+                    chain = atan2_chain(rotation_entry_z(R, 1, w, alpha), rotation_entry_z(R, 2, w, alpha))
+                else:  # the pitch of a planar root
+                    R02, _, R22 = rotation_column(R, 2, w, alpha)
+                    chain = atan2_chain(R02, R22)
+                np.dot(chain[2:5], Jw, out=J[i])
+                y[i], jdv[i] = chain[0], chain[5]
+        return y, self._J[stance].copy(), jdv
 
-    def _toe_pitch(self, kin: ModelKinematics, swing: str) -> tuple:
+    def _toe_pitch(self, kin: ModelKinematics, swing: str, v: np.ndarray) -> tuple:
         """The swing foot's pitch from its blade vector ``d = toe - heel`` (m, the ends of its sole
         line: a two-point foot's points, a four-point foot's toe-pair and heel-pair midpoints) as a
-        chain scalar on ``J_toe - J_heel`` (left in :attr:`_J_blade`)."""
+        chain scalar on ``J_toe - J_heel`` (left in :attr:`_J_blade`); ``v`` the state's velocity."""
         toe_id, heel_id = self.robot.sole_line_frame_ids[swing]
-        jac = kin.frame_jacobian6
+        jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
         t0, t1, t2 = kin.frame_translation_view(toe_id).tolist()
         h0, h1, h2 = kin.frame_translation_view(heel_id).tolist()
-        d = (t0 - h0, t1 - h1, t2 - h2)
         Jd = np.subtract(jac(toe_id)[:3], jac(heel_id)[:3], out=self._J_blade)
-        at, ah = kin.frame_jdot_v6(toe_id).tolist(), kin.frame_jdot_v6(heel_id).tolist()
-        dd = (at[0] - ah[0], at[1] - ah[1], at[2] - ah[2])
-        rd = (Jd @ kin.state()[1]).tolist()
+        at, ah = acc(toe_id).tolist(), acc(heel_id).tolist()
+        rd0, rd1, rd2 = np.dot(Jd, v).tolist()
         # The components of d as chain scalars on the blade Jacobian (coefficients: unit vectors).
-        dx = (d[0], rd[0], 1.0, 0.0, 0.0, dd[0])
-        dy = (d[1], rd[1], 0.0, 1.0, 0.0, dd[1])
-        dz = (d[2], rd[2], 0.0, 0.0, 1.0, dd[2])
-        return _atan2(_neg(dz), _hypot(dx, dy))
+        dx = (t0 - h0, rd0, 1.0, 0.0, 0.0, at[0] - ah[0])
+        dy = (t1 - h1, rd1, 0.0, 1.0, 0.0, at[1] - ah[1])
+        dz = (t2 - h2, rd2, 0.0, 0.0, 1.0, at[2] - ah[2])
+        return atan2_chain(neg_chain(dz), hypot_chain(dx, dy))
 
 
 def check_output_map(robot: Robot, output_map) -> None:

@@ -95,7 +95,9 @@ class IterativeIK:
         nv = m.nv
         #: The equations of the system (held coordinates and their rows per stance).
         self.equations = eq = IKEquations(robot, self.size)
-        self._pose_rows = eq.pose_rows
+        # the same rows as a slice (x, z, pitch: every other row; all six), read as a view
+        self._pose = slice(0, 5, 2) if robot.is_planar else slice(0, 6)
+        self._npose = len(eq.pose_rows)
         self._planar = robot.is_planar
         self._rows = eq.rows
         # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap)
@@ -142,7 +144,7 @@ class IterativeIK:
         n = self.size
         A[:n] = J
         cid = self.robot.contact_frame_ids[stance]
-        A[n : n + len(self._pose_rows)] = kin.frame_jacobian6(cid)[self._pose_rows]
+        A[n : n + self._npose] = kin.frame_jacobian6(cid)[self._pose]
         return y, kin.frame_position(cid), kin.frame_rotation(cid)
 
     def _drift(self, stance: str, heading: float, out: np.ndarray) -> None:
@@ -150,7 +152,7 @@ class IterativeIK:
         kin = self.kin
         n = self.size
         out[:n] = kin.outputs(stance, heading)[2]
-        out[n : n + len(self._pose_rows)] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose_rows]
+        out[n : n + self._npose] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose]
 
     def _residual(self, rows: StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
         """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
@@ -163,20 +165,20 @@ class IterativeIK:
         else:
             np.subtract(pos, fixed["contact_pos"], out=F[n : n + 3])
             F[n + 3 : n + 6] = r_err
-        np.subtract(rows.lin_q @ q, fixed["lin"], out=F[rows.n_var :])
+        np.subtract(np.dot(rows.lin_q, q), fixed["lin"], out=F[rows.n_var :])
         return F
 
     def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:
         """The held quantities and their estimated rates, from the updated kinematics."""
         rows = self._rows[stance]
-        q, v = kin.q, kin.v
+        q, v = kin.state()
         cid = self.robot.contact_frame_ids[stance]
-        twist = kin.frame_jacobian6(cid) @ v
+        twist = np.dot(kin.frame_jacobian6(cid), v)
         rates = np.empty(self.model.nv - self.size)
-        npose = len(self._pose_rows)
-        rates[:npose] = twist[self._pose_rows]
-        rates[npose:] = rows.lin_rate @ v
-        lin = rows.lin_q @ q
+        npose = self._npose
+        rates[:npose] = twist[self._pose]
+        rates[npose:] = np.dot(rows.lin_rate, v)
+        lin = np.dot(rows.lin_q, q)
         lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
         return {
             "contact_pos": kin.frame_position(cid),

@@ -83,7 +83,7 @@ def spring_deflections_rad(
         f = np.array([0.0, 0.0, kin.mass_kg * GRAVITY_MPS2])
     else:
         f = np.asarray(force_N, dtype=float).reshape(3)
-    tau_ext = kin.contact_jacobian(stance).T @ f  # generalized force of the ground reaction
+    tau_ext = np.dot(kin.contact_jacobian(stance).T, f)  # generalized force of the ground reaction
     joints, couplings = _stance_springs(robot, stance)
     if linkage is not None:
         if len(joints) != 1 or len(couplings) != 1:

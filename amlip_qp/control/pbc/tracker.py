@@ -62,12 +62,14 @@ from scipy.linalg.lapack import dgesv as _dgesv
 from amlip_qp.alip import other_side
 from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
+from amlip_qp.control.pbc.ik_newton import all_finite
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.messages import TrackerResult
 from amlip_qp.robots.outputs import OutputMap
+from amlip_qp.robots.passive import contiguous_index
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -84,6 +86,8 @@ class StanceLayout:
     kp: np.ndarray = field(default_factory=lambda: np.zeros(0))
     kd: np.ndarray = field(default_factory=lambda: np.zeros(0))
     swing_mask: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    swing_pos: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # positions of swing_mask's
+    swing_v: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # ... and their v indices
     K: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # KKT matrix, constant entries preset
     rhs: np.ndarray = field(default_factory=lambda: np.zeros(0))
     n_contact: int = 0  # contact rows (the spring rows follow)
@@ -132,6 +136,8 @@ class PBCTracker(Tracker):
                 kp=kp,
                 kd=kd,
                 swing_mask=swing_mask,
+                swing_pos=np.flatnonzero(swing_mask),
+                swing_v=act.pin_v_idx[ctrl][swing_mask],
             )
         # A two- or four-point foot: the rows of its sole line (a four-point sole is held as its line).
         self._blade = {s: len(robot.sole_line_frame_ids.get(s, ())) == 2 for s in robot.foot_sides}
@@ -152,7 +158,9 @@ class PBCTracker(Tracker):
         self._nv = nv
         names = OutputMap(robot).names
         self._yaw_feedback = PelvisYawFeedback.for_outputs(names, self.gains.hip_yaw_feedback)
-        self._torso_rows = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
+        torso = np.array([i for i, nm in enumerate(names) if nm in ("torso_pitch", "torso_roll")], dtype=int)
+        self._has_torso_rows = len(torso) > 0
+        self._torso_rows = contiguous_index(torso)  # a slice when they are adjacent (views, not copies)
         self._rhs_comp = np.zeros(nv)
         # spring model (see PBCGains.spring_model_offset): rest values and the stance leg's entries
         self._spring_rest = self.ik.equations.spring_rest_values()
@@ -217,10 +225,10 @@ class PBCTracker(Tracker):
         bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
         Jw = J6[3:]
         N = np.array(((ax, ay, az), (bx, by, bz)))
-        J_out[3:5] = N @ Jw
-        w = a6[3:]
-        a_out[3] = ax * w[0] + ay * w[1] + az * w[2]
-        a_out[4] = bx * w[0] + by * w[1] + bz * w[2]
+        J_out[3:5] = np.dot(N, Jw)
+        _, _, _, w0, w1, w2 = a6.tolist()
+        a_out[3] = ax * w0 + ay * w1 + az * w2
+        a_out[4] = bx * w0 + by * w1 + bz * w2
 
     def contact_constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
@@ -284,14 +292,13 @@ class PBCTracker(Tracker):
             held_springs=held,
         )
         info = {"ik_iterations": float(ik.iterations), "ik_residual": float(ik.residual)}
-        q_r = ik.q_r[lay.ctrl_q].copy()
+        q_r = ik.q_r[lay.ctrl_q]  # index arrays: new arrays
         v_r = ik.v_r[lay.ctrl_v]
         a_r = ik.a_r[lay.ctrl_v]
         if not ik.ok:
             return self._fallback(kin, lay, q_r, "ik_failed", info, t0, use_ref=False)
         c = self.gains.swing_torso_compensation
-        if c > 0.0 and len(self._torso_rows):
-            v_r = v_r.copy()
+        if c > 0.0 and self._has_torso_rows:
             self.compensate_swing(kin, target, lay, c, q_r, v_r)
         e = q_r - q[lay.ctrl_q]
         ed = v_r - v[lay.ctrl_v]
@@ -306,7 +313,7 @@ class PBCTracker(Tracker):
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
-        if not (math.isfinite(tau_c.sum()) and math.isfinite(lam.sum())):
+        if not all_finite(tau_c, lam):
             return self._fallback(kin, lay, q_r, "non_finite_torque", info, t0)
         tau = np.zeros(self._nu)
         tau[lay.ctrl] = tau_c
@@ -346,12 +353,12 @@ class PBCTracker(Tracker):
         rhs = self._rhs_comp
         rhs[rows] = c * (y[rows] - target.h_d[rows])
         dq = self.ik.solve_linear(rhs)
-        rhs[rows] = c * (J[rows] @ kin.v - target.dh_d[rows])
+        rhs[rows] = c * (np.dot(J[rows], kin.state()[1]) - target.dh_d[rows])
         dv = self.ik.solve_linear(rhs)
         rhs[rows] = 0.0
-        sw = lay.swing_mask
-        q_r[sw] += dq[lay.ctrl_v[sw]]
-        v_r[sw] += dv[lay.ctrl_v[sw]]
+        sw, sw_v = lay.swing_pos, lay.swing_v
+        q_r[sw] += dq[sw_v]
+        v_r[sw] += dv[sw_v]
 
     def _fallback(
         self, kin: RobotKinematics, lay: StanceLayout, q_r, reason: str, info: dict, t0: float, use_ref: bool = True

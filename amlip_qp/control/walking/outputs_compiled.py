@@ -98,9 +98,8 @@ class CompiledOutputMap:
         self._points = {stance: ref.points(stance) for stance in sides}
         self._rotating = {stance: ref.rotating_frames(stance) for stance in sides}
         self._joints = {stance: ref.joint_indices(stance) for stance in sides}
-        # the joint outputs' Jacobian entries (row, v index) as index arrays, per stance
-        rows_idx = np.array(ref.joint_rows, dtype=np.intp)
-        self._joint_entries = {stance: (rows_idx, np.array(self._joints[stance][1], dtype=np.intp)) for stance in sides}
+        # the joint outputs' Jacobian entries (row, v index), per stance (a few: set one by one)
+        self._joint_entries = {stance: tuple(zip(ref.joint_rows, self._joints[stance][1])) for stance in sides}
         # Views of the inputs each primitive is copied into (``view[...] = x`` is the cheapest copy).
         JT, p = self._JT, self._p
         self._in_base = (JT[0:3], JT[3:6], p[0:9].reshape(3, 3), p[9:12], p[12:15], p[15:18])
@@ -147,7 +146,8 @@ class CompiledOutputMap:
         self._in_v[...] = v
         self._eval()
         J = self._J.copy()
-        J[self._joint_entries[stance]] = 1.0
+        for entry in self._joint_entries[stance]:
+            J[entry] = 1.0
         return self._y.copy(), J, self._jdv.copy()
 
 
