@@ -314,6 +314,51 @@ class PlannerOutput:
     turn_rad: float
     v_z_used_mps: float
 
+    @classmethod
+    def of(
+        cls,
+        s,
+        t_remaining_s,
+        L_hat_Nms,
+        p_hat_m,
+        L_des_Nms,
+        p_sw_des_world_m,
+        p_sw_des_heading_m,
+        swing_target_world_m,
+        h_d,
+        dh_d,
+        ddh_d,
+        heading_rad,
+        heading_next_rad,
+        turn_rad,
+        v_z_used_mps,
+    ) -> PlannerOutput:
+        """``PlannerOutput(s=s, ...)`` with the fields in their order, positional: the same object
+        (tested), made without the frozen constructor's keyword handling and ``object.__setattr__``
+        calls (the planner's per-tick answer)."""
+        new = object.__new__(cls)
+        put = _PLANNER_OUTPUT_SETTERS
+        put[0](new, s)
+        put[1](new, t_remaining_s)
+        put[2](new, L_hat_Nms)
+        put[3](new, p_hat_m)
+        put[4](new, L_des_Nms)
+        put[5](new, p_sw_des_world_m)
+        put[6](new, p_sw_des_heading_m)
+        put[7](new, swing_target_world_m)
+        put[8](new, h_d)
+        put[9](new, dh_d)
+        put[10](new, ddh_d)
+        put[11](new, heading_rad)
+        put[12](new, heading_next_rad)
+        put[13](new, turn_rad)
+        put[14](new, v_z_used_mps)
+        return new
+
+
+#: The slot setters of :class:`PlannerOutput`'s fields, in field order.
+_PLANNER_OUTPUT_SETTERS = tuple(getattr(PlannerOutput, f.name).__set__ for f in fields(PlannerOutput))
+
 
 @dataclass(frozen=True)
 class ImuReading:

@@ -132,3 +132,18 @@ def test_terrain_prediction_defaults_to_flat_ground_and_is_validated():
     ]:
         with pytest.raises(InputError, match=match):
             TerrainPrediction(**kw)
+
+
+def test_planner_output_of_is_the_constructor_with_positional_fields():
+    from dataclasses import fields
+
+    from amlip_qp.messages import PlannerOutput
+
+    names = [f.name for f in fields(PlannerOutput)]
+    arrays = [np.arange(k, dtype=float) + i for i, k in enumerate((2, 2, 2, 2, 2, 3, 4, 4, 4))]
+    values = [0.4, 0.2, *arrays, 0.1, 0.3, 0.2, -0.05]
+    got, ref = PlannerOutput.of(*values), PlannerOutput(**dict(zip(names, values)))
+    assert type(got) is PlannerOutput and repr(got) == repr(ref)
+    assert all(getattr(got, n) is v for n, v in zip(names, values))
+    with pytest.raises(AttributeError):
+        got.s = 0.5  # type: ignore[misc]
