@@ -313,14 +313,7 @@ class WalkingController:
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
         command = self.corrector.apply(command)
         v_z = float(est.com_vel_mps[2])
-        state = StateEstimate(
-            stance=stance,
-            p_st_m=est.p_st_m,
-            L_Nms=est.L_Nms,
-            v_z_mps=v_z,
-            t_in_step_s=clock.time_in_step(t),
-            com_m=est.com_m,
-        )
+        state = StateEstimate.of(stance, est.p_st_m, est.L_Nms, v_z, clock.time_in_step(t), est.com_m)
         ground = self.ground
         plan = self._last_plan = plan_tick(self.planner, ground, state, command, est, new_step, self._last_plan)
         target = TrackingTarget(
