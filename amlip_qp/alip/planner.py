@@ -369,7 +369,9 @@ class Planner:
         ur = self.outputs.pack_swing_reference_input(
             s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref, ground=ground
         )
-        yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
+        yr = self.reference_fn(ur)
+        if not (type(yr) is np.ndarray and yr.dtype is _F64 and yr.ndim == 1):  # the generated kernels' is
+            yr = np.asarray(yr, dtype=float).reshape(-1)
         if yr.size != kernels.SWING_REFERENCE_N_OUT:
             raise InputError(
                 f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}"
