@@ -222,41 +222,6 @@ class StateEstimate:
         if self.t_in_step_s < 0.0:
             raise InputError(f"StateEstimate.t_in_step_s must be >= 0 s, got {self.t_in_step_s!r}")
 
-    @classmethod
-    def of(
-        cls, stance: str, p_st_m: np.ndarray, L_Nms: np.ndarray, v_z_mps: float, t_in_step_s: float, com_m: np.ndarray
-    ) -> StateEstimate:
-        """``StateEstimate(stance=stance, ...)`` with the fields in their order, positional: the same
-        object (tested), cheaper for the walking controller's per-tick estimate (three float64
-        3-vectors and two floats, checked as the constructor checks them); anything else, and every
-        failed check, goes through the constructor (its conversions and errors)."""
-        if (
-            (stance == "left" or stance == "right")
-            and type(p_st_m) is np.ndarray and type(L_Nms) is np.ndarray and type(com_m) is np.ndarray
-            and p_st_m.dtype is _F64 and L_Nms.dtype is _F64 and com_m.dtype is _F64
-            and p_st_m.shape == L_Nms.shape == com_m.shape == _VECTOR3
-            and type(v_z_mps) is float and type(t_in_step_s) is float and t_in_step_s >= 0.0
-        ):  # fmt: skip
-            p0, p1, p2 = p_st_m.tolist()
-            L0, L1, L2 = L_Nms.tolist()
-            c0, c1, c2 = com_m.tolist()
-            # one finiteness test, as the constructor's: NaN and inf propagate through a sum
-            if math.isfinite(p0 + p1 + p2 + (L0 + L1 + L2) + (c0 + c1 + c2) + v_z_mps + t_in_step_s):
-                new = object.__new__(cls)
-                put_stance, put_p, put_L, put_vz, put_t, put_com = _STATE_ESTIMATE_SETTERS
-                put_stance(new, stance)
-                put_p(new, p_st_m)
-                put_L(new, L_Nms)
-                put_vz(new, v_z_mps)
-                put_t(new, t_in_step_s)
-                put_com(new, com_m)
-                return new
-        return cls(stance=stance, p_st_m=p_st_m, L_Nms=L_Nms, v_z_mps=v_z_mps, t_in_step_s=t_in_step_s, com_m=com_m)
-
-
-#: The slot setters of :class:`StateEstimate`'s fields, in field order.
-_STATE_ESTIMATE_SETTERS = tuple(getattr(StateEstimate, f.name).__set__ for f in fields(StateEstimate))
-
 
 @dataclass(frozen=True, kw_only=True, slots=True)
 class TerrainPrediction:
@@ -348,51 +313,6 @@ class PlannerOutput:
     heading_next_rad: float
     turn_rad: float
     v_z_used_mps: float
-
-    @classmethod
-    def of(
-        cls,
-        s,
-        t_remaining_s,
-        L_hat_Nms,
-        p_hat_m,
-        L_des_Nms,
-        p_sw_des_world_m,
-        p_sw_des_heading_m,
-        swing_target_world_m,
-        h_d,
-        dh_d,
-        ddh_d,
-        heading_rad,
-        heading_next_rad,
-        turn_rad,
-        v_z_used_mps,
-    ) -> PlannerOutput:
-        """``PlannerOutput(s=s, ...)`` with the fields in their order, positional: the same object
-        (tested), made without the frozen constructor's keyword handling and ``object.__setattr__``
-        calls (the planner's per-tick answer)."""
-        new = object.__new__(cls)
-        put = _PLANNER_OUTPUT_SETTERS
-        put[0](new, s)
-        put[1](new, t_remaining_s)
-        put[2](new, L_hat_Nms)
-        put[3](new, p_hat_m)
-        put[4](new, L_des_Nms)
-        put[5](new, p_sw_des_world_m)
-        put[6](new, p_sw_des_heading_m)
-        put[7](new, swing_target_world_m)
-        put[8](new, h_d)
-        put[9](new, dh_d)
-        put[10](new, ddh_d)
-        put[11](new, heading_rad)
-        put[12](new, heading_next_rad)
-        put[13](new, turn_rad)
-        put[14](new, v_z_used_mps)
-        return new
-
-
-#: The slot setters of :class:`PlannerOutput`'s fields, in field order.
-_PLANNER_OUTPUT_SETTERS = tuple(getattr(PlannerOutput, f.name).__set__ for f in fields(PlannerOutput))
 
 
 @dataclass(frozen=True)

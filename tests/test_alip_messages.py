@@ -114,38 +114,6 @@ def test_state_estimate_converts_other_inputs_to_float64():
         est(L_Nms=np.array([0.0, np.nan, 0.0]))
 
 
-def test_state_estimate_of_is_the_constructor_with_its_checks_and_errors():
-    """The positional fast path gives the constructor's object (the arrays kept), and for every bad input
-    the constructor's InputError."""
-    from amlip_qp.messages import StateEstimate
-
-    names = ("stance", "p_st_m", "L_Nms", "v_z_mps", "t_in_step_s", "com_m")
-    good = dict(stance="right", p_st_m=np.array([0.03, -0.1, H]), L_Nms=np.array([1.5, 12.0, 0.2]),
-                v_z_mps=0.05, t_in_step_s=0.1, com_m=np.array([1.0, 0.5, H]))  # fmt: skip
-    got, ref = StateEstimate.of(*good.values()), StateEstimate(**good)
-    assert type(got) is StateEstimate and repr(got) == repr(ref)
-    assert all(getattr(got, n) is good[n] for n in names)
-    with pytest.raises(AttributeError):
-        got.v_z_mps = 0.0  # type: ignore[misc]
-    converted = StateEstimate.of("left", [0.03, -0.1, H], np.array([1, 12, 0]), 0, 0.1, good["com_m"])
-    assert converted.L_Nms.dtype == np.float64 and converted.p_st_m.tolist() == [0.03, -0.1, H]
-    bad = [
-        (dict(stance="middle"), "stance must be 'left' or 'right'"),
-        (dict(p_st_m=np.array([0.0, np.nan, H])), r"NaN or inf in \['p_st_m'\]"),
-        (dict(L_Nms=np.array([np.inf, 0.0, 0.0])), r"NaN or inf in \['L_Nms'\]"),
-        (dict(com_m=np.array([0.0, 0.0, -np.inf])), r"NaN or inf in \['com_m'\]"),
-        (dict(v_z_mps=np.nan), r"NaN or inf in \['v_z_mps'\]"),
-        (dict(t_in_step_s=np.inf), r"NaN or inf in \['t_in_step_s'\]"),
-        (dict(t_in_step_s=np.nan), r"NaN or inf in \['t_in_step_s'\]"),
-        (dict(t_in_step_s=-0.01), "t_in_step_s must be >= 0"),
-        (dict(p_st_m=np.zeros(2)), r"p_st_m must have shape \(3,\)"),
-        (dict(com_m=np.array([1e308, 1e308, 0.0])), "NaN or inf in a value too large to add"),
-    ]
-    for change, match in bad:
-        with pytest.raises(InputError, match=match):
-            StateEstimate.of(*{**good, **change}.values())
-
-
 def test_terrain_prediction_defaults_to_flat_ground_and_is_validated():
     from amlip_qp.messages import TerrainPrediction
 
@@ -164,18 +132,3 @@ def test_terrain_prediction_defaults_to_flat_ground_and_is_validated():
     ]:
         with pytest.raises(InputError, match=match):
             TerrainPrediction(**kw)
-
-
-def test_planner_output_of_is_the_constructor_with_positional_fields():
-    from dataclasses import fields
-
-    from amlip_qp.messages import PlannerOutput
-
-    names = [f.name for f in fields(PlannerOutput)]
-    arrays = [np.arange(k, dtype=float) + i for i, k in enumerate((2, 2, 2, 2, 2, 3, 4, 4, 4))]
-    values = [0.4, 0.2, *arrays, 0.1, 0.3, 0.2, -0.05]
-    got, ref = PlannerOutput.of(*values), PlannerOutput(**dict(zip(names, values)))
-    assert type(got) is PlannerOutput and repr(got) == repr(ref)
-    assert all(getattr(got, n) is v for n, v in zip(names, values))
-    with pytest.raises(AttributeError):
-        got.s = 0.5  # type: ignore[misc]

@@ -75,6 +75,7 @@ from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
 from amlip_qp.alip.planner_inputs import check_settings, check_tick, ground_terms
+from amlip_qp.alip.planner_output import planner_output
 from amlip_qp.alip.step_timing import StepTiming, retime
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
@@ -383,7 +384,7 @@ class Planner:
             h_d[i], dh_d[i], ddh_d[i] = O.late_descent(h_d[i], rate, t_in - T)
 
         target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2 + dz_sw])
-        return PlannerOutput.of(
+        return planner_output(
             s, t_rem, y[0:2], y[2:4], y[4:6], y[6:8], p_sw_h, target, h_d, dh_d, ddh_d,
             self._heading, heading_next, turn, v_z,
         )  # fmt: skip
