@@ -114,3 +114,19 @@ def test_ground_inputs_reach_the_references_and_are_checked():
 def test_late_descent_is_a_constant_rate_continuation():
     assert outputs.late_descent(0.8, 0.4, 0.05) == (pytest.approx(0.82), 0.4, 0.0)
     assert outputs.late_descent(0.8, 0.4, 0.0) == (0.8, 0.4, 0.0)
+
+
+def test_split_reference_gives_each_outputs_value_and_derivatives_in_new_memory():
+    """``h_d, dh_d, ddh_d`` are the kernel output's entries at the set's indices, in the set's order, in
+    memory of their own (writing them leaves the kernel's output alone)."""
+    y = np.arange(3 * kernels.N_REFERENCE_OUTPUTS, dtype=float) * 1.5
+    n = kernels.N_REFERENCE_OUTPUTS
+    for names in (OUT2, OUT3):
+        s = outputs.OutputSet(names)
+        idx = s.reference_index
+        h, dh, ddh = s.split_reference(y)
+        for got, want in ((h, y[idx]), (dh, y[n + idx]), (ddh, y[2 * n + idx])):
+            np.testing.assert_array_equal(got, want)
+            assert got.shape == (len(names),) and not np.shares_memory(got, y)
+        h[:] = -1.0
+        np.testing.assert_array_equal(dh, y[n + idx])

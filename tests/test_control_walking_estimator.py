@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip.kalman import AngularMomentumFilter
-from amlip_qp.control.walking.estimator import Estimator
+from amlip_qp.control.walking.estimator import Estimator, planner_state
 from amlip_qp.exceptions import InputError
-from amlip_qp.messages import Measurement
+from amlip_qp.messages import Measurement, StateEstimate
 from amlip_qp.robots import RobotKinematics, load_robot
 
 
@@ -99,3 +99,34 @@ def test_the_filters_are_the_librarys_momentum_filter(cassie):
         else:
             expect = ref.step(e.p_st_m[0], e.p_st_m[1], Lx, Ly, 0.0005)
         assert tuple(e.L_Nms[:2]) == expect and e.L_Nms[2] == Lz
+
+
+def test_planner_state_is_the_state_estimate_constructor_with_its_checks_and_errors():
+    """The positional fast path gives the constructor's object (the arrays kept), and for every bad input
+    the constructor's InputError."""
+    H = 0.8  # a CoM height, m
+    names = ("stance", "p_st_m", "L_Nms", "v_z_mps", "t_in_step_s", "com_m")
+    good = dict(stance="right", p_st_m=np.array([0.03, -0.1, H]), L_Nms=np.array([1.5, 12.0, 0.2]),
+                v_z_mps=0.05, t_in_step_s=0.1, com_m=np.array([1.0, 0.5, H]))  # fmt: skip
+    got, ref = planner_state(*good.values()), StateEstimate(**good)
+    assert type(got) is StateEstimate and repr(got) == repr(ref)
+    assert all(getattr(got, n) is good[n] for n in names)
+    with pytest.raises(AttributeError):
+        got.v_z_mps = 0.0  # type: ignore[misc]
+    converted = planner_state("left", [0.03, -0.1, H], np.array([1, 12, 0]), 0, 0.1, good["com_m"])
+    assert converted.L_Nms.dtype == np.float64 and converted.p_st_m.tolist() == [0.03, -0.1, H]
+    bad = [
+        (dict(stance="middle"), "stance must be 'left' or 'right'"),
+        (dict(p_st_m=np.array([0.0, np.nan, H])), r"NaN or inf in \['p_st_m'\]"),
+        (dict(L_Nms=np.array([np.inf, 0.0, 0.0])), r"NaN or inf in \['L_Nms'\]"),
+        (dict(com_m=np.array([0.0, 0.0, -np.inf])), r"NaN or inf in \['com_m'\]"),
+        (dict(v_z_mps=np.nan), r"NaN or inf in \['v_z_mps'\]"),
+        (dict(t_in_step_s=np.inf), r"NaN or inf in \['t_in_step_s'\]"),
+        (dict(t_in_step_s=np.nan), r"NaN or inf in \['t_in_step_s'\]"),
+        (dict(t_in_step_s=-0.01), "t_in_step_s must be >= 0"),
+        (dict(p_st_m=np.zeros(2)), r"p_st_m must have shape \(3,\)"),
+        (dict(com_m=np.array([1e308, 1e308, 0.0])), "NaN or inf in a value too large to add"),
+    ]
+    for change, match in bad:
+        with pytest.raises(InputError, match=match):
+            planner_state(*{**good, **change}.values())

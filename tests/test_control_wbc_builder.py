@@ -170,3 +170,23 @@ def test_a_four_point_sole_solution_holds_the_foot_and_loads_each_corner(sole_ro
     assert st.shape == (4, 3) and np.all(st[:, 2] >= cfg.min_normal_force_N - 1e-6)
     assert np.all(np.abs(st[:, :2]) <= cfg.friction_mu * st[:, 2:] + 1e-6)  # each corner's pyramid
     assert st[:, 2].sum() > 0.5 * robot.mass_kg * 9.81, "the stance foot carries the robot"
+
+
+def test_normal_force_totals_are_numpys_sums_bit_for_bit(robot):
+    """The totals (summed as Python floats for feet of fewer than 8 points) are NumPy's sums of the
+    normal components, bit for bit, signed zeros, infinities and NaN included."""
+    builder = WholeBodyQP(robot)
+    L = builder.layout
+    d = L.point_dim
+    rng = np.random.default_rng(3)
+    for i in range(2000):
+        x = rng.normal(size=L.n) * 10.0 ** rng.integers(-6, 6, size=L.n)
+        if i % 3 == 0:
+            x[rng.integers(0, L.n, 6)] = rng.choice([0.0, -0.0, np.inf, -np.inf, np.nan], 6)
+        if i % 7 == 0:
+            x[:] = rng.choice([0.0, -0.0], L.n)
+        want = [float(np.add.reduce(x[foot][d - 1 :: d])) for foot in (L.sl_f_st, L.sl_f_sw)]
+        got = builder.normal_force_totals(x)
+        assert all(type(v) is float for v in got)
+        np.testing.assert_array_equal(np.array(got), np.array(want))
+        assert np.array_equal(np.signbit(got), np.signbit(want))

@@ -163,3 +163,36 @@ def test_the_stacked_path_checks_solutions_and_refuses_a_contradictory_row():
     p.b[0] = 1.0
     with pytest.raises(QPError):
         solver.solve(p)
+
+
+def test_the_one_pass_check_bounds_the_violation_and_flags_non_finite_points():
+    """The solve's one-pass check (the largest gap of both bound sides) is the violation where that is
+    positive, and NaN or above any tolerance at a point with a NaN or an infinite entry, so a solution it
+    passes is finite and within the tolerance."""
+    from amlip_qp.qp.daqp_solver import RESIDUAL_CHECK, _Shape
+
+    p = allocated_problem(6, 2, 3)
+    p.u[0], p.lb[1] = np.inf, -np.inf
+    shape = _Shape(p)
+    shape.fill(p)
+    x0 = p.solve_with("quadprog")
+    for x in (x0, x0 + 0.5, x0 - 3.0):
+        assert max(shape.largest_gap(x), 0.0) == shape.violation(x)
+    for bad in (np.nan, np.inf, -np.inf):
+        for i in range(p.n):
+            x = x0.copy()
+            x[i] = bad
+            assert not shape.largest_gap(x) <= RESIDUAL_CHECK
+
+
+def test_a_replaced_array_of_the_same_problem_is_solved_with_its_new_values():
+    """The solver keeps the shape of the allocated problem it solved last; a problem whose array was
+    replaced (no longer stacked) is read apart, with the same solution as a fresh solver's."""
+    p = _allocated_copy(random_problem(3))
+    solver = DAQPSolver()
+    x_first = solver.solve(p).x
+    np.testing.assert_array_equal(solver.solve(p).x, x_first)
+    p.g = p.g + 1.0  # a replaced array: the problem is no longer read in place
+    assert p.stacked() is None
+    np.testing.assert_allclose(solver.solve(p).x, DAQPSolver().solve(p).x, atol=1e-9)
+    assert max(p.residuals(solver.solve(p).x).values()) < 1e-9

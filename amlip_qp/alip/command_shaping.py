@@ -71,6 +71,9 @@ class CommandShaper:
             raise InputError(f"CommandShaper needs a CommandShaping (rate limits), got {type(shaping).__name__}")
         self.shaping = shaping
         self._rates = (shaping.vx_accel_mps2, shaping.vy_accel_mps2, shaping.turn_accel_radps2)
+        # the axes without a limit (passed through) and those with one, with their rates
+        self._free = tuple(i for i, rate in enumerate(self._rates) if rate == math.inf)
+        self._limited = tuple((i, rate) for i, rate in enumerate(self._rates) if rate != math.inf)
         self._value = [0.0, 0.0, 0.0]
         self._t_s: float | None = None
 
@@ -115,12 +118,10 @@ class CommandShaper:
         raw = (command.vx_mps, command.vy_mps, command.turn_rate_radps)
         value = self._value
         changes: dict[str, float] = {}
-        for i in range(3):
+        for i in self._free:
+            value[i] = raw[i]
+        for i, rate in self._limited:
             target = raw[i]
-            rate = self._rates[i]
-            if rate == math.inf:
-                value[i] = target
-                continue
             step = rate * dt
             diff = target - value[i]
             if abs(diff) <= step * (1.0 + RATE_RTOL):

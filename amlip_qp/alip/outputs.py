@@ -77,6 +77,9 @@ class OutputSet:
         self.planar = planar
         #: Each output's index in :data:`REFERENCE_OUTPUTS`.
         self.reference_index = np.array([REFERENCE_OUTPUTS.index(n) for n in names], dtype=int)
+        n_ref = kernels.N_REFERENCE_OUTPUTS
+        # h_d, dh_d and ddh_d's places in a SWING_REFERENCE output, one after the other (split_reference)
+        self._split_index = np.concatenate([self.reference_index + k * n_ref for k in range(3)])
         # Where the kernel's step-start and command inputs come from (-1: not an output; its input is 0).
         self._i_stance_yaw = _position(names, "stance_hip_yaw")
         self._i_swing_yaw = _position(names, "swing_hip_yaw")
@@ -146,9 +149,11 @@ class OutputSet:
         return u
 
     def split_reference(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Split a SWING_REFERENCE output into this set's ``(h_d, dh_d, ddh_d)`` (new arrays)."""
-        n, idx = kernels.N_REFERENCE_OUTPUTS, self.reference_index
-        return y[idx], y[n + idx], y[2 * n + idx]
+        """Split a SWING_REFERENCE output into this set's ``(h_d, dh_d, ddh_d)`` (new memory: three
+        consecutive parts of one new array, gathered at once)."""
+        parts = y[self._split_index]
+        k = len(self.names)
+        return parts[:k], parts[k : 2 * k], parts[2 * k :]
 
 
 def output_set(outputs: Sequence[str] | OutputSet) -> OutputSet:

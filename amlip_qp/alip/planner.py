@@ -75,11 +75,14 @@ from amlip_qp.alip import outputs as O
 from amlip_qp.alip.clock import StepClock
 from amlip_qp.alip.formulas import GRAVITY_MPS2, world_to_heading_xy
 from amlip_qp.alip.planner_inputs import check_settings, check_tick, ground_terms
+from amlip_qp.alip.planner_output import planner_output
 from amlip_qp.alip.step_timing import StepTiming, retime
 from amlip_qp.exceptions import InputError
 from amlip_qp.messages import Command, PlannerOutput, StateEstimate, TerrainPrediction
 
 __all__ = ["VZ_CLAMP_FRACTION", "Planner"]
+
+_F64 = np.dtype(np.float64)
 
 #: The ``v_z`` fed to the foot-placement law is clamped to ``+-`` this fraction
 #: of ``H l tanh(lT)``, where the law's denominator vanishes (see
@@ -329,7 +332,11 @@ class Planner:
             p0, u_p1, u_L0, L1, t_rem, v_z, command.vx_mps * factor, vy, heading_next, sign, m, H, T, width, g, dz_next,
         )  # fmt: skip
         # The kernels may return a shared buffer: copy once, hand out views.
-        y = np.array(self.plan_fn(u), dtype=float).reshape(-1)
+        y = self.plan_fn(u)
+        if type(y) is np.ndarray and y.dtype is _F64 and y.ndim == 1:
+            y = y.copy()  # the generated kernels' output: np.array(y, dtype=float)'s bits, cheaper
+        else:
+            y = np.array(y, dtype=float).reshape(-1)
         if y.size != len(kernels.ALIP_PLAN_OUTPUTS):
             raise InputError(
                 f"plan_fn returned {y.size} values; ALIP_PLAN has {len(kernels.ALIP_PLAN_OUTPUTS)} outputs"
@@ -363,7 +370,9 @@ class Planner:
         ur = self.outputs.pack_swing_reference_input(
             s, T, H, command.clearance_m, self._h0, p_sw_h, turn, out=self._u_ref, ground=ground
         )
-        yr = np.asarray(self.reference_fn(ur), dtype=float).reshape(-1)
+        yr = self.reference_fn(ur)
+        if not (type(yr) is np.ndarray and yr.dtype is _F64 and yr.ndim == 1):  # the generated kernels' is
+            yr = np.asarray(yr, dtype=float).reshape(-1)
         if yr.size != kernels.SWING_REFERENCE_N_OUT:
             raise InputError(
                 f"reference_fn returned {yr.size} values; SWING_REFERENCE has {kernels.SWING_REFERENCE_N_OUT}"
@@ -375,20 +384,7 @@ class Planner:
             h_d[i], dh_d[i], ddh_d[i] = O.late_descent(h_d[i], rate, t_in - T)
 
         target = np.array([c0 - p0 + y2 - px_w, c1 - p1 + y3 - py_w, c2 - p2 + dz_sw])
-        return PlannerOutput(
-            s=s,
-            t_remaining_s=t_rem,
-            L_hat_Nms=y[0:2],
-            p_hat_m=y[2:4],
-            L_des_Nms=y[4:6],
-            p_sw_des_world_m=y[6:8],
-            p_sw_des_heading_m=p_sw_h,
-            swing_target_world_m=target,
-            h_d=h_d,
-            dh_d=dh_d,
-            ddh_d=ddh_d,
-            heading_rad=self._heading,
-            heading_next_rad=heading_next,
-            turn_rad=turn,
-            v_z_used_mps=v_z,
-        )
+        return planner_output(
+            s, t_rem, y[0:2], y[2:4], y[4:6], y[6:8], p_sw_h, target, h_d, dh_d, ddh_d,
+            self._heading, heading_next, turn, v_z,
+        )  # fmt: skip

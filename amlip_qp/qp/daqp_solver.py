@@ -61,14 +61,17 @@ class _Shape:
         n, n_in, n_eq = problem.n, problem.n_in, problem.n_eq
         m = n + n_in + n_eq
         self.A = np.zeros((n_in + n_eq, n))
-        self.bu = np.zeros(m)
-        self.bl = np.zeros(m)
+        # The residual check's buffers: ``lo = (bl, z)`` and ``hi = (z, bu)`` with ``z = (x, C x, A x)``,
+        # so that one subtraction gives both violations ``lo - hi = (bl - z, z - bu)``; the bounds
+        # DAQP reads are their halves.
+        self._lo, self._hi = np.zeros(2 * m), np.zeros(2 * m)
+        self.bl, self.bu = self._lo[:m], self._hi[m:]
         self.sense = np.zeros(m, dtype=np.intc)
         self.sense[n + n_in :] = SENSE_EQUALITY
         self.model: Any = None
-        # the residual check's buffers: z = (x, C x, A x), then the bounds' violations
-        self.z = np.zeros(m)
-        self.gap = np.zeros(m)
+        self.z, self._z_hi = self._lo[m:], self._hi[:m]
+        self.gap = np.zeros(2 * m)
+        self._gap_below, self._gap_above = self.gap[:m], self.gap[m:]
         self._A_in, self._A_eq = self.A[:n_in], self.A[n_in:]
         self._bu_box, self._bu_in, self._bu_eq = self.bu[:n], self.bu[n : n + n_in], self.bu[n + n_in :]
         self._bl_box, self._bl_in, self._bl_eq = self.bl[:n], self.bl[n : n + n_in], self.bl[n + n_in :]
@@ -77,22 +80,31 @@ class _Shape:
         #: The rows ``[C; A]`` DAQP solves: the problem's own block when it is stacked, else :attr:`A`.
         self.rows = self.A
 
+    def largest_gap(self, x: np.ndarray) -> float:
+        """The largest of ``bl - z`` and ``z - bu`` at ``x`` (``z = (x, C x, A x)``, the problem last
+        :meth:`fill`-ed), in one product and one pass; NaN if ``x`` has a NaN, and above any
+        tolerance if it has an infinite entry (against a finite box bound). Its
+        buffer :attr:`gap` then holds both violations (:meth:`violation`)."""
+        _copyto(self._z_x, x)
+        _dot(self.rows, x, out=self._z_rows)
+        _copyto(self._z_hi, self.z)
+        _subtract(self._lo, self._hi, out=self.gap)
+        return _max_reduce(self.gap)
+
     def violation(self, x: np.ndarray) -> float:
         """Largest violation at ``x`` of the problem last :meth:`fill`-ed (bounds, inequalities,
         equalities; the stacked rows and bounds DAQP solved, so an infinite bound, held as
         :data:`BIG_BOUND`, is never violated): :meth:`QPProblem.residuals
-        <amlip_qp.qp.problem.QPProblem.residuals>`' largest entry, in one product and two passes."""
-        z, gap = self.z, self.gap
-        _copyto(self._z_x, x)
-        _dot(self.rows, x, out=self._z_rows)
-        _subtract(self.bl, z, out=gap)
-        below = _max_reduce(gap)
-        _subtract(z, self.bu, out=gap)
-        return max(below, _max_reduce(gap), 0.0)
+        <amlip_qp.qp.problem.QPProblem.residuals>`' largest entry (NaN if either the violations
+        below or those above are NaN throughout, as a NaN ``x`` makes them)."""
+        self.largest_gap(x)
+        return max(_max_reduce(self._gap_below), _max_reduce(self._gap_above), 0.0)
 
-    def fill(self, p: QPProblem) -> None:
-        """Stack ``p``'s rows and bounds as DAQP takes them (:attr:`rows`, :attr:`bu`, :attr:`bl`)."""
-        stacked = p.stacked()
+    def fill(self, p: QPProblem, stacked: tuple | None = None) -> None:
+        """Stack ``p``'s rows and bounds as DAQP takes them (:attr:`rows`, :attr:`bu`, :attr:`bl`);
+        ``stacked``: ``p.stacked()`` when the caller has it (else it is asked here)."""
+        if stacked is None:
+            stacked = p.stacked()
         if stacked is not None:
             # the rows in place; the box and inequality bounds lie stacked already (the same clamps)
             self.rows, lower, upper = stacked
@@ -131,6 +143,8 @@ class DAQPSolver:
         self.warm_start = bool(warm_start)
         self.iter_limit = int(iter_limit)
         self._shapes: dict[tuple[int, int, int], _Shape] = {}
+        # the allocated problem solved last and its shape (an allocated problem's shapes are fixed)
+        self._last: tuple[QPProblem, _Shape] | None = None
         #: Number of model set-ups so far (1 per problem shape in steady hot-started use).
         self.n_init = 0
 
@@ -147,18 +161,30 @@ class DAQPSolver:
     def reset(self) -> None:
         """Forget the working sets; the next solve of each shape sets its model up afresh."""
         self._shapes.clear()
+        self._last = None
 
     def solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
-        dims = (problem.n, problem.n_eq, problem.n_in)
         t0 = time.perf_counter_ns()
-        shape = self._shapes.get(dims)
-        if shape is None:
-            if len(self._shapes) >= MAX_SHAPES:
-                del self._shapes[next(iter(self._shapes))]  # the oldest shape
-            shape = self._shapes[dims] = _Shape(problem)
-        shape.fill(problem)
-        H, f = np.ascontiguousarray(problem.H), np.ascontiguousarray(problem.g)
+        stacked = problem.stacked()
+        last = self._last
+        if stacked is not None and last is not None and last[0] is problem:
+            # the same allocated problem as the last solve, its views still in place: the same shape
+            shape = last[1]
+        else:
+            dims = (problem.n, problem.n_eq, problem.n_in)
+            found = self._shapes.get(dims)
+            if found is None:
+                if len(self._shapes) >= MAX_SHAPES:
+                    del self._shapes[next(iter(self._shapes))]  # the oldest shape
+                found = self._shapes[dims] = _Shape(problem)
+            shape = found
+            self._last = (problem, shape) if stacked is not None else None
+        shape.fill(problem, stacked)
+        if stacked is not None:  # an allocated problem's H and g: contiguous views of its buffer
+            H, f = problem.H, problem.g
+        else:
+            H, f = np.ascontiguousarray(problem.H), np.ascontiguousarray(problem.g)
         if shape.model is None or not self.warm_start:
             shape.model = self._daqp.Model()
             code = shape.model.setup(H, f, shape.rows, shape.bu, shape.bl, shape.sense)
@@ -173,12 +199,15 @@ class DAQPSolver:
         x, _, flag, info = shape.model.solve()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         # A hot-started update skips the set-up's checks (a zero constraint row that contradicts its
-        # bound is then reported solved): the solution is checked against the constraints here.
-        if flag in _SOLVED and shape.violation(np.asarray(x)) > RESIDUAL_CHECK:
-            flag = _VIOLATED
-        if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
-            shape.model = None  # the next solve of this shape starts afresh (other shapes stay hot)
-            raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
+        # bound is then reported solved): the solution is checked against the constraints here. Within
+        # the tolerance, x is also finite (a NaN gives a NaN gap, an infinite entry an infinite one).
+        if flag not in _SOLVED or not shape.largest_gap(x) <= RESIDUAL_CHECK:
+            if flag in _SOLVED and shape.violation(x) > RESIDUAL_CHECK:
+                flag = _VIOLATED
+            if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
+                shape.model = None  # the next solve of this shape starts afresh (other shapes stay hot)
+                raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
+        # DAQP returns a new array at every solve (its own data): no copy
         return QPSolution(
-            x=np.array(x), status="DAQP_SOLVED", iterations=int(info.get("iterations", 0)), solve_time_us=elapsed_us
+            x=x, status="DAQP_SOLVED", iterations=int(info.get("iterations", 0)), solve_time_us=elapsed_us
         )

@@ -49,7 +49,7 @@ from amlip_qp.alip.heading import world_to_heading
 from amlip_qp.alip.mpc_planner import MPCSettings
 from amlip_qp.alip.planner import Planner
 from amlip_qp.control.tracker import Tracker, TrackingTarget
-from amlip_qp.control.walking.estimator import Estimate, Estimator
+from amlip_qp.control.walking.estimator import Estimate, Estimator, planner_state
 from amlip_qp.control.walking.gait import GaitLogic, GaitParams, swing_contact_weight
 from amlip_qp.control.walking.ground import GroundPredictor, HeightFunction
 from amlip_qp.control.walking.planners import check_planner, make_planner, plan_tick
@@ -58,7 +58,7 @@ from amlip_qp.control.walking.speed import CorrectedCommand, SpeedCorrection, Sp
 from amlip_qp.control.walking.stage_timer import StageTimer
 from amlip_qp.estimation.base_estimator import BaseStateEstimator, TruthBaseEstimator
 from amlip_qp.exceptions import InputError
-from amlip_qp.messages import Command, Measurement, PlannerOutput, StateEstimate
+from amlip_qp.messages import Command, Measurement, PlannerOutput
 from amlip_qp.profiles import NO_SHAPING, CommandShaping
 from amlip_qp.robots.foot_extent import foot_extent_m
 from amlip_qp.robots.kinematics import check_stand_output_rank
@@ -313,14 +313,7 @@ class WalkingController:
         self._cmd_now[0], self._cmd_now[1] = command.vx_mps, command.vy_mps
         command = self.corrector.apply(command)
         v_z = float(est.com_vel_mps[2])
-        state = StateEstimate(
-            stance=stance,
-            p_st_m=est.p_st_m,
-            L_Nms=est.L_Nms,
-            v_z_mps=v_z,
-            t_in_step_s=clock.time_in_step(t),
-            com_m=est.com_m,
-        )
+        state = planner_state(stance, est.p_st_m, est.L_Nms, v_z, clock.time_in_step(t), est.com_m)
         ground = self.ground
         plan = self._last_plan = plan_tick(self.planner, ground, state, command, est, new_step, self._last_plan)
         target = TrackingTarget(

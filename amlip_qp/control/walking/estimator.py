@@ -12,7 +12,7 @@ Angular Momentum") and the CoM vertical velocity.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,9 +20,14 @@ import numpy as np
 from amlip_qp.alip import other_side
 from amlip_qp.alip.kalman import DEFAULT_MEASUREMENT_VAR, DEFAULT_PROCESS_VAR_RATE, AngularMomentumFilter
 from amlip_qp.exceptions import InputError
-from amlip_qp.messages import Measurement
+from amlip_qp.messages import Measurement, StateEstimate
 
-__all__ = ["Estimate", "Estimator"]
+__all__ = ["Estimate", "Estimator", "planner_state"]
+
+_F64 = np.dtype(np.float64)
+_VECTOR3 = (3,)
+#: The slot setters of :class:`~amlip_qp.messages.StateEstimate`'s fields, in field order.
+_STATE_SETTERS = tuple(getattr(StateEstimate, f.name).__set__ for f in fields(StateEstimate))
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -124,3 +129,37 @@ class Estimator:
             L_meas_Nms=L_meas,
             L_Nms=L,
         )
+
+
+def planner_state(
+    stance: str, p_st_m: np.ndarray, L_Nms: np.ndarray, v_z_mps: float, t_in_step_s: float, com_m: np.ndarray
+) -> StateEstimate:
+    """The planner's :class:`~amlip_qp.messages.StateEstimate` of one tick: ``StateEstimate(stance=stance,
+    ...)`` with the fields in their order, positional, the same object (tested), made cheaper for the
+    controller's per-tick estimate (three float64 3-vectors and two floats, checked as the constructor
+    checks them: sides, shapes, one finite sum, ``t_in_step_s >= 0``); anything else, and every failed
+    check, goes through the constructor (its conversions and errors)."""
+    if (
+        (stance == "left" or stance == "right")
+        and type(p_st_m) is np.ndarray and type(L_Nms) is np.ndarray and type(com_m) is np.ndarray
+        and p_st_m.dtype is _F64 and L_Nms.dtype is _F64 and com_m.dtype is _F64
+        and p_st_m.shape == L_Nms.shape == com_m.shape == _VECTOR3
+        and type(v_z_mps) is float and type(t_in_step_s) is float and t_in_step_s >= 0.0
+    ):  # fmt: skip
+        p0, p1, p2 = p_st_m.tolist()
+        L0, L1, L2 = L_Nms.tolist()
+        c0, c1, c2 = com_m.tolist()
+        # one finiteness test, as the constructor's: NaN and inf propagate through a sum
+        if math.isfinite(p0 + p1 + p2 + (L0 + L1 + L2) + (c0 + c1 + c2) + v_z_mps + t_in_step_s):
+            new = object.__new__(StateEstimate)
+            put_stance, put_p, put_L, put_vz, put_t, put_com = _STATE_SETTERS
+            put_stance(new, stance)
+            put_p(new, p_st_m)
+            put_L(new, L_Nms)
+            put_vz(new, v_z_mps)
+            put_t(new, t_in_step_s)
+            put_com(new, com_m)
+            return new
+    return StateEstimate(
+        stance=stance, p_st_m=p_st_m, L_Nms=L_Nms, v_z_mps=v_z_mps, t_in_step_s=t_in_step_s, com_m=com_m
+    )

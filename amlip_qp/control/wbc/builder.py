@@ -143,6 +143,10 @@ class WholeBodyQP:
         # The normal components of each foot's points, as strided slices of x (views, no gather).
         d = L.point_dim
         self._normal = tuple(slice(foot.start + d - 1, foot.stop, d) for foot in (L.sl_f_st, L.sl_f_sw))
+        # 1 to 7 points a foot: NumPy's sum of so few numbers is the sequential sum from 0 (its pairwise
+        # summation starts at 8; tested), which Python's sum of the same floats repeats bit for bit
+        points = [len(range(*sl.indices(L.n))) for sl in self._normal]
+        self._normal_sum_in_python = all(1 <= k < 8 for k in points)
 
     # ------------------------------------------------------------------ info
     @property
@@ -204,6 +208,9 @@ class WholeBodyQP:
     def normal_force_totals(self, x: np.ndarray) -> tuple[float, float]:
         """Total normal (vertical) force of the stance and of the swing foot in a solution, N."""
         st, sw = self._normal
+        if self._normal_sum_in_python and type(x) is np.ndarray and x.dtype == np.float64 and x.ndim == 1:
+            xs = x.tolist()  # one conversion, then Python floats (the same sums, see the constructor)
+            return sum(xs[st]), sum(xs[sw])
         return float(_sum(x[st])), float(_sum(x[sw]))
 
     def rigid_forces(self, x: np.ndarray) -> np.ndarray:

@@ -194,8 +194,12 @@ class InPlaceBuild:
         source, symbolic = generate_in_place_source(builder, self._terms)
         fn = symbolic[B.robot.foot_sides[0]]
         L, P, n_out = B.layout, B.problem, B.output_task.size
-        self._slices = small_layout(B.robot.nq, L.nv, n_out)
-        self._small = np.zeros(self._slices["size"])
+        self._slices = sl = small_layout(B.robot.nq, L.nv, n_out)
+        self._small = u = np.zeros(sl["size"])
+        # its parts, views made once (per build, slicing would cost more than the small copies)
+        self._small_parts = tuple(u[sl[k]] for k in ("q", "v", "h_d", "dh_d", "ddh_d"))
+        self._i_heading, self._i_w = sl["heading"].start, sl["w"].start
+        self._standard_map_type: type | None = None  # the output map class last found standard
         self._E = np.zeros((fn.size_out(fn.index_out("ET"))[1], L.n))
         self._EtE = np.zeros((L.n, L.n))
         self._y, self._J, self._jdv = np.zeros(n_out), np.zeros((n_out, L.nv)), np.zeros(n_out)
@@ -227,27 +231,31 @@ class InPlaceBuild:
         Same contract as :meth:`WholeBodyQP.build`."""
         B = self.builder
         self.outputs = None
-        if not computes_standard_outputs(kin.output_map):
-            return B.build(kin, target)  # a drop-in output map: only the Python build reads it
+        map_type = type(kin.output_map)
+        if map_type is not self._standard_map_type:
+            if not computes_standard_outputs(kin.output_map):
+                return B.build(kin, target)  # a drop-in output map: only the Python build reads it
+            self._standard_map_type = map_type
         kin.require_dynamics()
         stance = target.stance
         if stance not in self._names:
             raise InputError(f"target.stance must be one of {tuple(self._names)}, got {stance!r}")
         if kin.data is not self._data:
             self._bind_data(kin)
-        sl, u = self._slices, self._small
+        u = self._small
+        u_q, u_v, u_h_d, u_dh_d, u_ddh_d = self._small_parts
         q, v = kin.state()
-        u[sl["q"]] = q
-        u[sl["v"]] = v
-        u[sl["h_d"]] = target.h_d
-        u[sl["dh_d"]] = target.dh_d
-        u[sl["ddh_d"]] = target.ddh_d
+        u_q[:] = q
+        u_v[:] = v
+        u_h_d[:] = target.h_d
+        u_dh_d[:] = target.dh_d
+        u_ddh_d[:] = target.ddh_d
         heading = float(target.heading_rad)
         if not math.isfinite(heading):
             raise InputError(f"target.heading_rad must be finite, got {target.heading_rad!r}")
-        u[sl["heading"]] = heading
+        u[self._i_heading] = heading
         B.inputs.swing_force_weight = w = swing_force_weight(B.config, target)  # the tracker reads it
-        u[sl["w"]] = w
+        u[self._i_w] = w
         self._eval[stance]()
         E = self._E
         # np.dot: the same bits as np.matmul (the same BLAS call), with less overhead
