@@ -12,11 +12,19 @@ it survives more than the other tracker), then one line with the per-cell
 ratio QP / PBC and the sweep's cost. A sweep whose cells vary the planner
 (``examples/sweeps/push_map_planners.toml``: the QP tracker with the
 one-step law and with the step-timing MPC) is compared by planner instead,
-MPC / one-step, with the ratios of the medians and of the weakest cells::
+MPC / one-step, with the ratios of the medians and of the weakest cells.
+``--against CSV`` adds the cells of another push-map sweep's ``results.csv``
+for the sweep's trackers and the groups the sweep lacks (a row without a
+planner is the one-step law's), so that the MPC's cells are compared with
+one-step cells measured before instead of running them again
+(``examples/sweeps/push_map_planners_pbc.toml``: the PBC with the MPC, against
+the PBC's one-step cells of ``docs/media/push_map_results.csv``)::
 
     python examples/push_map.py --out out/push_map              # run the sweep (resumes), then draw
     python examples/push_map.py --from out/push_map --figure docs/media/push_map.png
     python examples/push_map.py --spec examples/sweeps/push_map_planners.toml --out out/push_map_planners
+    python examples/push_map.py --spec examples/sweeps/push_map_planners_pbc.toml --out out/push_map_planners_pbc \
+        --against docs/media/push_map_results.csv
 
 ``--out`` does not run a sweep its folder already holds finished (every cell
 measured, none failed): it draws it, and the sweep's own wall time stays in
@@ -54,7 +62,12 @@ LABELS = {"pbc": "PBC", "qp": "QP", "mpc": "MPC"}
 
 def read_records(folder: Path) -> list[dict]:
     """The rows of ``folder/results.csv`` as records ``{"params": ..., "metrics": ...}`` (numbers parsed)."""
-    with open(folder / "results.csv", newline="") as fh:
+    return read_csv_records(folder / "results.csv")
+
+
+def read_csv_records(path: Path) -> list[dict]:
+    """The rows of a push-map sweep's ``results.csv`` at ``path`` as records (see :func:`read_records`)."""
+    with open(path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     out = []
     for r in rows:
@@ -67,6 +80,34 @@ def read_records(folder: Path) -> list[dict]:
             params["planner"] = r["planner"]
         out.append({"params": params, "metrics": {VALUE: float(r[VALUE]) if r[VALUE] else float("nan")}})
     return out
+
+
+def with_against(records: list[dict], against: Path | None) -> list[dict]:
+    """``records`` after the cells of ``against`` (a push-map ``results.csv``; ``None``: none) of their
+    trackers, in the groups (tracker, planner) they lack; a row without a planner is the one-step law's."""
+    if against is None:
+        return records
+    have = {(r["params"]["tracker"], r["params"].get("planner", "one-step")) for r in records}
+    trackers = {tracker for tracker, _ in have}
+    extra = []
+    for r in read_csv_records(against):
+        p = r["params"]
+        p.setdefault("planner", "one-step")
+        if p["tracker"] in trackers and (p["tracker"], p["planner"]) not in have:
+            extra.append(r)
+    if any("planner" not in r["params"] for r in records):  # a sweep without planners: the one-step law's
+        records = [{**r, "params": {**r["params"], "planner": "one-step"}} for r in records]
+    return extra + records
+
+
+def check_against(path: Path) -> str | None:
+    """What keeps ``path`` from being compared against (a push-map ``results.csv``), or ``None``."""
+    if not path.is_file():
+        return "no such file"
+    with open(path, newline="") as fh:
+        columns = next(csv.reader(fh), [])
+    lacking = [c for c in ("tracker", "push_direction_deg", "push_phase", VALUE) if c not in columns]
+    return f"has no column {', '.join(lacking)}: not a push-map results.csv" if lacking else None
 
 
 def check_sweep_folder(folder: Path) -> str | None:
@@ -110,9 +151,10 @@ def cell_time_s(folder: Path, summary: dict) -> float:
     return sum(cells_s) or summary["cell_wall_s_total"]
 
 
-def summary_table(folder: Path) -> str:
-    """The map's summary: a Markdown table per tracker (or planner), then the per-cell ratio and the sweep's cost."""
-    records = read_records(folder)
+def summary_table(folder: Path, against: Path | None = None) -> str:
+    """The map's summary: a Markdown table per tracker (or planner), then the per-cell ratio and the sweep's cost
+    (with ``against``: its cells too, :func:`with_against`; the cost is the sweep's own)."""
+    records = with_against(read_records(folder), against)
     summary = json.loads((folder / "summary.json").read_text())
     high = json.loads((folder / "spec.json").read_text())["bisect"]["high"]
     key, trackers = grouping(records)
@@ -153,7 +195,8 @@ def summary_table(folder: Path) -> str:
     cell_s = cell_time_s(folder, summary)
     with open(folder / "results.csv", newline="") as fh:
         walks = sum(int(r["bisect_walks"]) for r in csv.DictReader(fh) if r.get("bisect_walks"))
-    cost = f"{summary['cells']} cells, {walks} walks, {cell_s:.0f} s of cell time; " + (
+    reused = f"the {len(records) - summary['cells']} other cells from {against.name}; " if against else ""
+    cost = f"{summary['cells']} cells, {walks} walks, {cell_s:.0f} s of cell time; {reused}" + (
         f"the sweep: {summary['wall_time_s'] / 60:.0f} min wall on {summary['workers']} worker(s)."
         if not summary.get("resumed")
         else f"its last run: {summary['ran']} cells in {summary['wall_time_s'] / 60:.0f} min wall on "
@@ -168,9 +211,10 @@ def refuse(message: str) -> int:
     return 2
 
 
-def draw(folder: Path, figure: Path) -> None:
-    """One polar map per tracker (or planner) in the sweep, and the ratio of the two when there are two."""
-    records = read_records(folder)
+def draw(folder: Path, figure: Path, against: Path | None = None) -> None:
+    """One polar map per tracker (or planner) in the sweep (and ``against``'s, :func:`with_against`), and the
+    ratio of the two when there are two."""
+    records = with_against(read_records(folder), against)
     key, trackers = grouping(records)
     summary = json.loads((folder / "summary.json").read_text())
     spec = json.loads((folder / "spec.json").read_text())
@@ -220,9 +264,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
     parser.add_argument("--figure", type=Path, default=None, help="figure path (default: FOLDER/push_map.png)")
     parser.add_argument("--csv", type=Path, default=None, help="also copy the sweep's results.csv to this path")
+    parser.add_argument(
+        "--against", type=Path, default=None, help="compare with the cells of this push-map results.csv too"
+    )
     args = parser.parse_args(argv)
     if args.workers is not None and not 1 <= args.workers <= 64:
         return refuse(f"--workers must be 1 to 64, got {args.workers}")
+    if args.against is not None and (problem := check_against(args.against)):
+        return refuse(f"--against {args.against}: {problem}")
     folder = args.source
     problem = check_sweep_folder(folder) if folder is not None else None
     if problem:
@@ -246,10 +295,10 @@ def main(argv: list[str] | None = None) -> int:
                 code = amlip_qp_main(["sweep", str(args.spec), "--out", str(folder), "--no-progress", *extra])
             if code not in (0, 1):  # 1: some cell failed; the map shows it as missing
                 return code
-    draw(folder, args.figure or folder / "push_map.png")
+    draw(folder, args.figure or folder / "push_map.png", args.against)
     if args.csv is not None:
         shutil.copyfile(folder / "results.csv", args.csv)
-    print(summary_table(folder))
+    print(summary_table(folder, args.against))
     return code
 
 

@@ -79,6 +79,22 @@ def test_push_that_the_reach_limited_one_step_law_cannot_recover_from():
     np.testing.assert_allclose(np.abs(mpc.steps[-1][5]), np.abs(calm.steps[-1][5]), atol=1e-3)
 
 
+def test_a_shortest_step_in_seconds_bounds_the_shortened_steps_and_never_lengthens_the_nominal_one():
+    """``step_time_min_s`` (a tracker's shortest step): the pushed steps end at it, not at 0.6 T; above T
+    it does not lengthen the undisturbed steps."""
+    bounded = Walk(mpc_planner(settings=MPCSettings(step_time_min_s=0.25)), COMMAND, reach_m=REACH_M)
+    bounded.run(1.6, push=PUSH)
+    durations = [t1 - t0 for t0, t1, *_ in bounded.steps]
+    assert durations[3] == pytest.approx(0.25, abs=1e-9)  # the pushed step: at the bound, not 0.6 T = 0.18 s
+    assert min(durations) == pytest.approx(0.25, abs=1e-9)
+    one = Walk(Planner(OUTPUTS, M, G), COMMAND).run(2.4)
+    above_T = Walk(mpc_planner(settings=MPCSettings(step_time_min_s=0.5)), COMMAND).run(2.4)
+    assert len(above_T.steps) == len(one.steps) == 8
+    for a, b in zip(one.steps, above_T.steps):
+        assert b[1] - b[0] == a[1] - a[0] == pytest.approx(T, abs=1e-9)
+        np.testing.assert_allclose(b[2], a[2], atol=1e-10)
+
+
 #: The lateral limits the MPC had before crossover steps (docs/TUNING.md, "The step-timing MPC"):
 #: the feet 0.05 H apart at least, the landing foot 0.1 H inside and 0.5 H outside the CoM, steps of 0.75 H.
 NO_CROSSING = MPCSettings(width_min=0.05, reach_in=0.1, reach_out=0.5, step_out=0.75)
@@ -217,6 +233,8 @@ def test_step_clock_takes_a_planned_duration():
     [
         (dict(step_time_min=0.0), "step_time_min"),
         (dict(step_time_min=1.2, step_time_max=1.0), "step_time_max"),
+        (dict(step_time_min_s=-0.1), "step_time_min_s"),
+        (dict(step_time_min_s=math.inf), "step_time_min_s"),
         (dict(width_min=math.nan), "width_min"),
         (dict(step_out=0.01, width_min=0.05), "step_out"),
         (dict(iterations=0), "iterations"),

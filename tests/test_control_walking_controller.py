@@ -74,6 +74,23 @@ def test_the_planner_is_chosen_by_name_and_bad_names_are_typed_errors(rabbit):
         WalkingController(rabbit, _HugeTracker(4), kin, mpc_settings=MPCSettings())
 
 
+def test_the_mpc_plans_no_step_shorter_than_the_tracker_follows(rabbit):
+    """The tracker's ``shortest_step_s`` becomes the MPC's ``step_time_min_s`` (a larger one given stays)."""
+    from amlip_qp.alip.mpc_planner import MPCSettings
+
+    class _Slow(_HugeTracker):
+        shortest_step_s = 0.21
+
+    kin = RobotKinematics(rabbit)
+    plain = WalkingController(rabbit, _HugeTracker(4), kin, planner_backend="numpy", planner="mpc")
+    assert plain.planner.settings == MPCSettings()  # a tracker without a bound: the MPC's own settings
+    slow = WalkingController(rabbit, _Slow(4), kin, planner_backend="numpy", planner="mpc")
+    assert slow.planner.settings == MPCSettings(step_time_min_s=0.21)
+    given = MPCSettings(step_time_min_s=0.3, weight_time=8.0)
+    kept = WalkingController(rabbit, _Slow(4), kin, planner_backend="numpy", planner="mpc", mpc_settings=given)
+    assert kept.planner.settings == given
+
+
 def test_bad_initial_stance_and_backend_are_typed_errors(rabbit):
     kin = RobotKinematics(rabbit)
     with pytest.raises(InputError, match="initial_stance"):

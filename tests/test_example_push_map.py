@@ -87,6 +87,36 @@ def test_a_sweep_that_varies_the_planner_is_compared_by_planner(push_map, tmp_pa
     assert "MPC / one-step: the medians 1.25, the weakest cells 1.50." in out[-1]
 
 
+def test_against_compares_the_mpc_cells_with_one_step_cells_measured_before(push_map, tmp_path, capsys):
+    """A sweep of the PBC with the MPC only, against a tracker map's results.csv (no planner column): its PBC
+    cells are the one-step law's, its QP cells are left out (one-step 30, 40, 50; MPC 45, 50, 60)."""
+    old = tmp_path / "old.csv"
+    rows = ["cell,id,tracker,push_direction_deg,push_phase,seed,max_push_impulse_Ns,error"]
+    for tracker, impulses in (("pbc", (30.0, 40.0, 50.0)), ("qp", (90.0, 90.0, 90.0))):
+        for direction, value in zip((0, 90, 180), impulses):
+            rows.append(f"{len(rows)},c{len(rows)},{tracker},{direction},0.0,0,{value!r},")
+    old.write_text("\n".join(rows) + "\n")
+    folder = tmp_path / "sweep"
+    folder.mkdir()
+    rows = ["cell,id,tracker,planner,push_direction_deg,push_phase,seed,max_push_impulse_Ns,bisect_walks,error"]
+    for direction, value in zip((0, 90, 180), (45.0, 50.0, 60.0)):
+        rows.append(f"{len(rows)},c{len(rows)},pbc,mpc,{direction},0.0,0,{value!r},6,")
+    (folder / "results.csv").write_text("\n".join(rows) + "\n")
+    summary = {"cells": 3, "ran": 3, "failed": 0, "wall_time_s": 60.0, "workers": 1, "cell_wall_s_total": 60.0}
+    (folder / "summary.json").write_text(json.dumps(summary))
+    (folder / "spec.json").write_text(json.dumps({"bisect": {"high": 100.0}}))
+    argv = ["--from", str(folder), "--figure", str(tmp_path / "map.png"), "--against", str(old)]
+    assert push_map.main(argv) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "| | one-step | MPC |"
+    assert out[2] == "| largest impulse survived, median over the cells, N s | 40.0 | 50.0 |"
+    assert out[5] == "| cells measured (failed) | 3 (0) | 3 (0) |"
+    assert "MPC / one-step: the medians 1.25, the weakest cells 1.50." in out[-1]
+    assert "3 cells, 18 walks, 60 s of cell time; the 3 other cells from old.csv;" in out[-1]
+    assert push_map.main([*argv[:4], "--against", str(tmp_path / "none.csv")]) == 2
+    assert "--against" in capsys.readouterr().err
+
+
 def test_out_draws_a_finished_sweep_without_running_it_again(push_map, tmp_path, monkeypatch, capsys):
     _finished_sweep(tmp_path / "sweep")
     monkeypatch.setattr(push_map, "amlip_qp_main", lambda argv: pytest.fail("ran the sweep"))

@@ -68,6 +68,10 @@ class MPCSettings:
         step_time_min: shortest step (the current one and every later one), in units of the
             command's ``T`` (> 0).
         step_time_max: longest step, in units of ``T`` (>= step_time_min).
+        step_time_min_s: shortest step in seconds, whatever ``T`` (>= 0; 0: none): the shortest
+            step the tracker's swing leg follows (``Tracker.shortest_step_s``; the walking loop
+            sets it). The bound on every step is ``max(step_time_min T, min(step_time_min_s, T))``:
+            it keeps the MPC from shortening a step below it, never lengthens the nominal ``T``.
         min_time_left_s: the least time left a re-plan may give the current step, s (>= 0).
         reach_x: ``|p_sw|`` along the heading at touchdown, at most this times ``H`` (> 0).
         reach_out: the landing foot's lateral distance outward from the CoM, at most this times ``H``.
@@ -85,6 +89,7 @@ class MPCSettings:
 
     step_time_min: float = 0.6
     step_time_max: float = 1.4
+    step_time_min_s: float = 0.0
     min_time_left_s: float = 0.05
     reach_x: float = 0.55
     reach_out: float = 0.65
@@ -109,7 +114,7 @@ class MPCSettings:
             "weight_time_later",
         ):
             C.positive(f"MPCSettings.{name}", getattr(self, name), "")
-        for name in ("min_time_left_s", "reach_in"):
+        for name in ("step_time_min_s", "min_time_left_s", "reach_in"):
             C.non_negative(f"MPCSettings.{name}", getattr(self, name), "")
         C.finite("MPCSettings.width_min", self.width_min)
         if not self.step_time_max >= self.step_time_min:
@@ -288,12 +293,15 @@ class MPCPlanner(Planner):
         vz_max = VZ_CLAMP_FRACTION * H * l * math.tanh(l * T)
         v_z = min(max(v_z, -vz_max), vz_max)
         tau_nom = max(T - t_in, 0.0)
+        # the shortest step: a fraction of T, and the tracker's own bound (never above T)
+        T_lo = max(st.step_time_min * T, min(st.step_time_min_s, T))
+        T_hi = max(st.step_time_max * T, T_lo)
         committed = self._T_plan is not None and self._T_plan - t_in <= st.min_time_left_s
         if committed:
             tau_lo = tau_hi = max(self._T_plan - t_in, 0.0)  # the end is near (or late): keep it
         else:
-            tau_hi = max(st.step_time_max * T - t_in, 0.0)
-            tau_lo = min(max(st.step_time_min * T - t_in, st.min_time_left_s), tau_hi)
+            tau_hi = max(T_hi - t_in, 0.0)
+            tau_lo = min(max(T_lo - t_in, st.min_time_left_s), tau_hi)
         tau_bar = tau_nom if self._T_plan is None else self._T_plan - t_in
         tau_bar = min(max(tau_bar, tau_lo), tau_hi)
         planar = self.outputs.planar
@@ -309,7 +317,6 @@ class MPCPlanner(Planner):
             heading, turn = self.heading_next_rad, command.turn_rate_radps * T
             lateral = (st.reach_out * H, st.reach_in * H, st.width_min * H, st.step_out * H)
         N = S.MPC_STEPS
-        T_lo, T_hi = st.step_time_min * T, st.step_time_max * T
         u = self._u_mpc
         u[:_I_T_BAR] = (
             p0, p1, L0, L1, v_z, command.vx_mps * factor, vy, heading, turn, sign, m, H, T, W, g,

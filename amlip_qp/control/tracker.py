@@ -60,6 +60,10 @@ class Tracker(abc.ABC):
 
     #: Short name used by the CLI and in summaries (``"pbc"``, ``"qp"``).
     name: str = "tracker"
+    #: The shortest step this tracker's swing leg follows, s (0: no bound of its own). The
+    #: step-timing MPC plans no step shorter than this (nor than the command's ``T``:
+    #: :attr:`amlip_qp.alip.mpc_planner.MPCSettings.step_time_min_s`, set by the walking loop).
+    shortest_step_s: float = 0.0
 
     @abc.abstractmethod
     def compute(self, kin: RobotKinematics, target: TrackingTarget) -> TrackerResult:

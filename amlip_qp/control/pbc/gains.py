@@ -101,6 +101,10 @@ class PBCGains:
             a rod, their damping) then pulls the swing foot off its pitch
             reference. ``docs/TUNING.md`` ("Closed-chain plant: the swing
             ankle") has the numbers.
+        shortest_step_s: The shortest step the PBC's swing leg follows, s (0: no bound): the
+            tracker's :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`, below which the
+            step-timing MPC plans no step. ``docs/TUNING.md`` ("The PBC's shortest step") has
+            the numbers.
     """
 
     kp_stance_ps2: float = 400.0
@@ -118,6 +122,7 @@ class PBCGains:
     spring_model_load: str = "commanded"
     hip_yaw_feedback: float = 0.0
     swing_ankle_gain_scale: float = 1.0
+    shortest_step_s: float = 0.0
 
     def __post_init__(self):
         if self.spring_model_load not in SPRING_MODEL_LOADS:

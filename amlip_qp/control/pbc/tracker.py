@@ -109,6 +109,7 @@ class PBCTracker(Tracker):
         if robot.profile is not None:
             robot.profile.check_supported("pbc")  # the profile's reason, before the IK's own check
         self.gains = gains or default_gains(robot)
+        self.shortest_step_s = self.gains.shortest_step_s
         self.ik = IterativeIK(robot, ik_settings)
         nv = robot.nv
         act = robot.actuated

@@ -112,7 +112,7 @@ class WalkingController:
             and step durations four steps ahead (:class:`~amlip_qp.alip.mpc_planner.MPCPlanner`,
             docs/ALIP_MPC.md), which plans the step's end on the step clock.
         mpc_settings: The MPC's limits and weights (:class:`~amlip_qp.alip.mpc_planner.MPCSettings`;
-            ``planner="mpc"`` only).
+            ``planner="mpc"`` only; ``step_time_min_s`` raised to the tracker's ``shortest_step_s``).
         stage_timer: Records each tick's kinematics update and tracker ``compute`` wall times
             (:class:`~amlip_qp.control.walking.stage_timer.StageTimer`); ``None`` (default): no timing.
 
@@ -182,8 +182,9 @@ class WalkingController:
         #: held by the planner, which starts its steps.
         self.clock = StepClock()
         descent = "landing" if self.ground.active else None
+        shortest = tracker.shortest_step_s  # the MPC plans no step shorter than the tracker follows
         self.planner: Planner = make_planner(
-            planner, output_names(robot), robot.mass_kg, self.clock, planner_backend, descent, mpc_settings
+            planner, output_names(robot), robot.mass_kg, self.clock, planner_backend, descent, mpc_settings, shortest
         )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()

@@ -4,6 +4,7 @@ and how it plans each tick, on flat ground or off it (:func:`plan_tick`)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from amlip_qp.alip.clock import StepClock
@@ -43,14 +44,22 @@ def make_planner(
     backend: str,
     late_descent: str | None,
     mpc_settings: MPCSettings | None = None,
+    shortest_step_s: float = 0.0,
 ) -> Planner:
     """The planner ``name`` (:data:`PLANNERS`) on ``clock``, its kernels the generated C (``backend="c"``)
     or the numpy references (``"numpy"``): ``"one-step"``, the paper's
     :class:`~amlip_qp.alip.planner.Planner`; ``"mpc"``, the step-timing
-    :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` (:func:`amlip_qp.control.mpc.make_mpc_planner`)."""
+    :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` (:func:`amlip_qp.control.mpc.make_mpc_planner`),
+    its ``step_time_min_s`` raised to ``shortest_step_s`` (the tracker's shortest step, s;
+    :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`)."""
     check_planner(name, mpc_settings)
     if name == "mpc":
         from amlip_qp.control.mpc import make_mpc_planner
+
+        if shortest_step_s > 0.0:
+            base = mpc_settings or MPCSettings()
+            if shortest_step_s > base.step_time_min_s:
+                mpc_settings = replace(base, step_time_min_s=float(shortest_step_s))
 
         return make_mpc_planner(
             outputs, mass_kg, backend=backend, settings=mpc_settings, clock=clock, late_descent=late_descent
