@@ -67,35 +67,6 @@ def test_ik_evaluates_the_output_map_on_its_own_kinematics(robot):
         np.testing.assert_array_equal(kin.outputs(stance, heading)[0], h)
 
 
-def test_ik_evaluates_the_output_map_of_the_kinematics_it_is_given(robot):
-    """Given the walking loop's kinematics (the generated-C output map), the IK evaluates that
-    same evaluator on its own kinematics, and solves to the Python map's references to rounding."""
-    from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, make_kinematics
-
-    q, v = _perturbed_state(robot, 2)
-    kin_c, kin_py = make_kinematics(robot), RobotKinematics(robot)
-    assert isinstance(kin_c.output_map, CompiledOutputMap)
-    heading = 0.2 if not robot.is_planar else 0.0
-    ik_c, ik_py = (IterativeIK(robot, IKSettings(knee_limit_swap=False)) for _ in range(2))
-    for kin in (kin_c, kin_py):
-        kin.update(q, v)
-    h, _, _ = kin_py.outputs("left", heading)
-    n = h.size
-    target = (h + 0.01, np.full(n, 0.1), np.zeros(n))
-    res_c = ik_c.solve(kin_c, "left", heading, *target)
-    res_py = ik_py.solve(kin_py, "left", heading, *target)
-    assert ik_c.kin.output_map is kin_c.output_map and ik_c.kin is not kin_c
-    assert not isinstance(ik_py.kin.output_map, CompiledOutputMap)
-    assert res_c.ok and res_py.ok
-    np.testing.assert_allclose(res_c.q_r, res_py.q_r, atol=1e-11)
-    np.testing.assert_allclose(res_c.v_r, res_py.v_r, atol=1e-9)
-    np.testing.assert_allclose(res_c.a_r, res_py.a_r, atol=1e-7)
-    # a map of another robot's outputs is refused, naming the defect
-    other = load_robot("rabbit" if robot.name != "rabbit" else "cassie")
-    with pytest.raises(InputError):
-        ik_c.use_output_map(RobotKinematics(other).output_map)
-
-
 @pytest.mark.parametrize("stance", ["left", "right"])
 def test_converges_and_holds_the_stance_foot_and_passive_joints(robot, stance):
     q_est, v_est = _perturbed_state(robot, 2)

@@ -25,15 +25,10 @@ stacked Jacobians of these equations):
   of the order of ``|a_r| dt`` relative to the drift (checked in
   tests/test_control_pbc_ik.py).
 
-Evaluation: ``h_0(q)`` and its Jacobian come from the output map of the
-kinematics :meth:`IterativeIK.solve` is given (``kin.output_map``: in the
-walking loop the generated-C
-:class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`, else
-:class:`amlip_qp.robots.outputs.OutputMap`), evaluated on the IK's own
+Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
+:class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
 :class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
 through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
-The two evaluators give the same outputs to rounding; the IK shares the
-evaluator object, whose results are new arrays.
 
 Robustness: each Newton step (:mod:`~amlip_qp.control.pbc.ik_newton`) solves
 ``A dq = -F`` (LU; a damped least-squares step ``(A^T A + mu I) dq = -A^T F``
@@ -131,22 +126,6 @@ class IterativeIK:
         self._prev_stance = None
         self._cache = None
         self.lu = None
-
-    def use_output_map(self, output_map) -> None:
-        """Evaluate the outputs with ``output_map`` (an :class:`~amlip_qp.robots.outputs.OutputMap` or a
-        drop-in, :attr:`RobotKinematics.output_map <amlip_qp.robots.kinematics.RobotKinematics.output_map>`)
-        from now on: new IK kinematics with it, and the last evaluation forgotten (the warm start's
-        ``q_r`` is kept). :meth:`solve` calls it with the evaluator of the kinematics it is given.
-
-        Raises:
-            InputError: ``output_map`` does not evaluate the robot's outputs.
-        """
-        from amlip_qp.robots.kinematics import RobotKinematics
-
-        if output_map is self.kin.output_map:
-            return
-        self.kin = RobotKinematics(self.robot, output_map)
-        self._cache = None
 
     # ---------------------------------------------------------------- pieces
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
@@ -262,9 +241,6 @@ class IterativeIK:
             with zero rates if there is none).
         """
         pin = self._pin
-        output_map = kin.output_map
-        if output_map is not self.kin.output_map:
-            self.use_output_map(output_map)
         h_d = np.asarray(h_d, dtype=float)
         dh_d = np.asarray(dh_d, dtype=float)
         ddh_d = np.asarray(ddh_d, dtype=float)
