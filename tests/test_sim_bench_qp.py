@@ -1,6 +1,8 @@
 """amlip_qp.experiments.bench_qp (`amlip-qp bench qp`): recording a walk's QPs, every solver's answer against
 ProxQP's, the report, a solver that is not installed, bad arguments."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -18,10 +20,10 @@ from amlip_qp.experiments.qp_runners_sparse import QPSolversRunner
 from amlip_qp.experiments.qp_solver_list import SolverSpec
 
 #: The solvers of the `test` extra (pyproject.toml), each driven through its own interface.
-TEST_EXTRA_SOLVERS = "proxsuite-init,daqp-hot,daqp-cold,piqp,clarabel,qpalm,quadprog,qpmad,osqp"
+TEST_EXTRA_SOLVERS = "proxsuite-init,daqp-hot,daqp-cold,daqp-eliminated,piqp,clarabel,qpalm,quadprog,qpmad,osqp"
 #: Active-set solvers: their x matches the reference's to this (the reference stops at 1e-12), and
 #: their cost exceeds the reference's by at most this (the optimal costs are of order -1e3 to -1e4).
-EXACT, EXACT_DX, EXACT_COST = ("daqp-hot", "daqp-cold", "quadprog", "qpmad"), 1e-5, 1e-6
+EXACT, EXACT_DX, EXACT_COST = ("daqp-hot", "daqp-cold", "daqp-eliminated", "quadprog", "qpmad"), 1e-5, 1e-6
 #: Interior-point solvers (their own duality-gap tolerances): cost excess at most this.
 INTERIOR, INTERIOR_COST = ("piqp", "clarabel"), 1e-3
 #: The solvers stopped at the tracker's absolute tolerance 1e-3 (ProxQP, OSQP, QPALM): the cost is
@@ -118,6 +120,8 @@ def test_the_report_names_every_solver_and_what_is_timed(report):
         assert f"\n{name} " in table and f"  {name}: " in text
     assert "MuJoCo steps" in text and "not installed" not in text
     assert report["versions"]["daqp"] in text and "pyqpmad" in report["versions"]
+    # the eliminated problem's solve is timed without its elimination, whose own time is stated beside it
+    assert re.search(r"daqp-eliminated: .*the elimination, untimed, took a median \d+\.\d µs", text)
 
 
 def test_a_solver_that_is_not_installed_is_named_and_the_bench_goes_on(walk):
