@@ -102,6 +102,20 @@ def test_every_test_extra_solver_agrees_with_proxqp(report):
     assert report["mujoco_step_us"] > 0
 
 
+def test_the_eliminated_runner_counts_a_problem_it_cannot_eliminate_as_a_failure(walk):
+    from amlip_qp.experiments.qp_runners import DAQPEliminatedRunner
+
+    good = walk[0][0]
+    bad = good.copy()
+    bad.A[1] = bad.A[0]  # a repeated equality row: no elimination
+    bad.b[1] = bad.b[0]
+    run = DAQPEliminatedRunner()
+    x = run.solve(run.prepare(good))
+    assert run.solve(run.prepare(bad)) is None and run.failures == 1
+    assert x is not None and max(good.residuals(x).values()) < 1e-8
+    assert len(run.elimination_us) == 1
+
+
 @pytest.mark.parametrize("box_as_rows", [False, True])
 def test_any_qpsolvers_backend_runs_through_the_generic_path(walk, box_as_rows):
     problems = walk[0][:30]

@@ -161,15 +161,23 @@ class DAQPEliminatedRunner(Runner):
             f"untimed, took a median {median} µs in NumPy and LAPACK)"
         )
 
-    def prepare(self, p: QPProblem) -> tuple:
+    def prepare(self, p: QPProblem) -> tuple | None:
+        """The eliminated problem and its DAQP data; ``None`` (counted as a failure when solved)
+        for a problem whose equalities cannot be eliminated (dependent or inconsistent rows)."""
         from amlip_qp.qp.equality_elimination import eliminate_equalities
 
         t0 = time.perf_counter_ns()
-        reduced = eliminate_equalities(p)
+        try:
+            reduced = eliminate_equalities(p)
+        except QPError:
+            return None
         self.elimination_us.append((time.perf_counter_ns() - t0) * 1e-3)
         return reduced, _daqp_data(reduced.problem)
 
-    def solve(self, data: tuple) -> np.ndarray | None:
+    def solve(self, data: tuple | None) -> np.ndarray | None:
+        if data is None:
+            self.failures += 1
+            return None
         reduced, (H, f, A, bu, bl, sense) = data
         key = A.shape
         model = self._models.get(key)
