@@ -176,3 +176,56 @@ def test_the_in_place_build_of_a_four_point_sole_equals_the_python_build(name, t
     robot = load_robot(sole_profile(name, tmp_path))
     builder = WholeBodyQP(robot, default_config(robot))
     assert_compiled_build_equals_the_python_build(builder, InPlaceBuild(builder), random_cases(robot, 8))
+
+
+def _assert_leading_block(small, full, label):
+    """``small`` is ``full``'s leading block (its variables and rows), bit for bit."""
+    n, m = small.n, small.n_in
+    pairs = {
+        "H": (small.H, full.H[:n, :n]), "g": (small.g, full.g[:n]), "A": (small.A, full.A[:, :n]),
+        "b": (small.b, full.b), "C": (small.C, full.C[:m, :n]), "l": (small.l, full.l[:m]),
+        "u": (small.u, full.u[:m]), "lb": (small.lb, full.lb[:n]), "ub": (small.ub, full.ub[:n]),
+    }  # fmt: skip
+    for key, (a, b) in pairs.items():
+        assert np.array_equal(a, b), f"{label}: {key}"
+
+
+@pytest.mark.parametrize("name", ["cassie", "rabbit", "h1"])
+def test_the_airborne_problem_is_the_full_problems_leading_block_bit_for_bit(name, tmp_path):
+    """With ``airborne=True`` a build with the swing foot in the air (force ramp 0) returns the
+    problem without its forces and friction rows, written by the same generated C as the full
+    problem's entries: the same bits as the leading block of the full build; with the ramp up,
+    the full problem as before. The stance pyramid turned to the ground is copied across."""
+    from amlip_qp.control.wbc.compiled_in_place import airborne_dims
+
+    if name == "h1":
+        from sole_cases import sole_profile
+
+        robot = load_robot(sole_profile(name, tmp_path))
+    else:
+        robot = load_robot(name)
+    air_builder, full_builder = WholeBodyQP(robot), WholeBodyQP(robot)
+    air, full = InPlaceBuild(air_builder, airborne=True), InPlaceBuild(full_builder)
+    dims = airborne_dims(air_builder)
+    assert dims is not None and air.airborne_problem is not None and full.airborne_problem is None
+    assert (air.airborne_problem.n, air.airborne_problem.n_in) == dims
+    assert dims[0] < air_builder.problem.n and dims[1] < air_builder.problem.n_in
+    friction = air_builder.constraint("friction")
+    kinds = set()
+    for i, (kin, target) in enumerate(random_cases(robot, 6, seed=5)):
+        if i == 3 and not robot.is_planar:  # the stance pyramid turned to a 20-degree flank, in both builders
+            for b in (air_builder, full_builder):
+                b.constraint("friction").tilt_stance_rows(b.problem, 0.35, target.heading_rad)
+            air.copy_constant_rows()
+        p_full = full.build(kin, target)
+        p_air = air.build(kin, target)
+        if air_builder.inputs.swing_force_weight == 0.0:
+            kinds.add("airborne")
+            assert p_air is air.airborne_problem
+            _assert_leading_block(p_air, p_full, f"{name} case {i}")
+            assert dict(p_air.in_rows)["friction"].stop == dims[1] == friction.swing_rows.start
+        else:
+            kinds.add("loaded")
+            assert p_air is air_builder.problem
+            assert_same_problem(p_full, p_air, f"{name} case {i}")
+    assert kinds == {"airborne", "loaded"}

@@ -53,12 +53,12 @@ from amlip_qp.control.wbc.frame_terms import FrameTerms
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
 from amlip_qp.exceptions import InputError
+from amlip_qp.qp.problem import QPProblem
 from amlip_qp.robots.outputs import OutputMap, computes_standard_outputs
 
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
     from amlip_qp.control.wbc.builder import WholeBodyQP
-    from amlip_qp.qp.problem import QPProblem
     from amlip_qp.robots.kinematics import RobotKinematics
 
 #: Name stem of the generated functions (``<stem>_left``, ``<stem>_right``), other than the default
@@ -67,6 +67,10 @@ FUNCTION_STEM = "wbqp_in_place"
 #: File names inside the cache folder.
 SOURCE_FILE = "amlip_wbqp_in_place.c"
 LIBRARY_FILE = "libamlip_wbqp_in_place.so"
+#: The functions' name stem with the airborne problem's outputs (another library, other symbols).
+AIRBORNE_FUNCTION_STEM = "wbqp_in_place_airborne"
+#: The assembly outputs the airborne problem repeats, as its leading blocks, in this order.
+AIRBORNE_OUTPUTS = ("ET", "g", "AT", "b", "TT", "l_tau", "u_in", "lb", "ub")
 
 
 def small_layout(nq: int, nv: int, n_outputs: int) -> dict:
@@ -90,12 +94,17 @@ def frame_terms(builder: WholeBodyQP) -> FrameTerms:
     return FrameTerms(robot.pin_model, frames, [robot.base_frame_id, *rotating])
 
 
-def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Function:
+def tick_function(
+    builder: WholeBodyQP, stance: str, terms: FrameTerms, airborne: tuple[int, int] | None = None
+) -> ca.Function:
     """The CasADi function of ``stance``'s whole tick (see the module doc): the
     inputs ``M_upper`` and ``nle`` (Pinocchio's ``M``, read above the diagonal,
     and ``h``), the :attr:`FrameTerms.symbols` and ``small``
     (:func:`small_layout`); the outputs of :func:`assembly_function`, then ``y``,
-    ``JyT`` and ``jdv`` of the output map."""
+    ``JyT`` and ``jdv`` of the output map. With ``airborne = (n, n_in)`` (the
+    variables and inequality rows before the swing foot's), then the airborne
+    problem's varying blocks, each the same entries as the full problem's
+    (:data:`AIRBORNE_OUTPUTS`): the same values written twice, not computed twice."""
     B, L, robot = builder, builder.layout, builder.robot
     nv, nq, task = L.nv, robot.nq, B.output_task
     n_out = task.size
@@ -151,21 +160,44 @@ def tick_function(builder: WholeBodyQP, stance: str, terms: FrameTerms) -> ca.Fu
     names = [core.name_out(i) for i in range(core.n_out())]
     args = [Mu, nle, *(s for _, s in T.symbols), u]
     arg_names = ["M_upper", "nle", *(n for n, _ in T.symbols), "small"]
-    return ca.Function(
-        f"{FUNCTION_STEM}_{stance}", args, [*parts, ca.densify(y), ca.densify(JyT), ca.densify(jdv)],
-        arg_names, [*names, "y", "JyT", "jdv"],
-    )  # fmt: skip
+    outs, out_names = [*parts, ca.densify(y), ca.densify(JyT), ca.densify(jdv)], [*names, "y", "JyT", "jdv"]
+    stem = FUNCTION_STEM
+    if airborne is not None:
+        n, n_in = airborne
+        part = dict(zip(names, parts))
+        # column-major outputs: a leading block of variables is a leading block of rows of ET, AT, TT
+        blocks = {"ET": part["ET"][:n, :], "g": part["g"][:n], "AT": part["AT"][:n, :], "b": part["b"],
+                  "TT": part["TT"][:n, :], "l_tau": part["l_tau"], "u_in": part["u_in"][:n_in],
+                  "lb": part["lb"][:n], "ub": part["ub"][:n]}  # fmt: skip
+        outs += [blocks[k] for k in AIRBORNE_OUTPUTS]
+        out_names += [f"{k}_airborne" for k in AIRBORNE_OUTPUTS]
+        stem = AIRBORNE_FUNCTION_STEM
+    return ca.Function(f"{stem}_{stance}", args, outs, arg_names, out_names)
 
 
 def generate_in_place_source(
-    builder: WholeBodyQP, terms: FrameTerms | None = None
+    builder: WholeBodyQP, terms: FrameTerms | None = None, airborne: tuple[int, int] | None = None
 ) -> tuple[bytes, dict[str, ca.Function]]:
     """The C source of both stances' tick functions for ``builder`` (reading ``terms``, default
-    :func:`frame_terms`), and the functions."""
+    :func:`frame_terms`; with the ``airborne`` problem's outputs, :func:`tick_function`), and the functions."""
     # Expanded to scalar (SX) code: sparsity and constants folded; E^T E stays with numpy (docs/TUNING.md).
     terms = frame_terms(builder) if terms is None else terms
-    functions = {side: tick_function(builder, side, terms).expand() for side in builder.robot.foot_sides}
+    functions = {side: tick_function(builder, side, terms, airborne).expand() for side in builder.robot.foot_sides}
     return generate.single_file_source(functions.values(), SOURCE_FILE), functions
+
+
+def airborne_dims(builder: WholeBodyQP) -> tuple[int, int] | None:
+    """``(n, n_in)``: the variables and inequality rows before the swing foot's, when the swing
+    foot's force variables and friction rows trail the problem (the layout and the constraint
+    order put them last; then the problem of an airborne swing foot is a leading block); else ``None``."""
+    from amlip_qp.control.wbc.constraints import FrictionPyramid
+
+    L, friction = builder.layout, builder.constraint("friction")
+    if not isinstance(friction, FrictionPyramid):
+        return None
+    if L.sl_f_sw.stop != L.n or friction.swing_rows.stop != builder.problem.n_in:
+        return None
+    return L.sl_f_sw.start, friction.swing_rows.start
 
 
 class InPlaceBuild:
@@ -175,8 +207,16 @@ class InPlaceBuild:
         builder: The :class:`~amlip_qp.control.wbc.builder.WholeBodyQP`
             whose problem arrays it fills (with its inputs and dynamics buffers).
         cache_dir: Overrides the codegen cache folder.
+        airborne: Also fill :attr:`airborne_problem`, and return it from :meth:`build` while the
+            swing foot's force ramp is 0 (ignored when the layout has no such leading block,
+            :func:`airborne_dims`).
 
     Attributes:
+        airborne_problem: The problem without the airborne swing foot's forces and friction rows
+            (its own contiguous buffers, :meth:`QPProblem.allocate
+            <amlip_qp.qp.problem.QPProblem.allocate>`), entry for entry the leading block of the
+            builder's problem; ``None`` without ``airborne``. It has the same optimum as the full
+            problem while the swing foot's forces are fixed at zero and its rows free.
         outputs: The output map ``h_0``'s ``(y, J, Jdot_v)`` that the last :meth:`build`
             computed (new arrays each build; shapes (n_outputs,), (n_outputs, nv),
             (n_outputs,)), for its target's stance and heading; ``None`` before a build, and
@@ -187,11 +227,12 @@ class InPlaceBuild:
         CodegenError: The compiler rejected the source or the library does not load.
     """
 
-    def __init__(self, builder: WholeBodyQP, cache_dir: str | os.PathLike | None = None):
+    def __init__(self, builder: WholeBodyQP, cache_dir: str | os.PathLike | None = None, airborne: bool = False):
         self.builder = B = builder
         runtime.require_compiler()  # before the generation, which takes seconds
         self._terms = frame_terms(builder)
-        source, symbolic = generate_in_place_source(builder, self._terms)
+        dims = airborne_dims(builder) if airborne else None
+        source, symbolic = generate_in_place_source(builder, self._terms, dims)
         fn = symbolic[B.robot.foot_sides[0]]
         L, P, n_out = B.layout, B.problem, B.output_task.size
         self._slices = sl = small_layout(B.robot.nq, L.nv, n_out)
@@ -208,7 +249,11 @@ class InPlaceBuild:
             self._E, P.g, P.A, P.b, P.C[:n_tau], P.l[:n_tau], P.u, P.lb, P.ub, B.dynamics.RD, B.dynamics.Rhp,
             self._y, self._J, self._jdv,
         ]  # fmt: skip
-        self._names = {side: f"{FUNCTION_STEM}_{side}" for side in B.robot.foot_sides}
+        self.airborne_problem: QPProblem | None = None
+        if dims is not None:
+            self._add_airborne_outputs(dims, n_tau)
+        stem = FUNCTION_STEM if dims is None else AIRBORNE_FUNCTION_STEM
+        self._names = {side: f"{stem}_{side}" for side in B.robot.foot_sides}
         self.library_path, self._functions = runtime.compile_and_load(
             source, list(self._names.values()), SOURCE_FILE, LIBRARY_FILE, cache_dir
         )
@@ -216,6 +261,43 @@ class InPlaceBuild:
         self._views: list = []  # keeps the bound views alive
         self._eval: dict = {}
         self.outputs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _add_airborne_outputs(self, dims: tuple[int, int], n_tau: int) -> None:
+        """Allocate :attr:`airborne_problem` and bind its varying blocks to the functions' airborne outputs."""
+        n, n_in = dims
+        P = self.builder.problem
+        self.airborne_problem = Pa = QPProblem.allocate(
+            n, P.n_eq, n_in,
+            variables={k: s for k, s in P.variables.items() if s.stop <= n},
+            eq_rows=list(P.eq_rows),
+            in_rows=[(k, slice(s.start, min(s.stop, n_in))) for k, s in P.in_rows if s.start < n_in],
+        )  # fmt: skip
+        self._n_tau = n_tau
+        self._E_air = np.zeros((self._E.shape[0], n))
+        self._EtE_air = np.zeros((n, n))
+        # the constant Hessian's block, contiguous (the builder makes H0 once)
+        self._H0_air = np.ascontiguousarray(self.builder.constant_cost.H0[:n, :n])
+        self._outputs += [self._E_air, Pa.g, Pa.A, Pa.b, Pa.C[:n_tau], Pa.l[:n_tau], Pa.u, Pa.lb, Pa.ub]
+        self.copy_constant_rows()
+
+    def copy_constant_rows(self) -> None:
+        """Copy the full problem's constant inequality rows (those after the torque rows: the
+        stance friction pyramid) into :attr:`airborne_problem`; call it after changing them
+        (the tracker turns the pyramid to the stance ground). Nothing without ``airborne``."""
+        Pa = self.airborne_problem
+        if Pa is None:
+            return
+        P, k, n, n_in = self.builder.problem, self._n_tau, Pa.n, Pa.n_in
+        np.copyto(Pa.C[k:], P.C[k:n_in, :n])
+        np.copyto(Pa.l[k:], P.l[k:n_in])
+
+    def full_problem(self) -> QPProblem:
+        """The builder's full problem of the last build: after an airborne build, its Hessian
+        (which that build leaves) is completed first. For recording; not on the control path."""
+        B = self.builder
+        E = self._E
+        np.add(B.constant_cost.H0, np.dot(E.T, E, out=self._EtE), out=B.problem.H)
+        return B.problem
 
     def _bind_data(self, kin: RobotKinematics) -> None:
         """Bind the functions' inputs to ``kin``'s Pinocchio arrays (see the module doc)."""
@@ -257,9 +339,14 @@ class InPlaceBuild:
         B.inputs.swing_force_weight = w = swing_force_weight(B.config, target)  # the tracker reads it
         u[self._i_w] = w
         self._eval[stance]()
+        B.dynamics.filled_for(stance)
+        self.outputs = (self._y.copy(), self._J.copy(), self._jdv.copy())
+        Pa = self.airborne_problem
+        if w == 0.0 and Pa is not None:
+            E = self._E_air
+            np.add(self._H0_air, np.dot(E.T, E, out=self._EtE_air), out=Pa.H)
+            return Pa
         E = self._E
         # np.dot: the same bits as np.matmul (the same BLAS call), with less overhead
         np.add(B.constant_cost.H0, np.dot(E.T, E, out=self._EtE), out=B.problem.H)
-        B.dynamics.filled_for(stance)
-        self.outputs = (self._y.copy(), self._J.copy(), self._jdv.copy())
         return B.problem

@@ -9,14 +9,17 @@ joint torques from the actuated rows of the dynamics.
 While the swing foot is in the air (force ramp ``w = 0``) its force
 variables are pinned to zero and its friction rows are lifted; with
 ``airborne_reduction=True`` the tracker then solves the problem without them
-(:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`: the same
-optimum, a smaller KKT system, about a quarter less solve time) as a second
-persistent problem shape of the same solver; both stay warm-started. It is off by default: the
-trajectories then differ from the full solve's within the solver's tolerance,
-and the closed-chain 2.5 m/s walk with the robot's sensors and the EKF
-(seed 0) ends with a lateral speed of 0.179 m/s, above the acceptance's 0.15
-(without: -0.014; seeds 1-3: -0.049, 0.033, 0.029 m/s, without: 0.026, a fall
-at 14.48 s, 0.090: that walk is at the edge either way).
+(the same optimum, a smaller KKT system) as a second persistent problem shape
+of the same solver; both stay warm- or hot-started. With the in-place assembly
+that problem has its own buffers, which the generated C writes with the same
+entries as the full problem's leading block
+(:attr:`InPlaceBuild.airborne_problem
+<amlip_qp.control.wbc.compiled_in_place.InPlaceBuild.airborne_problem>`);
+the other builds solve the leading block's views
+(:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`). It is off
+by default: it changes the walks at the rounding level of the solve, and the
+published results are of the full problem (docs/TUNING.md, "Controller speed:
+the airborne problem in place").
 
 Infeasible ticks get a second chance without the torque-limit rows (counted
 in :attr:`QPTracker.relaxed_solves`; the controller saturates the torques).
@@ -41,7 +44,7 @@ from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.wbc.builder import WholeBodyQP
 from amlip_qp.control.wbc.compiled import CompiledBuild
-from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild
+from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild, airborne_dims
 from amlip_qp.control.wbc.config import QP_SOLVERS, QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
@@ -80,7 +83,8 @@ class QPTracker(Tracker):
             ``False``: the Python build.
         airborne_reduction: While the swing foot's force ramp is 0, solve the
             problem without its force variables and friction rows (same
-            optimum, about a quarter less solve time; see the module doc).
+            optimum; with DAQP on Cassie about 0.86× of the full problem's
+            solve time in the walking loop; see the module doc).
         qp_solver: ``None`` (default): the config's
             :attr:`~amlip_qp.control.wbc.config.QPConfig.qp_solver` (``"proxqp"``
             unless the profile's ``[trackers.qp]`` names another); ``"proxqp"``
@@ -159,10 +163,16 @@ class QPTracker(Tracker):
         self.build_problem = self.builder.build
         self.build_backend = "python"
         self._in_place: InPlaceBuild | None = None  # its outputs go into the result
+        # The airborne swing foot's variables and friction rows trail the problem's (the layout and the
+        # constraint order put them last): the problem without them is a leading block.
+        dims = airborne_dims(self.builder)
+        #: Whether airborne ticks solve the problem without the swing foot (``airborne_reduction`` and a
+        #: layout that allows it): the in-place assembly's own airborne problem, else the leading block.
+        self.airborne_reduction = bool(airborne_reduction) and dims is not None
         if compiled_build is None or compiled_build:
             try:
                 if in_place_assembly is None or in_place_assembly:
-                    self._in_place = InPlaceBuild(self.builder)
+                    self._in_place = InPlaceBuild(self.builder, airborne=self.airborne_reduction)
                     self.build_problem = self._in_place.build
                     self.build_backend = "c-in-place"
                 else:
@@ -213,14 +223,7 @@ class QPTracker(Tracker):
         self._friction = friction
         # (ground pitch, heading) rad the stance pyramid is turned to; None: about the world's vertical
         self._friction_ground: tuple[float, float] | None = None
-        # The airborne swing foot's variables and friction rows trail the problem's (the layout and the
-        # constraint order put them last): the problem without them is a leading block.
-        L = self.builder.layout
-        self._airborne_dims = (L.sl_f_sw.start, friction.swing_rows.start)
-        #: Whether airborne ticks solve the leading block (``airborne_reduction`` and a layout that allows it).
-        self.airborne_reduction = (
-            bool(airborne_reduction) and L.sl_f_sw.stop == L.n and friction.swing_rows.stop == self.builder.problem.n_in
-        )
+        self._airborne_dims = dims
         self._airborne: tuple[QPProblem, QPProblem] | None = None  # (full problem, its leading block of views)
 
     def _orient_friction(self, target: TrackingTarget) -> None:
@@ -230,11 +233,13 @@ class QPTracker(Tracker):
             if self._friction_ground is not None:
                 self._friction.initialize(self.builder.problem)
                 self._friction_ground = None
+                self._constant_rows_changed()
             return
         key = (pitch, target.heading_rad)
         if key != self._friction_ground:
             self._friction.tilt_stance_rows(self.builder.problem, pitch, target.heading_rad)
             self._friction_ground = key
+            self._constant_rows_changed()
 
     def reset(self) -> None:
         """New run: forget the warm start, the last torques and the counters."""
@@ -251,6 +256,12 @@ class QPTracker(Tracker):
         if self._friction_ground is not None:
             self._friction.initialize(self.builder.problem)
             self._friction_ground = None
+            self._constant_rows_changed()
+
+    def _constant_rows_changed(self) -> None:
+        """The full problem's constant rows changed: the in-place assembly's airborne problem copies them."""
+        if self._in_place is not None:
+            self._in_place.copy_constant_rows()
 
     def _fallback(self, kin: RobotKinematics, reason: str, info: dict, outputs: tuple | None = None) -> TrackerResult:
         self.fallbacks += 1
@@ -311,17 +322,28 @@ class QPTracker(Tracker):
 
     def _solve(self, problem: QPProblem) -> QPSolution:
         """Solve ``problem``; with :attr:`airborne_reduction`, while the swing foot is airborne,
-        its leading block without the swing forces."""
+        the problem without the swing forces: the in-place assembly's airborne problem (which
+        :meth:`build_problem` then returns) or the full problem's leading block. The solution
+        has the full problem's size."""
+        if problem.n != self.builder.layout.n:  # the in-place assembly's airborne problem
+            return self._full_size(self.solver.solve(problem))
         if not (self.airborne_reduction and self.builder.inputs.swing_force_weight == 0.0):
             return self.solver.solve(problem)
         pair = self._airborne
         if pair is None or pair[0] is not problem:
             # Views of the builder's live arrays: made once, valid for every later build.
+            assert self._airborne_dims is not None
             pair = self._airborne = (problem, problem.leading(*self._airborne_dims))
-        sol = self.solver.solve(pair[1])
-        x = np.zeros(problem.n)  # the swing forces: their bounds, zero
-        x[: sol.x.shape[0]] = sol.x
-        sol.x = x
+        return self._full_size(self.solver.solve(pair[1]))
+
+    def _full_size(self, sol: QPSolution) -> QPSolution:
+        """``sol`` of a problem without the airborne swing foot's forces, with those forces
+        (fixed at zero by their bounds) appended."""
+        n = self.builder.layout.n
+        if sol.x.shape[0] != n:
+            x = np.zeros(n)
+            x[: sol.x.shape[0]] = sol.x
+            sol.x = x
         return sol
 
     def _solve_relaxed(self, problem: QPProblem) -> QPSolution | None:
@@ -332,7 +354,7 @@ class QPTracker(Tracker):
         relaxed.l[rows] = -np.inf
         relaxed.u[rows] = np.inf
         try:
-            sol = self.solver.solve(relaxed)
+            sol = self._full_size(self.solver.solve(relaxed))
         except QPError:
             return None
         self.relaxed_solves += 1
@@ -354,7 +376,9 @@ class QPTracker(Tracker):
         if not math.isfinite(sum(tau.tolist())):  # Python floats: cheaper than a numpy reduction here
             return self._fallback(kin, "non-finite torques", info, outputs)
         self.last_solution = sol.x
-        if self.record:
+        if self.record:  # the full problem, also when its airborne block was solved (the same optimum)
+            if problem.n != sol.x.shape[0] and self._in_place is not None:
+                problem = self._in_place.full_problem()
             self.recorded.append((problem.copy(), sol.x.copy()))
         self._tau_prev[:] = tau
         self._fail_streak = 0
