@@ -101,6 +101,7 @@ VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
     "qp-gathered": ("qp", {"in_place_assembly": False}),
     "qp-daqp": ("qp", {"qp_solver": "daqp"}),
     "qp-proxqp": ("qp", {"qp_solver": "proxqp"}),
+    "qp-airborne": ("qp", {"airborne_reduction": True}),
 }
 
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
