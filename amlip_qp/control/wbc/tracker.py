@@ -83,7 +83,7 @@ class QPTracker(Tracker):
             ``False``: the Python build.
         airborne_reduction: While the swing foot's force ramp is 0, solve the
             problem without its force variables and friction rows (same
-            optimum; with DAQP on Cassie about 0.86× of the full problem's
+            optimum; with DAQP on Cassie about 0.85× of the full problem's
             solve time in the walking loop; see the module doc).
         qp_solver: ``None`` (default): the config's
             :attr:`~amlip_qp.control.wbc.config.QPConfig.qp_solver` (``"proxqp"``
