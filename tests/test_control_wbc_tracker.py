@@ -265,3 +265,41 @@ def test_a_four_point_robot_at_stand_gives_finite_torques_within_limits(name, tm
     reduced = QPTracker(robot, eps_abs=1e-9, warm_start=False, airborne_reduction=True)
     assert reduced.airborne_reduction
     np.testing.assert_allclose(reduced.compute(kin, target).tau_Nm, res.tau_Nm, atol=1e-5)
+
+
+def test_the_airborne_problem_in_place_gets_the_relaxed_solve_and_the_full_solution():
+    """Mid-swing with ``airborne_reduction``: the in-place assembly returns its airborne problem,
+    the solution comes back at the full problem's size with the swing forces zero, and a tick
+    whose torque rows cannot be met is solved again without them (a relaxed solve, still full size)."""
+    robot = load_robot("cassie")
+    tracker = QPTracker(robot, airborne_reduction=True, record=True)
+    kin, target = _stand(robot)
+    target.swing_contact_weight = 0.0  # the swing foot in the air
+    good = tracker.compute(kin, target)
+    assert good.ok and good.info["swing_force_weight"] == 0.0
+    air = tracker.last_problem
+    assert air is not None and air.n < tracker.builder.problem.n
+    x = tracker.last_solution
+    assert x is not None and x.shape == (tracker.builder.problem.n,)
+    assert np.all(x[tracker.builder.problem.variables["forces_swing"]] == 0.0)
+    # recorded as the full problem, which the full solution satisfies
+    problem, x_rec = tracker.recorded[-1]
+    assert problem.n == x_rec.size == x.size and max(problem.residuals(x_rec).values()) < 1e-6
+    build = tracker.build_problem
+
+    def torque_band_out_of_reach(kin, target):
+        problem = build(kin, target)
+        rows = dict(problem.in_rows)["torque"]
+        problem.l[rows.start] = problem.u[rows.start] = 1e5  # a torque no joint can give
+        return problem
+
+    tracker.build_problem = torque_band_out_of_reach
+    relaxed = tracker.compute(kin, target)
+    assert relaxed.ok and tracker.relaxed_solves == 1 and tracker.fallbacks == 0
+    x_relaxed = tracker.last_solution
+    assert x_relaxed is not None and x_relaxed.shape == x.shape
+    assert np.all(x_relaxed[tracker.builder.problem.variables["forces_swing"]] == 0.0)
+    assert np.all(np.isfinite(relaxed.tau_Nm))
+    # the same problem but for the torque rows: the same stance forces to within the dropped rows' effect
+    st = tracker.builder.problem.variables["forces_stance"]
+    assert abs(x_relaxed[st][2::3].sum() - x[st][2::3].sum()) < 0.05 * abs(x[st][2::3].sum())
