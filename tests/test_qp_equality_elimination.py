@@ -1,5 +1,5 @@
 """amlip_qp.qp.equality_elimination: the reduced QP has the full QP's optimum; its basis spans the
-equalities' null space; dependent, inconsistent or over-determined equalities are refused."""
+equalities' null space; dependent or over-determined equalities are refused."""
 
 import numpy as np
 import pytest
@@ -85,11 +85,13 @@ def test_equalities_that_leave_no_freedom_are_refused():
         eliminate_equalities(p)
 
 
-def test_equalities_inconsistent_with_the_fixed_variables_are_refused():
+def test_equalities_dependent_once_the_fixed_variables_are_out_are_refused():
     p = _problem(6, n=8, n_eq=3, n_in=4, n_fixed=3)
     # the free variables' columns span only 2 of the 3 rows' directions once the fixed ones are out
+    # (the full rows stay independent; with this b they are also inconsistent)
     free = np.flatnonzero(p.lb != p.ub)
     p.A[2, free] = p.A[0, free] + p.A[1, free]
     p.b[2] += 1.0
-    with pytest.raises(QPError, match="dependent|inconsistent"):
+    assert np.linalg.matrix_rank(p.A) == 3
+    with pytest.raises(QPError, match=r"equality rows are dependent \(row 2, block 'second'\)"):
         eliminate_equalities(p)

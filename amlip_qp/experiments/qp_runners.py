@@ -163,7 +163,7 @@ class DAQPEliminatedRunner(Runner):
 
     def prepare(self, p: QPProblem) -> tuple | None:
         """The eliminated problem and its DAQP data; ``None`` (counted as a failure when solved)
-        for a problem whose equalities cannot be eliminated (dependent or inconsistent rows)."""
+        for a problem whose equalities cannot be eliminated (rows dependent over its free variables)."""
         from amlip_qp.qp.equality_elimination import eliminate_equalities
 
         t0 = time.perf_counter_ns()

@@ -39,8 +39,6 @@ from amlip_qp.qp.problem import QPProblem
 
 #: A pivot of ``R`` below this fraction of the largest is taken as a dependent equality row.
 RANK_TOLERANCE = 1e-10
-#: Largest residual ``|A x_0 - b|`` (relative to ``1 + |b|``) accepted from consistent equalities.
-CONSISTENCY_TOLERANCE = 1e-8
 
 
 @dataclass(frozen=True)
@@ -73,8 +71,9 @@ def eliminate_equalities(problem: QPProblem) -> EliminatedQP:
     """The problem's equalities and fixed variables eliminated (module doc).
 
     Raises:
-        QPError: The equality rows are dependent (rank below their number, naming the block) or
-            inconsistent with the fixed variables, or they leave no free variable.
+        QPError: The equality rows are dependent over the free variables (rank below their
+            number, naming the block; then they may also be inconsistent), or they leave no free
+            variable. Rows of full rank always have a solution ``x_0``.
     """
     p = problem
     fixed_mask = p.lb == p.ub
@@ -109,10 +108,7 @@ def eliminate_equalities(problem: QPProblem) -> EliminatedQP:
     if info != 0:
         raise QPError(f"eliminate_equalities: LAPACK dorgqr failed (info {info})", problem=p)
     Q1, Z = Q[:, :n_eq], np.ascontiguousarray(Q[:, n_eq:])
-    w, info = lapack.dtrtrs(R, b, trans=1)[:2] if n_eq else (np.zeros(0), 0)
-    x0 = Q1 @ w
-    if n_eq and np.max(np.abs(A @ x0 - b)) > CONSISTENCY_TOLERANCE * (1.0 + np.max(np.abs(b))):
-        raise QPError("eliminate_equalities: the equality rows are inconsistent", problem=p)
+    x0 = Q1 @ (lapack.dtrtrs(R, b, trans=1)[0] if n_eq else np.zeros(0))
 
     H = p.H[np.ix_(free, free)]
     g = p.g[free] + p.H[np.ix_(free, fixed)] @ xf

@@ -49,6 +49,7 @@ from amlip_qp.alip import other_side
 from amlip_qp.codegen import generate, runtime
 from amlip_qp.codegen.output_map import output_map_function
 from amlip_qp.control.wbc.compiled import assembly_function, bind_buffers
+from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.control.wbc.frame_terms import FrameTerms
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
@@ -190,8 +191,6 @@ def airborne_dims(builder: WholeBodyQP) -> tuple[int, int] | None:
     """``(n, n_in)``: the variables and inequality rows before the swing foot's, when the swing
     foot's force variables and friction rows trail the problem (the layout and the constraint
     order put them last; then the problem of an airborne swing foot is a leading block); else ``None``."""
-    from amlip_qp.control.wbc.constraints import FrictionPyramid
-
     L, friction = builder.layout, builder.constraint("friction")
     if not isinstance(friction, FrictionPyramid):
         return None
