@@ -38,3 +38,15 @@ def test_a_soft_row_gives_way_to_a_hard_bound_and_a_hard_one_fails():
 def test_bad_sizes_raise(n, m, soft):
     with pytest.raises(QPError):
         SmallQPSolver(n, m, soft_rows=soft)
+
+
+@pytest.mark.parametrize("soft", [(), (0,)])
+def test_a_nan_row_fails_although_daqp_reports_it_solved(soft):
+    """A hot-started DAQP update takes a NaN row and exits "solved" with a finite x: the residual
+    check (NaN propagates through it, hard and soft rows alike) turns that into a QPError."""
+    s = SmallQPSolver(2, 2, soft_rows=soft)
+    rows, lower, upper = np.eye(2), [-1e9, -1e9, -10.0, -10.0], [1e9, 1e9, 10.0, 10.0]
+    np.testing.assert_allclose(s(H, G, rows, lower, upper), [1.0, 1.0], atol=1e-12)
+    with pytest.raises(QPError, match="exit flag 1"):
+        s(H, G, np.array([[np.nan, 0.0], [0.0, 1.0]]), lower, upper)
+    assert s.failures == 1

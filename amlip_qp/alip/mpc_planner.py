@@ -57,6 +57,12 @@ _I_REGIONS = S.MPC_QP_INPUTS.index("dz_1")
 #: A planned duration this close to the command's ``T`` (s) is ``T`` itself.
 NOMINAL_TOL_S = 1e-9
 #: The region inputs without regions: flat, boxes of +-NO_BOUND.
+# The durations' entries of the MPC's solution x (the current step's sigma, then the later ones'), and the
+# ufuncs the per-tick solve uses: np.clip's, np.max's and np.cumsum's Python layers cost more than the
+# arithmetic on these few entries (clip(a, lo, hi) is minimum(maximum(a, lo), hi), cumsum is
+# add.accumulate: the same values).
+_SIGMA_IDX = np.array([0, *range(S.I_SIGMA_LATER, S.N_VAR)])
+_maximum, _minimum, _max_reduce, _accumulate = np.maximum, np.minimum, np.maximum.reduce, np.add.accumulate
 _NO_REGIONS = np.concatenate([np.zeros(S.MPC_STEPS), np.tile([-S.NO_BOUND, S.NO_BOUND] * 2, S.MPC_STEPS)])
 
 
@@ -327,7 +333,7 @@ class MPCPlanner(Planner):
             u[_I_T_BAR:_I_D_BAR] = T
             u[_I_D_BAR:_I_REGIONS] = 0.0
         else:
-            u[_I_T_BAR:_I_D_BAR] = np.clip(np.where(np.isnan(self._T_later), T, self._T_later), T_lo, T_hi)
+            u[_I_T_BAR:_I_D_BAR] = _minimum(_maximum(np.where(np.isnan(self._T_later), T, self._T_later), T_lo), T_hi)
             u[_I_D_BAR:_I_REGIONS] = self._d_later.reshape(-1)
         u[_I_REGIONS:] = region_inputs
         if terrain is not None:
@@ -344,13 +350,13 @@ class MPCPlanner(Planner):
                 if y.size != S.MPC_QP_N_OUT:
                     raise InputError(f"mpc_fn returned {y.size} values; MPC_QP has {S.MPC_QP_N_OUT} outputs")
                 x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
-                taus = np.log(np.maximum(x[[0, *range(S.I_SIGMA_LATER, S.N_VAR)]], 1e-300)) / l
-                moved = max(abs(taus[0] - u[_I_TAU_BAR]), float(np.max(np.abs(taus[1:] - u[_I_T_BAR:_I_D_BAR]))))
+                taus = np.log(_maximum(x[_SIGMA_IDX], 1e-300)) / l
+                moved = max(abs(taus[0] - u[_I_TAU_BAR]), float(_max_reduce(np.abs(taus[1:] - u[_I_T_BAR:_I_D_BAR]))))
                 if moved < 1e-9 or it == st.iterations:
                     break
                 # re-linearise at the new durations and steps
                 u[_I_TAU_BAR] = min(max(taus[0], tau_lo), tau_hi)
-                u[_I_T_BAR:_I_D_BAR] = np.clip(taus[1:], T_lo, T_hi)
+                u[_I_T_BAR:_I_D_BAR] = _minimum(_maximum(taus[1:], T_lo), T_hi)
                 u[_I_D_BAR:_I_REGIONS] = x[1 : S.I_SIGMA_LATER]
         except QPError:
             x = None
@@ -366,9 +372,9 @@ class MPCPlanner(Planner):
             # the nominal end to the solver's precision is the nominal end (the one-step law's phase, bit for bit)
             T_plan = T if abs(t_in + tau - T) < NOMINAL_TOL_S else t_in + tau
         self._T_plan = T_plan
-        T_later = np.clip(np.log(np.maximum(x[S.I_SIGMA_LATER :], 1e-300)) / l, T_lo, T_hi)
+        T_later = _minimum(_maximum(np.log(_maximum(x[S.I_SIGMA_LATER :], 1e-300)) / l, T_lo), T_hi)
         T_later[np.abs(T_later - T) < NOMINAL_TOL_S] = T  # the nominal duration, as for the current step
         steps = x[1 : S.I_SIGMA_LATER].reshape(N, 2)
         self._T_later, self._d_later = T_later, steps.copy()
-        footholds = r0[:2] + np.cumsum(steps, axis=0)
+        footholds = r0[:2] + _accumulate(steps, axis=0)
         return MPCPlan(T_plan, footholds, T_later, it, True)

@@ -26,6 +26,7 @@ import numpy as np
 from amlip_qp.exceptions import QPError
 from amlip_qp.qp.daqp_solver import BIG_BOUND, PRIMAL_TOL
 
+_max_reduce = np.maximum.reduce  # the ufunc's reduce: ndarray.max's Python layer costs more on these sizes
 #: DAQP's sense flag of a soft row.
 SENSE_SOFT = 8
 #: Largest constraint violation (in the rows' units) a reported solution may have.
@@ -69,6 +70,9 @@ class SmallQPSolver:
         self._bl = np.zeros(n + m)
         self._sense = np.zeros(n + m, dtype=np.intc)
         self._z = np.zeros(n + m)
+        self._z_x, self._z_rows = self._z[:n], self._z[n:]
+        self._big = np.full(n + m, BIG_BOUND)  # DAQP's "no bound", one array (no scalar broadcast per call)
+        self._neg_big = -self._big
         self._t1, self._t2 = np.zeros(n + m), np.zeros(n + m)
         self._hard = np.ones(n + m)  # 1: checked (the bounds of x, the hard rows), 0: soft
         for i in soft_rows:
@@ -93,8 +97,8 @@ class SmallQPSolver:
         self._H[:] = H
         self._f[:] = g
         self._A[:] = C
-        np.minimum(upper, BIG_BOUND, out=self._bu)
-        np.maximum(lower, -BIG_BOUND, out=self._bl)
+        np.minimum(upper, self._big, out=self._bu)
+        np.maximum(lower, self._neg_big, out=self._bl)
         self.solves += 1
         if self._model is None:
             model = self._daqp.Model()
@@ -111,14 +115,14 @@ class SmallQPSolver:
         ok = flag in (1, 2) and math.isfinite(sum(x.tolist()))
         if ok:
             z = self._z
-            z[: self.n] = x
-            np.dot(self._A, x, out=z[self.n :])
+            self._z_x[:] = x
+            np.dot(self._A, x, out=self._z_rows)
             t1, t2 = self._t1, self._t2
             np.subtract(self._bl, z, out=t1)
             np.subtract(z, self._bu, out=t2)
             np.maximum(t1, t2, out=t1)
             t1 *= self._hard
-            ok = float(t1.max()) <= RESIDUAL_CHECK
+            ok = float(_max_reduce(t1)) <= RESIDUAL_CHECK  # NaN (a NaN row) fails it, as with ndarray.max
         self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if not ok:
             self.failures += 1
