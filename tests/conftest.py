@@ -44,6 +44,9 @@ def no_simulation(monkeypatch):
     from amlip_qp.control.mpc import bench as mpc_bench
 
     monkeypatch.setattr(mpc_bench, "run_benchmark", _simulated)
+    from amlip_qp.experiments import bench_mpc
+
+    monkeypatch.setattr(bench_mpc, "run", _simulated)
     from amlip_qp.experiments import bench_qp
 
     monkeypatch.setattr(bench_qp, "run", _simulated)

@@ -132,9 +132,9 @@ RULES: dict[str, Rule] = {
         + ("amlip_qp.control.tracker", "amlip_qp.control.walking", "amlip_qp.estimation", "amlip_qp.control.mpc"),
         ("mujoco", "proxsuite", "qpsolvers", "amlip_qp.qp"),
     ),
-    # the step-timing MPC planner on its runtime: the generated C and a small DAQP; its bench handler
+    # the step-timing MPC planner on its runtime: the generated C and a small DAQP; its point-mass bench
     "amlip_qp.control.mpc": Rule(
-        CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.mpc", "amlip_qp.output_paths"),
+        CONTROL_BASE + ("amlip_qp.qp", "amlip_qp.control.mpc"),
         ("mujoco", "pinocchio", "proxsuite", "amlip_qp.sim", "amlip_qp.control.walking"),
     ),
     # the base-state estimators: numpy, Pinocchio and the generated C of the codegen runtime; never MuJoCo

@@ -45,3 +45,20 @@ def test_bench_reports_the_solve_time_of_a_pushed_walk():
         assert 0.0 < result[key]["median_us"] <= result[key]["p99_us"]
     assert "mpc_solve" in format_table(result)
     json.dumps(result)
+
+
+@needs_cc
+def test_bench_mpc_times_the_trackers_solve_in_turns_and_judges_the_goal():
+    """``amlip-qp bench mpc``: the tracker's own solve (hot DAQP on Cassie) in turns of 50 ticks."""
+    from amlip_qp.experiments.bench_mpc import BLOCK_TICKS, format_table, run, tracker_runner_name
+
+    assert tracker_runner_name() == "daqp-hot"  # Cassie's profile names DAQP
+    result = run(duration_s=0.5)
+    ts = result["tracker_solve"]
+    assert result["ticks"] == 1000 and ts["problems"] == 1000 and ts["failures"] == 0
+    assert ts["solves"] == (1000 // BLOCK_TICKS - 1) * BLOCK_TICKS  # a block after every 50 ticks but the last
+    assert 0.0 < ts["median_us"] <= ts["p99_us"]
+    assert result["goal_met"] == (result["mpc_solve"]["median_us"] <= ts["median_us"])
+    table = format_table(result)
+    assert "tracker_solve" in table and ("goal: mpc_solve median <= tracker_solve median: " in table)
+    json.dumps(result)

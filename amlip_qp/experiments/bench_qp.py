@@ -213,7 +213,9 @@ def time_interleaved(
     return times, solutions, steps_us
 
 
-def _settings() -> SolverSettings:
+def solver_settings() -> SolverSettings:
+    """What the runners are built with: the tracker's ProxQP options, its absolute tolerance for the
+    iterative solvers and its ProxQP's primal infeasibility threshold."""
     options = tracker_solver_options()
     return SolverSettings(
         proxqp=options, eps_abs=float(options["eps_abs"]), eps_primal_inf=float(options["eps_primal_inf"])
@@ -246,7 +248,7 @@ def bench_solvers(
         raise InputError("bench_solvers needs at least one problem")
     if {(p.n, p.n_eq, p.n_in) for p in problems} != {(problems[0].n, problems[0].n_eq, problems[0].n_in)}:
         raise InputError("bench_solvers needs problems of one shape (a tracker keeps its layout)")
-    settings = settings if settings is not None else _settings()
+    settings = settings if settings is not None else solver_settings()
     specs = solvers if any(s.name == REFERENCE for s in solvers) else (qp_solver_list.SOLVERS[0], *solvers)
     present = [s for s in specs if qp_solver_list.available(s)]
     missing = [qp_solver_list.missing_line(s) for s in specs if s not in present]
@@ -309,7 +311,7 @@ def run(n_ticks: int = 1200, scenario: str = DEFAULT_SCENARIO, solvers: str | No
     specs = qp_solver_list.select(solvers)
     state: list = []
     problems, tick_us, fell = record_walk(n_ticks, scenario, mujoco_state=state)
-    settings = _settings()
+    settings = solver_settings()
     with solver_output_to_stderr():
         report = bench_solvers(problems, specs, settings, yardstick=state[0])
     return {

@@ -13,16 +13,16 @@ that the step time and reach limits become active. Each tick is timed, in micros
 - ``one_step_update``: the one-step planner's tick (on the generated C) on the same states.
 
 Each entry has ``median_us`` and ``p99_us``; also the shortest planned step, the failures
-(ticks that fell back to the one-step law) and the mean linearisations per tick. Compare the
-solve with the QP tracker's warm ProxQP median in ``amlip-qp bench qp`` (docs/BENCH_QP.md).
+(ticks that fell back to the one-step law) and the mean linearisations per tick. ``amlip-qp bench
+mpc`` (:mod:`amlip_qp.experiments.bench_mpc`) times the QP tracker's own solve in turns with it.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import platform
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -30,7 +30,6 @@ from amlip_qp.alip.planner import Planner
 from amlip_qp.codegen import load_kernels
 from amlip_qp.control.mpc.factory import make_mpc_planner
 from amlip_qp.messages import Command, StateEstimate
-from amlip_qp.output_paths import check_output_path, emit_report
 
 M_KG, H_M, G, T_S, DT_S = 32.0, 0.8, 9.81, 0.3, 0.0005
 OUTPUTS = (
@@ -45,8 +44,14 @@ def _stats(samples_us) -> dict[str, float]:
     return {"median_us": float(np.median(a)), "p99_us": float(np.percentile(a, 99))}
 
 
-def run_benchmark(duration_s: float = 4.0) -> dict:
-    """Walk the point mass for ``duration_s`` s (module doc); return the JSON-ready result."""
+def run_benchmark(
+    duration_s: float = 4.0, between_blocks: Callable[[], None] | None = None, block_ticks: int = 50
+) -> dict:
+    """Walk the point mass for ``duration_s`` s (module doc); return the JSON-ready result.
+
+    ``between_blocks``, if given, is called (untimed) after every ``block_ticks`` ticks: a caller
+    timing another solver in turns with the MPC (``amlip-qp bench mpc``'s QP tracker solve).
+    """
     lam = math.sqrt(G / H_M)
     cmd = Command(step_time_s=T_S, com_height_m=H_M, clearance_m=0.1, vx_mps=0.5, step_width_m=0.25)
     mpc = make_mpc_planner(OUTPUTS, M_KG, g=G)
@@ -60,7 +65,9 @@ def run_benchmark(duration_s: float = 4.0) -> dict:
     solve, update, update_one, iterations, shortest = [], [], [], [], math.inf
     clock = time.perf_counter_ns
     n_ticks = int(round(duration_s / DT_S))
-    for _ in range(n_ticks):
+    for i_tick in range(n_ticks):
+        if between_blocks is not None and i_tick and i_tick % block_ticks == 0:
+            between_blocks()
         est = StateEstimate(stance=stance, p_st_m=c - r, L_Nms=np.cross(c - r, M_KG * v), v_z_mps=0.0,
                             t_in_step_s=t - t_start, com_m=c.copy())  # fmt: skip
         t0 = clock()
@@ -112,11 +119,3 @@ def format_table(result: dict) -> str:
         s = result[key]
         lines.append(f"{key:<18}{s['median_us']:>11.2f}{s['p99_us']:>11.2f}")
     return "\n".join(lines)
-
-
-def run_bench(args: argparse.Namespace) -> int:
-    """The handler of ``amlip-qp bench mpc``: the table, and JSON with ``--json PATH|-``."""
-    check_output_path("--json", args.json)
-    result = run_benchmark(duration_s=args.duration)
-    emit_report(format_table(result), result, args.json)
-    return 0
