@@ -56,13 +56,13 @@ _I_D_BAR = S.MPC_QP_INPUTS.index("d_bar_x_1")
 _I_REGIONS = S.MPC_QP_INPUTS.index("dz_1")
 #: A planned duration this close to the command's ``T`` (s) is ``T`` itself.
 NOMINAL_TOL_S = 1e-9
-#: The region inputs without regions: flat, boxes of +-NO_BOUND.
 # The durations' entries of the MPC's solution x (the current step's sigma, then the later ones'), and the
 # ufuncs the per-tick solve uses: np.clip's, np.max's and np.cumsum's Python layers cost more than the
 # arithmetic on these few entries (clip(a, lo, hi) is minimum(maximum(a, lo), hi), cumsum is
 # add.accumulate: the same values).
 _SIGMA_IDX = np.array([0, *range(S.I_SIGMA_LATER, S.N_VAR)])
 _maximum, _minimum, _max_reduce, _accumulate = np.maximum, np.minimum, np.maximum.reduce, np.add.accumulate
+#: The region inputs without regions: flat, boxes of +-NO_BOUND.
 _NO_REGIONS = np.concatenate([np.zeros(S.MPC_STEPS), np.tile([-S.NO_BOUND, S.NO_BOUND] * 2, S.MPC_STEPS)])
 
 

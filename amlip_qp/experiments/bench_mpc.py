@@ -53,8 +53,9 @@ def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, 
 
     Returns:
         :func:`amlip_qp.control.mpc.bench.run_benchmark`'s result with ``tracker_solve``
-        (``median_us``, ``p99_us``, ``runner``, ``scenario``, ``problems``: the QPs recorded, and
-        ``solves``) and ``goal_met`` (``mpc_solve``'s median at most ``tracker_solve``'s).
+        (``median_us``, ``p99_us``, ``runner``, ``scenario``, ``problems``: the QPs recorded,
+        ``solves`` and the solver's ``failures``) and ``goal_met`` (``mpc_solve``'s median at most
+        ``tracker_solve``'s).
     """
     name = tracker_runner_name(scenario)
     n_ticks = int(round(duration_s / mpc_bench.DT_S))
