@@ -156,8 +156,7 @@ MANIFEST: tuple[Entry, ...] = (
     ),
     # 14 walks of 10 s from rest, one process: 379 s measured on the 2 cores shared with other jobs
     entry("step-commands", "python examples/step_commands.py --jobs 1", 380),
-    # the MPC walk and a recorded cassie-1mps walk of the QP tracker whose solve it times in turns: 15-20 s
-    entry("bench-mpc", "amlip-qp bench mpc", 20, "text"),
+    entry("bench-mpc", "amlip-qp bench mpc", 20, "text"),  # with the recorded QP walk it times in turns: 10-20 s
     entry("bench-codegen", "amlip-qp bench codegen", 10, "text"),
     # 20-26 s measured
     entry("bench-qp", "amlip-qp bench qp", 25, "text"),
