@@ -20,6 +20,7 @@ BAD_INPUTS = [
     # malformed values
     (["bench", "mpc", "--duration", "0"], "--duration"),
     (["bench", "mpc", "--json", "/proc/x"], "--json /proc/x: cannot write"),
+    (["bench", "mpc", "--duration", "0.01"], "bench mpc needs --duration of at least 0.05 s"),
     # plant modifiers: nonsensical values
     (["bench", "ekf", "--scenario", "cassie-1mps"], "needs a scenario with the EKF estimator"),
     (["bench", "ekf", "--scenario", "nowhere"], "unknown scenario 'nowhere'"),

@@ -105,7 +105,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     b.add_argument("--json", metavar="PATH", default=None, help="write the results as JSON to PATH, or '-' for stdout")
     b.add_argument(
-        "--duration", type=_DURATION, default=4.0, metavar="S", help=f"simulated time, s, {_DURATION_HELP} (default 4)"
+        "--duration",
+        type=_DURATION,
+        default=4.0,
+        metavar="S",
+        help=f"simulated time, s, {_DURATION_HELP}, at least 0.05 (a turn of the tracker's solves; default 4)",
     )
     b.set_defaults(func=handler("amlip_qp.experiments.bench_mpc:run_bench"))
     b = bench.add_parser(

@@ -35,6 +35,8 @@ from amlip_qp.sim.scenarios.named import get_scenario
 BLOCK_TICKS = 50
 #: The most tracker QPs recorded (a longer benchmark replays them again from the first).
 MAX_PROBLEMS = 8000
+#: The shortest walk with a turn of the tracker's solves: two blocks of MPC ticks, s.
+MIN_DURATION_S = 2 * BLOCK_TICKS * mpc_bench.DT_S
 #: The ``amlip-qp bench qp`` runner of each tracker solver: its warm path, as the tracker runs it.
 TRACKER_RUNNERS = {"daqp": "daqp-hot", "proxqp": "proxsuite-warm"}
 
@@ -48,6 +50,15 @@ def tracker_runner_name(scenario: str = DEFAULT_SCENARIO) -> str:
     return TRACKER_RUNNERS[solver]
 
 
+def check_duration(duration_s: float) -> None:
+    """Raise InputError unless the walk lasts at least :data:`MIN_DURATION_S` (one turn of the tracker's solves)."""
+    if not duration_s >= MIN_DURATION_S - 1e-12:
+        raise InputError(
+            f"bench mpc needs --duration of at least {MIN_DURATION_S:g} s (a turn of the QP tracker's solves "
+            f"after {BLOCK_TICKS} MPC ticks), got {duration_s:g} s"
+        )
+
+
 def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, Any]:
     """The MPC benchmark of ``duration_s`` simulated s with the QP tracker's solve timed in turns (module doc).
 
@@ -57,6 +68,7 @@ def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, 
         ``solves`` and the solver's ``failures``) and ``goal_met`` (``mpc_solve``'s median at most
         ``tracker_solve``'s).
     """
+    check_duration(duration_s)
     name = tracker_runner_name(scenario)
     n_ticks = int(round(duration_s / mpc_bench.DT_S))
     problems, _, _ = record_walk(min(max(n_ticks, BLOCK_TICKS), MAX_PROBLEMS), scenario)
@@ -113,6 +125,7 @@ def format_table(result: dict[str, Any]) -> str:
 def run_bench(args: argparse.Namespace) -> int:
     """The handler of ``amlip-qp bench mpc``: the table, and JSON with ``--json PATH|-``."""
     check_output_path("--json", args.json)
+    check_duration(args.duration)
     result = run(duration_s=args.duration)
     emit_report(format_table(result), result, args.json)
     return 0
