@@ -161,7 +161,9 @@ class MPCPlanner(Planner):
         outputs, mass_kg, g, plan_fn, reference_fn: as :class:`~amlip_qp.alip.planner.Planner`.
         solve_fn: ``(H, g, C, lower, upper) -> x`` for ``min 1/2 x'Hx + g'x``,
             ``l <= Cx <= u``, ``lb <= x <= ub`` with ``lower = (lb, l)``, ``upper = (ub, u)``
-            stacked (:func:`~amlip_qp.alip.step_mpc.split_qp`); raises QPError on failure.
+            stacked (:func:`~amlip_qp.alip.step_mpc.split_qp`); raises QPError on failure. When it
+            has a ``solve_stacked(y)`` method (:class:`~amlip_qp.qp.small_qp.SmallQPSolver`), that
+            is called with ``MPC_QP``'s output ``y`` whole (the same QP, in DAQP's order) instead.
         mpc_fn: ``MPC_QP`` implementation (default the numpy reference :func:`step_mpc.mpc_qp`).
         settings: :class:`MPCSettings`.
         **planner_kwargs: the :class:`Planner`'s keyword arguments.
@@ -187,6 +189,7 @@ class MPCPlanner(Planner):
         if settings is not None and not isinstance(settings, MPCSettings):
             raise InputError(f"settings must be MPCSettings, got {type(settings).__name__}")
         self.solve_fn = solve_fn
+        self._solve_stacked: Callable[[np.ndarray], np.ndarray] | None = getattr(solve_fn, "solve_stacked", None)
         self.mpc_fn = mpc_fn or S.mpc_qp
         self.settings = settings or MPCSettings()
         self._u_mpc = np.zeros(len(S.MPC_QP_INPUTS))
@@ -349,7 +352,10 @@ class MPCPlanner(Planner):
                 y = np.asarray(self.mpc_fn(u), dtype=float).reshape(-1)
                 if y.size != S.MPC_QP_N_OUT:
                     raise InputError(f"mpc_fn returned {y.size} values; MPC_QP has {S.MPC_QP_N_OUT} outputs")
-                x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
+                if self._solve_stacked is not None:
+                    x = np.asarray(self._solve_stacked(y), dtype=float).reshape(-1)
+                else:
+                    x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
                 taus = np.log(_maximum(x[_SIGMA_IDX], 1e-300)) / l
                 moved = max(abs(taus[0] - u[_I_TAU_BAR]), float(_max_reduce(np.abs(taus[1:] - u[_I_T_BAR:_I_D_BAR]))))
                 if moved < 1e-9 or it == st.iterations:

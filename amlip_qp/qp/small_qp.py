@@ -11,8 +11,13 @@ For problems of a few variables solved every control tick (the step-timing MPC o
 with ``lower = (lb, l)`` and ``upper = (ub, u)`` stacked (DAQP's layout: the bounds of
 ``x``, then the rows'), and keeps DAQP's model (and so its working set) from one call to the next, like
 :class:`~amlip_qp.qp.daqp_solver.DAQPSolver` but without a :class:`~amlip_qp.qp.problem.QPProblem`:
-the arrays are copied into the model's own buffers. Bounds beyond ``+-BIG_BOUND`` are
-DAQP's "no bound".
+the arrays are copied into the solver's own buffers, which the model reads in place
+(:func:`~amlip_qp.qp.daqp_model.make_model`: DAQP's C API when it loads). Bounds beyond
+``+-BIG_BOUND`` are DAQP's "no bound".
+
+:meth:`SmallQPSolver.solve_stacked` takes the same problem as one array in DAQP's own
+order, ``(H row-major, g, C row-major, lower, upper)`` (the layout of
+:func:`~amlip_qp.alip.step_mpc.mpc_qp`'s output): one copy instead of five.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from amlip_qp.exceptions import QPError
+from amlip_qp.qp.daqp_model import make_model
 from amlip_qp.qp.daqp_solver import BIG_BOUND, PRIMAL_TOL
 
 _max_reduce = np.maximum.reduce  # the ufunc's reduce: ndarray.max's Python layer costs more on these sizes
@@ -43,14 +49,14 @@ class SmallQPSolver:
             slack of cost ``slack^2 / rho_soft``, ``rho_soft = 1e-6``, only when the hard
             ones leave no other choice); not checked against :data:`RESIDUAL_CHECK`.
         iter_limit: DAQP's iteration cap per solve.
+        use_c_api: drive DAQP through its C API when it loads (the same solutions, less overhead);
+            ``False``: through ``daqp.Model``.
 
     Attributes:
         solves: calls so far; failures: calls that raised; last_solve_us: the last call's time, µs.
     """
 
-    def __init__(self, n: int, m: int, soft_rows: tuple[int, ...] = (), iter_limit: int = 200):
-        import daqp
-
+    def __init__(self, n: int, m: int, soft_rows: tuple[int, ...] = (), iter_limit: int = 200, use_c_api: bool = True):
         if (
             isinstance(n, bool)
             or not isinstance(n, int)
@@ -60,14 +66,18 @@ class SmallQPSolver:
             or m < 0
         ):
             raise QPError(f"SmallQPSolver(n={n!r}, m={m!r}): n must be an integer > 0 and m an integer >= 0")
-        self._daqp = daqp
         self.n, self.m = n, m
         self.iter_limit = int(iter_limit)
-        self._H = np.zeros((n, n))
-        self._f = np.zeros(n)
-        self._A = np.zeros((m, n))
-        self._bu = np.zeros(n + m)
-        self._bl = np.zeros(n + m)
+        self.use_c_api = bool(use_c_api)
+        # one buffer in DAQP's order (solve_stacked copies into it at once): H, f, A, lower, upper
+        sizes = np.cumsum([0, n * n, n, m * n, n + m, n + m])
+        self._data = np.zeros(int(sizes[-1]))
+        d = self._data
+        self._H = d[sizes[0] : sizes[1]].reshape(n, n)
+        self._f = d[sizes[1] : sizes[2]]
+        self._A = d[sizes[2] : sizes[3]].reshape(m, n)
+        self._bl = d[sizes[3] : sizes[4]]
+        self._bu = d[sizes[4] : sizes[5]]
         self._sense = np.zeros(n + m, dtype=np.intc)
         self._z = np.zeros(n + m)
         self._z_x, self._z_rows = self._z[:n], self._z[n:]
@@ -97,21 +107,34 @@ class SmallQPSolver:
         self._H[:] = H
         self._f[:] = g
         self._A[:] = C
-        np.minimum(upper, self._big, out=self._bu)
-        np.maximum(lower, self._neg_big, out=self._bl)
+        self._bl[:] = lower
+        self._bu[:] = upper
+        return self._solve(t0)
+
+    def solve_stacked(self, data: np.ndarray) -> np.ndarray:
+        """As calling the solver, with the problem as one 1-D array ``(H row-major, g, C
+        row-major, lower, upper)`` of ``n^2 + n + m n + 2 (n + m)`` entries (module doc)."""
+        t0 = time.perf_counter_ns()
+        self._data[:] = data
+        return self._solve(t0)
+
+    def _solve(self, t0: int) -> np.ndarray:
+        np.minimum(self._bu, self._big, out=self._bu)
+        np.maximum(self._bl, self._neg_big, out=self._bl)
         self.solves += 1
-        if self._model is None:
-            model = self._daqp.Model()
+        model = self._model
+        if model is None:
+            model = make_model(self.n, self.n + self.m, self.n, use_c_api=self.use_c_api)
             code = model.setup(self._H, self._f, self._A, self._bu, self._bl, self._sense)
-            if code[0] < 0:
+            if code < 0:
                 self.failures += 1
-                raise QPError(f"DAQP set-up failed with code {code[0]}", status=f"DAQP_SETUP_{code[0]}")
-            model.settings = {"iter_limit": self.iter_limit, "primal_tol": PRIMAL_TOL}
+                raise QPError(f"DAQP set-up failed with code {code}", status=f"DAQP_SETUP_{code}")
+            model.set_settings(self.iter_limit, PRIMAL_TOL)
             self._model = model
         else:
-            self._model.update(H=self._H, f=self._f, A=self._A, bupper=self._bu, blower=self._bl)
-        x, _, flag, _ = self._model.solve()
-        x = np.array(x, dtype=float)
+            model.update(self._H, self._f, self._A, self._bu, self._bl)
+        flag = model.solve()
+        x = model.x.copy()
         ok = flag in (1, 2) and math.isfinite(sum(x.tolist()))
         if ok:
             z = self._z
