@@ -20,8 +20,11 @@ from typing import Any
 import numpy as np
 
 from amlip_qp.exceptions import QPError
+from amlip_qp.qp.daqp_model import make_model
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import ProxQPSolver
+
+_copyto = np.copyto
 
 #: Infinite bounds as the C solvers that take no ``inf`` (DAQP) read them.
 BIG_BOUND = 1e30
@@ -92,20 +95,29 @@ def _daqp_data(p: QPProblem) -> tuple:
 
 
 class DAQPRunner(Runner):
-    """DAQP (dual active set). ``hot``: one ``daqp.Model``, set up on the first problem, then
-    ``update`` + ``solve``, which starts from the previous problem's working set; otherwise
-    ``daqp.solve``, from the empty working set. A fixed variable (``lb == ub``) stays a bound."""
+    """DAQP (dual active set). ``hot``: one workspace, set up on the first problem, then updated
+    and solved, starting from the previous problem's working set: through DAQP's C API as the
+    tracker's :class:`~amlip_qp.qp.daqp_solver.DAQPSolver` drives it
+    (:func:`~amlip_qp.qp.daqp_model.make_model`), or with ``model=True`` through ``daqp.Model``
+    (the same solutions); otherwise ``daqp.solve``, from the empty working set. A fixed variable
+    (``lb == ub``) stays a bound. Hot, each problem is copied (timed) into the arrays the workspace
+    was set up on, as a tracker's builder writes into its own buffers, which DAQP reads in place."""
 
-    def __init__(self, hot: bool):
+    def __init__(self, hot: bool, model: bool = False):
         super().__init__()
         import daqp
 
         self._daqp = daqp
         self.hot = hot
-        self.name = "daqp-hot" if hot else "daqp-cold"
+        self.use_c_api = hot and not model
+        self.name = ("daqp-hot-model" if model else "daqp-hot") if hot else "daqp-cold"
         self.start = "hot: previous working set" if hot else "cold: empty working set"
-        self.timed = "Model.update + Model.solve" if hot else "daqp.solve (set-up + solve)"
+        if not hot:
+            self.timed = "daqp.solve (set-up + solve)"
+        else:
+            self.timed = "daqp.Model.update + solve" if model else "DAQP's C API: daqp_update_ldp + daqp_solve"
         self._model: Any = None
+        self._buffers: tuple = ()
 
     def prepare(self, p: QPProblem) -> tuple:
         return _daqp_data(p)
@@ -116,14 +128,18 @@ class DAQPRunner(Runner):
             x, _, flag, _ = self._daqp.solve(H, f, A, bu, bl, sense)
         else:
             if self._model is None:
-                self._model = self._daqp.Model()
-                if self._model.setup(H, f, A, bu, bl, sense)[0] < 0:
+                self._buffers = tuple(a.copy() for a in (H, f, A, bu, bl))
+                self._model = make_model(H.shape[0], bu.size, H.shape[0], use_c_api=self.use_c_api)
+                if self._model.setup(*self._buffers, sense) < 0:
                     self._model = None
                     self.failures += 1
                     return None
             else:
-                self._model.update(H=H, f=f, A=A, bupper=bu, blower=bl)
-            x, _, flag, _ = self._model.solve()
+                for buffer, value in zip(self._buffers, (H, f, A, bu, bl), strict=True):
+                    _copyto(buffer, value)
+                self._model.update(*self._buffers)
+            flag = self._model.solve()
+            x = self._model.x.copy()
         if flag <= 0:
             self.failures += 1
             if self.hot:

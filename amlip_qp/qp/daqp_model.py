@@ -43,7 +43,7 @@ _RESULT_BYTES = 256
 _SETTINGS_CHECK_BYTES = 136
 _OFFSET_PRIMAL_TOL, _OFFSET_ITER_LIMIT = 0, 44
 # DAQPResult: x, lam (pointers), fval, soft_slack (doubles), exitflag, iter (ints).
-_OFFSET_EXITFLAG = 32
+_OFFSET_EXITFLAG, _OFFSET_ITERATIONS = 32, 36
 
 
 class DAQPModelFallbackWarning(RuntimeWarning):
@@ -115,7 +115,8 @@ class _Library:
 class CModel:
     """A DAQP workspace through the C API (module doc): :meth:`setup`, then :meth:`update` and
     :meth:`solve` per problem. ``n`` variables, ``m`` bounds and rows in all, the first ``ms``
-    the bounds of ``x``; :attr:`x` holds the last solution (overwritten by the next solve)."""
+    the bounds of ``x``; :attr:`x` holds the last solution (overwritten by the next solve),
+    :attr:`iterations` its count of working-set changes."""
 
     def __init__(self, library: _Library, n: int, m: int, ms: int):
         self._lib = library
@@ -177,6 +178,11 @@ class CModel:
         self._lib.solve(self._pr, self._pw)
         return struct.unpack_from("i", self._result, _OFFSET_EXITFLAG)[0]
 
+    @property
+    def iterations(self) -> int:
+        """The last solve's iterations (DAQP's count)."""
+        return struct.unpack_from("i", self._result, _OFFSET_ITERATIONS)[0]
+
     def __del__(self):
         if getattr(self, "_set_up", False):
             self._set_up = False
@@ -190,6 +196,7 @@ class PyModel:
     def __init__(self, daqp_module: Any, n: int, m: int, ms: int):
         self._model = daqp_module.Model()
         self.x = np.zeros(n)
+        self.iterations = 0
 
     def setup(self, H, f, A, bupper, blower, sense) -> int:
         return int(self._model.setup(H, f, A, bupper, blower, sense)[0])
@@ -201,8 +208,8 @@ class PyModel:
         return int(self._model.update(H=H, f=f, A=A, bupper=bupper, blower=blower))
 
     def solve(self) -> int:
-        x, _, flag, _ = self._model.solve()
-        self.x = x
+        x, _, flag, info = self._model.solve()
+        self.x, self.iterations = x, int(info.get("iterations", 0))
         return int(flag)
 
 

@@ -15,7 +15,8 @@ by :meth:`QPProblem.allocate <amlip_qp.qp.problem.QPProblem.allocate>` (the
 QP tracker's) already holds ``[C; A]`` as one block (:meth:`QPProblem.stacked
 <amlip_qp.qp.problem.QPProblem.stacked>`): DAQP reads it in place, and the
 bounds are stacked with two clamps and two copies of ``b``. One
-``daqp.Model`` per problem shape lives as long as the solver; each solve
+DAQP workspace per problem shape (:func:`~amlip_qp.qp.daqp_model.make_model`:
+DAQP's C API, or ``daqp.Model``) lives as long as the solver; each solve
 ``update``-s it and starts from the previous solve's working set (a hot
 start). DAQP is a deterministic sequence of floating-point operations: the
 same problems in the same order give the same solutions.
@@ -30,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from amlip_qp.exceptions import QPError
+from amlip_qp.qp.daqp_model import make_model
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import MAX_SHAPES, QPSolution
 
@@ -131,15 +133,17 @@ class DAQPSolver:
         warm_start: Start each solve from the previous working set of the same shape (default);
             ``False`` sets the model up afresh at every call, from the empty working set.
         iter_limit: DAQP's iteration cap per solve.
+        use_c_api: drive DAQP through its C API when it loads (:mod:`amlip_qp.qp.daqp_model`:
+            the same solutions, less Python per solve); ``False``: through ``daqp.Model``.
 
     Raises:
         ImportError: DAQP is not installed (``pip install daqp``).
     """
 
-    def __init__(self, warm_start: bool = True, iter_limit: int = 1000):
-        import daqp
+    def __init__(self, warm_start: bool = True, iter_limit: int = 1000, use_c_api: bool = True):
+        import daqp  # noqa: F401 - the ImportError is raised here, at construction
 
-        self._daqp = daqp
+        self.use_c_api = bool(use_c_api)
         self.warm_start = bool(warm_start)
         self.iter_limit = int(iter_limit)
         self._shapes: dict[tuple[int, int, int], _Shape] = {}
@@ -151,7 +155,7 @@ class DAQPSolver:
     @property
     def options(self) -> dict:
         """The constructor arguments of this solver (to build another one alike)."""
-        return {"warm_start": self.warm_start, "iter_limit": self.iter_limit}
+        return {"warm_start": self.warm_start, "iter_limit": self.iter_limit, "use_c_api": self.use_c_api}
 
     @property
     def primal_tol(self) -> float:
@@ -185,18 +189,21 @@ class DAQPSolver:
             H, f = problem.H, problem.g
         else:
             H, f = np.ascontiguousarray(problem.H), np.ascontiguousarray(problem.g)
-        if shape.model is None or not self.warm_start:
-            shape.model = self._daqp.Model()
-            code = shape.model.setup(H, f, shape.rows, shape.bu, shape.bl, shape.sense)
-            shape.model.settings = {"iter_limit": self.iter_limit, "primal_tol": PRIMAL_TOL}
+        rows = shape.rows if shape.rows.flags.c_contiguous else np.ascontiguousarray(shape.rows)
+        model = shape.model
+        if model is None or not self.warm_start:
+            model = shape.model = make_model(problem.n, len(shape.sense), problem.n, use_c_api=self.use_c_api)
+            code = model.setup(H, f, rows, shape.bu, shape.bl, shape.sense)
+            model.set_settings(self.iter_limit, PRIMAL_TOL)
             self.n_init += 1
-            if code[0] < 0:
+            if code < 0:
                 shape.model = None
-                status = f"DAQP_SETUP_{code[0]}"
-                raise QPError(f"DAQP set-up failed with code {code[0]}", problem=problem, status=status)
+                status = f"DAQP_SETUP_{code}"
+                raise QPError(f"DAQP set-up failed with code {code}", problem=problem, status=status)
         else:
-            shape.model.update(H=H, f=f, A=shape.rows, bupper=shape.bu, blower=shape.bl)
-        x, _, flag, info = shape.model.solve()
+            model.update(H, f, rows, shape.bu, shape.bl)
+        flag = model.solve()
+        x = model.x.copy()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         # A hot-started update skips the set-up's checks (a zero constraint row that contradicts its
         # bound is then reported solved): the solution is checked against the constraints here. Within
@@ -207,7 +214,4 @@ class DAQPSolver:
             if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
                 shape.model = None  # the next solve of this shape starts afresh (other shapes stay hot)
                 raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
-        # DAQP returns a new array at every solve (its own data): no copy
-        return QPSolution(
-            x=x, status="DAQP_SOLVED", iterations=int(info.get("iterations", 0)), solve_time_us=elapsed_us
-        )
+        return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)
