@@ -199,6 +199,26 @@ def build_library(
     return lib
 
 
+def compile_library(
+    source: bytes, source_file: str, library_file: str, cache_dir: str | os.PathLike | None = None
+) -> Path:
+    """Compile C ``source`` once into the cache (as :func:`compile_and_load`, announcing a cold
+    cache on stderr) and return the library's path, for loading with :mod:`ctypes`.
+
+    Raises:
+        CompilerUnavailableError: No usable C compiler (the message says why).
+        CodegenError: The compiler rejected the source.
+    """
+    root = cache_root() if cache_dir is None else Path(cache_dir)
+    try:
+        compiler = find_compiler()
+        if not (root / cache_key(source, compiler) / library_file).is_file():
+            _announce_compilation(root)
+        return build_library(source, compiler, root, source_file, library_file)
+    except _NoCompiler as exc:
+        raise CompilerUnavailableError(str(exc)) from None
+
+
 def compile_and_load(
     source: bytes,
     function_names: Sequence[str],
@@ -225,14 +245,7 @@ def compile_and_load(
         CompilerUnavailableError: No usable C compiler (the message says why).
         CodegenError: The compiler rejected the source, or a function does not load.
     """
-    root = cache_root() if cache_dir is None else Path(cache_dir)
-    try:
-        compiler = find_compiler()
-        if not (root / cache_key(source, compiler) / library_file).is_file():
-            _announce_compilation(root)
-        lib = build_library(source, compiler, root, source_file, library_file)
-    except _NoCompiler as exc:
-        raise CompilerUnavailableError(str(exc)) from None
+    lib = compile_library(source, source_file, library_file, cache_dir)
     functions = {}
     for name in function_names:
         try:

@@ -28,6 +28,7 @@ import ctypes
 import importlib.metadata
 import struct
 import warnings
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -44,6 +45,21 @@ _SETTINGS_CHECK_BYTES = 136
 _OFFSET_PRIMAL_TOL, _OFFSET_ITER_LIMIT = 0, 44
 # DAQPResult: x, lam (pointers), fval, soft_slack (doubles), exitflag, iter (ints).
 _OFFSET_EXITFLAG, _OFFSET_ITERATIONS = 32, 36
+
+
+@dataclass(frozen=True)
+class CHandles:
+    """What compiled code needs to drive a :class:`CModel`'s workspace itself (addresses as ints):
+    DAQP's ``daqp_update_ldp`` and ``daqp_solve``, the workspace, problem and result structures,
+    the mask :meth:`CModel.update` passes, and the exit flag's byte offset in the result."""
+
+    update_fn: int
+    solve_fn: int
+    work: int
+    problem: int
+    result: int
+    update_mask: int
+    exitflag_offset: int
 
 
 class DAQPModelFallbackWarning(RuntimeWarning):
@@ -177,6 +193,17 @@ class CModel:
         """Solve from the last working set; returns DAQP's exit flag (1, 2: solved). Solution in :attr:`x`."""
         self._lib.solve(self._pr, self._pw)
         return struct.unpack_from("i", self._result, _OFFSET_EXITFLAG)[0]
+
+    def c_handles(self) -> CHandles:
+        """The addresses compiled code needs to update and solve this workspace (:class:`CHandles`);
+        valid while this model lives, once :meth:`setup` succeeded."""
+        if not self._set_up:
+            raise RuntimeError("CModel.c_handles before a successful setup")
+        lib = self._lib
+        address = ctypes.cast(lib.update, ctypes.c_void_p).value, ctypes.cast(lib.solve, ctypes.c_void_p).value
+        return CHandles(
+            int(address[0] or 0), int(address[1] or 0), self._pw, self._pp, self._pr, UPDATE_ALL, _OFFSET_EXITFLAG
+        )
 
     @property
     def iterations(self) -> int:

@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from amlip_qp.exceptions import QPError
-from amlip_qp.qp.daqp_model import make_model
+from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.qp.daqp_model import CModel, make_model
 from amlip_qp.qp.daqp_solver import BIG_BOUND, PRIMAL_TOL
 
 _max_reduce = np.maximum.reduce  # the ufunc's reduce: ndarray.max's Python layer costs more on these sizes
@@ -51,12 +51,24 @@ class SmallQPSolver:
         iter_limit: DAQP's iteration cap per solve.
         use_c_api: drive DAQP through its C API when it loads (the same solutions, less overhead);
             ``False``: through ``daqp.Model``.
+        fast_step: for :meth:`solve_stacked` on DAQP's C API, the copy, the clamps, DAQP's update
+            and solve and the check in one compiled call: an object whose ``bind(handles, data, x,
+            hard, n, m, big)`` returns ``step(src) -> (exit flag, largest violation)``
+            (:class:`amlip_qp.control.mpc.daqp_step.DAQPStep`); the same solutions.
 
     Attributes:
         solves: calls so far; failures: calls that raised; last_solve_us: the last call's time, µs.
     """
 
-    def __init__(self, n: int, m: int, soft_rows: tuple[int, ...] = (), iter_limit: int = 200, use_c_api: bool = True):
+    def __init__(
+        self,
+        n: int,
+        m: int,
+        soft_rows: tuple[int, ...] = (),
+        iter_limit: int = 200,
+        use_c_api: bool = True,
+        fast_step: Any = None,
+    ):
         if (
             isinstance(n, bool)
             or not isinstance(n, int)
@@ -91,13 +103,21 @@ class SmallQPSolver:
             self._sense[n + i] = SENSE_SOFT
             self._hard[n + i] = 0.0
         self._model: Any = None
+        self._fast_step = fast_step
+        self._bound_step: Any = None  # fast_step bound to the current model
         self.solves = 0
         self.failures = 0
         self.last_solve_us = 0.0
 
+    @property
+    def fast_path(self) -> bool:
+        """Whether :meth:`solve_stacked` runs as the one compiled call of ``fast_step`` (bound once the
+        model is set up through DAQP's C API)."""
+        return self._bound_step is not None
+
     def reset(self) -> None:
         """Forget the working set: the next call sets the model up afresh."""
-        self._model = None
+        self._model = self._bound_step = None
 
     def __call__(self, H, g, C, lower, upper) -> np.ndarray:
         """Solve; return ``x`` (a new array). ``lower``, ``upper``: ``n + m`` bounds each (module doc).
@@ -115,8 +135,30 @@ class SmallQPSolver:
         """As calling the solver, with the problem as one 1-D array ``(H row-major, g, C
         row-major, lower, upper)`` of ``n^2 + n + m n + 2 (n + m)`` entries (module doc)."""
         t0 = time.perf_counter_ns()
+        step = self._bound_step
+        if step is not None:
+            flag, violation = step(data)
+            self.solves += 1
+            self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
+            if flag not in (1, 2) or not violation <= RESIDUAL_CHECK:  # NaN fails, as in the Python check
+                self._fail(flag)
+            return self._model.x.copy()
+        if np.shape(data) != self._data.shape:
+            raise InputError(
+                f"the stacked QP must be a 1-D array of {self._data.size} entries, got shape {np.shape(data)}"
+            )
         self._data[:] = data
-        return self._solve(t0)
+        x = self._solve(t0)
+        if self._fast_step is not None and isinstance(self._model, CModel):
+            self._bound_step = self._fast_step.bind(
+                self._model.c_handles(), self._data, self._model.x, self._hard, self.n, self.m, BIG_BOUND
+            )
+        return x
+
+    def _fail(self, flag: int):
+        self.failures += 1
+        self._model = self._bound_step = None
+        raise QPError(f"DAQP failed on the small QP (exit flag {flag})", status=f"DAQP_EXIT_{flag}")
 
     def _solve(self, t0: int) -> np.ndarray:
         np.minimum(self._bu, self._big, out=self._bu)
@@ -148,7 +190,5 @@ class SmallQPSolver:
             ok = float(_max_reduce(t1)) <= RESIDUAL_CHECK  # NaN (a NaN row) fails it, as with ndarray.max
         self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
         if not ok:
-            self.failures += 1
-            self._model = None
-            raise QPError(f"DAQP failed on the small QP (exit flag {flag})", status=f"DAQP_EXIT_{flag}")
+            self._fail(flag)
         return x

@@ -18,7 +18,9 @@ def make_mpc_planner(
     settings: MPCSettings | None = None,
     **planner_kwargs,
 ) -> MPCPlanner:
-    """An :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` with a hot-started DAQP (soft reach rows).
+    """An :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` with a hot-started DAQP (soft reach rows);
+    with the ``"c"`` backend its solves run as one compiled call each
+    (:mod:`amlip_qp.control.mpc.daqp_step`; the same solutions as the Python path).
 
     Args:
         outputs: the robot's output names (as :class:`~amlip_qp.alip.planner.Planner`).
@@ -35,10 +37,13 @@ def make_mpc_planner(
     if backend not in ("c", "numpy"):
         raise InputError(f"backend must be 'c' or 'numpy', got {backend!r}")
     kw = dict(planner_kwargs)
+    fast_step = None
     if backend == "c":
         from amlip_qp.codegen import load_kernels
+        from amlip_qp.control.mpc.daqp_step import load_daqp_step
 
         kernels = load_kernels()
         kw.update(plan_fn=kernels.alip_plan, reference_fn=kernels.swing_reference, mpc_fn=kernels.alip_mpc_qp)
-    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS)
+        fast_step = load_daqp_step()
+    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS, fast_step=fast_step)
     return MPCPlanner(outputs, mass_kg, solver, settings=settings, **kw)

@@ -1,0 +1,80 @@
+/* One hot-started DAQP solve of a fixed-shape QP and its checks, in one call.
+ *
+ * Part of amlip_qp (amlip_qp/control/mpc/daqp_step.py compiles and loads it). The
+ * problem arrives as one array in DAQP's order, (H row-major, f, A row-major,
+ * lower, upper), n variables and m rows, the bounds of x first in lower and upper.
+ * amlip_daqp_step copies it into the workspace's arrays, clamps the bounds to
+ * +-big (NaN stays NaN, as numpy's minimum and maximum leave it), calls DAQP's
+ * daqp_update_ldp and daqp_solve (their addresses are handed over from the daqp
+ * Python package's library), and, when DAQP reports the problem solved, computes
+ * the largest violation of the bounds of x and of the checked rows at the
+ * solution (NaN when any is NaN). It is the sequence of
+ * amlip_qp.qp.small_qp.SmallQPSolver's Python path, with the same DAQP calls on
+ * the same data: the same solution, bit for bit.
+ */
+#include <math.h>
+#include <string.h>
+
+typedef int (*amlip_daqp_update_fn)(int mask, void *work, void *problem);
+typedef void (*amlip_daqp_solve_fn)(void *result, void *work);
+
+typedef struct {
+    amlip_daqp_update_fn update;
+    amlip_daqp_solve_fn solve;
+    void *work;         /* DAQP's workspace, set up on `data` */
+    void *problem;      /* DAQP's problem, pointing into `data` */
+    void *result;       /* DAQP's result, its x pointing at `x` */
+    double *data;       /* n*n + n + m*n + 2*(n + m): H, f, A, lower, upper */
+    const double *x;    /* DAQP's solution, n */
+    const double *hard; /* n + m: 1 checked, 0 not (soft rows) */
+    int n;
+    int m;
+    int update_mask;
+    int exitflag_offset; /* bytes from `result` to DAQP's exit flag (an int) */
+    double big;
+    double violation;   /* out: the largest violation, when solved */
+} amlip_daqp_step_t;
+
+int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
+{
+    const int n = c->n, m = c->m, nb = n + m;
+    const int n_matrices = n * n + n + m * n;
+    double *d = c->data;
+    double *lower = d + n_matrices, *upper = lower + nb;
+    const double *A = d + n * n + n;
+    const double big = c->big;
+    int i, k, flag;
+    double worst = -INFINITY;
+
+    memcpy(d, src, sizeof(double) * (size_t)(n_matrices + 2 * nb));
+    for (i = 0; i < nb; ++i) {
+        double lo = lower[i], up = upper[i];
+        if (!(lo != lo || lo > -big)) lower[i] = -big;
+        if (!(up != up || up < big)) upper[i] = big;
+    }
+    c->update(c->update_mask, c->work, c->problem);
+    c->solve(c->result, c->work);
+    memcpy(&flag, (const char *)c->result + c->exitflag_offset, sizeof(int));
+    if (flag != 1 && flag != 2) return flag;
+    for (i = 0; i < nb; ++i) {
+        double z, below, above, gap;
+        if (i < n) {
+            z = c->x[i];
+        } else {
+            const double *row = A + (size_t)(i - n) * n;
+            z = 0.0;
+            for (k = 0; k < n; ++k) z += row[k] * c->x[k];
+        }
+        below = lower[i] - z;
+        above = z - upper[i];
+        gap = (below != below || above != above) ? NAN : (below > above ? below : above);
+        gap *= c->hard[i];
+        if (gap != gap) {
+            worst = NAN;
+            break;
+        }
+        if (gap > worst) worst = gap;
+    }
+    c->violation = worst;
+    return flag;
+}

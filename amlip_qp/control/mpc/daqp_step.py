@@ -1,0 +1,147 @@
+"""The small QP's hot path as one compiled call: copy, clamps, DAQP's update and solve, and the check.
+
+:class:`~amlip_qp.qp.small_qp.SmallQPSolver` solves the step-timing MPC's QP through DAQP's C
+API (:mod:`amlip_qp.qp.daqp_model`); around those two C calls its Python copies the problem in,
+clamps the bounds and checks the solution against the hard rows, a dozen numpy calls that cost
+about as much as DAQP's own work. ``daqp_step.c`` (beside this module) does the same in one C
+function, calling DAQP through the addresses :meth:`CModel.c_handles
+<amlip_qp.qp.daqp_model.CModel.c_handles>` hands over: the same DAQP calls on the same data, so
+the same solutions bit for bit (the residual's rows are summed in a plain loop rather than by
+numpy's ``dot``: the same check, the value may differ in its last bits).
+
+:func:`load_daqp_step` compiles it once into the codegen cache
+(:func:`~amlip_qp.codegen.runtime.compile_library`) and returns a :class:`DAQPStep`, the
+``fast_step`` :class:`SmallQPSolver` takes; without a C compiler it returns ``None`` (the Python
+path, the same solutions) and one :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning` says so.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import warnings
+from importlib import resources
+
+import numpy as np
+
+from amlip_qp.exceptions import CompilerUnavailableError, InputError
+from amlip_qp.qp.daqp_model import CHandles
+
+SOURCE_FILE = "amlip_daqp_step.c"
+LIBRARY_FILE = "libamlip_daqp_step.so"
+
+
+class _Context(ctypes.Structure):
+    """``amlip_daqp_step_t`` of ``daqp_step.c`` (the same fields in the same order)."""
+
+    _fields_ = [
+        ("update", ctypes.c_void_p),
+        ("solve", ctypes.c_void_p),
+        ("work", ctypes.c_void_p),
+        ("problem", ctypes.c_void_p),
+        ("result", ctypes.c_void_p),
+        ("data", ctypes.c_void_p),
+        ("x", ctypes.c_void_p),
+        ("hard", ctypes.c_void_p),
+        ("n", ctypes.c_int),
+        ("m", ctypes.c_int),
+        ("update_mask", ctypes.c_int),
+        ("exitflag_offset", ctypes.c_int),
+        ("big", ctypes.c_double),
+        ("violation", ctypes.c_double),
+    ]
+
+
+def _address(a: np.ndarray) -> int:
+    return a.__array_interface__["data"][0]
+
+
+class BoundStep:
+    """``step(src) -> (exit flag, largest violation)`` for one workspace (module doc); ``src`` is the
+    problem as one C-contiguous float64 array in DAQP's order. The violation is meaningful only
+    when the flag is 1 or 2 (solved)."""
+
+    __slots__ = ("_fn", "_context", "_context_address", "_keep", "_src", "_src_address", "_size")
+
+    def __init__(self, fn, context: _Context, keep: tuple, size: int):
+        self._fn = fn
+        self._context = context
+        self._context_address = ctypes.addressof(context)
+        self._keep = keep  # the arrays the context points into
+        self._src: np.ndarray | None = None
+        self._src_address = 0
+        self._size = size
+
+    def __call__(self, src: np.ndarray) -> tuple[int, float]:
+        if src is not self._src:
+            if src.dtype != np.float64 or not src.flags.c_contiguous or src.size != self._size:
+                raise InputError(f"the stacked QP must be a C-contiguous float64 array of {self._size} entries")
+            self._src, self._src_address = src, _address(src)
+        flag = self._fn(self._context_address, self._src_address)
+        return flag, self._context.violation
+
+
+class DAQPStep:
+    """The compiled ``amlip_daqp_step`` (module doc); :meth:`bind` it to a set-up workspace."""
+
+    def __init__(self, library: ctypes.CDLL):
+        self._fn = library.amlip_daqp_step
+        self._fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+        self._fn.restype = ctypes.c_int
+
+    def bind(
+        self, handles: CHandles, data: np.ndarray, x: np.ndarray, hard: np.ndarray, n: int, m: int, big: float
+    ) -> BoundStep:
+        """A :class:`BoundStep` on the workspace of ``handles``, set up on ``data`` (``H, f, A, lower,
+        upper`` of ``n`` variables and ``m`` rows, contiguous), its solution in ``x``, ``hard``
+        (``n + m``: 1 checked, 0 not), bounds clamped to ``+-big``."""
+        size = n * n + n + m * n + 2 * (n + m)
+        for name, a, want in (("data", data, size), ("x", x, n), ("hard", hard, n + m)):
+            if a.dtype != np.float64 or not a.flags.c_contiguous or a.size != want:
+                raise ValueError(f"{name} must be a C-contiguous float64 array of {want} entries")
+        context = _Context(
+            update=handles.update_fn,
+            solve=handles.solve_fn,
+            work=handles.work,
+            problem=handles.problem,
+            result=handles.result,
+            data=_address(data),
+            x=_address(x),
+            hard=_address(hard),
+            n=n,
+            m=m,
+            update_mask=handles.update_mask,
+            exitflag_offset=handles.exitflag_offset,
+            big=big,
+            violation=0.0,
+        )
+        return BoundStep(self._fn, context, (data, x, hard), size)
+
+
+_loaded: DAQPStep | None = None
+_unavailable: str | None = None
+
+
+def load_daqp_step(cache_dir=None, refresh: bool = False) -> DAQPStep | None:
+    """The compiled step (compiled once into the cache), or ``None`` without a C compiler (with one
+    :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning` per process; ``refresh``: forget the
+    last outcome and try again)."""
+    global _loaded, _unavailable
+    if refresh:
+        _loaded = _unavailable = None
+    if _loaded is not None or _unavailable is not None:
+        return _loaded
+    from amlip_qp.codegen.runtime import CodegenFallbackWarning, compile_library
+
+    source = resources.files("amlip_qp.control.mpc").joinpath("daqp_step.c").read_bytes()
+    try:
+        path = compile_library(source, SOURCE_FILE, LIBRARY_FILE, cache_dir)
+    except CompilerUnavailableError as exc:
+        _unavailable = str(exc)
+        warnings.warn(
+            f"the small QP's compiled step is unavailable ({exc}): its Python path solves it (the same solutions)",
+            CodegenFallbackWarning,
+            stacklevel=2,
+        )
+        return None
+    _loaded = DAQPStep(ctypes.CDLL(str(path)))
+    return _loaded

@@ -1,0 +1,90 @@
+"""The small QP's compiled step: the same solutions and the same failures as its Python path."""
+
+import numpy as np
+import pytest
+
+from amlip_qp.codegen.runtime import CodegenFallbackWarning
+from amlip_qp.control.mpc import daqp_step
+from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.qp.small_qp import SmallQPSolver
+
+
+@pytest.fixture(scope="module")
+def step():
+    loaded = daqp_step.load_daqp_step()
+    assert loaded is not None, "a C compiler is needed for the compiled step (the kernels' too)"
+    return loaded
+
+
+def _stacked_sequence(n, m, count, seed):
+    """Stacked QPs ``(H, g, C, lower, upper)`` drifting from call to call, with bounds beyond DAQP's
+    "no bound" (clamped), and now and then a row that contradicts its bounds or a NaN entry."""
+    rng = np.random.default_rng(seed)
+    M = rng.standard_normal((n, n))
+    H0, C0 = M @ M.T + n * np.eye(n), rng.standard_normal((m, n))
+    for k in range(count):
+        H = H0 + 0.1 * np.diag(rng.random(n))
+        g = 3.0 * rng.standard_normal(n)
+        C = C0 + 0.01 * rng.standard_normal(C0.shape)
+        lower = np.concatenate([-0.5 * np.ones(n), -rng.random(m) - 0.1])
+        upper = np.concatenate([0.5 * np.ones(n), rng.random(m) + 0.1])
+        lower[n + 2], upper[n + 3] = -np.inf, 1e40
+        if k % 40 == 11:
+            upper[n + 4] = lower[n + 4] - 1.0
+        if k % 40 == 23:
+            C[5, 1] = np.nan
+        yield np.concatenate([H.ravel(), g, C.ravel(), lower, upper])
+
+
+def _outcome(solver, data):
+    try:
+        return solver.solve_stacked(data).tobytes()
+    except QPError as exc:
+        return str(exc)
+
+
+def test_compiled_step_solutions_and_failures_equal_the_python_path(step):
+    n, m, soft = 13, 24, (0, 1, 6, 7)
+    fast = SmallQPSolver(n, m, soft_rows=soft, fast_step=step)
+    plain = SmallQPSolver(n, m, soft_rows=soft)
+    used = 0
+    for data in _stacked_sequence(n, m, 400, seed=5):
+        used += fast.fast_path
+        assert _outcome(fast, data) == _outcome(plain, data)
+    assert fast.failures == plain.failures and 0 < fast.failures < 100
+    assert used > 300  # after each failure, one Python solve sets the model up again, then the step
+
+
+def test_a_nan_row_reported_solved_fails_on_the_compiled_step(step):
+    """As on the Python path: DAQP takes a NaN row in a hot-started update and exits "solved"."""
+    H, G = np.diag([2.0, 4.0]), np.array([-2.0, -4.0])
+    s = SmallQPSolver(2, 2, soft_rows=(1,), fast_step=step)
+    lower, upper = [-1e9, -1e9, -10.0, -10.0], [1e9, 1e9, 10.0, 10.0]
+    for _ in range(2):
+        x = s.solve_stacked(np.concatenate([H.ravel(), G, np.eye(2).ravel(), lower, upper]))
+        np.testing.assert_allclose(x, [1.0, 1.0], atol=1e-12)
+    assert s.fast_path
+    with pytest.raises(QPError, match="exit flag 1"):
+        s.solve_stacked(np.concatenate([H.ravel(), G, [np.nan, 0.0, 0.0, 1.0], lower, upper]))
+    assert s.failures == 1 and not s.fast_path
+
+
+def test_a_stacked_problem_of_the_wrong_size_is_refused(step):
+    good = np.concatenate([np.eye(2).ravel(), [-1.0, -1.0], [1.0, 1.0], [-5.0, -5.0, -5.0], [5.0, 5.0, 5.0]])
+    s = SmallQPSolver(2, 1, fast_step=step)
+    with pytest.raises(InputError, match="1-D array of 14 entries"):
+        s.solve_stacked(good[:-1])  # the first solve, on the Python path
+    s.solve_stacked(good)
+    assert s.fast_path
+    with pytest.raises(InputError, match="C-contiguous float64 array of 14 entries"):
+        s.solve_stacked(good[:-1])
+
+
+def test_without_a_compiler_the_python_path_runs_with_one_warning(monkeypatch, tmp_path):
+    monkeypatch.setenv("AMLIP_QP_CC", "none")
+    try:
+        with pytest.warns(CodegenFallbackWarning, match="Python path"):
+            assert daqp_step.load_daqp_step(cache_dir=tmp_path, refresh=True) is None
+    finally:
+        monkeypatch.undo()
+        assert daqp_step.load_daqp_step(refresh=True) is not None
