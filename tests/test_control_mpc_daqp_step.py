@@ -7,6 +7,7 @@ from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.mpc import daqp_step
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.qp.small_qp import SmallQPSolver
+from codegen_cases import needs_cc
 
 
 @pytest.fixture(scope="module")
@@ -88,3 +89,28 @@ def test_without_a_compiler_the_python_path_runs_with_one_warning(monkeypatch, t
     finally:
         monkeypatch.undo()
         assert daqp_step.load_daqp_step(refresh=True) is not None
+
+
+@needs_cc
+def test_the_mpc_planner_on_the_fused_step_walks_the_python_paths_walk_bit_for_bit():
+    """``make_mpc_planner``'s solver runs the QP kernel, DAQP and the check in one compiled call; a
+    planner on the same kernels solving through the Python path steps the same, to the bit."""
+    from alip_point_mass import OUTPUTS, REACH_M, G, H, M, T, Walk
+    from amlip_qp.alip import step_mpc
+    from amlip_qp.alip.mpc_planner import MPCPlanner
+    from amlip_qp.codegen import load_kernels
+    from amlip_qp.control.mpc import make_mpc_planner
+    from amlip_qp.messages import Command
+
+    command = Command(step_time_s=T, com_height_m=H, clearance_m=0.1, vx_mps=0.5, step_width_m=0.25)
+    fused = make_mpc_planner(OUTPUTS, M, g=G)
+    k = load_kernels()
+    python_path = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS)
+    plain = MPCPlanner(OUTPUTS, M, python_path, g=G, plan_fn=k.alip_plan, reference_fn=k.swing_reference,
+                       mpc_fn=k.alip_mpc_qp)  # fmt: skip
+    walks = [Walk(p, command, reach_m=REACH_M).run(2.4, push=(0.95, np.array([2.6, 0.0]))) for p in (fused, plain)]
+    assert fused.solve_fn.fast_path and not python_path.fast_path
+    assert len(walks[0].steps) == len(walks[1].steps) >= 9
+    for a, b in zip(walks[0].steps, walks[1].steps, strict=True):
+        assert all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
+    assert min(t1 - t0 for t0, t1, *_ in walks[0].steps) < T - 0.05  # the push shortened a step

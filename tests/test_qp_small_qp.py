@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amlip_qp.exceptions import QPError
+from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.qp.small_qp import SmallQPSolver
 
 H = np.diag([2.0, 4.0])
@@ -50,3 +50,16 @@ def test_a_nan_row_fails_although_daqp_reports_it_solved(soft):
     with pytest.raises(QPError, match="exit flag 1"):
         s(H, G, np.array([[np.nan, 0.0], [0.0, 1.0]]), lower, upper)
     assert s.failures == 1
+
+
+def test_solve_inputs_needs_a_producer_and_solves_what_it_makes():
+    with pytest.raises(InputError, match="producer"):
+        SmallQPSolver(2, 1).solve_inputs(np.zeros(3))
+    rows = np.array([[1.0, 1.0]])
+
+    def producer(u):  # the row's upper bound from the input: x0 + x1 <= u[0]
+        return np.concatenate([H.ravel(), G, rows.ravel(), [-1e9, -1e9, -10.0], [1e9, 1e9, u[0]]])
+
+    s = SmallQPSolver(2, 1, producer=producer)
+    np.testing.assert_allclose(s.solve_inputs(np.array([1.0])), [1.0 / 3.0, 2.0 / 3.0], atol=1e-12)
+    np.testing.assert_allclose(s.solve_inputs(np.array([10.0])), [1.0, 1.0], atol=1e-12)

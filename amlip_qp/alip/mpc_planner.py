@@ -61,6 +61,8 @@ NOMINAL_TOL_S = 1e-9
 # arithmetic on these few entries (clip(a, lo, hi) is minimum(maximum(a, lo), hi), cumsum is
 # add.accumulate: the same values).
 _SIGMA_IDX = np.array([0, *range(S.I_SIGMA_LATER, S.N_VAR)])
+# The entries of the MPC's inputs linearised about those durations (tau_bar, then T_bar_1 ..)
+_TAU_BAR_IDX = np.array([_I_TAU_BAR, *range(_I_T_BAR, _I_D_BAR)])
 _maximum, _minimum, _max_reduce, _accumulate = np.maximum, np.minimum, np.maximum.reduce, np.add.accumulate
 #: The region inputs without regions: flat, boxes of +-NO_BOUND.
 _NO_REGIONS = np.concatenate([np.zeros(S.MPC_STEPS), np.tile([-S.NO_BOUND, S.NO_BOUND] * 2, S.MPC_STEPS)])
@@ -163,7 +165,10 @@ class MPCPlanner(Planner):
             ``l <= Cx <= u``, ``lb <= x <= ub`` with ``lower = (lb, l)``, ``upper = (ub, u)``
             stacked (:func:`~amlip_qp.alip.step_mpc.split_qp`); raises QPError on failure. When it
             has a ``solve_stacked(y)`` method (:class:`~amlip_qp.qp.small_qp.SmallQPSolver`), that
-            is called with ``MPC_QP``'s output ``y`` whole (the same QP, in DAQP's order) instead.
+            is called with ``MPC_QP``'s output ``y`` whole (the same QP, in DAQP's order) instead;
+            when it has a ``producer`` (not ``None``) and a ``solve_inputs(u)`` method, that is called
+            with ``MPC_QP``'s inputs and makes the QP itself (with ``mpc_fn``'s function:
+            :func:`amlip_qp.control.mpc.make_mpc_planner`).
         mpc_fn: ``MPC_QP`` implementation (default the numpy reference :func:`step_mpc.mpc_qp`).
         settings: :class:`MPCSettings`.
         **planner_kwargs: the :class:`Planner`'s keyword arguments.
@@ -190,6 +195,9 @@ class MPCPlanner(Planner):
             raise InputError(f"settings must be MPCSettings, got {type(settings).__name__}")
         self.solve_fn = solve_fn
         self._solve_stacked: Callable[[np.ndarray], np.ndarray] | None = getattr(solve_fn, "solve_stacked", None)
+        self._solve_inputs: Callable[[np.ndarray], np.ndarray] | None = (
+            getattr(solve_fn, "solve_inputs", None) if getattr(solve_fn, "producer", None) is not None else None
+        )
         self.mpc_fn = mpc_fn or S.mpc_qp
         self.settings = settings or MPCSettings()
         self._u_mpc = np.zeros(len(S.MPC_QP_INPUTS))
@@ -349,15 +357,19 @@ class MPCPlanner(Planner):
         t0 = time.perf_counter_ns()
         try:
             for it in range(1, st.iterations + 1):
-                y = np.asarray(self.mpc_fn(u), dtype=float).reshape(-1)
-                if y.size != S.MPC_QP_N_OUT:
-                    raise InputError(f"mpc_fn returned {y.size} values; MPC_QP has {S.MPC_QP_N_OUT} outputs")
-                if self._solve_stacked is not None:
-                    x = np.asarray(self._solve_stacked(y), dtype=float).reshape(-1)
+                if self._solve_inputs is not None:
+                    x = self._solve_inputs(u)
                 else:
-                    x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
+                    y = np.asarray(self.mpc_fn(u), dtype=float).reshape(-1)
+                    if y.size != S.MPC_QP_N_OUT:
+                        raise InputError(f"mpc_fn returned {y.size} values; MPC_QP has {S.MPC_QP_N_OUT} outputs")
+                    if self._solve_stacked is not None:
+                        x = np.asarray(self._solve_stacked(y), dtype=float).reshape(-1)
+                    else:
+                        x = np.asarray(self.solve_fn(*S.split_qp(y)), dtype=float).reshape(-1)
                 taus = np.log(_maximum(x[_SIGMA_IDX], 1e-300)) / l
-                moved = max(abs(taus[0] - u[_I_TAU_BAR]), float(_max_reduce(np.abs(taus[1:] - u[_I_T_BAR:_I_D_BAR]))))
+                moved_by = taus - u[_TAU_BAR_IDX]
+                moved = float(_max_reduce(np.abs(moved_by, out=moved_by)))
                 if moved < 1e-9 or it == st.iterations:
                     break
                 # re-linearise at the new durations and steps

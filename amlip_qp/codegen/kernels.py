@@ -27,8 +27,10 @@ input array, evaluates, and returns the output array.
 
 from __future__ import annotations
 
+import ctypes
 import os
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -114,6 +116,24 @@ class FastFunction:
         return f"FastFunction({self.name!r}, {self.n_in}->{self.n_out}, backend={self.backend!r})"
 
 
+@dataclass(frozen=True)
+class CKernel:
+    """A compiled kernel's C entry point, for compiled code that calls it itself (addresses as ints).
+
+    ``function`` is CasADi's ``int name(const double** arg, double** res, long long* iw, double* w,
+    int mem)``, writing its one dense output from its one dense input; ``sz_arg``, ``sz_res``,
+    ``sz_iw``, ``sz_w`` are the work sizes its ``name_work`` reports."""
+
+    name: str
+    function: int
+    n_in: int
+    n_out: int
+    sz_arg: int
+    sz_res: int
+    sz_iw: int
+    sz_w: int
+
+
 class Kernels:
     """The planner kernels, compiled (backend ``"c"``) or on CasADi (``"casadi"``).
 
@@ -154,6 +174,17 @@ class Kernels:
             functions["swing_reference"], symbolic.spec("swing_reference"), self.backend
         )
         self.alip_mpc_qp = FastFunction(functions["alip_mpc_qp"], symbolic.spec("alip_mpc_qp"), self.backend)
+
+    def c_kernel(self, name: str) -> CKernel | None:
+        """The compiled kernel ``name``'s C entry point (:class:`CKernel`), ``None`` on the CasADi backend."""
+        kernel = self[name]
+        if self.library_path is None:
+            return None
+        lib = ctypes.CDLL(str(self.library_path))
+        sizes = [ctypes.c_longlong(0) for _ in range(4)]
+        getattr(lib, f"{name}_work")(*(ctypes.byref(v) for v in sizes))
+        address = ctypes.cast(getattr(lib, name), ctypes.c_void_p).value
+        return CKernel(name, int(address or 0), kernel.n_in, kernel.n_out, *(int(v.value) for v in sizes))
 
     def __getitem__(self, name: str) -> FastFunction:
         """The kernel called ``name`` (one of ``symbolic.KERNEL_NAMES``)."""

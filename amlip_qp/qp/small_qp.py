@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -55,6 +56,10 @@ class SmallQPSolver:
             and solve and the check in one compiled call: an object whose ``bind(handles, data, x,
             hard, n, m, big)`` returns ``step(src) -> (exit flag, largest violation)``
             (:class:`amlip_qp.control.mpc.daqp_step.DAQPStep`); the same solutions.
+        producer: for :meth:`solve_inputs`, the function making the stacked problem of its inputs
+            (the step-timing MPC's ``alip_mpc_qp`` kernel); ``producer_c``: its compiled C entry
+            point (:meth:`Kernels.c_kernel <amlip_qp.codegen.kernels.Kernels.c_kernel>`), which
+            the fast path then calls itself.
 
     Attributes:
         solves: calls so far; failures: calls that raised; last_solve_us: the last call's time, µs.
@@ -68,6 +73,8 @@ class SmallQPSolver:
         iter_limit: int = 200,
         use_c_api: bool = True,
         fast_step: Any = None,
+        producer: Callable[[np.ndarray], np.ndarray] | None = None,
+        producer_c: Any = None,
     ):
         if (
             isinstance(n, bool)
@@ -105,14 +112,17 @@ class SmallQPSolver:
         self._model: Any = None
         self._fast_step = fast_step
         self._bound_step: Any = None  # fast_step bound to the current model
+        #: The function making the stacked problem of :meth:`solve_inputs`' inputs, or ``None``.
+        self.producer = producer
+        self._producer_c = producer_c if producer is not None else None
         self.solves = 0
         self.failures = 0
         self.last_solve_us = 0.0
 
     @property
     def fast_path(self) -> bool:
-        """Whether :meth:`solve_stacked` runs as the one compiled call of ``fast_step`` (bound once the
-        model is set up through DAQP's C API)."""
+        """Whether :meth:`solve_stacked` (without a producer) or :meth:`solve_inputs` (with one) runs
+        as the one compiled call of ``fast_step`` (bound once the model is set up through DAQP's C API)."""
         return self._bound_step is not None
 
     def reset(self) -> None:
@@ -135,23 +145,44 @@ class SmallQPSolver:
         """As calling the solver, with the problem as one 1-D array ``(H row-major, g, C
         row-major, lower, upper)`` of ``n^2 + n + m n + 2 (n + m)`` entries (module doc)."""
         t0 = time.perf_counter_ns()
-        step = self._bound_step
-        if step is not None:
-            flag, violation = step(data)
-            self.solves += 1
-            self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
-            if flag not in (1, 2) or not violation <= RESIDUAL_CHECK:  # NaN fails, as in the Python check
-                self._fail(flag)
-            return self._model.x.copy()
+        if self._bound_step is not None and self.producer is None:
+            return self._solve_fast(data, t0)
+        return self._solve_python(data, t0)
+
+    def solve_inputs(self, inputs: np.ndarray) -> np.ndarray:
+        """The QP ``producer`` makes of ``inputs``: as ``solve_stacked(producer(inputs))``, on the fast
+        path one compiled call that also runs the producer's compiled kernel (``producer_c``)."""
+        if self.producer is None:
+            raise InputError("solve_inputs needs a SmallQPSolver made with a producer")
+        t0 = time.perf_counter_ns()
+        if self._bound_step is not None:
+            return self._solve_fast(inputs, t0)
+        return self._solve_python(self.producer(inputs), t0)
+
+    def _solve_fast(self, src: np.ndarray, t0: int) -> np.ndarray:
+        flag, violation = self._bound_step(src)
+        self.solves += 1
+        self.last_solve_us = (time.perf_counter_ns() - t0) * 1e-3
+        if flag not in (1, 2) or not violation <= RESIDUAL_CHECK:  # NaN fails, as in the Python check
+            self._fail(flag)
+        return self._model.x.copy()
+
+    def _solve_python(self, data: np.ndarray, t0: int) -> np.ndarray:
         if np.shape(data) != self._data.shape:
-            raise InputError(
-                f"the stacked QP must be a 1-D array of {self._data.size} entries, got shape {np.shape(data)}"
-            )
+            size, shape = self._data.size, np.shape(data)
+            raise InputError(f"the stacked QP must be a 1-D array of {size} entries, got shape {shape}")
         self._data[:] = data
         x = self._solve(t0)
         if self._fast_step is not None and isinstance(self._model, CModel):
             self._bound_step = self._fast_step.bind(
-                self._model.c_handles(), self._data, self._model.x, self._hard, self.n, self.m, BIG_BOUND
+                self._model.c_handles(),
+                self._data,
+                self._model.x,
+                self._hard,
+                self.n,
+                self.m,
+                BIG_BOUND,
+                producer=self._producer_c,
             )
         return x
 

@@ -11,12 +11,17 @@
  * solution (NaN when any is NaN). It is the sequence of
  * amlip_qp.qp.small_qp.SmallQPSolver's Python path, with the same DAQP calls on
  * the same data: the same solution, bit for bit.
+ *
+ * With a producer (a CasADi-generated function, e.g. the step-timing MPC's
+ * alip_mpc_qp), the call's input is the producer's input instead: the producer
+ * writes the problem straight into the workspace's arrays.
  */
 #include <math.h>
 #include <string.h>
 
 typedef int (*amlip_daqp_update_fn)(int mask, void *work, void *problem);
 typedef void (*amlip_daqp_solve_fn)(void *result, void *work);
+typedef int (*amlip_casadi_fn)(const double **arg, double **res, long long *iw, double *w, int mem);
 
 typedef struct {
     amlip_daqp_update_fn update;
@@ -33,6 +38,11 @@ typedef struct {
     int exitflag_offset; /* bytes from `result` to DAQP's exit flag (an int) */
     double big;
     double violation;   /* out: the largest violation, when solved */
+    amlip_casadi_fn producer; /* NULL: the input is the problem itself */
+    const double **producer_arg;
+    double **producer_res;
+    long long *producer_iw;
+    double *producer_w;
 } amlip_daqp_step_t;
 
 int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
@@ -46,7 +56,14 @@ int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
     int i, k, flag;
     double worst = -INFINITY;
 
-    memcpy(d, src, sizeof(double) * (size_t)(n_matrices + 2 * nb));
+    if (c->producer) {
+        c->producer_arg[0] = src;
+        c->producer_res[0] = d;
+        flag = c->producer(c->producer_arg, c->producer_res, c->producer_iw, c->producer_w, 0);
+        if (flag != 0) return -1000 - flag; /* the producer failed: not a DAQP exit flag */
+    } else {
+        memcpy(d, src, sizeof(double) * (size_t)(n_matrices + 2 * nb));
+    }
     for (i = 0; i < nb; ++i) {
         double lo = lower[i], up = upper[i];
         if (!(lo != lo || lo > -big)) lower[i] = -big;

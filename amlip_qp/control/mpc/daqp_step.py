@@ -7,7 +7,11 @@ about as much as DAQP's own work. ``daqp_step.c`` (beside this module) does the 
 function, calling DAQP through the addresses :meth:`CModel.c_handles
 <amlip_qp.qp.daqp_model.CModel.c_handles>` hands over: the same DAQP calls on the same data, so
 the same solutions bit for bit (the residual's rows are summed in a plain loop rather than by
-numpy's ``dot``: the same check, the value may differ in its last bits).
+numpy's ``dot``: the same check, the value may differ in its last bits). With a producer, a
+compiled CasADi kernel (:meth:`Kernels.c_kernel <amlip_qp.codegen.kernels.Kernels.c_kernel>`; the
+MPC's ``alip_mpc_qp``), the step's input is the kernel's input and the kernel writes the problem
+straight into the workspace's arrays: the MPC's matrices, solve and check in one call
+(:meth:`SmallQPSolver.solve_inputs <amlip_qp.qp.small_qp.SmallQPSolver.solve_inputs>`).
 
 :func:`load_daqp_step` compiles it once into the codegen cache
 (:func:`~amlip_qp.codegen.runtime.compile_library`) and returns a :class:`DAQPStep`, the
@@ -23,6 +27,7 @@ from importlib import resources
 
 import numpy as np
 
+from amlip_qp.codegen.kernels import CKernel
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.qp.daqp_model import CHandles
 
@@ -48,6 +53,11 @@ class _Context(ctypes.Structure):
         ("exitflag_offset", ctypes.c_int),
         ("big", ctypes.c_double),
         ("violation", ctypes.c_double),
+        ("producer", ctypes.c_void_p),
+        ("producer_arg", ctypes.c_void_p),
+        ("producer_res", ctypes.c_void_p),
+        ("producer_iw", ctypes.c_void_p),
+        ("producer_w", ctypes.c_void_p),
     ]
 
 
@@ -74,7 +84,7 @@ class BoundStep:
     def __call__(self, src: np.ndarray) -> tuple[int, float]:
         if src is not self._src:
             if src.dtype != np.float64 or not src.flags.c_contiguous or src.size != self._size:
-                raise InputError(f"the stacked QP must be a C-contiguous float64 array of {self._size} entries")
+                raise InputError(f"the step's input must be a C-contiguous float64 array of {self._size} entries")
             self._src, self._src_address = src, _address(src)
         flag = self._fn(self._context_address, self._src_address)
         return flag, self._context.violation
@@ -89,12 +99,23 @@ class DAQPStep:
         self._fn.restype = ctypes.c_int
 
     def bind(
-        self, handles: CHandles, data: np.ndarray, x: np.ndarray, hard: np.ndarray, n: int, m: int, big: float
+        self,
+        handles: CHandles,
+        data: np.ndarray,
+        x: np.ndarray,
+        hard: np.ndarray,
+        n: int,
+        m: int,
+        big: float,
+        producer: CKernel | None = None,
     ) -> BoundStep:
         """A :class:`BoundStep` on the workspace of ``handles``, set up on ``data`` (``H, f, A, lower,
         upper`` of ``n`` variables and ``m`` rows, contiguous), its solution in ``x``, ``hard``
-        (``n + m``: 1 checked, 0 not), bounds clamped to ``+-big``."""
+        (``n + m``: 1 checked, 0 not), bounds clamped to ``+-big``. With ``producer`` (a compiled
+        kernel whose output is that problem), the step's input is the kernel's input."""
         size = n * n + n + m * n + 2 * (n + m)
+        if producer is not None and producer.n_out != size:
+            raise InputError(f"the producer {producer.name} writes {producer.n_out} values, the problem has {size}")
         for name, a, want in (("data", data, size), ("x", x, n), ("hard", hard, n + m)):
             if a.dtype != np.float64 or not a.flags.c_contiguous or a.size != want:
                 raise ValueError(f"{name} must be a C-contiguous float64 array of {want} entries")
@@ -114,7 +135,20 @@ class DAQPStep:
             big=big,
             violation=0.0,
         )
-        return BoundStep(self._fn, context, (data, x, hard), size)
+        keep: tuple = (data, x, hard)
+        if producer is not None:
+            work = (
+                (ctypes.c_void_p * max(producer.sz_arg, 1))(),
+                (ctypes.c_void_p * max(producer.sz_res, 1))(),
+                (ctypes.c_longlong * max(producer.sz_iw, 1))(),
+                (ctypes.c_double * max(producer.sz_w, 1))(),
+            )
+            context.producer = producer.function
+            context.producer_arg, context.producer_res, context.producer_iw, context.producer_w = (
+                ctypes.addressof(w) for w in work
+            )
+            keep += work
+        return BoundStep(self._fn, context, keep, size if producer is None else producer.n_in)
 
 
 _loaded: DAQPStep | None = None

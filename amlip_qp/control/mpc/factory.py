@@ -37,13 +37,19 @@ def make_mpc_planner(
     if backend not in ("c", "numpy"):
         raise InputError(f"backend must be 'c' or 'numpy', got {backend!r}")
     kw = dict(planner_kwargs)
-    fast_step = None
+    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS)
     if backend == "c":
         from amlip_qp.codegen import load_kernels
         from amlip_qp.control.mpc.daqp_step import load_daqp_step
 
         kernels = load_kernels()
         kw.update(plan_fn=kernels.alip_plan, reference_fn=kernels.swing_reference, mpc_fn=kernels.alip_mpc_qp)
-        fast_step = load_daqp_step()
-    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS, fast_step=fast_step)
+        solver = SmallQPSolver(
+            step_mpc.N_VAR,
+            step_mpc.N_ROWS,
+            step_mpc.SOFT_ROWS,
+            fast_step=load_daqp_step(),
+            producer=kernels.alip_mpc_qp,
+            producer_c=kernels.c_kernel("alip_mpc_qp"),
+        )
     return MPCPlanner(outputs, mass_kg, solver, settings=settings, **kw)
