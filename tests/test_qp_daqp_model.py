@@ -105,3 +105,14 @@ def test_small_qp_solver_paths_agree_bit_for_bit():
                 outcomes.append(type(exc).__name__)
         assert outcomes[0] == outcomes[1] == outcomes[2]
     assert solvers[0].solves == 200 and 0 < solvers[0].failures < 200
+
+
+def test_a_c_model_refuses_to_be_pickled():
+    """Its structures point into this process's memory: a copy elsewhere would solve garbage."""
+    import pickle
+
+    model = dm.make_model(2, 2, 2)
+    if isinstance(model, dm.PyModel):
+        pytest.fail(f"the C API did not load: {dm.c_api_status()}")
+    with pytest.raises(TypeError, match="cannot be pickled"):
+        pickle.dumps(model)

@@ -210,6 +210,9 @@ class CModel:
         """The last solve's iterations (DAQP's count)."""
         return struct.unpack_from("i", self._result, _OFFSET_ITERATIONS)[0]
 
+    def __reduce__(self):
+        raise TypeError("a CModel holds pointers into this process's memory and cannot be pickled; make a new one")
+
     def __del__(self):
         if getattr(self, "_set_up", False):
             self._set_up = False
