@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from amlip_qp.exceptions import QPError
-from amlip_qp.qp.daqp_model import make_model
+from amlip_qp.exceptions import InputError, QPError
+from amlip_qp.qp.daqp_model import CModel, make_model
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.qp.solver import MAX_SHAPES, QPSolution
 
@@ -81,6 +81,9 @@ class _Shape:
         self._bu_rows, self._bl_rows = self.bu[: n + n_in], self.bl[: n + n_in]
         #: The rows ``[C; A]`` DAQP solves: the problem's own block when it is stacked, else :attr:`A`.
         self.rows = self.A
+        #: The compiled call bound to :attr:`model` and to the arrays of :attr:`step_problem`, or ``None``.
+        self.step: Any = None
+        self.step_problem: QPProblem | None = None
 
     def largest_gap(self, x: np.ndarray) -> float:
         """The largest of ``bl - z`` and ``z - bu`` at ``x`` (``z = (x, C x, A x)``, the problem last
@@ -135,15 +138,21 @@ class DAQPSolver:
         iter_limit: DAQP's iteration cap per solve.
         use_c_api: drive DAQP through its C API when it loads (:mod:`amlip_qp.qp.daqp_model`:
             the same solutions, less Python per solve); ``False``: through ``daqp.Model``.
+        fast_step: for a problem made by :meth:`QPProblem.allocate
+            <amlip_qp.qp.problem.QPProblem.allocate>` solved hot on DAQP's C API, the bounds'
+            stacking, DAQP's update and solve and the solution's check in one compiled call: an
+            object with :meth:`~amlip_qp.codegen.daqp_step.DAQPStep.bind_rows`
+            (:func:`amlip_qp.codegen.daqp_step.load_daqp_step`); the same solutions.
 
     Raises:
         ImportError: DAQP is not installed (``pip install daqp``).
     """
 
-    def __init__(self, warm_start: bool = True, iter_limit: int = 1000, use_c_api: bool = True):
+    def __init__(self, warm_start: bool = True, iter_limit: int = 1000, use_c_api: bool = True, fast_step: Any = None):
         import daqp  # noqa: F401 - the ImportError is raised here, at construction
 
         self.use_c_api = bool(use_c_api)
+        self._fast_step = fast_step
         self.warm_start = bool(warm_start)
         self.iter_limit = int(iter_limit)
         self._shapes: dict[tuple[int, int, int], _Shape] = {}
@@ -151,6 +160,8 @@ class DAQPSolver:
         self._last: tuple[QPProblem, _Shape] | None = None
         #: Number of model set-ups so far (1 per problem shape in steady hot-started use).
         self.n_init = 0
+        #: Number of solves run as the compiled call of ``fast_step``.
+        self.n_compiled = 0
 
     @property
     def options(self) -> dict:
@@ -175,6 +186,8 @@ class DAQPSolver:
         if stacked is not None and last is not None and last[0] is problem:
             # the same allocated problem as the last solve, its views still in place: the same shape
             shape = last[1]
+            if shape.step is not None and shape.step_problem is problem and shape.model is not None:
+                return self._solve_compiled(problem, shape, t0)
         else:
             dims = (problem.n, problem.n_eq, problem.n_in)
             found = self._shapes.get(dims)
@@ -193,6 +206,7 @@ class DAQPSolver:
         model = shape.model
         if model is None or not self.warm_start:
             model = shape.model = make_model(problem.n, len(shape.sense), problem.n, use_c_api=self.use_c_api)
+            shape.step = shape.step_problem = None
             code = model.setup(H, f, rows, shape.bu, shape.bl, shape.sense)
             model.set_settings(self.iter_limit, PRIMAL_TOL)
             self.n_init += 1
@@ -212,6 +226,32 @@ class DAQPSolver:
             if flag in _SOLVED and shape.violation(x) > RESIDUAL_CHECK:
                 flag = _VIOLATED
             if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
-                shape.model = None  # the next solve of this shape starts afresh (other shapes stay hot)
+                # the next solve of this shape starts afresh (other shapes stay hot)
+                shape.model = shape.step = shape.step_problem = None
+                raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
+        if self._fast_step is not None and stacked is not None and self.warm_start and isinstance(model, CModel):
+            if shape.step_problem is not problem:
+                rows, lower, upper = stacked
+                try:
+                    shape.step = self._fast_step.bind_rows(
+                        model.c_handles(), lower, upper, problem.b, shape.bl, shape.bu, rows, model.x, BIG_BOUND
+                    )
+                    shape.step_problem = problem
+                except InputError:  # arrays the compiled call cannot read in place: the Python path
+                    shape.step, shape.step_problem = None, None
+        return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)
+
+    def _solve_compiled(self, problem: QPProblem, shape: _Shape, t0: int) -> QPSolution:
+        """The hot solve of the problem ``shape.step`` is bound to, as one compiled call (class doc)."""
+        flag, gap = shape.step()
+        self.n_compiled += 1
+        model = shape.model
+        x = model.x.copy()
+        elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
+        if flag not in _SOLVED or not gap <= RESIDUAL_CHECK:  # as in solve: the same checks, the same order
+            if flag in _SOLVED and shape.violation(x) > RESIDUAL_CHECK:
+                flag = _VIOLATED
+            if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
+                shape.model = shape.step = shape.step_problem = None
                 raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
         return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)

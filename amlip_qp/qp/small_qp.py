@@ -55,7 +55,7 @@ class SmallQPSolver:
         fast_step: for :meth:`solve_stacked` on DAQP's C API, the copy, the clamps, DAQP's update
             and solve and the check in one compiled call: an object whose ``bind(handles, data, x,
             hard, n, m, big)`` returns ``step(src) -> (exit flag, largest violation)``
-            (:class:`amlip_qp.control.mpc.daqp_step.DAQPStep`); the same solutions.
+            (:class:`amlip_qp.codegen.daqp_step.DAQPStep`); the same solutions.
         producer: for :meth:`solve_inputs`, the function making the stacked problem of its inputs
             (the step-timing MPC's ``alip_mpc_qp`` kernel); ``producer_c``: its compiled C entry
             point (:meth:`Kernels.c_kernel <amlip_qp.codegen.kernels.Kernels.c_kernel>`), which

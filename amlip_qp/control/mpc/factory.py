@@ -20,7 +20,7 @@ def make_mpc_planner(
 ) -> MPCPlanner:
     """An :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` with a hot-started DAQP (soft reach rows);
     with the ``"c"`` backend its solves run as one compiled call each
-    (:mod:`amlip_qp.control.mpc.daqp_step`; the same solutions as the Python path).
+    (:mod:`amlip_qp.codegen.daqp_step`; the same solutions as the Python path).
 
     Args:
         outputs: the robot's output names (as :class:`~amlip_qp.alip.planner.Planner`).
@@ -40,7 +40,7 @@ def make_mpc_planner(
     solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS)
     if backend == "c":
         from amlip_qp.codegen import load_kernels
-        from amlip_qp.control.mpc.daqp_step import load_daqp_step
+        from amlip_qp.codegen.daqp_step import load_daqp_step
 
         kernels = load_kernels()
         kw.update(plan_fn=kernels.alip_plan, reference_fn=kernels.swing_reference, mpc_fn=kernels.alip_mpc_qp)

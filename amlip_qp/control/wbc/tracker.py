@@ -192,7 +192,9 @@ class QPTracker(Tracker):
         self.qp_solver = qp_solver
         self.solver: ProxQPSolver | DAQPSolver
         if qp_solver == "daqp":
-            self.solver = DAQPSolver(warm_start=warm_start, iter_limit=int(max_iter))
+            from amlip_qp.codegen.daqp_step import load_daqp_step
+
+            self.solver = DAQPSolver(warm_start=warm_start, iter_limit=int(max_iter), fast_step=load_daqp_step())
         else:
             self.solver = ProxQPSolver(
                 eps_abs=eps_abs,

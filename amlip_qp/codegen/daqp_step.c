@@ -1,6 +1,8 @@
 /* One hot-started DAQP solve of a fixed-shape QP and its checks, in one call.
  *
- * Part of amlip_qp (amlip_qp/control/mpc/daqp_step.py compiles and loads it). The
+ * Part of amlip_qp (amlip_qp/codegen/daqp_step.py compiles and loads it).
+ *
+ * amlip_daqp_step: a small QP of fixed shape (the step-timing MPC's). The
  * problem arrives as one array in DAQP's order, (H row-major, f, A row-major,
  * lower, upper), n variables and m rows, the bounds of x first in lower and upper.
  * amlip_daqp_step copies it into the workspace's arrays, clamps the bounds to
@@ -93,5 +95,73 @@ int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
         if (gap > worst) worst = gap;
     }
     c->violation = worst;
+    return flag;
+}
+
+/* amlip_daqp_rows: the QP tracker's problem (amlip_qp.qp.daqp_solver.DAQPSolver), which keeps
+ * its data where its builder wrote it: H, f and the rows [C; A] in place, the bounds of x and of
+ * the inequality rows stacked (lower, upper: n + n_in), the equalities' right side b (n_eq).
+ * DAQP's bounds bl, bu (n + n_in + n_eq) are those clamped to +-big, then b on both sides (the
+ * equalities); then DAQP's update and solve, and, when solved, the largest of bl - z and z - bu
+ * over z = (x, C x, A x) (NaN when any is NaN): DAQPSolver's Python sequence, the same solution
+ * bit for bit. */
+typedef struct {
+    amlip_daqp_update_fn update;
+    amlip_daqp_solve_fn solve;
+    void *work;
+    void *problem;
+    void *result;
+    const double *lower;
+    const double *upper;
+    const double *b;
+    double *bl;
+    double *bu;
+    const double *rows; /* (n_in + n_eq) x n, row-major */
+    const double *x;
+    int n;
+    int n_in;
+    int n_eq;
+    int update_mask;
+    int exitflag_offset;
+    double big;
+    double gap; /* out: the largest violation, when solved */
+} amlip_daqp_rows_t;
+
+int amlip_daqp_rows(amlip_daqp_rows_t *c)
+{
+    const int n = c->n, nb = n + c->n_in, m = nb + c->n_eq;
+    const double big = c->big;
+    int i, k, flag;
+    double worst = -INFINITY;
+
+    for (i = 0; i < nb; ++i) {
+        double lo = c->lower[i], up = c->upper[i];
+        c->bl[i] = (lo != lo || lo > -big) ? lo : -big;
+        c->bu[i] = (up != up || up < big) ? up : big;
+    }
+    for (i = nb; i < m; ++i) c->bl[i] = c->bu[i] = c->b[i - nb];
+    c->update(c->update_mask, c->work, c->problem);
+    c->solve(c->result, c->work);
+    memcpy(&flag, (const char *)c->result + c->exitflag_offset, sizeof(int));
+    if (flag != 1 && flag != 2) return flag;
+    for (i = 0; i < m; ++i) {
+        double z, below, above;
+        if (i < n) {
+            z = c->x[i];
+        } else {
+            const double *row = c->rows + (size_t)(i - n) * n;
+            z = 0.0;
+            for (k = 0; k < n; ++k) z += row[k] * c->x[k];
+        }
+        below = c->bl[i] - z;
+        above = z - c->bu[i];
+        if (below != below || above != above) {
+            worst = NAN;
+            break;
+        }
+        if (below > worst) worst = below;
+        if (above > worst) worst = above;
+    }
+    c->gap = worst;
     return flag;
 }

@@ -24,12 +24,12 @@ from __future__ import annotations
 import ctypes
 import warnings
 from importlib import resources
+from typing import Any
 
 import numpy as np
 
 from amlip_qp.codegen.kernels import CKernel
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
-from amlip_qp.qp.daqp_model import CHandles
 
 SOURCE_FILE = "amlip_daqp_step.c"
 LIBRARY_FILE = "libamlip_daqp_step.so"
@@ -58,6 +58,32 @@ class _Context(ctypes.Structure):
         ("producer_res", ctypes.c_void_p),
         ("producer_iw", ctypes.c_void_p),
         ("producer_w", ctypes.c_void_p),
+    ]
+
+
+class _RowsContext(ctypes.Structure):
+    """``amlip_daqp_rows_t`` of ``daqp_step.c`` (the same fields in the same order)."""
+
+    _fields_ = [
+        ("update", ctypes.c_void_p),
+        ("solve", ctypes.c_void_p),
+        ("work", ctypes.c_void_p),
+        ("problem", ctypes.c_void_p),
+        ("result", ctypes.c_void_p),
+        ("lower", ctypes.c_void_p),
+        ("upper", ctypes.c_void_p),
+        ("b", ctypes.c_void_p),
+        ("bl", ctypes.c_void_p),
+        ("bu", ctypes.c_void_p),
+        ("rows", ctypes.c_void_p),
+        ("x", ctypes.c_void_p),
+        ("n", ctypes.c_int),
+        ("n_in", ctypes.c_int),
+        ("n_eq", ctypes.c_int),
+        ("update_mask", ctypes.c_int),
+        ("exitflag_offset", ctypes.c_int),
+        ("big", ctypes.c_double),
+        ("gap", ctypes.c_double),
     ]
 
 
@@ -90,17 +116,85 @@ class BoundStep:
         return flag, self._context.violation
 
 
+class BoundRows:
+    """``step() -> (exit flag, largest gap)`` for one workspace and one problem's arrays (the QP
+    tracker's, :meth:`DAQPStep.bind_rows`); the gap is meaningful only when the flag is 1 or 2."""
+
+    __slots__ = ("_fn", "_context", "_context_address", "_keep")
+
+    def __init__(self, fn, context: _RowsContext, keep: tuple):
+        self._fn = fn
+        self._context = context
+        self._context_address = ctypes.addressof(context)
+        self._keep = keep  # the arrays the context points into
+
+    def __call__(self) -> tuple[int, float]:
+        flag = self._fn(self._context_address)
+        return flag, self._context.gap
+
+
+def _checked(name: str, a: np.ndarray, size: int) -> np.ndarray:
+    if a.dtype != np.float64 or not a.flags.c_contiguous or a.size != size:
+        raise InputError(f"{name} must be a C-contiguous float64 array of {size} entries")
+    return a
+
+
 class DAQPStep:
-    """The compiled ``amlip_daqp_step`` (module doc); :meth:`bind` it to a set-up workspace."""
+    """The compiled ``amlip_daqp_step`` and ``amlip_daqp_rows`` (module doc); :meth:`bind` and
+    :meth:`bind_rows` them to a set-up workspace."""
 
     def __init__(self, library: ctypes.CDLL):
         self._fn = library.amlip_daqp_step
         self._fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         self._fn.restype = ctypes.c_int
+        self._rows_fn = library.amlip_daqp_rows
+        self._rows_fn.argtypes = [ctypes.c_void_p]
+        self._rows_fn.restype = ctypes.c_int
+
+    def bind_rows(
+        self,
+        handles: Any,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        b: np.ndarray,
+        bl: np.ndarray,
+        bu: np.ndarray,
+        rows: np.ndarray,
+        x: np.ndarray,
+        big: float,
+    ) -> BoundRows:
+        """A :class:`BoundRows` on the workspace of ``handles``, set up on ``H``, ``f``, ``rows``
+        (``[C; A]``, ``(n_in + n_eq, n)``), ``bu`` and ``bl`` (``n + n_in + n_eq``), which it
+        fills from ``lower``, ``upper`` (``n + n_in``, clamped to ``+-big``) and ``b`` (``n_eq``);
+        its solution in ``x`` (``n``)."""
+        n, n_eq = x.size, b.size
+        n_in = lower.size - n
+        arrays = {"lower": (lower, n + n_in), "upper": (upper, n + n_in), "b": (b, n_eq),
+                  "bl": (bl, n + n_in + n_eq), "bu": (bu, n + n_in + n_eq), "rows": (rows, (n_in + n_eq) * n),
+                  "x": (x, n)}  # fmt: skip
+        for name, (a, size) in arrays.items():
+            _checked(name, a, size)
+        context = _RowsContext(
+            update=handles.update_fn,
+            solve=handles.solve_fn,
+            work=handles.work,
+            problem=handles.problem,
+            result=handles.result,
+            n=n,
+            n_in=n_in,
+            n_eq=n_eq,
+            update_mask=handles.update_mask,
+            exitflag_offset=handles.exitflag_offset,
+            big=big,
+            gap=0.0,
+        )
+        for name, (a, _) in arrays.items():
+            setattr(context, name, _address(a))
+        return BoundRows(self._rows_fn, context, tuple(a for a, _ in arrays.values()))
 
     def bind(
         self,
-        handles: CHandles,
+        handles: Any,
         data: np.ndarray,
         x: np.ndarray,
         hard: np.ndarray,
@@ -166,7 +260,7 @@ def load_daqp_step(cache_dir=None, refresh: bool = False) -> DAQPStep | None:
         return _loaded
     from amlip_qp.codegen.runtime import CodegenFallbackWarning, compile_library
 
-    source = resources.files("amlip_qp.control.mpc").joinpath("daqp_step.c").read_bytes()
+    source = resources.files("amlip_qp.codegen").joinpath("daqp_step.c").read_bytes()
     try:
         path = compile_library(source, SOURCE_FILE, LIBRARY_FILE, cache_dir)
     except CompilerUnavailableError as exc:

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from amlip_qp.codegen import daqp_step
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
-from amlip_qp.control.mpc import daqp_step
 from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.qp.small_qp import SmallQPSolver
 from codegen_cases import needs_cc
@@ -114,3 +114,37 @@ def test_the_mpc_planner_on_the_fused_step_walks_the_python_paths_walk_bit_for_b
     for a, b in zip(walks[0].steps, walks[1].steps, strict=True):
         assert all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
     assert min(t1 - t0 for t0, t1, *_ in walks[0].steps) < T - 0.05  # the push shortened a step
+
+
+def test_the_trackers_compiled_solve_equals_its_python_path_bit_for_bit(step):
+    """DAQPSolver with the compiled call (the QP tracker's) against the Python path, on 80 QPs of the
+    QP tracker walking cassie-1mps written one after the other into one allocated problem (as the
+    tracker's builder does), with a NaN entry and a contradicting row among them: the same solutions,
+    and the same failures."""
+    from amlip_qp.experiments.bench_qp import record_walk
+    from amlip_qp.qp import DAQPSolver, QPProblem
+
+    problems, _, fell = record_walk(n_ticks=80, scenario="cassie-1mps", t_skip_s=0.6)
+    assert not fell
+    p0 = problems[0]
+    target = QPProblem.allocate(p0.n, p0.n_eq, p0.n_in)
+    fast, plain = DAQPSolver(fast_step=step), DAQPSolver()
+    failed = []
+    for k, p in enumerate(problems):
+        for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+            getattr(target, name)[...] = getattr(p, name)
+        if k == 30:
+            target.C[2, 3] = np.nan
+        if k == 50:
+            target.u[4] = target.l[4] - 1.0
+        outcomes = []
+        for solver in (fast, plain):
+            try:
+                outcomes.append(solver.solve(target).x.tobytes())
+            except QPError as exc:
+                outcomes.append(str(exc))
+        assert outcomes[0] == outcomes[1], f"problem {k}"
+        if isinstance(outcomes[0], str):
+            failed.append(k)
+    assert 50 in failed and len(failed) < 10  # the contradicting row (the tracker validates against NaN first)
+    assert fast.n_compiled >= 80 - 2 * len(failed) - 1 and plain.n_compiled == 0
