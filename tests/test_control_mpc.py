@@ -52,7 +52,7 @@ def test_bench_mpc_times_the_trackers_solve_in_turns_and_judges_the_goal():
     """``amlip-qp bench mpc``: the tracker's own solve (hot DAQP on Cassie) in turns of 50 ticks."""
     from amlip_qp.experiments.bench_mpc import BLOCK_TICKS, format_table, run, tracker_runner_name
 
-    assert tracker_runner_name() == "daqp-hot"  # Cassie's profile names DAQP
+    assert tracker_runner_name() == "daqp-tracker"  # Cassie's profile names DAQP
     result = run(duration_s=0.5)
     ts = result["tracker_solve"]
     assert result["ticks"] == 1000 and ts["problems"] == 1000 and ts["failures"] == 0

@@ -20,10 +20,17 @@ from amlip_qp.experiments.qp_runners_sparse import QPSolversRunner
 from amlip_qp.experiments.qp_solver_list import SolverSpec
 
 #: The solvers of the `test` extra (pyproject.toml), each driven through its own interface.
-TEST_EXTRA_SOLVERS = "proxsuite-init,daqp-hot,daqp-cold,daqp-eliminated,piqp,clarabel,qpalm,quadprog,qpmad,osqp"
+TEST_EXTRA_SOLVERS = ",".join(
+    ("proxsuite-init", "daqp-hot", "daqp-hot-model", "daqp-tracker", "daqp-cold", "daqp-eliminated")
+    + ("piqp", "clarabel", "qpalm", "quadprog", "qpmad", "osqp")
+)
 #: Active-set solvers: their x matches the reference's to this (the reference stops at 1e-12), and
 #: their cost exceeds the reference's by at most this (the optimal costs are of order -1e3 to -1e4).
-EXACT, EXACT_DX, EXACT_COST = ("daqp-hot", "daqp-cold", "daqp-eliminated", "quadprog", "qpmad"), 1e-5, 1e-6
+EXACT, EXACT_DX, EXACT_COST = (
+    ("daqp-hot", "daqp-hot-model", "daqp-tracker", "daqp-cold", "daqp-eliminated", "quadprog", "qpmad"),
+    1e-5,
+    1e-6,
+)
 #: Interior-point solvers (their own duality-gap tolerances): cost excess at most this.
 INTERIOR, INTERIOR_COST = ("piqp", "clarabel"), 1e-3
 #: The solvers stopped at the tracker's absolute tolerance 1e-3 (ProxQP, OSQP, QPALM): the cost is

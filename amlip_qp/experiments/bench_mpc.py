@@ -5,9 +5,10 @@
 :data:`BLOCK_TICKS` MPC ticks, this module times the next :data:`BLOCK_TICKS` whole-body QPs of
 a recorded walk of the default scenario (:func:`amlip_qp.experiments.bench_qp.record_walk`)
 through the QP tracker's own solver, as the tracker runs it: the robot profile's
-``qp_solver`` (hot-started DAQP on Cassie, ``daqp-hot`` of ``amlip-qp bench qp``; warm-started
-ProxQP, ``proxsuite-warm``, for a profile that names ProxQP). Each of those QPs is put in the
-solver's own format before the timed call. The machine's speed drifts (up to 1.6x within
+``qp_solver`` (hot-started DAQP on Cassie: the tracker's ``DAQPSolver`` on an allocated problem,
+``daqp-tracker`` of ``amlip-qp bench qp``; warm-started ProxQP, ``proxsuite-warm``, for a profile
+that names ProxQP). Each of those QPs is put in the solver's own format, and written where the
+solver reads it, before the timed call. The machine's speed drifts (up to 1.6x within
 minutes on the 2-core development machine) then hit both solves alike.
 
 The goal of the MPC's solve (``mpc_solve``): a median at most the QP tracker's warm solve's
@@ -38,7 +39,7 @@ MAX_PROBLEMS = 8000
 #: The shortest walk with a turn of the tracker's solves: two blocks of MPC ticks, s.
 MIN_DURATION_S = 2 * BLOCK_TICKS * mpc_bench.DT_S
 #: The ``amlip-qp bench qp`` runner of each tracker solver: its warm path, as the tracker runs it.
-TRACKER_RUNNERS = {"daqp": "daqp-hot", "proxqp": "proxsuite-warm"}
+TRACKER_RUNNERS = {"daqp": "daqp-tracker", "proxqp": "proxsuite-warm"}
 
 
 def tracker_runner_name(scenario: str = DEFAULT_SCENARIO) -> str:
@@ -76,7 +77,9 @@ def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, 
     runner = spec.make(solver_settings())
     runner.setup(problems)
     for p in problems[:WARMUP_PROBLEMS]:  # untimed: caches and the working set settle
-        runner.solve(runner.prepare(p))
+        d = runner.prepare(p)
+        runner.load(d)
+        runner.solve(d)
     times_us: list[float] = []
     state = {"next": 0}
 
@@ -87,6 +90,7 @@ def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, 
         data = [runner.prepare(p) for p in chunk]
         clock = time.perf_counter_ns
         for d in data:
+            runner.load(d)
             t0 = clock()
             runner.solve(d)
             times_us.append((clock() - t0) * 1e-3)

@@ -203,6 +203,7 @@ def time_interleaved(
             data = [run.prepare(p) for p in chunk]
             out, xs = times[name], solutions[name]
             for d in data:
+                run.load(d)
                 t0 = clock()
                 x = run.solve(d)
                 out.append((clock() - t0) * 1e-3)

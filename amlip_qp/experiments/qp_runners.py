@@ -54,6 +54,10 @@ class Runner:
         """``problem`` in the solver's own format (not timed)."""
         return problem
 
+    def load(self, data: Any) -> None:
+        """Just before the timed :meth:`solve` of ``data`` (not timed): e.g. write the problem into
+        the buffers the solver reads in place, as a tracker's builder does."""
+
     def solve(self, data: Any) -> np.ndarray | None:
         """Solve prepared data (timed): the full-size ``x``, or ``None`` when the solver found none."""
         raise NotImplementedError
@@ -146,6 +150,45 @@ class DAQPRunner(Runner):
                 self._model = None  # start the next one afresh
             return None
         return x
+
+
+class DAQPTrackerRunner(Runner):
+    """The QP tracker's own :class:`~amlip_qp.qp.daqp_solver.DAQPSolver` on an allocated problem (one
+    per shape), into which each recorded problem is written before its timed solve, as the tracker's
+    builder writes its problem in place: hot-started through DAQP's C API, after the first solve as
+    one compiled call (:func:`~amlip_qp.codegen.daqp_step.load_daqp_step`)."""
+
+    name = "daqp-tracker"
+    start = "hot: previous working set (the tracker's path)"
+    timed = "DAQPSolver.solve (the compiled call: bounds, DAQP's update and solve, the check)"
+    _FIELDS = ("H", "g", "A", "b", "C", "l", "u", "lb", "ub")
+
+    def __init__(self):
+        super().__init__()
+        from amlip_qp.codegen.daqp_step import load_daqp_step
+        from amlip_qp.qp.daqp_solver import DAQPSolver
+
+        self.solver = DAQPSolver(fast_step=load_daqp_step())
+        self._targets: dict[tuple[int, int, int], QPProblem] = {}
+        self._target: QPProblem | None = None
+
+    def load(self, data: QPProblem) -> None:
+        dims = (data.n, data.n_eq, data.n_in)
+        target = self._targets.get(dims)
+        if target is None:
+            target = self._targets[dims] = QPProblem.allocate(*dims)
+        for name in self._FIELDS:
+            getattr(target, name)[...] = getattr(data, name)
+        self._target = target
+
+    def solve(self, data: QPProblem) -> np.ndarray | None:
+        if self._target is None:
+            raise RuntimeError("DAQPTrackerRunner.solve called before load")
+        try:
+            return self.solver.solve(self._target).x
+        except QPError:
+            self.failures += 1
+            return None
 
 
 class DAQPEliminatedRunner(Runner):

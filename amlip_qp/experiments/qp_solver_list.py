@@ -68,6 +68,7 @@ SOLVERS: tuple[SolverSpec, ...] = (
     SolverSpec("proxsuite-init", "proxsuite", "proxsuite", lambda s: dense.ProxSuiteRunner(False, s.proxqp)),
     SolverSpec("daqp-hot", "daqp", "daqp", lambda s: dense.DAQPRunner(hot=True)),
     SolverSpec("daqp-hot-model", "daqp", "daqp", lambda s: dense.DAQPRunner(hot=True, model=True)),
+    SolverSpec("daqp-tracker", "daqp", "daqp", lambda s: dense.DAQPTrackerRunner()),
     SolverSpec("daqp-cold", "daqp", "daqp", lambda s: dense.DAQPRunner(hot=False)),
     SolverSpec("daqp-eliminated", "daqp", "daqp", lambda s: dense.DAQPEliminatedRunner()),
     SolverSpec("piqp", "piqp", "piqp", lambda s: dense.PIQPRunner(s.eps_abs, s.eps_primal_inf)),
