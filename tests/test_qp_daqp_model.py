@@ -116,3 +116,16 @@ def test_a_c_model_refuses_to_be_pickled():
         pytest.fail(f"the C API did not load: {dm.c_api_status()}")
     with pytest.raises(TypeError, match="cannot be pickled"):
         pickle.dumps(model)
+
+
+@pytest.mark.parametrize("use_c_api", [True, False])
+def test_a_failed_set_up_leaves_a_model_that_takes_settings_and_nothing_else(use_c_api):
+    """DAQP frees its settings when the set-up fails (here: H not positive definite); setting them
+    then is a no-op on both models, as daqp.Model's."""
+    model = dm.make_model(2, 2, 2, use_c_api=use_c_api)
+    H, f, A = -np.eye(2), np.zeros(2), np.zeros((0, 2))
+    assert model.setup(H, f, A, np.ones(2), -np.ones(2), np.zeros(2, dtype=np.intc)) < 0
+    model.set_settings(100, 1e-6)
+    if use_c_api:
+        with pytest.raises(RuntimeError, match="setup"):
+            model.c_handles()

@@ -178,8 +178,13 @@ class CModel:
         return code
 
     def set_settings(self, iter_limit: int, primal_tol: float) -> None:
-        """DAQP's ``iter_limit`` and ``primal_tol`` settings (the others stay DAQP's defaults)."""
+        """DAQP's ``iter_limit`` and ``primal_tol`` settings (the others stay DAQP's defaults); a no-op
+        before a successful :meth:`setup` (a failed one leaves no settings), as ``daqp.Model``'s."""
+        if not self._set_up:
+            return
         (address,) = struct.unpack_from("P", self._work, self._lib.settings_offset)
+        if not address:
+            return
         settings = (ctypes.c_char * _SETTINGS_CHECK_BYTES).from_address(address)
         struct.pack_into("i", settings, _OFFSET_ITER_LIMIT, int(iter_limit))
         struct.pack_into("d", settings, _OFFSET_PRIMAL_TOL, float(primal_tol))
