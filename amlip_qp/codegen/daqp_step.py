@@ -102,7 +102,7 @@ class BoundStep:
         self._fn = fn
         self._context = context
         self._context_address = ctypes.addressof(context)
-        self._keep = keep  # the arrays the context points into
+        self._keep = keep  # the arrays the context points into, and the model whose workspace it drives
         self._src: np.ndarray | None = None
         self._src_address = 0
         self._size = size
@@ -126,7 +126,7 @@ class BoundRows:
         self._fn = fn
         self._context = context
         self._context_address = ctypes.addressof(context)
-        self._keep = keep  # the arrays the context points into
+        self._keep = keep  # the arrays the context points into, and the model whose workspace it drives
 
     def __call__(self) -> tuple[int, float]:
         flag = self._fn(self._context_address)
@@ -190,7 +190,7 @@ class DAQPStep:
         )
         for name, (a, _) in arrays.items():
             setattr(context, name, _address(a))
-        return BoundRows(self._rows_fn, context, tuple(a for a, _ in arrays.values()))
+        return BoundRows(self._rows_fn, context, (*(a for a, _ in arrays.values()), handles.owner))
 
     def bind(
         self,
@@ -229,7 +229,7 @@ class DAQPStep:
             big=big,
             violation=0.0,
         )
-        keep: tuple = (data, x, hard)
+        keep: tuple = (data, x, hard, handles.owner)
         if producer is not None:
             work = (
                 (ctypes.c_void_p * max(producer.sz_arg, 1))(),

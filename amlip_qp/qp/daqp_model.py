@@ -60,6 +60,8 @@ class CHandles:
     result: int
     update_mask: int
     exitflag_offset: int
+    #: The model these addresses belong to: whoever keeps the addresses keeps it alive.
+    owner: Any = None
 
 
 class DAQPModelFallbackWarning(RuntimeWarning):
@@ -191,11 +193,15 @@ class CModel:
 
     def update(self, H, f, A, bupper, blower) -> int:
         """New data (in the arrays last given, or in new ones of the same shapes); returns DAQP's code."""
+        if not self._set_up:
+            raise RuntimeError("CModel.update before a successful setup")
         self._point((H, f, A, bupper, blower))
         return int(self._lib.update(UPDATE_ALL, self._pw, self._pp))
 
     def solve(self) -> int:
         """Solve from the last working set; returns DAQP's exit flag (1, 2: solved). Solution in :attr:`x`."""
+        if not self._set_up:
+            raise RuntimeError("CModel.solve before a successful setup")
         self._lib.solve(self._pr, self._pw)
         return struct.unpack_from("i", self._result, _OFFSET_EXITFLAG)[0]
 
@@ -207,7 +213,7 @@ class CModel:
         lib = self._lib
         address = ctypes.cast(lib.update, ctypes.c_void_p).value, ctypes.cast(lib.solve, ctypes.c_void_p).value
         return CHandles(
-            int(address[0] or 0), int(address[1] or 0), self._pw, self._pp, self._pr, UPDATE_ALL, _OFFSET_EXITFLAG
+            int(address[0] or 0), int(address[1] or 0), self._pw, self._pp, self._pr, UPDATE_ALL, _OFFSET_EXITFLAG, self
         )
 
     @property
