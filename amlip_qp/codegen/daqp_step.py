@@ -1,24 +1,30 @@
-"""The small QP's hot path as one compiled call: copy, clamps, DAQP's update and solve, and the check.
+"""DAQP's hot path as one compiled call: the data in, DAQP's update and solve, and the check.
 
-:class:`~amlip_qp.qp.small_qp.SmallQPSolver` solves the step-timing MPC's QP through DAQP's C
-API (:mod:`amlip_qp.qp.daqp_model`); around those two C calls its Python copies the problem in,
-clamps the bounds and checks the solution against the hard rows, a dozen numpy calls that cost
-about as much as DAQP's own work. ``daqp_step.c`` (beside this module) does the same in one C
-function, calling DAQP through the addresses :meth:`CModel.c_handles
-<amlip_qp.qp.daqp_model.CModel.c_handles>` hands over: the same DAQP calls on the same data, so
-the same solutions bit for bit (the residual's rows are summed in a plain loop rather than by
-numpy's ``dot``: the same check, the value may differ in its last bits). With a producer, a
-compiled CasADi kernel (:meth:`Kernels.c_kernel <amlip_qp.codegen.kernels.Kernels.c_kernel>`; the
-MPC's ``alip_mpc_qp``), the step's input is the kernel's input and the kernel writes the problem
-straight into the workspace's arrays: the MPC's matrices, solve and check in one call
-(:meth:`SmallQPSolver.solve_inputs <amlip_qp.qp.small_qp.SmallQPSolver.solve_inputs>`).
+Two solvers drive DAQP through its C API (:mod:`amlip_qp.qp.daqp_model`): the step-timing MPC's
+:class:`~amlip_qp.qp.small_qp.SmallQPSolver` and the QP tracker's
+:class:`~amlip_qp.qp.daqp_solver.DAQPSolver`. Around DAQP's two C calls their Python stacks or
+copies the problem in, clamps the bounds and checks the solution against the constraints, a
+dozen numpy calls that cost about as much as DAQP's own work. ``daqp_step.c`` (beside this
+module) does the same in one C function each, calling DAQP through the addresses
+:meth:`CModel.c_handles <amlip_qp.qp.daqp_model.CModel.c_handles>` hands over: the same DAQP
+calls on the same data, so the same solutions bit for bit (the rows' products of the check are
+summed in a plain loop rather than by numpy's ``dot``: the same check, its value may differ in
+the last bits).
 
-:func:`load_daqp_step` compiles it once into the codegen cache
+- ``amlip_daqp_step`` (:meth:`DAQPStep.bind`): a problem of fixed shape given as one array in
+  DAQP's order, copied in; or, with a producer, a compiled CasADi kernel
+  (:meth:`Kernels.c_kernel <amlip_qp.codegen.kernels.Kernels.c_kernel>`; the MPC's
+  ``alip_mpc_qp``), the step's input is the kernel's input and the kernel writes the problem
+  straight into the workspace's arrays: the MPC's matrices, solve and check in one call
+  (:meth:`SmallQPSolver.solve_inputs <amlip_qp.qp.small_qp.SmallQPSolver.solve_inputs>`).
+- ``amlip_daqp_rows`` (:meth:`DAQPStep.bind_rows`): the QP tracker's allocated problem read where
+  its builder wrote it; the bounds stacked and clamped into DAQP's arrays.
+
+:func:`load_daqp_step` compiles both once into the codegen cache
 (:func:`~amlip_qp.codegen.runtime.compile_library`) and returns a :class:`DAQPStep`, the
-``fast_step`` :class:`SmallQPSolver` takes; without a C compiler it returns ``None`` (the Python
-path, the same solutions) and one :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning` says so.
+``fast_step`` both solvers take; without a C compiler it returns ``None`` (the Python paths, the
+same solutions) and one :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning` says so.
 """
-
 from __future__ import annotations
 
 import ctypes
