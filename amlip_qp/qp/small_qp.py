@@ -17,7 +17,11 @@ the arrays are copied into the solver's own buffers, which the model reads in pl
 
 :meth:`SmallQPSolver.solve_stacked` takes the same problem as one array in DAQP's own
 order, ``(H row-major, g, C row-major, lower, upper)`` (the layout of
-:func:`~amlip_qp.alip.step_mpc.mpc_qp`'s output): one copy instead of five.
+:func:`~amlip_qp.alip.step_mpc.mpc_qp`'s output): one copy instead of five. Given a
+``producer`` (the function making that array of some inputs), :meth:`SmallQPSolver.solve_inputs`
+takes the inputs. Given a ``fast_step`` (:mod:`amlip_qp.codegen.daqp_step`), once the model is
+set up either runs as one compiled call (the producer's compiled kernel inside it): the same
+solutions, bit for bit.
 """
 
 from __future__ import annotations
