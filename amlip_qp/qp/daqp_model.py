@@ -127,7 +127,7 @@ class _Library:
         if primal_tol != 1e-6:
             raise RuntimeError(f"DAQPSettings.primal_tol reads {primal_tol!r}, expected DAQP's default 1e-6")
         self.settings_offset = int(set_words[0]) * 8
-        work.raw = bytes(_WORK_BYTES)  # the settings struct leaks once per process (a few hundred bytes)
+        ctypes.memset(work, 0, _WORK_BYTES)  # the settings struct leaks once per process (a few hundred bytes)
 
 
 class CModel:

@@ -81,9 +81,9 @@ class _Shape:
         self._bu_rows, self._bl_rows = self.bu[: n + n_in], self.bl[: n + n_in]
         #: The rows ``[C; A]`` DAQP solves: the problem's own block when it is stacked, else :attr:`A`.
         self.rows = self.A
-        #: The compiled call bound to :attr:`model` and to the arrays of :attr:`step_problem`, or ``None``.
-        self.step: Any = None
-        self.step_problem: QPProblem | None = None
+        #: The compiled call bound to :attr:`model` and to the arrays of :attr:`compiled_for`, or ``None``.
+        self.compiled: Any = None
+        self.compiled_for: QPProblem | None = None
 
     def largest_gap(self, x: np.ndarray) -> float:
         """The largest of ``bl - z`` and ``z - bu`` at ``x`` (``z = (x, C x, A x)``, the problem last
@@ -186,7 +186,7 @@ class DAQPSolver:
         if stacked is not None and last is not None and last[0] is problem:
             # the same allocated problem as the last solve, its views still in place: the same shape
             shape = last[1]
-            if shape.step is not None and shape.step_problem is problem and shape.model is not None:
+            if shape.compiled is not None and shape.compiled_for is problem and shape.model is not None:
                 return self._solve_compiled(problem, shape, t0)
         else:
             dims = (problem.n, problem.n_eq, problem.n_in)
@@ -206,7 +206,7 @@ class DAQPSolver:
         model = shape.model
         if model is None or not self.warm_start:
             model = shape.model = make_model(problem.n, len(shape.sense), problem.n, use_c_api=self.use_c_api)
-            shape.step = shape.step_problem = None
+            shape.compiled = shape.compiled_for = None
             code = model.setup(H, f, rows, shape.bu, shape.bl, shape.sense)
             model.set_settings(self.iter_limit, PRIMAL_TOL)
             self.n_init += 1
@@ -227,23 +227,23 @@ class DAQPSolver:
                 flag = _VIOLATED
             if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
                 # the next solve of this shape starts afresh (other shapes stay hot)
-                shape.model = shape.step = shape.step_problem = None
+                shape.model = shape.compiled = shape.compiled_for = None
                 raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
         if self._fast_step is not None and stacked is not None and self.warm_start and isinstance(model, CModel):
-            if shape.step_problem is not problem:
+            if shape.compiled_for is not problem:
                 rows, lower, upper = stacked
                 try:
-                    shape.step = self._fast_step.bind_rows(
+                    shape.compiled = self._fast_step.bind_rows(
                         model.c_handles(), lower, upper, problem.b, shape.bl, shape.bu, rows, model.x, BIG_BOUND
                     )
-                    shape.step_problem = problem
+                    shape.compiled_for = problem
                 except InputError:  # arrays the compiled call cannot read in place: the Python path
-                    shape.step, shape.step_problem = None, None
+                    shape.compiled, shape.compiled_for = None, None
         return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)
 
     def _solve_compiled(self, problem: QPProblem, shape: _Shape, t0: int) -> QPSolution:
-        """The hot solve of the problem ``shape.step`` is bound to, as one compiled call (class doc)."""
-        flag, gap = shape.step()
+        """The hot solve of the problem ``shape.compiled`` is bound to, as one compiled call (class doc)."""
+        flag, gap = shape.compiled()
         self.n_compiled += 1
         model = shape.model
         x = model.x.copy()
@@ -252,6 +252,6 @@ class DAQPSolver:
             if flag in _SOLVED and shape.violation(x) > RESIDUAL_CHECK:
                 flag = _VIOLATED
             if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):
-                shape.model = shape.step = shape.step_problem = None
+                shape.model = shape.compiled = shape.compiled_for = None
                 raise QPError(f"DAQP failed with exit flag {flag}", problem=problem, status=f"DAQP_EXIT_{flag}")
         return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)

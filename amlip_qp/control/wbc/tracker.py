@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from amlip_qp.codegen.daqp_step import load_daqp_step
 from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.tracker import Tracker
 from amlip_qp.control.wbc.builder import WholeBodyQP
@@ -192,8 +193,6 @@ class QPTracker(Tracker):
         self.qp_solver = qp_solver
         self.solver: ProxQPSolver | DAQPSolver
         if qp_solver == "daqp":
-            from amlip_qp.codegen.daqp_step import load_daqp_step
-
             self.solver = DAQPSolver(warm_start=warm_start, iter_limit=int(max_iter), fast_step=load_daqp_step())
         else:
             self.solver = ProxQPSolver(
