@@ -25,6 +25,7 @@ the last bits).
 ``fast_step`` both solvers take; without a C compiler it returns ``None`` (the Python paths, the
 same solutions) and one :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning` says so.
 """
+
 from __future__ import annotations
 
 import ctypes
