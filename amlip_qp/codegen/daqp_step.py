@@ -42,29 +42,27 @@ SOURCE_FILE = "amlip_daqp_step.c"
 LIBRARY_FILE = "libamlip_daqp_step.so"
 
 
+def _pointers(*names: str) -> list:
+    return [(name, ctypes.c_void_p) for name in names]
+
+
+#: The fields both C structures begin with: DAQP's two functions and its three structures.
+_DAQP_FIELDS = _pointers("update", "solve", "work", "problem", "result")
+
+
 class _Context(ctypes.Structure):
     """``amlip_daqp_step_t`` of ``daqp_step.c`` (the same fields in the same order)."""
 
     _fields_ = [
-        ("update", ctypes.c_void_p),
-        ("solve", ctypes.c_void_p),
-        ("work", ctypes.c_void_p),
-        ("problem", ctypes.c_void_p),
-        ("result", ctypes.c_void_p),
-        ("data", ctypes.c_void_p),
-        ("x", ctypes.c_void_p),
-        ("hard", ctypes.c_void_p),
+        *_DAQP_FIELDS,
+        *_pointers("data", "x", "hard"),
         ("n", ctypes.c_int),
         ("m", ctypes.c_int),
         ("update_mask", ctypes.c_int),
         ("exitflag_offset", ctypes.c_int),
         ("big", ctypes.c_double),
         ("violation", ctypes.c_double),
-        ("producer", ctypes.c_void_p),
-        ("producer_arg", ctypes.c_void_p),
-        ("producer_res", ctypes.c_void_p),
-        ("producer_iw", ctypes.c_void_p),
-        ("producer_w", ctypes.c_void_p),
+        *_pointers("producer", "producer_arg", "producer_res", "producer_iw", "producer_w"),
     ]
 
 
@@ -72,17 +70,8 @@ class _RowsContext(ctypes.Structure):
     """``amlip_daqp_rows_t`` of ``daqp_step.c`` (the same fields in the same order)."""
 
     _fields_ = [
-        ("update", ctypes.c_void_p),
-        ("solve", ctypes.c_void_p),
-        ("work", ctypes.c_void_p),
-        ("problem", ctypes.c_void_p),
-        ("result", ctypes.c_void_p),
-        ("lower", ctypes.c_void_p),
-        ("upper", ctypes.c_void_p),
-        ("b", ctypes.c_void_p),
-        ("bl", ctypes.c_void_p),
-        ("bu", ctypes.c_void_p),
-        ("rows", ctypes.c_void_p),
+        *_DAQP_FIELDS,
+        *_pointers("lower", "upper", "b", "bl", "bu", "rows"),
         ("x", ctypes.c_void_p),
         ("n", ctypes.c_int),
         ("n_in", ctypes.c_int),
