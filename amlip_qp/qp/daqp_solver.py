@@ -166,7 +166,12 @@ class DAQPSolver:
     @property
     def options(self) -> dict:
         """The constructor arguments of this solver (to build another one alike)."""
-        return {"warm_start": self.warm_start, "iter_limit": self.iter_limit, "use_c_api": self.use_c_api}
+        return {
+            "warm_start": self.warm_start,
+            "iter_limit": self.iter_limit,
+            "use_c_api": self.use_c_api,
+            "fast_step": self._fast_step,
+        }
 
     @property
     def primal_tol(self) -> float:
