@@ -196,3 +196,8 @@ def test_a_replaced_array_of_the_same_problem_is_solved_with_its_new_values():
     assert p.stacked() is None
     np.testing.assert_allclose(solver.solve(p).x, DAQPSolver().solve(p).x, atol=1e-9)
     assert max(p.residuals(solver.solve(p).x).values()) < 1e-9
+
+
+def test_a_fast_step_without_bind_rows_is_refused_at_construction():
+    with pytest.raises(InputError, match="fast_step must have a bind_rows"):
+        DAQPSolver(fast_step=object())

@@ -63,3 +63,10 @@ def test_solve_inputs_needs_a_producer_and_solves_what_it_makes():
     s = SmallQPSolver(2, 1, producer=producer)
     np.testing.assert_allclose(s.solve_inputs(np.array([1.0])), [1.0 / 3.0, 2.0 / 3.0], atol=1e-12)
     np.testing.assert_allclose(s.solve_inputs(np.array([10.0])), [1.0, 1.0], atol=1e-12)
+
+
+def test_a_fast_step_or_producer_of_the_wrong_kind_is_refused_at_construction():
+    with pytest.raises(InputError, match="fast_step must have a bind"):
+        SmallQPSolver(2, 1, fast_step="compiled")
+    with pytest.raises(InputError, match="producer must be callable"):
+        SmallQPSolver(2, 1, producer=np.zeros(14))

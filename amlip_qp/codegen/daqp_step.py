@@ -83,10 +83,6 @@ class _RowsContext(ctypes.Structure):
     ]
 
 
-def _address(a: np.ndarray) -> int:
-    return a.__array_interface__["data"][0]
-
-
 class BoundStep:
     """``step(src) -> (exit flag, largest violation)`` for one workspace (module doc); ``src`` is the
     problem as one C-contiguous float64 array in DAQP's order. The violation is meaningful only
@@ -107,7 +103,7 @@ class BoundStep:
         if src is not self._src:
             if src.dtype != np.float64 or not src.flags.c_contiguous or src.size != self._size:
                 raise InputError(f"the step's input must be a C-contiguous float64 array of {self._size} entries")
-            self._src, self._src_address = src, _address(src)
+            self._src, self._src_address = src, src.ctypes.data
         flag = self._fn(self._context_address, self._src_address)
         return flag, self._context.violation
 
@@ -185,7 +181,7 @@ class DAQPStep:
             gap=0.0,
         )
         for name, (a, _) in arrays.items():
-            setattr(context, name, _address(a))
+            setattr(context, name, a.ctypes.data)
         return BoundRows(self._rows_fn, context, (*(a for a, _ in arrays.values()), handles.owner))
 
     def bind(
@@ -215,9 +211,9 @@ class DAQPStep:
             work=handles.work,
             problem=handles.problem,
             result=handles.result,
-            data=_address(data),
-            x=_address(x),
-            hard=_address(hard),
+            data=data.ctypes.data,
+            x=x.ctypes.data,
+            hard=hard.ctypes.data,
             n=n,
             m=m,
             update_mask=handles.update_mask,

@@ -152,6 +152,8 @@ class DAQPSolver:
         import daqp  # noqa: F401 - the ImportError is raised here, at construction
 
         self.use_c_api = bool(use_c_api)
+        if fast_step is not None and not callable(getattr(fast_step, "bind_rows", None)):
+            raise InputError(f"fast_step must have a bind_rows(...) method (a DAQPStep), got {fast_step!r}")
         self._fast_step = fast_step
         self.warm_start = bool(warm_start)
         self.iter_limit = int(iter_limit)

@@ -114,6 +114,10 @@ class SmallQPSolver:
             self._sense[n + i] = SENSE_SOFT
             self._hard[n + i] = 0.0
         self._model: Any = None
+        if fast_step is not None and not callable(getattr(fast_step, "bind", None)):
+            raise InputError(f"fast_step must have a bind(...) method (a DAQPStep), got {fast_step!r}")
+        if producer is not None and not callable(producer):
+            raise InputError(f"producer must be callable (inputs -> the stacked QP), got {producer!r}")
         self._fast_step = fast_step
         self._bound_step: Any = None  # fast_step bound to the current model
         #: The function making the stacked problem of :meth:`solve_inputs`' inputs, or ``None``.

@@ -37,19 +37,17 @@ def make_mpc_planner(
     if backend not in ("c", "numpy"):
         raise InputError(f"backend must be 'c' or 'numpy', got {backend!r}")
     kw = dict(planner_kwargs)
-    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS)
+    fast: dict = {}
     if backend == "c":
         from amlip_qp.codegen import load_kernels
         from amlip_qp.codegen.daqp_step import load_daqp_step
 
         kernels = load_kernels()
         kw.update(plan_fn=kernels.alip_plan, reference_fn=kernels.swing_reference, mpc_fn=kernels.alip_mpc_qp)
-        solver = SmallQPSolver(
-            step_mpc.N_VAR,
-            step_mpc.N_ROWS,
-            step_mpc.SOFT_ROWS,
-            fast_step=load_daqp_step(),
-            producer=kernels.alip_mpc_qp,
-            producer_c=kernels.c_kernel("alip_mpc_qp"),
-        )
+        fast = {
+            "fast_step": load_daqp_step(),
+            "producer": kernels.alip_mpc_qp,
+            "producer_c": kernels.c_kernel("alip_mpc_qp"),
+        }
+    solver = SmallQPSolver(step_mpc.N_VAR, step_mpc.N_ROWS, step_mpc.SOFT_ROWS, **fast)
     return MPCPlanner(outputs, mass_kg, solver, settings=settings, **kw)
