@@ -272,8 +272,11 @@ class InPlaceBuild:
             in_rows=[(k, slice(s.start, min(s.stop, n_in))) for k, s in P.in_rows if s.start < n_in],
         )  # fmt: skip
         self._n_tau = n_tau
-        self._E_air = np.zeros((self._E.shape[0], n))
-        self._EtE_air = np.zeros((n, n))
+        self._E_air = np.zeros((self._E.shape[0], n))  # an output of the functions; H is formed from E (below)
+        # The airborne Hessian is the full product's leading block: numpy forms E'E with BLAS's syrk,
+        # whose blocking follows the size, so a product of the leading columns alone can differ from
+        # that block in the last bits (it does with OpenBLAS on some processors).
+        self._EtE_lead = self._EtE[:n, :n]
         # the constant Hessian's block, contiguous (the builder makes H0 once)
         self._H0_air = np.ascontiguousarray(self.builder.constant_cost.H0[:n, :n])
         self._outputs += [self._E_air, Pa.g, Pa.A, Pa.b, Pa.C[:n_tau], Pa.l[:n_tau], Pa.u, Pa.lb, Pa.ub]
@@ -342,8 +345,9 @@ class InPlaceBuild:
         self.outputs = (self._y.copy(), self._J.copy(), self._jdv.copy())
         Pa = self.airborne_problem
         if w == 0.0 and Pa is not None:
-            E = self._E_air
-            np.add(self._H0_air, np.dot(E.T, E, out=self._EtE_air), out=Pa.H)
+            E = self._E
+            np.dot(E.T, E, out=self._EtE)
+            np.add(self._H0_air, self._EtE_lead, out=Pa.H)
             return Pa
         E = self._E
         # np.dot: the same bits as np.matmul (the same BLAS call), with less overhead
