@@ -66,6 +66,13 @@ class QPError(AmlipError):
         self.status = status
 
 
+class InvalidQPError(QPError):
+    """A QP is malformed before any solve: a field of the wrong shape, a NaN or infinite matrix
+    or vector entry, a NaN bound, or a lower bound above its upper bound
+    (:meth:`QPProblem.validate <amlip_qp.qp.problem.QPProblem.validate>`). Fix what built it: the
+    state estimate, the references or the gains."""
+
+
 class UnverifiedCommandWarning(UserWarning):
     """A command inside the robot's physical bounds but outside what its acceptance verifies
     (its profile's ``[verified]``): it runs, unverified. The CLI prints it as one line on stderr."""

@@ -148,3 +148,105 @@ def test_the_trackers_compiled_solve_equals_its_python_path_bit_for_bit(step):
             failed.append(k)
     assert 50 in failed and len(failed) < 10  # the contradicting row (the tracker validates against NaN first)
     assert fast.n_compiled >= 80 - 2 * len(failed) - 1 and plain.n_compiled == 0
+
+
+def _defect(p, kind):
+    """Write one defect of ``kind`` into the allocated problem ``p`` (or a valid extreme: an infinite
+    bound, a large finite entry)."""
+    if kind == "nan H":
+        p.H[3, 5] = np.nan
+    elif kind == "inf g":
+        p.g[7] = np.inf
+    elif kind == "nan C":
+        p.C[2, 3] = np.nan
+    elif kind == "-inf A":
+        p.A[1, 0] = -np.inf
+    elif kind == "nan b":
+        p.b[-1] = np.nan
+    elif kind == "crossed l, u":
+        p.u[4] = p.l[4] - 1.0
+    elif kind == "crossed lb, ub":
+        p.lb[-1] = p.ub[-1] + 1e-12  # a swing force pinned at zero: 1e-12 above it
+    elif kind == "nan l":
+        p.l[0] = np.nan
+    elif kind == "nan ub":
+        p.ub[-1] = np.nan
+    elif kind == "infinite bounds":  # valid
+        p.l[1], p.u[2], p.lb[3], p.ub[4] = -np.inf, np.inf, -np.inf, np.inf
+    elif kind == "large H":  # valid: finite, though the entries' sum overflows
+        p.H[0, 1] = p.H[1, 0] = 1e308
+        p.H[2, 3] = p.H[3, 2] = 1e308
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # validate's sum, "large H"
+def test_the_trackers_compiled_check_refuses_exactly_what_validate_refuses(step):
+    """``DAQPSolver.solve(problem, check=True)`` validates the problem inside the compiled call: on
+    the QP tracker's recorded problems written into one allocated problem, each with one defect (a
+    NaN or infinite entry of each matrix and vector, crossed or NaN bounds) or a valid extreme
+    (infinite bounds, entries whose sum overflows), it raises :class:`InvalidQPError` with
+    ``QPProblem.validate``'s message exactly when ``validate`` raises, as the Python path does, and
+    otherwise gives the Python path's solution bit for bit."""
+    from amlip_qp.exceptions import InvalidQPError
+    from amlip_qp.experiments.bench_qp import record_walk
+    from amlip_qp.qp import DAQPSolver, QPProblem
+
+    problems, _, fell = record_walk(n_ticks=60, scenario="cassie-1mps", t_skip_s=0.6)
+    assert not fell
+    p0 = problems[0]
+    target = QPProblem.allocate(p0.n, p0.n_eq, p0.n_in)
+    kinds = [None, "nan H", None, "inf g", "nan C", None, "-inf A", "nan b", None, "crossed l, u",
+             "crossed lb, ub", None, "nan l", "nan ub", None, "infinite bounds", None, "large H"]  # fmt: skip
+    fast, plain = DAQPSolver(fast_step=step), DAQPSolver()
+    invalid = 0
+    for k, p in enumerate(problems):
+        for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+            getattr(target, name)[...] = getattr(p, name)
+        kind = kinds[k % len(kinds)] if k >= 2 else None  # the first two: set-up and binding
+        _defect(target, kind)
+        try:
+            target.copy().validate()
+            expected = None
+        except InvalidQPError as exc:
+            expected = str(exc)
+        outcomes = []
+        for solver in (fast, plain):
+            compiled_before = solver.n_compiled
+            try:
+                outcomes.append(solver.solve(target, check=True).x.tobytes())
+            except InvalidQPError as exc:
+                outcomes.append(f"invalid: {exc}")
+                assert solver is plain or solver.n_compiled == compiled_before + 1  # checked in the call
+            except QPError as exc:
+                outcomes.append(f"failed: {exc}")
+        assert outcomes[0] == outcomes[1], f"problem {k} ({kind})"
+        assert (expected is None) == (not isinstance(outcomes[0], str) or outcomes[0].startswith("failed"))
+        if expected is not None:
+            assert outcomes[0] == f"invalid: {expected}"
+            invalid += 1
+    valid_kinds = (None, "infinite bounds", "large H")
+    assert invalid == sum(kinds[k % len(kinds)] not in valid_kinds for k in range(2, len(problems))) > 2 * 9
+    assert fast.n_compiled >= 50 and plain.n_compiled == 0
+
+
+def test_an_invalid_problem_leaves_the_compiled_solver_hot(step):
+    """An invalid problem raises before DAQP is called: the next valid problem is solved by the same
+    hot-started workspace (no new set-up) with the solution of a solver that never saw the invalid one."""
+    from amlip_qp.exceptions import InvalidQPError
+    from amlip_qp.experiments.bench_qp import record_walk
+    from amlip_qp.qp import DAQPSolver, QPProblem
+
+    problems, _, _ = record_walk(n_ticks=6, scenario="cassie-1mps", t_skip_s=0.6)
+    p0 = problems[0]
+    target = QPProblem.allocate(p0.n, p0.n_eq, p0.n_in)
+    solvers = DAQPSolver(fast_step=step), DAQPSolver(fast_step=step)
+    for k, p in enumerate(problems):
+        for name in ("H", "g", "A", "b", "C", "l", "u", "lb", "ub"):
+            getattr(target, name)[...] = getattr(p, name)
+        x = [s.solve(target, check=True).x.tobytes() for s in solvers]
+        assert x[0] == x[1]
+        if k == 3:
+            target.H[0, 0] = np.nan
+            with pytest.raises(InvalidQPError, match="QP field H contains NaN"):
+                solvers[0].solve(target, check=True)
+    assert solvers[0].n_init == solvers[1].n_init == 1
+    assert solvers[0].n_compiled == solvers[1].n_compiled + 1 == len(problems) - 1 + 1

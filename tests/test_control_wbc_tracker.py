@@ -227,6 +227,38 @@ def test_an_infeasible_fresh_solve_is_not_repeated():
     assert tracker.solver.n_init - before == 2  # the solve, then the relaxed solve; no repeat
 
 
+@pytest.mark.parametrize("name", ["cassie", "rabbit"])
+def test_an_invalid_problem_falls_back_without_a_retry_and_the_solver_stays_warm(name):
+    """A NaN the assembly writes into the cost (after the first tick, so that a hot-started DAQP
+    checks the problem inside its compiled call) is an invalid problem: the fallback names the
+    field, without a cold retry or a relaxed solve, and the next tick is solved by the same warm
+    solver with the torques of a tracker that never saw the NaN."""
+    robot = load_robot(name)
+    tracker, twin = QPTracker(robot), QPTracker(robot)
+    kin, target = _stand(robot)
+    first = tracker.compute(kin, target)
+    assert first.ok and np.array_equal(twin.compute(kin, target).tau_Nm, first.tau_Nm)
+    build = tracker.build_problem
+
+    def poisoned(kin, target):
+        problem = build(kin, target)
+        problem.H[1, 1] = np.nan
+        return problem
+
+    tracker.build_problem = poisoned
+    n_init = tracker.solver.n_init
+    bad = tracker.compute(kin, target)
+    assert not bad.ok and bad.fallback.startswith("invalid problem: QP field H contains NaN")
+    assert np.allclose(bad.tau_Nm, tracker.fallback_decay * first.tau_Nm)
+    assert (tracker.fallbacks, tracker.cold_retries, tracker.relaxed_solves) == (1, 0, 0)
+    tracker.build_problem = build
+    again = tracker.compute(kin, target)
+    assert again.ok and tracker.solver.n_init == n_init
+    assert np.array_equal(again.tau_Nm, twin.compute(kin, target).tau_Nm)
+    if tracker.qp_solver == "daqp":
+        assert tracker.solver.n_compiled == twin.solver.n_compiled + 1  # the check ran in the compiled call
+
+
 def test_tracker_keeps_the_stance_toe_passive_and_reports_the_force_ramp():
     cassie = load_robot("cassie")
     tracker = QPTracker(cassie, CASSIE_CONFIG)

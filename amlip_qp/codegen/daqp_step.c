@@ -104,7 +104,11 @@ int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
  * DAQP's bounds bl, bu (n + n_in + n_eq) are those clamped to +-big, then b on both sides (the
  * equalities); then DAQP's update and solve, and, when solved, the largest of bl - z and z - bu
  * over z = (x, C x, A x) (NaN when any is NaN): DAQPSolver's Python sequence, the same solution
- * bit for bit. */
+ * bit for bit. With check_problem set, first QPProblem.validate's test of an allocated problem: every
+ * entry of data (H, g, C, A, b: n_data) finite and lower <= upper (a NaN bound fails); if either
+ * fails, AMLIP_DAQP_INVALID is returned and DAQP is not called. */
+#define AMLIP_DAQP_INVALID (-200)
+
 typedef struct {
     amlip_daqp_update_fn update;
     amlip_daqp_solve_fn solve;
@@ -118,14 +122,30 @@ typedef struct {
     double *bu;
     const double *rows; /* (n_in + n_eq) x n, row-major */
     const double *x;
+    const double *data; /* H, g, C, A, b of the allocated problem, for the check */
     int n;
     int n_in;
     int n_eq;
     int update_mask;
     int exitflag_offset;
+    int n_data;
+    int check_problem;
     double big;
     double gap; /* out: the largest violation, when solved */
 } amlip_daqp_rows_t;
+
+/* Whether the n entries of a are all finite (no NaN, no inf): their exponent bits never all set. */
+static int amlip_all_finite(const double *a, int n)
+{
+    const unsigned long long exponent = 0x7ff0000000000000ULL;
+    unsigned long long bits, bad = 0;
+    int i;
+    for (i = 0; i < n; ++i) {
+        memcpy(&bits, a + i, sizeof bits);
+        bad |= (unsigned long long)((bits & exponent) == exponent);
+    }
+    return !bad;
+}
 
 int amlip_daqp_rows(amlip_daqp_rows_t *c)
 {
@@ -134,6 +154,11 @@ int amlip_daqp_rows(amlip_daqp_rows_t *c)
     int i, k, flag;
     double worst = -INFINITY;
 
+    if (c->check_problem) {
+        int crossed = 0;
+        for (i = 0; i < nb; ++i) crossed |= !(c->lower[i] <= c->upper[i]);
+        if (crossed || !amlip_all_finite(c->data, c->n_data)) return AMLIP_DAQP_INVALID;
+    }
     for (i = 0; i < nb; ++i) {
         double lo = c->lower[i], up = c->upper[i];
         c->bl[i] = (lo != lo || lo > -big) ? lo : -big;

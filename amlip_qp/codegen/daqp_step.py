@@ -18,7 +18,10 @@ the last bits).
   straight into the workspace's arrays: the MPC's matrices, solve and check in one call
   (:meth:`SmallQPSolver.solve_inputs <amlip_qp.qp.small_qp.SmallQPSolver.solve_inputs>`).
 - ``amlip_daqp_rows`` (:meth:`DAQPStep.bind_rows`): the QP tracker's allocated problem read where
-  its builder wrote it; the bounds stacked and clamped into DAQP's arrays.
+  its builder wrote it; the bounds stacked and clamped into DAQP's arrays. On request it first
+  tests the problem as :meth:`QPProblem.validate <amlip_qp.qp.problem.QPProblem.validate>` does
+  (every matrix and vector entry finite, no lower bound above its upper bound), so that the
+  tracker's validation is part of the same call.
 
 :func:`load_daqp_step` compiles both once into the codegen cache
 (:func:`~amlip_qp.codegen.runtime.compile_library`) and returns a :class:`DAQPStep`, the
@@ -73,14 +76,22 @@ class _RowsContext(ctypes.Structure):
         *_DAQP_FIELDS,
         *_pointers("lower", "upper", "b", "bl", "bu", "rows"),
         ("x", ctypes.c_void_p),
+        ("data", ctypes.c_void_p),
         ("n", ctypes.c_int),
         ("n_in", ctypes.c_int),
         ("n_eq", ctypes.c_int),
         ("update_mask", ctypes.c_int),
         ("exitflag_offset", ctypes.c_int),
+        ("n_data", ctypes.c_int),
+        ("check_problem", ctypes.c_int),
         ("big", ctypes.c_double),
         ("gap", ctypes.c_double),
     ]
+
+
+#: The exit flag of ``amlip_daqp_rows`` when its check finds the problem invalid (a non-finite
+#: entry of ``H, g, C, A, b`` or a lower bound not at most its upper bound); DAQP is not called.
+INVALID_PROBLEM = -200
 
 
 class BoundStep:
@@ -109,18 +120,26 @@ class BoundStep:
 
 
 class BoundRows:
-    """``step() -> (exit flag, largest gap)`` for one workspace and one problem's arrays (the QP
-    tracker's, :meth:`DAQPStep.bind_rows`); the gap is meaningful only when the flag is 1 or 2."""
+    """``step(check=False) -> (exit flag, largest gap)`` for one workspace and one problem's arrays
+    (the QP tracker's, :meth:`DAQPStep.bind_rows`); the gap is meaningful only when the flag is 1
+    or 2. With ``check``, the problem is first tested as :meth:`QPProblem.validate
+    <amlip_qp.qp.problem.QPProblem.validate>` tests it; a problem that fails returns
+    :data:`INVALID_PROBLEM` without a solve."""
 
-    __slots__ = ("_fn", "_context", "_context_address", "_keep")
+    __slots__ = ("_fn", "_context", "_context_address", "_keep", "_check")
 
     def __init__(self, fn, context: _RowsContext, keep: tuple):
         self._fn = fn
         self._context = context
         self._context_address = ctypes.addressof(context)
         self._keep = keep  # the arrays the context points into, and the model whose workspace it drives
+        self._check = False
 
-    def __call__(self) -> tuple[int, float]:
+    def __call__(self, check: bool = False) -> tuple[int, float]:
+        if check is not self._check:
+            check = bool(check)
+            self._context.check_problem = int(check)
+            self._check = check
         flag = self._fn(self._context_address)
         return flag, self._context.gap
 
@@ -154,16 +173,19 @@ class DAQPStep:
         rows: np.ndarray,
         x: np.ndarray,
         big: float,
+        data: np.ndarray,
     ) -> BoundRows:
         """A :class:`BoundRows` on the workspace of ``handles``, set up on ``H``, ``f``, ``rows``
         (``[C; A]``, ``(n_in + n_eq, n)``), ``bu`` and ``bl`` (``n + n_in + n_eq``), which it
         fills from ``lower``, ``upper`` (``n + n_in``, clamped to ``+-big``) and ``b`` (``n_eq``);
-        its solution in ``x`` (``n``)."""
+        its solution in ``x`` (``n``). ``data``: the problem's ``H, g, C, A, b`` in one buffer
+        (:meth:`QPProblem.buffers <amlip_qp.qp.problem.QPProblem.buffers>`), which the check reads."""
         n, n_eq = x.size, b.size
         n_in = lower.size - n
+        n_data = n * n + n + (n_in + n_eq) * n + n_eq
         arrays = {"lower": (lower, n + n_in), "upper": (upper, n + n_in), "b": (b, n_eq),
                   "bl": (bl, n + n_in + n_eq), "bu": (bu, n + n_in + n_eq), "rows": (rows, (n_in + n_eq) * n),
-                  "x": (x, n)}  # fmt: skip
+                  "x": (x, n), "data": (data, n_data)}  # fmt: skip
         for name, (a, size) in arrays.items():
             _checked(name, a, size)
         context = _RowsContext(
@@ -177,6 +199,8 @@ class DAQPStep:
             n_eq=n_eq,
             update_mask=handles.update_mask,
             exitflag_offset=handles.exitflag_offset,
+            n_data=n_data,
+            check_problem=0,
             big=big,
             gap=0.0,
         )

@@ -185,8 +185,12 @@ class DAQPSolver:
         self._shapes.clear()
         self._last = None
 
-    def solve(self, problem: QPProblem) -> QPSolution:
-        """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
+    def solve(self, problem: QPProblem, check: bool = False) -> QPSolution:
+        """Solve ``problem``; raise :class:`QPError` (carrying it) on failure. ``check``: first
+        validate ``problem`` (:meth:`QPProblem.validate
+        <amlip_qp.qp.problem.QPProblem.validate>`: an invalid one raises its
+        :class:`~amlip_qp.exceptions.InvalidQPError` and leaves the solver as it was), inside the
+        compiled call when there is one."""
         t0 = time.perf_counter_ns()
         stacked = problem.stacked()
         last = self._last
@@ -194,8 +198,12 @@ class DAQPSolver:
             # the same allocated problem as the last solve, its views still in place: the same shape
             shape = last[1]
             if shape.compiled is not None and shape.compiled_for is problem and shape.model is not None:
-                return self._solve_compiled(problem, shape, t0)
+                return self._solve_compiled(problem, shape, t0, check)
+            if check:
+                problem.validate()
         else:
+            if check:  # before the solver's state changes
+                problem.validate()
             dims = (problem.n, problem.n_eq, problem.n_in)
             found = self._shapes.get(dims)
             if found is None:
@@ -239,23 +247,30 @@ class DAQPSolver:
         if self._fast_step is not None and stacked is not None and self.warm_start and isinstance(model, CModel):
             if shape.compiled_for is not problem:
                 rows, lower, upper = stacked
+                buffers = problem.buffers()
+                assert buffers is not None  # stacked: an allocated problem's views
                 try:
+                    bounds = (lower, upper, problem.b, shape.bl, shape.bu)
                     shape.compiled = self._fast_step.bind_rows(
-                        model.c_handles(), lower, upper, problem.b, shape.bl, shape.bu, rows, model.x, BIG_BOUND
+                        model.c_handles(), *bounds, rows, model.x, BIG_BOUND, buffers[0]
                     )
                     shape.compiled_for = problem
                 except InputError:  # arrays the compiled call cannot read in place: the Python path
                     shape.compiled, shape.compiled_for = None, None
         return QPSolution(x=x, status="DAQP_SOLVED", iterations=model.iterations, solve_time_us=elapsed_us)
 
-    def _solve_compiled(self, problem: QPProblem, shape: _Shape, t0: int) -> QPSolution:
-        """The hot solve of the problem ``shape.compiled`` is bound to, as one compiled call (class doc)."""
-        flag, gap = shape.compiled()
+    def _solve_compiled(self, problem: QPProblem, shape: _Shape, t0: int, check: bool) -> QPSolution:
+        """The hot solve of the problem ``shape.compiled`` is bound to, as one compiled call (class doc);
+        with ``check``, the call validates the problem first and returns a failure flag without a
+        solve if it is invalid."""
+        flag, gap = shape.compiled(check)
         self.n_compiled += 1
         model = shape.model
         x = model.x.copy()
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         if flag not in _SOLVED or not gap <= RESIDUAL_CHECK:  # as in solve: the same checks, the same order
+            if check and flag not in _SOLVED:
+                problem.validate()  # an invalid problem (the compiled check's failure): its named error
             if flag in _SOLVED and shape.violation(x) > RESIDUAL_CHECK:
                 flag = _VIOLATED
             if flag not in _SOLVED or not math.isfinite(sum(x.tolist())):

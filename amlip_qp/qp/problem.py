@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from amlip_qp.exceptions import QPError
+from amlip_qp.exceptions import InvalidQPError, QPError
 
 _sum = np.add.reduce
 _all = np.logical_and.reduce
@@ -140,8 +140,20 @@ class QPProblem:
             return None
         return packed.rows, packed.lower, packed.upper
 
+    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """For a problem made by :meth:`allocate` whose arrays are still its views: its three buffers
+        ``(data, lower, upper)`` (no copies; read only): ``data`` holds ``H, g, C, A, b`` flattened in
+        that order, ``lower`` = ``[lb; l]`` and ``upper`` = ``[ub; u]``. ``None`` for any other
+        problem."""
+        packed = self._packed
+        H, g, A, b, C, l, u, lb, ub = self.H, self.g, self.A, self.b, self.C, self.l, self.u, self.lb, self.ub
+        if packed is None or not packed.holds(H, g, A, b, C, l, u, lb, ub):
+            return None
+        return packed.data, packed.lower, packed.upper
+
     def validate(self) -> None:
-        """Check shapes and finiteness; raise :class:`QPError` naming the defect."""
+        """Check shapes and finiteness; raise :class:`~amlip_qp.exceptions.InvalidQPError` (a
+        :class:`QPError`) naming the defect."""
         H, g, A, b, C, l, u, lb, ub = self.H, self.g, self.A, self.b, self.C, self.l, self.u, self.lb, self.ub
         packed = self._packed
         if packed is not None and packed.holds(H, g, A, b, C, l, u, lb, ub):
@@ -155,21 +167,23 @@ class QPProblem:
         if got != expected:
             for name, shape, want in zip(("H", "g", "A", "b", "C", "l", "u", "lb", "ub"), got, expected):
                 if shape != want:
-                    raise QPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
+                    raise InvalidQPError(f"QP field {name} has shape {shape}, expected {want}", problem=self)
         # Fast path, once per control tick: NaN and inf propagate through a sum (ufunc
         # reductions without ndarray.sum()'s wrapper; short vectors as Python floats, cheaper still).
         if not math.isfinite(_sum(H, None) + _sum(A, None) + _sum(C, None) + sum(g.tolist()) + sum(b.tolist())):
             for name in ("H", "g", "A", "b", "C"):
                 if not np.all(np.isfinite(getattr(self, name))):
-                    raise QPError(
+                    raise InvalidQPError(
                         f"QP field {name} contains NaN or inf: check the state estimate and gains", problem=self
                     )
         # Bounds may be +-inf, but never NaN; a crossed pair is infeasible by construction.
         if not (_all(l <= u) and _all(lb <= ub)):
             for name in ("l", "u", "lb", "ub"):
                 if np.any(np.isnan(getattr(self, name))):
-                    raise QPError(f"QP bound {name} contains NaN", problem=self)
-            raise QPError("QP has a lower bound above its upper bound (infeasible by construction)", problem=self)
+                    raise InvalidQPError(f"QP bound {name} contains NaN", problem=self)
+            raise InvalidQPError(
+                "QP has a lower bound above its upper bound (infeasible by construction)", problem=self
+            )
 
     def objective(self, x: np.ndarray) -> float:
         """Cost ``1/2 x'Hx + g'x`` at ``x``."""

@@ -136,8 +136,12 @@ class ProxQPSolver:
         """Forget the previous solutions; the next solve of each shape re-initialises."""
         self._qps.clear()
 
-    def solve(self, problem: QPProblem) -> QPSolution:
-        """Solve ``problem``; raise :class:`QPError` (carrying it) on failure."""
+    def solve(self, problem: QPProblem, check: bool = False) -> QPSolution:
+        """Solve ``problem``; raise :class:`QPError` (carrying it) on failure. ``check``: first
+        validate ``problem`` (:meth:`QPProblem.validate <amlip_qp.qp.problem.QPProblem.validate>`:
+        an invalid one raises its :class:`~amlip_qp.exceptions.InvalidQPError`)."""
+        if check:
+            problem.validate()
         H, A, C = problem.H, problem.A, problem.C
         dims = (H.shape[0], A.shape[0], C.shape[0])
         t0 = time.perf_counter_ns()

@@ -48,7 +48,7 @@ from amlip_qp.control.wbc.compiled import CompiledBuild
 from amlip_qp.control.wbc.compiled_in_place import InPlaceBuild, airborne_dims
 from amlip_qp.control.wbc.config import QP_SOLVERS, QPConfig
 from amlip_qp.control.wbc.constraints import FrictionPyramid
-from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, QPError
+from amlip_qp.exceptions import AmlipError, CompilerUnavailableError, InputError, InvalidQPError, QPError
 from amlip_qp.messages import TrackerResult
 from amlip_qp.qp.daqp_solver import DAQPSolver
 from amlip_qp.qp.problem import QPProblem
@@ -289,11 +289,9 @@ class QPTracker(Tracker):
         outputs = None  # the output map h_0 of the in-place assembly, for the result
         try:
             problem = self.build_problem(kin, target)
-            in_place = self._in_place
-            if in_place is not None and self.build_problem == in_place.build:
-                outputs = in_place.outputs
+            if self._in_place is not None and self.build_problem == self._in_place.build:
+                outputs = self._in_place.outputs
             self.last_problem = problem
-            problem.validate()
         except QPError as exc:
             return self._fallback(kin, f"invalid problem: {exc}", info, outputs)
         except (AmlipError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -303,15 +301,16 @@ class QPTracker(Tracker):
         try:
             n_init = self.solver.n_init
             try:
-                sol = self._solve(problem)
-            except QPError:
-                # A warm start from a far-away iterate can stall: retry once from
-                # scratch (the solver re-initialises after a failure). A solve
-                # that was already a fresh start is not repeated.
-                if self.solver.n_init != n_init:
+                sol = self._solve(problem)  # validates the problem first (InvalidQPError)
+            except QPError as exc:
+                # A warm start from a far-away iterate can stall: retry once from scratch (the solver
+                # re-initialises after a failure); not an invalid problem, nor a fresh start's failure.
+                if isinstance(exc, InvalidQPError) or self.solver.n_init != n_init:
                     raise
                 self.cold_retries += 1
                 sol = self._solve(problem)
+        except InvalidQPError as exc:
+            return self._fallback(kin, f"invalid problem: {exc}", info, outputs)
         except QPError as exc:
             relaxed = self._solve_relaxed(problem)
             if relaxed is not None:
@@ -322,14 +321,15 @@ class QPTracker(Tracker):
         return self._finish(kin, problem, sol, info, (t0, t1), outputs, relaxed=False)
 
     def _solve(self, problem: QPProblem) -> QPSolution:
-        """Solve ``problem``; with :attr:`airborne_reduction`, while the swing foot is airborne,
-        the problem without the swing forces: the in-place assembly's airborne problem (which
-        :meth:`build_problem` then returns) or the full problem's leading block. The solution
-        has the full problem's size."""
+        """Validate (:class:`InvalidQPError`; the solver does, in its compiled call if any) and solve
+        ``problem``; with :attr:`airborne_reduction`, while the swing foot is airborne, the problem
+        without the swing forces: the in-place assembly's airborne problem (which :meth:`build_problem`
+        then returns) or the full problem's leading block. The solution has the full problem's size."""
         if problem.n != self.builder.layout.n:  # the in-place assembly's airborne problem
-            return self._full_size(self.solver.solve(problem))
+            return self._full_size(self.solver.solve(problem, check=True))
         if not (self.airborne_reduction and self.builder.inputs.swing_force_weight == 0.0):
-            return self.solver.solve(problem)
+            return self.solver.solve(problem, check=True)
+        problem.validate()  # the full problem, as the other paths validate what they solve
         pair = self._airborne
         if pair is None or pair[0] is not problem:
             # Views of the builder's live arrays: made once, valid for every later build.
