@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from amlip_qp.alip import kernels
+from amlip_qp.alip.formulas import DOWNHILL_COM_SHARE as SHARE
 
 #: Outputs per block of SWING_REFERENCE (values, first and second time derivatives).
 N = kernels.N_REFERENCE_OUTPUTS
@@ -166,9 +167,11 @@ def test_swing_reference_ground_heights_and_pitches(dz0, dz1):
     base = dict(z_cl=zcl, dz_sw0=dz0, dz_sw=dz1, slope_pitch0=-0.2, slope_pitch=0.25)
     y0 = kernels.swing_reference(_ref_input(0.0, **base)[0])
     y1 = kernels.swing_reference(_ref_input(1.0, **base)[0])
-    # CoM over stance from H + dz0 to H; CoM over swing from H to H - dz1; toe from pitch0 to pitch.
-    np.testing.assert_allclose(y0[[4, 7, 8]], [H + dz0, H, -0.2], atol=1e-15)
-    np.testing.assert_allclose(y1[[4, 7, 8]], [H, H - dz1, 0.25], atol=1e-15)
+    # CoM over stance from H + dz0 to H, CoM over swing from H to H - dz1, toe from pitch0 to pitch; on
+    # a step down (dz0 > 0 at the start, dz1 < 0 at the end) the CoM takes its share of the drop.
+    a, d = SHARE * max(dz0, 0.0), SHARE * min(dz1, 0.0)
+    np.testing.assert_allclose(y0[[4, 7, 8]], [H + dz0 - a, H - a, -0.2], atol=1e-15)
+    np.testing.assert_allclose(y1[[4, 7, 8]], [H + d, H - dz1 + d, 0.25], atol=1e-15)
     np.testing.assert_allclose(y0[N + np.array([4, 8])], 0.0, atol=1e-15)  # blends start and end at rest
     np.testing.assert_allclose(y1[N + np.array([4, 8])], 0.0, atol=1e-15)
     assert y1[N + 7] > 0.0 and y0[N + 7] < 0.0  # the foot rises at lift-off and descends at touchdown
@@ -180,7 +183,28 @@ def test_swing_reference_ground_heights_and_pitches(dz0, dz1):
     assert max(dz0, dz1) + zcl - 1e-9 <= apex <= max(dz0, dz1) + zcl + abs(dz1 - dz0) / 8 + 1e-9
 
 
-@pytest.mark.parametrize("ground", [dict(), dict(dz_sw0=-0.1, dz_sw=0.12, slope_pitch0=0.1, slope_pitch=-0.3)])
+def test_the_com_height_is_continuous_across_a_touchdown_on_every_step_up_or_down():
+    """At a touchdown the CoM has not moved: the new step's ``com_z_over_stance`` at s = 0 is the
+    old step's at s = 1 plus the drop to the new contact, and the swing foot, which left the old
+    contact, starts at the old CoM height over it. On a step down the CoM ends the step ``SHARE``
+    of the drop below ``H`` (the swing leg reaches that much less far), and the next step starts
+    there; a level or rising step ends at ``H``."""
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        dz_prev, dz1, dz2 = rng.uniform(-0.25, 0.25, size=3)  # target heights over each stance contact
+        old = kernels.swing_reference(_ref_input(1.0, dz_sw0=dz_prev, dz_sw=dz1)[0])
+        new = kernels.swing_reference(_ref_input(0.0, dz_sw0=-dz1, dz_sw=dz2)[0])
+        com_old = old[4]  # over the old stance contact; the new one lies dz1 higher
+        assert com_old == pytest.approx(H + SHARE * min(dz1, 0.0), abs=1e-15)
+        assert new[4] == pytest.approx(com_old - dz1, abs=1e-14)
+        assert new[7] == pytest.approx(com_old, abs=1e-14)
+        assert abs(old[N + 4]) < 1e-14 and abs(new[N + 4]) < 1e-14  # at rest at both ends
+
+
+@pytest.mark.parametrize(
+    "ground",
+    [dict(), dict(dz_sw0=-0.1, dz_sw=0.12, slope_pitch0=0.1, slope_pitch=-0.3), dict(dz_sw0=0.14, dz_sw=-0.18)],
+)
 def test_swing_reference_ground_derivatives_match_finite_differences(ground):
     rng = np.random.default_rng(1)
     dt = 1e-5

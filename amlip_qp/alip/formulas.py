@@ -23,6 +23,12 @@ import numpy as np
 #: Standard gravity, m/s^2 (positive; gravity points along -z).
 GRAVITY_MPS2 = 9.81
 
+#: The share of a step down that the CoM takes before the touchdown (:func:`stance_height`): 0
+#: holds it at ``H`` over the stance contact to the end (the swing leg then reaches down the whole
+#: drop below ``H``), 1 brings it to ``H`` over the lower landing point. Measured: docs/TUNING.md,
+#: "The CoM's share of a step down".
+DOWNHILL_COM_SHARE = 0.5
+
 
 def backend(*args):
     """Return the math module for the arguments: ``casadi`` if any argument is
@@ -185,7 +191,7 @@ def clearance_parabola(s, H_m, z_cl_m):
 def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
     """Swing ``p^z_sw->CoM`` reference when the swing foot moves from height
     ``dz0_m`` to ``dz1_m`` over the stance contact (m), with the CoM over the
-    stance at ``H + dz0 w(s)`` (:func:`stance_height`, ``w`` from 1 to 0).
+    stance as :func:`stance_height` puts it.
 
     The foot's height over the stance contact is
     ``dz0 + (dz1 - dz0) s + (z_cl + |dz1 - dz0| / 2) 4 s (1 - s)``: its apex is
@@ -194,9 +200,12 @@ def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
 
         4 z_cl (s - 1/2)^2 + (H - z_cl) - [dz0 b(s) + (dz1 - dz0) s + |dz1 - dz0| / 2 * 4 s (1 - s)]
 
-    with ``b = (1 - cos(pi s)) / 2``. It starts at ``H`` and ends at ``H - dz1``;
-    with ``dz0 = dz1 = 0`` it is :func:`clearance_parabola` bit for bit (the
-    bracket is an exact 0 subtracted last). Returns ``(y, dy/ds, d2y/ds2)`` in m.
+    with ``b = (1 - cos(pi s)) / 2``, plus the CoM's descent on a step down
+    (:func:`downhill_com_terms`). It starts at ``H - a`` and ends at ``H - dz1 + d``
+    (``a``, ``d`` of :func:`stance_height`: both 0 unless a step goes down); with
+    ``dz0 = dz1 = 0`` it is :func:`clearance_parabola` bit for bit (the
+    bracket and the descent are exact zeros, subtracted and added last). Returns
+    ``(y, dy/ds, d2y/ds2)`` in m.
     """
     xp = backend(s, H_m, z_cl_m, dz0_m, dz1_m)
     y, dy, ddy = clearance_parabola(s, H_m, z_cl_m)
@@ -207,17 +216,35 @@ def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
     q = dz0_m * (0.5 * (1.0 - c)) + rise * s + lift * (4.0 * s * (1.0 - s))
     dq = dz0_m * (0.5 * np.pi * sn) + rise + lift * (4.0 - 8.0 * s)
     ddq = dz0_m * (0.5 * np.pi**2 * c) - 8.0 * lift
-    return y - q, dy - dq, ddy - ddq
+    e, de, dde = downhill_com_terms(c, sn, xp, dz0_m, dz1_m)
+    return y - q + e, dy - dq + de, ddy - ddq + dde
 
 
-def stance_height(s, H_m, dz0_m):
-    """CoM over the stance contact ``H + dz0 (1 + cos(pi s)) / 2`` (m): from
-    ``H + dz0`` at the step start, where ``dz0`` (m) is the previous stance
-    contact's height minus the current one's (the CoM has not moved at
-    touchdown), to ``H`` at s=1, with zero velocity at both ends. ``dz0 = 0``
-    is the constant ``H`` bit for bit. Returns ``(y, dy/ds, d2y/ds2)``.
+def downhill_com_terms(c, sn, xp, dz0_m, dz1_m):
+    """The CoM's descent on a step down, added to the CoM over the stance and over the swing
+    (:func:`stance_height`, :func:`swing_height`): ``d b(s) - a (1 - b(s))`` with
+    ``a = share max(dz0, 0)`` (the share of the last step's drop the CoM took before its
+    touchdown) and ``d = share min(dz1, 0)`` (the share of this step's drop it takes before the
+    next), ``share`` = :data:`DOWNHILL_COM_SHARE`, ``c = cos(pi s)``, ``sn = sin(pi s)``. Returns
+    it and its first two derivatives in ``s`` (m); exact zeros (``+0.0``) unless a step goes down."""
+    a = DOWNHILL_COM_SHARE * xp.fmax(dz0_m, 0.0)
+    d = DOWNHILL_COM_SHARE * xp.fmin(dz1_m, 0.0)
+    k = d + a
+    return d * (0.5 * (1.0 - c)) - a * (0.5 * (1.0 + c)), k * (0.5 * np.pi * sn), k * (0.5 * np.pi**2 * c)
+
+
+def stance_height(s, H_m, dz0_m, dz1_m):
+    """CoM over the stance contact, m: ``H + dz0 (1 + cos(pi s)) / 2`` plus the descent on a step
+    down, ``d b(s) - a (1 - b(s))`` (:func:`downhill_com_terms`). ``dz0`` (m) is the previous
+    stance contact's height minus the current one's and ``dz1`` the target's minus the current
+    one's. The CoM has not moved at touchdown: the reference starts at ``H + dz0 - a`` (``a`` =
+    :data:`DOWNHILL_COM_SHARE` ``max(dz0, 0)``, the share of that step's drop the CoM took before
+    it) and ends at ``H + d`` at s=1 (``d`` = the share ``min(dz1, 0)`` of this step's drop, below
+    ``H``, so that the swing leg reaches a lower foothold), with zero velocity at both ends. Level
+    and rising steps (``dz0 <= 0``, ``dz1 >= 0``) go from ``H + dz0`` to ``H``; ``dz0 = dz1 = 0`` is
+    the constant ``H`` bit for bit. Returns ``(y, dy/ds, d2y/ds2)``.
     """
-    xp = backend(s, H_m, dz0_m)
+    xp = backend(s, H_m, dz0_m, dz1_m)
     c = xp.cos(np.pi * s)
     sn = xp.sin(np.pi * s)
     y, dy, ddy = constant(s, H_m)
@@ -225,10 +252,11 @@ def stance_height(s, H_m, dz0_m):
     # of two products with non-negative factors, so dz0 = 0 gives +0.0 (not -0.0) also
     # where CasADi drops the constant's 0 and the generated C returns the term itself.
     k1, k2 = 0.5 * np.pi, 0.5 * np.pi**2
+    e, de, dde = downhill_com_terms(c, sn, xp, dz0_m, dz1_m)
     return (
-        y + dz0_m * (0.5 * (1.0 + c)),
-        dy + (dz0_m * (k1 * (1.0 - sn)) - dz0_m * k1),
-        ddy + (dz0_m * (k2 * (1.0 - c)) - dz0_m * k2),
+        y + dz0_m * (0.5 * (1.0 + c)) + e,
+        dy + (dz0_m * (k1 * (1.0 - sn)) - dz0_m * k1) + de,
+        ddy + (dz0_m * (k2 * (1.0 - c)) - dz0_m * k2) + dde,
     )
 
 

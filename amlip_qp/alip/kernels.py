@@ -47,7 +47,9 @@ heading's y axis, positive = ground descending ahead, so an uphill slope of
 ``a`` is ``-a``).
 
 With the ground inputs, ``com_z_over_stance`` goes from ``H + dz_sw0`` to
-``H``, ``com_z_over_swing`` from ``H`` to ``H - dz_sw`` with the foot's apex
+``H``, ``com_z_over_swing`` from ``H`` to ``H - dz_sw`` (on a step down the CoM
+takes :data:`~amlip_qp.alip.formulas.DOWNHILL_COM_SHARE` of the drop before the
+touchdown, and both end that much lower) with the foot's apex
 at least ``z_cl`` above the higher end, and ``swing_toe_pitch`` from
 ``slope_pitch0`` to ``slope_pitch`` (:func:`~amlip_qp.alip.formulas.swing_height`,
 :func:`~amlip_qp.alip.formulas.stance_height`,
@@ -106,7 +108,7 @@ def swing_reference_terms(u: Sequence) -> list:
         F.constant(s, 0.0),  # torso roll
         F.line(s, st_yaw0, st_yaw1),  # stance hip yaw
         F.line(s, sw_yaw0, sw_yaw1),  # swing hip yaw
-        F.stance_height(s, H, dz0),  # CoM z over stance
+        F.stance_height(s, H, dz0, dz1),  # CoM z over stance
         F.cosine_blend(s, x0, x_des),  # CoM x over swing
         F.cosine_blend(s, y0, y_des),  # CoM y over swing
         F.swing_height(s, H, z_cl, dz0, dz1),  # CoM z over swing

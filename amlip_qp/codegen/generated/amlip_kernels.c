@@ -38,6 +38,8 @@ extern "C" {
 #define casadi_f1 CASADI_PREFIX(f1)
 #define casadi_f2 CASADI_PREFIX(f2)
 #define casadi_fabs CASADI_PREFIX(fabs)
+#define casadi_fmax CASADI_PREFIX(fmax)
+#define casadi_fmin CASADI_PREFIX(fmin)
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
 #define casadi_s2 CASADI_PREFIX(s2)
@@ -60,6 +62,24 @@ extern "C" {
     #define CASADI_SYMBOL_EXPORT
   #endif
 #endif
+
+casadi_real casadi_fmin(casadi_real x, casadi_real y) {
+/* Pre-c99 compatibility */
+#if __STDC_VERSION__ < 199901L
+  return x<y ? x : y;
+#else
+  return fmin(x, y);
+#endif
+}
+
+casadi_real casadi_fmax(casadi_real x, casadi_real y) {
+/* Pre-c99 compatibility */
+#if __STDC_VERSION__ < 199901L
+  return x>y ? x : y;
+#else
+  return fmax(x, y);
+#endif
+}
 
 casadi_real casadi_sq(casadi_real x) { return x*x;}
 
@@ -263,7 +283,7 @@ CASADI_SYMBOL_EXPORT int alip_plan_work_bytes(casadi_int *sz_arg, casadi_int* sz
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
-  casadi_real a24, a25, a26;
+  casadi_real a24, a25, a26, a27, a28, a29;
   a00=0.;
   if (res[0]!=0) res[0][0]=a00;
   if (res[0]!=0) res[0][1]=a00;
@@ -294,49 +314,58 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a14=(a09*a13);
   a15=(a10*a14);
   a15=(a08+a15);
+  a16=arg[0]? arg[0][12] : 0;
+  a17=casadi_fmin(a16,a00);
+  a17=(a09*a17);
+  a18=(a01-a12);
+  a19=(a09*a18);
+  a20=(a17*a19);
+  a21=casadi_fmax(a10,a00);
+  a21=(a09*a21);
+  a22=(a21*a14);
+  a20=(a20-a22);
+  a15=(a15+a20);
   if (res[0]!=0) res[0][4]=a15;
   a15=arg[0]? arg[0][6] : 0;
-  a16=(a13*a15);
-  a17=(a01-a12);
-  a18=arg[0]? arg[0][8] : 0;
-  a19=(a17*a18);
-  a16=(a16+a19);
-  a16=(a09*a16);
-  if (res[0]!=0) res[0][5]=a16;
-  a16=arg[0]? arg[0][7] : 0;
-  a13=(a13*a16);
-  a19=arg[0]? arg[0][9] : 0;
-  a20=(a17*a19);
-  a13=(a13+a20);
+  a22=(a13*a15);
+  a23=arg[0]? arg[0][8] : 0;
+  a24=(a18*a23);
+  a22=(a22+a24);
+  a22=(a09*a22);
+  if (res[0]!=0) res[0][5]=a22;
+  a22=arg[0]? arg[0][7] : 0;
+  a13=(a13*a22);
+  a24=arg[0]? arg[0][9] : 0;
+  a25=(a18*a24);
+  a13=(a13+a25);
   a13=(a09*a13);
   if (res[0]!=0) res[0][6]=a13;
   a13=4.;
-  a20=arg[0]? arg[0][3] : 0;
-  a21=(a13*a20);
-  a22=(a02-a09);
-  a23=casadi_sq(a22);
-  a21=(a21*a23);
-  a08=(a08-a20);
-  a21=(a21+a08);
-  a08=(a09*a17);
-  a23=(a10*a08);
-  a24=arg[0]? arg[0][12] : 0;
-  a24=(a24-a10);
-  a25=(a24*a02);
-  a23=(a23+a25);
-  a25=casadi_fabs(a24);
-  a09=(a09*a25);
-  a26=(a13*a02);
-  a26=(a26*a03);
-  a26=(a09*a26);
-  a23=(a23+a26);
-  a21=(a21-a23);
-  if (res[0]!=0) res[0][7]=a21;
-  a21=arg[0]? arg[0][13] : 0;
-  a14=(a21*a14);
-  a23=arg[0]? arg[0][14] : 0;
-  a08=(a23*a08);
-  a14=(a14+a08);
+  a25=arg[0]? arg[0][3] : 0;
+  a26=(a13*a25);
+  a27=(a02-a09);
+  a28=casadi_sq(a27);
+  a26=(a26*a28);
+  a08=(a08-a25);
+  a26=(a26+a08);
+  a08=(a10*a19);
+  a16=(a16-a10);
+  a28=(a16*a02);
+  a08=(a08+a28);
+  a28=casadi_fabs(a16);
+  a09=(a09*a28);
+  a29=(a13*a02);
+  a29=(a29*a03);
+  a29=(a09*a29);
+  a08=(a08+a29);
+  a26=(a26-a08);
+  a26=(a26+a20);
+  if (res[0]!=0) res[0][7]=a26;
+  a26=arg[0]? arg[0][13] : 0;
+  a14=(a26*a14);
+  a20=arg[0]? arg[0][14] : 0;
+  a19=(a20*a19);
+  a14=(a14+a19);
   if (res[0]!=0) res[0][8]=a14;
   if (res[0]!=0) res[0][9]=a00;
   if (res[0]!=0) res[0][10]=a00;
@@ -355,65 +384,72 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a01=(a10*a01);
   a05=(a07*a10);
   a01=(a01-a05);
+  a17=(a17+a21);
+  a07=(a07*a11);
+  a11=(a17*a07);
+  a01=(a01+a11);
   a01=(a01/a04);
   if (res[0]!=0) res[0][14]=a01;
-  a07=(a07*a11);
-  a18=(a18-a15);
-  a15=(a07*a18);
+  a23=(a23-a15);
+  a15=(a07*a23);
   a15=(a15/a04);
   if (res[0]!=0) res[0][15]=a15;
-  a19=(a19-a16);
-  a16=(a07*a19);
-  a16=(a16/a04);
-  if (res[0]!=0) res[0][16]=a16;
-  a16=8.;
-  a20=(a16*a20);
-  a22=(a20*a22);
+  a24=(a24-a22);
+  a22=(a07*a24);
+  a22=(a22/a04);
+  if (res[0]!=0) res[0][16]=a22;
+  a22=8.;
+  a25=(a22*a25);
+  a27=(a25*a27);
   a15=(a10*a07);
-  a15=(a15+a24);
-  a16=(a16*a02);
-  a16=(a13-a16);
-  a09=(a09*a16);
+  a15=(a15+a16);
+  a22=(a22*a02);
+  a22=(a13-a22);
+  a09=(a09*a22);
   a15=(a15+a09);
-  a22=(a22-a15);
-  a22=(a22/a04);
-  if (res[0]!=0) res[0][17]=a22;
-  a22=(a23*a07);
-  a07=(a21*a07);
-  a22=(a22-a07);
-  a22=(a22/a04);
-  if (res[0]!=0) res[0][18]=a22;
+  a27=(a27-a15);
+  a27=(a27+a11);
+  a27=(a27/a04);
+  if (res[0]!=0) res[0][17]=a27;
+  a27=(a20*a07);
+  a07=(a26*a07);
+  a27=(a27-a07);
+  a27=(a27/a04);
+  if (res[0]!=0) res[0][18]=a27;
   if (res[0]!=0) res[0][19]=a00;
   if (res[0]!=0) res[0][20]=a00;
   if (res[0]!=0) res[0][21]=a00;
   if (res[0]!=0) res[0][22]=a00;
   if (res[0]!=0) res[0][23]=a00;
-  a22=4.9348022005446790e+00;
-  a17=(a22*a17);
-  a17=(a10*a17);
-  a07=(a22*a10);
-  a17=(a17-a07);
+  a27=4.9348022005446790e+00;
+  a18=(a27*a18);
+  a18=(a10*a18);
+  a07=(a27*a10);
+  a18=(a18-a07);
+  a27=(a27*a12);
+  a17=(a17*a27);
+  a18=(a18+a17);
   a04=casadi_sq(a04);
-  a17=(a17/a04);
-  if (res[0]!=0) res[0][24]=a17;
-  a22=(a22*a12);
-  a18=(a22*a18);
   a18=(a18/a04);
-  if (res[0]!=0) res[0][25]=a18;
-  a19=(a22*a19);
-  a19=(a19/a04);
-  if (res[0]!=0) res[0][26]=a19;
-  a10=(a10*a22);
-  a13=(a13*a25);
-  a10=(a10-a13);
-  a20=(a20-a10);
-  a20=(a20/a04);
-  if (res[0]!=0) res[0][27]=a20;
-  a23=(a23*a22);
-  a21=(a21*a22);
-  a23=(a23-a21);
+  if (res[0]!=0) res[0][24]=a18;
+  a23=(a27*a23);
   a23=(a23/a04);
-  if (res[0]!=0) res[0][28]=a23;
+  if (res[0]!=0) res[0][25]=a23;
+  a24=(a27*a24);
+  a24=(a24/a04);
+  if (res[0]!=0) res[0][26]=a24;
+  a10=(a10*a27);
+  a13=(a13*a28);
+  a10=(a10-a13);
+  a25=(a25-a10);
+  a25=(a25+a17);
+  a25=(a25/a04);
+  if (res[0]!=0) res[0][27]=a25;
+  a20=(a20*a27);
+  a26=(a26*a27);
+  a20=(a20-a26);
+  a20=(a20/a04);
+  if (res[0]!=0) res[0][28]=a20;
   if (res[0]!=0) res[0][29]=a00;
   return 0;
 }
