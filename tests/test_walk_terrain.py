@@ -7,7 +7,8 @@ for 15 s, blind and terrain-aware; stairs of 10 cm rise and 30 cm run up and dow
 4 m wavelength at 0.75 m/s with 20 cm clearance (blind). "Without falling" also means the mean
 speed over the last 3 s, horizontal along the heading (the summary's ``mean_velocity``), is within
 0.15 m/s of the command. The 22 degree slope and the PBC tracker are reported
-(``examples/terrain_table.py``), not required.
+(``examples/terrain_table.py``), not required. The stairs are also walked from other starts, and
+with 15 cm risers (the 10 cm scenario on ``stairs:0.15:0.3``).
 """
 
 from __future__ import annotations
@@ -77,3 +78,27 @@ def test_qp_walks_the_stairs_from_other_starts_with_its_steps_timed(forward_m, r
     T = 0.3  # Cassie's step time at 0.4 m/s
     durations = [s.t_end_s - s.t_start_s for s in res.steps]
     assert max(durations) > 1.2 * T  # at the fixed T the scenario's own walk has none over 0.333 s
+
+
+def test_qp_walks_15_cm_stairs_down_as_well_as_up():
+    """The stairs with 15 cm risers (``stairs:0.15:0.3``: 4 up, the landing, 3 down), terrain-aware,
+    the one-step law: no fall, the speed over the last 3 s within the band of the 0.4 m/s command,
+    and the last step ends 3 x 15 cm below the landing, back on the floor. On the way down the CoM
+    takes half of each step's drop before the touchdown (``DOWNHILL_COM_SHARE``), so the swing leg
+    reaches the next tread; held at ``H`` over the upper tread, it fell there (at 6.69 s)."""
+    from dataclasses import replace
+
+    from amlip_qp.sim.reports.summary import mean_velocity_heading
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
+
+    base = SCENARIOS["cassie-stairs-10cm"]
+    scenario = base.with_(setting=replace(base.setting, terrain="stairs:0.15:0.3"))
+    res = build_simulation(scenario, "qp").run(scenario.duration_s, log="summary")
+    assert not res.fell, f"fell at {res.fall_time_s} s"
+    assert res.fallback_ticks == 0
+    vx = float(mean_velocity_heading(res, 3.0)[0])
+    assert abs(vx - scenario.vx.final_mps) <= SPEED_TOLERANCE_MPS, f"mean speed {vx:.3f} m/s"
+    landed = [s.swing_actual_m[2] - res.steps[0].swing_actual_m[2] for s in res.steps]  # over the floor
+    assert max(landed) == pytest.approx(4 * 0.15, abs=0.03)  # the landing, 4 risers up
+    assert landed[-1] == pytest.approx(0.0, abs=0.03)  # back on the floor
