@@ -250,3 +250,15 @@ def test_an_invalid_problem_leaves_the_compiled_solver_hot(step):
                 solvers[0].solve(target, check=True)
     assert solvers[0].n_init == solvers[1].n_init == 1
     assert solvers[0].n_compiled == solvers[1].n_compiled + 1 == len(problems) - 1 + 1
+
+
+def test_the_invalid_problem_flag_is_the_c_sources():
+    """``INVALID_PROBLEM`` is the value ``daqp_step.c`` returns for a problem its check refuses, and no
+    DAQP exit flag (DAQP's are -6..2)."""
+    import re
+    from importlib import resources
+
+    source = resources.files("amlip_qp.codegen").joinpath("daqp_step.c").read_text()
+    found = re.search(r"#define AMLIP_DAQP_INVALID \((-?\d+)\)", source)
+    assert found is not None and int(found.group(1)) == daqp_step.INVALID_PROBLEM
+    assert daqp_step.INVALID_PROBLEM < -6

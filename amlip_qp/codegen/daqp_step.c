@@ -104,9 +104,10 @@ int amlip_daqp_step(amlip_daqp_step_t *c, const double *src)
  * DAQP's bounds bl, bu (n + n_in + n_eq) are those clamped to +-big, then b on both sides (the
  * equalities); then DAQP's update and solve, and, when solved, the largest of bl - z and z - bu
  * over z = (x, C x, A x) (NaN when any is NaN): DAQPSolver's Python sequence, the same solution
- * bit for bit. With check_problem set, first QPProblem.validate's test of an allocated problem: every
- * entry of data (H, g, C, A, b: n_data) finite and lower <= upper (a NaN bound fails); if either
- * fails, AMLIP_DAQP_INVALID is returned and DAQP is not called. */
+ * bit for bit. With check_problem set, first QPProblem.validate's test of an allocated problem:
+ * every entry of data (H, g, C, A, b: n_data) finite and lower <= upper (a NaN bound fails); if
+ * either fails, AMLIP_DAQP_INVALID (daqp_step.py's INVALID_PROBLEM) is returned and DAQP is not
+ * called. */
 #define AMLIP_DAQP_INVALID (-200)
 
 typedef struct {
