@@ -70,8 +70,9 @@ SOURCE_FILE = "amlip_wbqp_in_place.c"
 LIBRARY_FILE = "libamlip_wbqp_in_place.so"
 #: The functions' name stem with the airborne problem's outputs (another library, other symbols).
 AIRBORNE_FUNCTION_STEM = "wbqp_in_place_airborne"
-#: The assembly outputs the airborne problem repeats, as its leading blocks, in this order.
-AIRBORNE_OUTPUTS = ("ET", "g", "AT", "b", "TT", "l_tau", "u_in", "lb", "ub")
+#: The assembly outputs the airborne problem repeats, as its leading blocks, in this order (not
+#: ``ET``: the airborne Hessian is the leading block of the full ``E'E``, :meth:`InPlaceBuild.build`).
+AIRBORNE_OUTPUTS = ("g", "AT", "b", "TT", "l_tau", "u_in", "lb", "ub")
 
 
 def small_layout(nq: int, nv: int, n_outputs: int) -> dict:
@@ -167,7 +168,7 @@ def tick_function(
         n, n_in = airborne
         part = dict(zip(names, parts))
         # column-major outputs: a leading block of variables is a leading block of rows of ET, AT, TT
-        blocks = {"ET": part["ET"][:n, :], "g": part["g"][:n], "AT": part["AT"][:n, :], "b": part["b"],
+        blocks = {"g": part["g"][:n], "AT": part["AT"][:n, :], "b": part["b"],
                   "TT": part["TT"][:n, :], "l_tau": part["l_tau"], "u_in": part["u_in"][:n_in],
                   "lb": part["lb"][:n], "ub": part["ub"][:n]}  # fmt: skip
         outs += [blocks[k] for k in AIRBORNE_OUTPUTS]
@@ -272,14 +273,13 @@ class InPlaceBuild:
             in_rows=[(k, slice(s.start, min(s.stop, n_in))) for k, s in P.in_rows if s.start < n_in],
         )  # fmt: skip
         self._n_tau = n_tau
-        self._E_air = np.zeros((self._E.shape[0], n))  # an output of the functions; H is formed from E (below)
         # The airborne Hessian is the full product's leading block: numpy forms E'E with BLAS's syrk,
         # whose blocking follows the size, so a product of the leading columns alone can differ from
         # that block in the last bits (it does with OpenBLAS on some processors).
         self._EtE_lead = self._EtE[:n, :n]
         # the constant Hessian's block, contiguous (the builder makes H0 once)
         self._H0_air = np.ascontiguousarray(self.builder.constant_cost.H0[:n, :n])
-        self._outputs += [self._E_air, Pa.g, Pa.A, Pa.b, Pa.C[:n_tau], Pa.l[:n_tau], Pa.u, Pa.lb, Pa.ub]
+        self._outputs += [Pa.g, Pa.A, Pa.b, Pa.C[:n_tau], Pa.l[:n_tau], Pa.u, Pa.lb, Pa.ub]
         self.copy_constant_rows()
 
     def copy_constant_rows(self) -> None:
