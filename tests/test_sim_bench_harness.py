@@ -42,6 +42,8 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         assert goals["realtime_factor"]["goal"] == 1.5
         assert goals["realtime_factor"]["met"] == (row["realtime_factor"] >= 1.5)
     text = bench_harness.format_report(r)
+    assert all(row["tracker_parts_per_loop_step"] == {} for row in r["runs"].values())  # the PBC times no solve
+    assert "the tracker's own work in its parts" not in text
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
     assert "a cassie-1mps qp walk of 13.20 MuJoCo steps of wall time per tick (harness 3.01) ran at 0.65x" in text
     assert "no verdict on the goals" in text
@@ -57,6 +59,13 @@ def test_the_goals_are_judged_on_the_reference_walk_only(scenario):
     # a real-time goal only where the robot's profile sets one for its nominal walk (Rabbit's sets none)
     assert ("realtime_factor" in goals) == (scenario == "cassie-1mps")
     assert "tick <= 3 steps: " in text and "tracker <= 2 steps: " in text
+    for key, row in r["runs"].items():
+        # the tracker's work in its parts, each a positive share of MuJoCo's step (its solver's call and
+        # its build each less than the whole work), and a line of the table per row
+        parts = row["tracker_parts_per_loop_step"]
+        assert set(parts) == {"kinematics", "build", "solve", "rest"} and min(parts.values()) > 0.0
+        assert max(parts["build"], parts["solve"], parts["kinematics"]) < row["tracker_per_loop_step"]
+        assert re.search(rf"{key}\s+kinematics\s+{parts['kinematics']:.2f}\s+build\s+{parts['build']:.2f}", text)
     if scenario != bench_harness.REFERENCE_SCENARIO:
         assert r["qp_meets_realtime_goal"] == {} and r["harness_meets_goal"] == {}
         assert "no verdict on the goals" in text

@@ -46,7 +46,9 @@ the robot's ``[compare] realtime_goal`` on its nominal walk. The same two are
 also given over the yardstick's step alone with every step timed on its own
 (:func:`~amlip_qp.experiments.mujoco_yardstick.step_median_us`, robust to a step
 preempted by another process; a warm-cache step, about 2.4 times shorter
-than the loop's), the median over the walks.
+than the loop's), the median over the walks. For a tracker that times its own build and solve
+(the QP tracker's ``info``), the tracker's work is also split into the kinematics update, the
+problem's build, the solver's call and the rest, each over MuJoCo's step in the same tick.
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ from amlip_qp.control.registry import TRACKER_MODULES, tracker_class
 from amlip_qp.control.walking.stage_timer import StageTimer
 from amlip_qp.exceptions import InputError
 from amlip_qp.experiments.bench_goals import realtime_goal, tick_goals, tracker_base
+from amlip_qp.experiments.bench_harness_report import format_report
 from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_median_us, step_time_us
 from amlip_qp.profiles import DEFAULT_SCENARIO, bundled_names, get_profile
 from amlip_qp.sim.loop.run_log import LOG_MODES
@@ -131,7 +134,8 @@ def run(
         ``tracker_per_step``), the same two over MuJoCo's step in the same
         tick, medians over the ticks (``controller_per_loop_step``,
         ``tracker_per_loop_step``: both parts of one tick see the same machine
-        state), the goals of :func:`speed_goals` with their
+        state), the tracker's work in its parts in the same unit (``tracker_parts_per_loop_step``,
+        :func:`tracker_parts`), the goals of :func:`speed_goals` with their
         verdicts (``speed_goals``), the ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (the
         reference walk's figures), the goals (``goal_realtime_factor``,
@@ -179,11 +183,14 @@ def run(
                 ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
                 ratios["controller"].append(float(np.median(result.tick_time_us)) / step_us)
                 ratios["tracker"].append(float(np.median(timer.tracker_work_us)) / step_us)
-                got = parts.setdefault(key, {"controller": [], "mujoco": [], "harness": [], "tracker": []})
+                got = parts.setdefault(key, {name: [] for name in ("controller", "mujoco", "harness", *_WORK_PARTS)})
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))
                 got["harness"].append(np.asarray(result.harness_time_us))
                 got["tracker"].append(np.asarray(timer.tracker_work_us))
+                got["kinematics"].append(np.asarray(timer.kinematics_us))
+                got["build"].append(np.asarray(timer.build_us))
+                got["solve"].append(np.asarray(timer.solve_us))
                 rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
                 wall[key] = wall.get(key, 0.0) + result.wall_time_s
                 fell[key] = fell.get(key, False) or bool(result.fell)
@@ -214,6 +221,7 @@ def run(
             "tracker_per_step": float(np.median(per_step[key]["tracker"])),
             "controller_per_loop_step": _per_tick_ratio(ticks["controller"], ticks["mujoco"]),
             "tracker_per_loop_step": _per_tick_ratio(ticks["tracker"], ticks["mujoco"]),
+            "tracker_parts_per_loop_step": tracker_parts(ticks),
             "ticks": n,
             "fell": fell[key],
         }
@@ -246,6 +254,24 @@ def run(
 
 #: The QP tracker's names in the report (the goals are set for QP walks).
 _QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() if base == REFERENCE_TRACKER))
+
+
+#: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).
+_WORK_PARTS = ("tracker", "kinematics", "build", "solve")
+
+
+def tracker_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:
+    """The tracker's own work per tick in its parts, each over MuJoCo's step in the same tick of the loop,
+    medians over the ticks: ``kinematics`` (the update at the measured state), ``build`` and ``solve``
+    (the problem's build and the solver's call, as the tracker times them in its ``info``) and ``rest``
+    (the rest of its ``compute``: checks, torques, the result). Empty when the tracker times no build
+    and solve (the PBC), or when the ticks do not pair up with MuJoCo's (a safe-mode tick)."""
+    mujoco, build, solve = ticks["mujoco"], ticks["build"], ticks["solve"]
+    if build.shape != mujoco.shape or ticks["tracker"].shape != mujoco.shape or np.isnan(build).all():
+        return {}
+    rest = ticks["tracker"] - ticks["kinematics"] - build - solve
+    named = {"kinematics": ticks["kinematics"], "build": build, "solve": solve, "rest": rest}
+    return {name: float(np.nanmedian(part / mujoco)) for name, part in named.items()}
 
 
 def _per_tick_ratio(part_us: np.ndarray, mujoco_us: np.ndarray) -> float:
@@ -291,64 +317,6 @@ def reference_realtime(tick_per_mujoco: float) -> float:
     """The real-time factor of a walk costing ``tick_per_mujoco`` MuJoCo steps of wall time per tick,
     on the machine state on which the reference's walk ran at :data:`REFERENCE_REALTIME_FACTOR`."""
     return REFERENCE_REALTIME_FACTOR * REFERENCE_TICK_PER_MUJOCO / tick_per_mujoco
-
-
-def format_report(r: dict) -> str:
-    """The report as a table."""
-    ref = r["reference"]
-    lines = [
-        f"closed-loop tick, {r['scenario']}, {r['duration_s']:g} s x {r['repeats']} per row, interleaved "
-        "(medians, µs per tick; per MuJoCo step: means; per step alone: medians of the walks' ratios)",
-        f"  {'tracker/log':19s} {'controller':>10s} {'MuJoCo':>8s} {'harness':>8s} {'sum':>8s} {'realtime':>9s}"
-        f" {'tick/MJ':>8s} {'harn/MJ':>8s} {'at ref.':>8s} {'alone':>6s} {'tick/al':>8s} {'harn/al':>8s}",
-    ]
-    for key, row in r["runs"].items():
-        lines.append(
-            f"  {key:19s} {row['controller_us_per_tick']:10.1f} {row['mujoco_us_per_tick']:8.1f} "
-            f"{row['harness_us_per_tick']:8.1f} {row['sum_us_per_tick']:8.1f} {row['realtime_factor']:8.2f}x"
-            f" {row['tick_per_mujoco']:8.2f} {row['harness_per_mujoco']:8.2f}"
-            f" {row['realtime_factor_at_reference']:7.2f}x {row['step_alone_us']:6.2f} {row['tick_per_step']:8.2f}"
-            f" {row['harness_per_step']:8.2f}" + (" (FELL)" if row["fell"] else "")
-        )
-    lines.append(
-        "  in MuJoCo steps (each step timed alone, replayed after every walk; the walks' tick medians over the"
-        " step medians, median over the walks): step µs, controller tick, tracker's own work (kinematics update"
-        " + compute); the same two over MuJoCo's step in the same tick of the loop (medians over the ticks);"
-        " goals (on the step in the loop)"
-    )
-    for key, row in r["runs"].items():
-        verdicts = []
-        for name, g in row["speed_goals"].items():
-            unit = "x real time" if name == "realtime_factor" else " steps"
-            sign = ">=" if name == "realtime_factor" else "<="
-            label = {"controller_steps": "tick", "tracker_steps": "tracker", "realtime_factor": "walk"}[name]
-            verdicts.append(f"{label} {sign} {g['goal']:g}{unit}: " + ("met" if g["met"] else "NOT met"))
-        lines.append(
-            f"  {key:19s} {row['step_median_us']:6.1f} {row['controller_per_step']:6.2f}"
-            f" {row['tracker_per_step']:6.2f}   {row['controller_per_loop_step']:6.2f}"
-            f" {row['tracker_per_loop_step']:6.2f}   " + ("; ".join(verdicts) if verdicts else "no goal")
-        )
-    same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
-    lines.append(f"  same summary in both log modes: {same}")
-    lines.append(
-        f"  reference machine state: a {ref['scenario']} {ref['tracker']} walk of "
-        f"{ref['tick_per_mujoco']:.2f} MuJoCo steps of wall time per tick (harness {ref['harness_per_mujoco']:.2f}) "
-        f"ran at {ref['realtime_factor']:g}x real time"
-    )
-    for key, ok in r["qp_meets_realtime_goal"].items():
-        lines.append(
-            f"  {key} walk at >= {r['goal_realtime_factor']:g}x real time on that machine state "
-            f"(<= {r['goal_tick_per_mujoco']:.2f} MuJoCo steps per tick): " + ("met" if ok else "NOT met")
-        )
-    if not r["harness_meets_goal"]:
-        lines.append(f"  no verdict on the goals: they are set for {ref['scenario']} {ref['tracker']} walks")
-        return "\n".join(lines)
-    met = [key for key, ok in r["harness_meets_goal"].items() if ok]
-    lines.append(
-        f"  harness <= {r['goal_harness_per_mujoco']:.2f} MuJoCo steps per tick: "
-        + (f"met by {', '.join(met)}" if met else "NOT met")
-    )
-    return "\n".join(lines)
 
 
 #: ``--scenario robots``: each bundled robot's nominal walk.

@@ -330,7 +330,7 @@ class WalkingController:
         t0_ns = time.perf_counter_ns() if timer is not None else 0
         result = self.tracker.compute(kin, target)
         if timer is not None:
-            timer.record(update_ns, time.perf_counter_ns() - t0_ns)
+            timer.record(update_ns, time.perf_counter_ns() - t0_ns, result.info)
         tau = result.tau_Nm
         ok = result.ok
         # A finite sum implies finite entries; only if it is not (or overflows), look closer.

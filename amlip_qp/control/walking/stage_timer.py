@@ -2,13 +2,18 @@
 
 A :class:`StageTimer` given to :class:`~amlip_qp.control.walking.controller.WalkingController`
 (``stage_timer=``) receives, for every tick that reaches the tracker, the wall time of the
-kinematics update at the measured state and of the tracker's ``compute`` (for the QP tracker: the
-problem's build and its solve). ``amlip-qp bench harness`` judges the tracker's own work (the two
-together) against its speed goal (:mod:`amlip_qp.experiments.bench_goals`). Without a timer the
-controller reads no clock (one ``is None`` test per stage).
+kinematics update at the measured state and of the tracker's ``compute``, and the parts of that
+``compute`` the tracker times itself (the QP tracker's ``info["build_us"]``, the problem's build, and
+``info["solve_us"]``, the solver's call). ``amlip-qp bench harness`` judges the tracker's own work
+(the kinematics update and ``compute`` together) against its speed goal
+(:mod:`amlip_qp.experiments.bench_goals`) and reports its parts. Without a timer the controller reads
+no clock (one ``is None`` test per stage).
 """
 
 from __future__ import annotations
+
+import math
+from collections.abc import Mapping
 
 
 class StageTimer:
@@ -19,11 +24,21 @@ class StageTimer:
         self.kinematics_us: list[float] = []
         #: The tracker's ``compute``, µs.
         self.tracker_us: list[float] = []
+        #: The problem's build within ``compute`` as the tracker timed it (``info["build_us"]``), µs;
+        #: NaN in a tick whose tracker reports none (the PBC, a fallback before the build).
+        self.build_us: list[float] = []
+        #: The solver's call within ``compute`` as the tracker timed it (``info["solve_us"]``), µs; NaN
+        #: in a tick whose tracker reports none.
+        self.solve_us: list[float] = []
 
-    def record(self, kinematics_ns: int, tracker_ns: int) -> None:
-        """Add one tick's times (the controller calls this), ns."""
+    def record(self, kinematics_ns: int, tracker_ns: int, info: Mapping[str, object] | None = None) -> None:
+        """Add one tick's times, ns, and the parts of ``compute`` in the tracker's ``info`` (µs; the
+        controller calls this)."""
         self.kinematics_us.append(kinematics_ns * 1e-3)
         self.tracker_us.append(tracker_ns * 1e-3)
+        parts = info or {}
+        self.build_us.append(_part_us(parts, "build_us"))
+        self.solve_us.append(_part_us(parts, "solve_us"))
 
     @property
     def tracker_work_us(self) -> list[float]:
@@ -34,3 +49,13 @@ class StageTimer:
         """Forget the recorded ticks."""
         self.kinematics_us.clear()
         self.tracker_us.clear()
+        self.build_us.clear()
+        self.solve_us.clear()
+
+
+def _part_us(info: Mapping[str, object], key: str) -> float:
+    """``info[key]`` as a float, µs; NaN when it is missing or not a finite number."""
+    value = info.get(key)
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return math.nan
