@@ -91,6 +91,19 @@ def report(walk):
     return bench_solvers(problems, specs, yardstick=state[0])
 
 
+def test_daqps_update_and_solve_are_timed_apart_inside_its_hot_call(report):
+    """The hot DAQP runners time DAQP's update and its solve apart, inside the timed call: both
+    positive, together about the call (medians of the parts against the median of the whole)."""
+    for name in ("daqp-hot", "daqp-hot-model"):
+        s = report["solvers"][name]
+        assert s["update_median_us"] > 0.0 and s["solve_median_us"] > 0.0
+        assert s["update_median_us"] + s["solve_median_us"] < 1.5 * s["median_us"]
+    for name in ("daqp-cold", "daqp-tracker", "proxsuite-init"):
+        assert "update_median_us" not in report["solvers"][name]
+    text = format_report(report)
+    assert text.count("of it, timed apart (medians): DAQP's update") == 2
+
+
 def test_every_test_extra_solver_agrees_with_proxqp(report):
     stats = report["solvers"]
     assert set(stats) == {"proxsuite-warm", *TEST_EXTRA_SOLVERS.split(",")}

@@ -56,7 +56,7 @@ from amlip_qp.exceptions import InputError, QPError
 from amlip_qp.experiments import qp_solver_list
 from amlip_qp.experiments.bench_qp_report import agreement, format_report, time_stats
 from amlip_qp.experiments.mujoco_yardstick import snapshot_walk, step_time_us
-from amlip_qp.experiments.qp_runners import ProxSuiteRunner, Runner
+from amlip_qp.experiments.qp_runners import DAQPRunner, ProxSuiteRunner, Runner
 from amlip_qp.experiments.qp_solver_list import REFERENCE, SolverSettings, SolverSpec
 from amlip_qp.profiles import DEFAULT_ROBOT, DEFAULT_SCENARIO
 from amlip_qp.qp.problem import QPProblem
@@ -243,7 +243,8 @@ def bench_solvers(
         ``{"solvers": {name: {"median_us", "p99_us", "n", "failures", "ratio_to_warm", "max_dx",
         "max_violation", "max_cost_excess", "start", "timed"}}, "missing": [lines], "versions"
         (pip package -> version), "mujoco_step_us", "reference", "reference_eps"}`` (ProxSuite entries also count
-        ``cold_retries``: failed warm solves retried from scratch, as the tracker does, timing included).
+        ``cold_retries``: failed warm solves retried from scratch, as the tracker does, timing included; the
+        hot DAQP runners give ``update_median_us`` and ``solve_median_us``: DAQP's update and solve timed apart).
     """
     if not problems:
         raise InputError("bench_solvers needs at least one problem")
@@ -272,6 +273,9 @@ def bench_solvers(
         out[name].update(start=run.start, timed=run.timed)
         if isinstance(run, ProxSuiteRunner):
             out[name]["cold_retries"] = run.retries
+        if isinstance(run, DAQPRunner) and run.update_ns and run.solve_ns:
+            out[name]["update_median_us"] = float(np.median(run.update_ns)) * 1e-3
+            out[name]["solve_median_us"] = float(np.median(run.solve_ns)) * 1e-3
     ref = out[REFERENCE]["median_us"]
     for stats in out.values():
         stats["ratio_to_warm"] = stats["median_us"] / ref if ref > 0 else float("nan")
