@@ -107,6 +107,10 @@ VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
     "qp-airborne": ("qp", {"airborne_reduction": True}),
 }
 
+#: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).
+_WORK_PARTS = ("tracker", "kinematics", "build", "solve")
+
+
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
 WARMUP_S = 0.5
 
@@ -254,10 +258,6 @@ def run(
 
 #: The QP tracker's names in the report (the goals are set for QP walks).
 _QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() if base == REFERENCE_TRACKER))
-
-
-#: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).
-_WORK_PARTS = ("tracker", "kinematics", "build", "solve")
 
 
 def tracker_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:
