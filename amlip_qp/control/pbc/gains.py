@@ -105,6 +105,12 @@ class PBCGains:
             tracker's :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`, below which the
             step-timing MPC plans no step. ``docs/TUNING.md`` ("The PBC's shortest step") has
             the numbers.
+        release_pulling_contact: When the tick's solve of (1)-(3) gives the stance contact a
+            negative normal force (the ground would have to pull the foot), solve the tick again
+            without the stance contact's rows: the foot free and its force zero, the springs still
+            held (:func:`~amlip_qp.control.pbc.contact_release.solve_released`). Off by
+            default: the paper's PBC holds the contact as an equality in every tick.
+            ``docs/TUNING.md`` ("The PBC's pulling contact") has the measurements.
     """
 
     kp_stance_ps2: float = 400.0
@@ -123,8 +129,11 @@ class PBCGains:
     hip_yaw_feedback: float = 0.0
     swing_ankle_gain_scale: float = 1.0
     shortest_step_s: float = 0.0
+    release_pulling_contact: bool = False
 
     def __post_init__(self):
+        if not isinstance(self.release_pulling_contact, bool):
+            raise InputError(f"release_pulling_contact must be True or False, got {self.release_pulling_contact!r}")
         if self.spring_model_load not in SPRING_MODEL_LOADS:
             raise InputError(
                 f"spring_model_load must be one of {', '.join(SPRING_MODEL_LOADS)}, got {self.spring_model_load!r}"
@@ -133,7 +142,8 @@ class PBCGains:
             raise InputError(
                 f"spring_model_linkage must be an AchillesLinkage or None, got {self.spring_model_linkage!r}"
             )
-        vals = [getattr(self, f) for f in self.__dataclass_fields__ if not f.startswith("spring_model")]
+        flags = ("release_pulling_contact",)
+        vals = [getattr(self, f) for f in self.__dataclass_fields__ if not (f.startswith("spring_model") or f in flags)]
         if (
             not all(np.isfinite(v) and v >= 0 for v in vals)
             or self.touchdown_gain_drop > 1
@@ -179,9 +189,9 @@ def gains_from_table(table: Mapping[str, Any]) -> PBCGains:
             if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value.values()):
                 raise InputError(f"spring_model_linkage's values must be numbers, got {dict(value)!r}")
             kwargs[key] = AchillesLinkage(**{k: float(v) for k, v in value.items()})
-        elif key == "spring_model_offset":
+        elif key in ("spring_model_offset", "release_pulling_contact"):
             if not isinstance(value, bool):
-                raise InputError(f"spring_model_offset must be true or false, got {value!r}")
+                raise InputError(f"{key} must be true or false, got {value!r}")
             kwargs[key] = value
         elif key == "spring_model_load":
             kwargs[key] = value

@@ -60,6 +60,7 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from amlip_qp.alip import other_side
+from amlip_qp.control.pbc.contact_release import solve_released
 from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_newton import all_finite
@@ -179,6 +180,9 @@ class PBCTracker(Tracker):
             for side in robot.foot_sides
         }
         self._last_force: dict[str, np.ndarray | None] = dict.fromkeys(robot.foot_sides)
+        self._fz_row = 1 if self._planar else 2  # the contact force's normal component in lambda
+        #: Ticks solved without the stance contact (``PBCGains.release_pulling_contact``).
+        self.contact_releases = 0
 
     def layout(self, stance: str) -> StanceLayout:
         """The controlled joints, gains and KKT buffers for ``stance`` (read-only)."""
@@ -192,9 +196,10 @@ class PBCTracker(Tracker):
         return None if f is None else f.copy()
 
     def reset(self) -> None:
-        """Forget the IK warm start and the last contact forces."""
+        """Forget the IK warm start, the last contact forces and the released contacts' count."""
         self.ik.reset()
         self._last_force = dict.fromkeys(self.robot.foot_sides)
+        self.contact_releases = 0
 
     # ---------------------------------------------------------------- model
     def _contact_rows(self, kin: RobotKinematics, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
@@ -312,6 +317,10 @@ class PBCTracker(Tracker):
         info["tracking_error_rad"] = float(abs(e).max())
         try:
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
+            if self.gains.release_pulling_contact and lam[self._fz_row] < 0.0:  # the ground would pull
+                vdot, tau_c, lam = solve_released(lay.K, lay.rhs, self._nv, len(lay.ctrl_v), lay.n_contact)
+                self.contact_releases += 1
+                info["contact_released"] = 1.0
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
         if not all_finite(tau_c, lam):
