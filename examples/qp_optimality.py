@@ -42,6 +42,7 @@ from amlip_qp.qp.problem import QPProblem
 from amlip_qp.sim.loop.run_types import Push
 from amlip_qp.sim.scenarios.factory import build_simulation, load
 from amlip_qp.sim.scenarios.named import get_scenario
+from amlip_qp.sim.scenarios.scenarios import Scenario, check_scenario
 
 #: A tick's solution is off the optimum above this excess cost, relative to ``max(1, |cost*|)``.
 RELATIVE_COST_TOL = 1e-3
@@ -79,13 +80,25 @@ def judge(t_s: float, problem: QPProblem, x: np.ndarray, relaxed: bool, referenc
     return Tick(t_s, False, excess, float(np.abs(x - x_star).max()), excess > RELATIVE_COST_TOL * max(1.0, abs(best)))
 
 
-def walk(scenario: str, solver: str, push_Ns: float, duration_s: float) -> tuple[list[Tick], dict]:
-    """Walk ``scenario`` with the QP tracker on ``solver``; every solved tick judged (:func:`judge`), and
-    the walk's outcome (``fell``, ``fall_time_s``, ``fallbacks``)."""
+def pushed_scenario(scenario: str, push_Ns: float, duration_s: float) -> Scenario:
+    """The named scenario for ``duration_s``, with the forward push of ``push_Ns`` (none at 0) besides its own.
+
+    Raises:
+        InputError: An unknown scenario, or a duration or push outside the robot's bounds
+            (:func:`~amlip_qp.sim.scenarios.scenarios.check_scenario`).
+    """
     sc = get_scenario(scenario)
     force = (push_Ns / PUSH_DURATION_S, 0.0, 0.0)
     pushes = (*sc.pushes, Push(PUSH_START_S, force, PUSH_DURATION_S)) if push_Ns > 0.0 else sc.pushes
     sc = sc.with_(pushes=pushes, duration_s=duration_s)
+    check_scenario(sc)
+    return sc
+
+
+def walk(scenario: str, solver: str, push_Ns: float, duration_s: float) -> tuple[list[Tick], dict]:
+    """Walk ``scenario`` with the QP tracker on ``solver``; every solved tick judged (:func:`judge`), and
+    the walk's outcome (``fell``, ``fall_time_s``, ``fallbacks``)."""
+    sc = pushed_scenario(scenario, push_Ns, duration_s)
     tracker = QPTracker(load(sc.robot), qp_solver=solver)
     tracker.record = True
     sim = build_simulation(sc, tracker)
@@ -140,15 +153,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     solvers = [s.strip() for s in args.solvers.split(",") if s.strip()]
     try:
-        get_scenario(args.scenario)
         if not solvers or any(s not in QP_SOLVERS for s in solvers):
             raise InputError(f"--solvers: choose from {', '.join(QP_SOLVERS)}, got {args.solvers!r}")
-        if not (math.isfinite(args.push) and 0.0 <= args.push <= 100.0):
-            raise InputError(f"--push must be in [0, 100] N s, got {args.push!r}")
+        if not (math.isfinite(args.push) and args.push >= 0.0):
+            raise InputError(f"--push must be a forward impulse >= 0 N s, got {args.push!r}")
         if not (math.isfinite(args.duration) and args.duration > 0.0):
             raise InputError(f"--duration must be a positive number of seconds, got {args.duration!r}")
         if args.push > 0.0 and args.duration <= PUSH_START_S + PUSH_DURATION_S:
             raise InputError(f"--duration must pass the push's end, {PUSH_START_S + PUSH_DURATION_S:g} s")
+        pushed_scenario(args.scenario, args.push, args.duration)  # the robot's bounds, before any walk
     except InputError as exc:
         parser.error(str(exc))
     print(

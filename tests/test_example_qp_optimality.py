@@ -60,7 +60,16 @@ def test_daqps_hot_started_solves_are_the_optimum_in_every_tick_of_a_walk():
 
 
 @pytest.mark.parametrize(
-    "argv", [["--solvers", "osqp"], ["--push", "-1"], ["--duration", "0"], ["--push", "10", "--duration", "3"]]
+    "argv",
+    [
+        ["--solvers", "osqp"],
+        ["--push", "-1"],
+        ["--duration", "0"],
+        ["--push", "10", "--duration", "3"],
+        ["--duration", "1e9"],
+        ["--push", "5000", "--duration", "4"],
+        ["--scenario", "nope"],
+    ],
 )
 def test_bad_options_exit_2_before_walking(argv, monkeypatch, capsys):
     module = _module()
