@@ -156,7 +156,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAMES",
         help="comma-separated trackers: qp (with the profile's QP solver), pbc, qp-gathered (the QP with the "
         "compiled build that gathers its inputs in Python), qp-daqp and qp-proxqp (the QP with that solver), "
-        "qp-airborne (the QP solving the problem without the airborne swing foot's forces) (default qp,pbc)",
+        "qp-full (the QP solving the full problem in every tick, the airborne swing foot's forces included) "
+        "(default qp,pbc)",
     )
     b.set_defaults(func=handler("amlip_qp.experiments.bench_harness:run_bench"))
 

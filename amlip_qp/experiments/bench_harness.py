@@ -104,7 +104,7 @@ VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
     "qp-gathered": ("qp", {"in_place_assembly": False}),
     "qp-daqp": ("qp", {"qp_solver": "daqp"}),
     "qp-proxqp": ("qp", {"qp_solver": "proxqp"}),
-    "qp-airborne": ("qp", {"airborne_reduction": True}),
+    "qp-full": ("qp", {"airborne_reduction": False}),
 }
 
 #: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).

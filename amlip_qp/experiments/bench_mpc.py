@@ -3,8 +3,9 @@
 :func:`amlip_qp.control.mpc.bench.run_benchmark` walks a pushed point mass with the MPC planner
 (its module doc says what each row times). In turns with it, after every
 :data:`BLOCK_TICKS` MPC ticks, this module times the next :data:`BLOCK_TICKS` whole-body QPs of
-a recorded walk of the default scenario (:func:`amlip_qp.experiments.bench_qp.record_walk`)
-through the QP tracker's own solver, as the tracker runs it: the robot profile's
+a recorded walk of the default scenario (:func:`amlip_qp.experiments.bench_qp.record_walk`;
+the problems the tracker solves by default: the airborne problem while the swing foot is in
+the air, the full one otherwise) through the QP tracker's own solver, as the tracker runs it: the robot profile's
 ``qp_solver`` (hot-started DAQP on Cassie: the tracker's ``DAQPSolver`` on an allocated problem,
 ``daqp-tracker`` of ``amlip-qp bench qp``; warm-started ProxQP, ``proxsuite-warm``, for a profile
 that names ProxQP). Each of those QPs is put in the solver's own format, and written where the
@@ -72,7 +73,8 @@ def run(duration_s: float = 4.0, scenario: str = DEFAULT_SCENARIO) -> dict[str, 
     check_duration(duration_s)
     name = tracker_runner_name(scenario)
     n_ticks = int(round(duration_s / mpc_bench.DT_S))
-    problems, _, _ = record_walk(min(max(n_ticks, BLOCK_TICKS), MAX_PROBLEMS), scenario)
+    # The problems the default tracker solves: the airborne problem while the swing foot is in the air.
+    problems, _, _ = record_walk(min(max(n_ticks, BLOCK_TICKS), MAX_PROBLEMS), scenario, airborne_reduction=True)
     spec = next(s for s in qp_solver_list.SOLVERS if s.name == name)
     runner = spec.make(solver_settings())
     runner.setup(problems)

@@ -2,7 +2,8 @@
 
 :func:`record_walk` runs a scenario with the whole-body QP tracker (the
 tracker named ``"qp"`` in :data:`amlip_qp.control.registry.TRACKER_MODULES`, with ProxQP whatever
-the profile's solver: :data:`RECORD_QP_SOLVER`) and
+the profile's solver: :data:`RECORD_QP_SOLVER`; the full problem in every tick, so that every
+recorded problem has one shape) and
 copies every tick's problem, keeping the whole controller tick times
 (estimate, plan, build, solve) and MuJoCo's state at the end of the walk.
 :func:`bench_solvers` replays the recorded sequence through every solver of
@@ -90,18 +91,23 @@ REFERENCE_MAX_ITER = 1000
 RECORD_QP_SOLVER = "proxqp"
 
 
-def _make_qp_tracker(robot: Robot) -> QPTracker:
+def _make_qp_tracker(robot: Robot, airborne_reduction: bool = False) -> QPTracker:
     """A new :data:`QP_TRACKER` for ``robot`` with :data:`RECORD_QP_SOLVER`, typed as the whole-body QP
-    tracker it is."""
+    tracker it is; ``airborne_reduction`` as :class:`QPTracker`'s (here off by default: the full
+    problem in every tick, one shape)."""
     from amlip_qp.control.wbc.tracker import QPTracker
 
     cls = tracker_class(QP_TRACKER)
     assert cls is QPTracker, f"tracker {QP_TRACKER!r} is a {cls.__name__}"
-    return QPTracker(robot, qp_solver=RECORD_QP_SOLVER)
+    return QPTracker(robot, qp_solver=RECORD_QP_SOLVER, airborne_reduction=airborne_reduction)
 
 
 def record_walk(
-    n_ticks: int = 1200, scenario: str = DEFAULT_SCENARIO, t_skip_s: float = 1.0, mujoco_state: list | None = None
+    n_ticks: int = 1200,
+    scenario: str = DEFAULT_SCENARIO,
+    t_skip_s: float = 1.0,
+    mujoco_state: list | None = None,
+    airborne_reduction: bool = False,
 ):
     """Run ``scenario`` with a recording QP tracker.
 
@@ -111,6 +117,9 @@ def record_walk(
         t_skip_s: Walking time to skip before recording starts (start-up), s.
         mujoco_state: If given, MuJoCo's ``(model, data)`` at the end of the walk is appended to it
             (the state the yardstick replays, :func:`amlip_qp.experiments.mujoco_yardstick.step_time_us`).
+        airborne_reduction: Record the problems the tracker solves by default, the airborne problem
+            while the swing foot is in the air (two shapes), instead of the full problem in every
+            tick (``False``, the default here: one shape, which :func:`bench_solvers` needs).
 
     The problems are copied by a harness callback after each timed tick, so
     the tick times do not include the recording.
@@ -123,7 +132,7 @@ def record_walk(
     if n_ticks < 1:
         raise InputError(f"n_ticks must be >= 1, got {n_ticks}")
     sc = get_scenario(scenario)
-    tracker = _make_qp_tracker(load(sc.robot))
+    tracker = _make_qp_tracker(load(sc.robot), airborne_reduction)
     sim = build_simulation(sc, tracker)
     dt_s = sim.controller.dt_s
     duration = t_skip_s + n_ticks * dt_s

@@ -10,8 +10,8 @@
   heel right (12 per foot); Rabbit (planar): the point foot, ``(f_x, f_z)``
   (2 per foot). The stance foot's block always comes first, so the dimensions never change
   and one persistent solver serves the whole walk (two with
-  ``QPTracker(airborne_reduction=True)``: the problem without the airborne
-  swing foot's block is the other).
+  ``QPTracker(airborne_reduction=True)``, the default: the problem without
+  the airborne swing foot's block is the other).
 
 The rigid-spring constraint forces ``lambda`` are not variables (they are
 eliminated, :mod:`amlip_qp.control.wbc.spring_elimination`); the layout only

@@ -7,19 +7,20 @@ warm-started :class:`~amlip_qp.qp.solver.ProxQPSolver`), check the status, and r
 joint torques from the actuated rows of the dynamics.
 
 While the swing foot is in the air (force ramp ``w = 0``) its force
-variables are pinned to zero and its friction rows are lifted; with
-``airborne_reduction=True`` the tracker then solves the problem without them
-(the same optimum, a smaller KKT system) as a second persistent problem shape
-of the same solver; both stay warm- or hot-started. With the in-place assembly
+variables are pinned to zero and its friction rows are lifted; the tracker
+then solves the problem without them (``airborne_reduction``, on by default:
+the same optimum, a smaller problem) as a second persistent problem shape of
+the same solver; both stay warm- or hot-started. With the in-place assembly
 that problem has its own buffers, which the generated C writes with the same
 entries as the full problem's leading block
 (:attr:`InPlaceBuild.airborne_problem
 <amlip_qp.control.wbc.compiled_in_place.InPlaceBuild.airborne_problem>`);
 the other builds solve the leading block's views
-(:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`). It is off
-by default: it changes the walks at the rounding level of the solve, and the
-published results are of the full problem (docs/TUNING.md, "Controller speed:
-the airborne problem in place").
+(:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`).
+``airborne_reduction=False`` solves the full problem in every tick: the same
+walks to the rounding level of the solve, and about 1.5x the solve time with
+DAQP on Cassie (docs/TUNING.md, "Controller speed: the airborne problem in
+place").
 
 Infeasible ticks get a second chance without the torque-limit rows (counted
 in :attr:`QPTracker.relaxed_solves`; the controller saturates the torques).
@@ -83,9 +84,10 @@ class QPTracker(Tracker):
             warning; ``True``: required (raises without a compiler);
             ``False``: the Python build.
         airborne_reduction: While the swing foot's force ramp is 0, solve the
-            problem without its force variables and friction rows (same
-            optimum; with DAQP on Cassie about 0.85× of the full problem's
-            solve time in the walking loop; see the module doc).
+            problem without its force variables and friction rows (default;
+            the same optimum; with DAQP on Cassie about 0.65× of the full
+            problem's solve time in the walking loop, docs/TUNING.md).
+            ``False``: the full problem in every tick (see the module doc).
         qp_solver: ``None`` (default): the config's
             :attr:`~amlip_qp.control.wbc.config.QPConfig.qp_solver` (``"proxqp"``
             unless the profile's ``[trackers.qp]`` names another); ``"proxqp"``
@@ -134,7 +136,7 @@ class QPTracker(Tracker):
         fallback_decay: float = 0.9,
         fallback_damping_Nms: float = 5.0,
         compiled_build: bool | None = None,
-        airborne_reduction: bool = False,
+        airborne_reduction: bool = True,
         in_place_assembly: bool | None = None,
         qp_solver: str | None = None,
     ):
