@@ -17,10 +17,8 @@ entries as the full problem's leading block
 <amlip_qp.control.wbc.compiled_in_place.InPlaceBuild.airborne_problem>`);
 the other builds solve the leading block's views
 (:meth:`QPProblem.leading <amlip_qp.qp.problem.QPProblem.leading>`).
-``airborne_reduction=False`` solves the full problem in every tick: the same
-walks to the rounding level of the solve, and about 1.5x the solve time with
-DAQP on Cassie (docs/TUNING.md, "Controller speed: the airborne problem in
-place").
+``airborne_reduction=False`` solves the full problem in every tick (the same
+walks to rounding, about 1.5x the solve time with DAQP on Cassie; docs/TUNING.md).
 
 Infeasible ticks get a second chance without the torque-limit rows (counted
 in :attr:`QPTracker.relaxed_solves`; the controller saturates the torques).
@@ -83,11 +81,9 @@ class QPTracker(Tracker):
             :meth:`~amlip_qp.control.wbc.builder.WholeBodyQP.build` with one
             warning; ``True``: required (raises without a compiler);
             ``False``: the Python build.
-        airborne_reduction: While the swing foot's force ramp is 0, solve the
-            problem without its force variables and friction rows (default;
-            the same optimum; with DAQP on Cassie about 0.65× of the full
-            problem's solve time in the walking loop, docs/TUNING.md).
-            ``False``: the full problem in every tick (see the module doc).
+        airborne_reduction: While the swing foot's force ramp is 0, solve the problem without
+            its force variables and friction rows (default; the same optimum; with DAQP on Cassie
+            about 0.65× of the full problem's solve time). ``False``: the full problem every tick.
         qp_solver: ``None`` (default): the config's
             :attr:`~amlip_qp.control.wbc.config.QPConfig.qp_solver` (``"proxqp"``
             unless the profile's ``[trackers.qp]`` names another); ``"proxqp"``
