@@ -335,3 +335,18 @@ def test_the_airborne_problem_in_place_gets_the_relaxed_solve_and_the_full_solut
     # the same problem but for the torque rows: the same stance forces to within the dropped rows' effect
     st = tracker.builder.problem.variables["forces_stance"]
     assert abs(x_relaxed[st][2::3].sum() - x[st][2::3].sum()) < 0.05 * abs(x[st][2::3].sum())
+
+
+def test_the_tracker_solves_the_airborne_problem_by_default():
+    """By default, mid-swing, the tracker solves the problem without the airborne swing foot's
+    variables; ``airborne_reduction=False`` solves the full problem."""
+    robot = load_robot("cassie")
+    kin, target = _stand(robot)
+    target.swing_contact_weight = 0.0  # the swing foot in the air
+    default = QPTracker(robot)
+    full = QPTracker(robot, airborne_reduction=False)
+    assert default.airborne_reduction and not full.airborne_reduction
+    assert default.compute(kin, target).ok and full.compute(kin, target).ok
+    assert default.last_problem is not None and full.last_problem is not None
+    assert full.last_problem.n == full.builder.problem.n
+    assert default.last_problem.n < default.builder.problem.n

@@ -49,6 +49,17 @@ def walk():
     return problems, tick_us, fell, state
 
 
+def test_record_walk_keeps_the_full_problem_unless_asked_for_the_default_trackers(walk):
+    """The solver benchmark's problems have one shape (the full problem in every tick); the MPC
+    benchmark asks for the problems the default tracker solves: the airborne one mid-swing too."""
+    problems = walk[0]
+    assert len({p.n for p in problems}) == 1
+    airborne, _, fell = record_walk(n_ticks=120, scenario="cassie-1mps", t_skip_s=0.6, airborne_reduction=True)
+    assert not fell
+    sizes = {p.n for p in airborne}
+    assert len(sizes) == 2 and max(sizes) == problems[0].n
+
+
 def test_record_walk_keeps_one_distinct_problem_per_solved_tick(walk):
     problems, tick_us, fell, state = walk
     assert not fell
