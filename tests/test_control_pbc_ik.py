@@ -67,6 +67,39 @@ def test_ik_evaluates_the_output_map_on_its_own_kinematics(robot):
         np.testing.assert_array_equal(kin.outputs(stance, heading)[0], h)
 
 
+def test_ik_evaluates_the_output_map_of_the_kinematics_it_is_given(robot):
+    """Given the walking controller's kinematics (the generated-C output map by default), the IK
+    evaluates that same map on its own kinematics; given Python-map kinematics, the Python map.
+    The two give the same references to rounding (converged or not: the iterates are the same)."""
+    from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, make_kinematics
+    from amlip_qp.robots.outputs import OutputMap
+
+    q, v = _perturbed_state(robot, 3)
+    kin_c, kin_p = make_kinematics(robot), RobotKinematics(robot)
+    assert isinstance(kin_c.output_map, CompiledOutputMap)
+    for k in (kin_c, kin_p):
+        k.update(q, v)
+    settings = IKSettings(knee_limit_swap=False)
+    ik_c, ik_p = IterativeIK(robot, settings), IterativeIK(robot, settings)
+    assert isinstance(ik_c.kin.output_map, OutputMap)  # before any solve
+    heading = 0.0 if robot.is_planar else 0.25
+    for stance in ("left", "right"):
+        h = kin_p.outputs(stance, heading)[0]
+        n = h.size
+        dh, ddh = np.linspace(-0.1, 0.1, n), np.linspace(0.2, -0.2, n)
+        res_c = ik_c.solve(kin_c, stance, heading, h + 0.001, dh, ddh)
+        res_p = ik_p.solve(kin_p, stance, heading, h + 0.001, dh, ddh)
+        assert ik_c.kin.output_map is kin_c.output_map and ik_c.kin.data is not kin_c.data
+        assert ik_p.kin.output_map is kin_p.output_map
+        assert res_c.ok and res_p.ok and res_c.iterations == res_p.iterations
+        np.testing.assert_allclose(res_c.q_r, res_p.q_r, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(res_c.v_r, res_p.v_r, rtol=0, atol=1e-8)
+        np.testing.assert_allclose(res_c.a_r, res_p.a_r, rtol=0, atol=1e-6)
+    # handed the other kinematics, it follows them
+    ik_c.solve(kin_p, "left", heading, kin_p.outputs("left", heading)[0], np.zeros(n), np.zeros(n))
+    assert ik_c.kin.output_map is kin_p.output_map
+
+
 @pytest.mark.parametrize("stance", ["left", "right"])
 def test_converges_and_holds_the_stance_foot_and_passive_joints(robot, stance):
     q_est, v_est = _perturbed_state(robot, 2)

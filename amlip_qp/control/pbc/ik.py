@@ -25,8 +25,11 @@ stacked Jacobians of these equations):
   of the order of ``|a_r| dt`` relative to the drift (checked in
   tests/test_control_pbc_ik.py).
 
-Evaluation: ``h_0(q)`` and its Jacobian come from the one output map,
-:class:`amlip_qp.robots.outputs.OutputMap`, evaluated on the IK's own
+Evaluation: ``h_0(q)`` and its Jacobian come from the output map of the
+kinematics :meth:`IterativeIK.solve` is given (the controller's: by default the
+generated-C :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`,
+else the Python :class:`amlip_qp.robots.outputs.OutputMap`; the same outputs to
+rounding), evaluated on the IK's own
 :class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
 through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
 
@@ -72,7 +75,9 @@ class IterativeIK:
 
     Attributes:
         kin: The IK's own :class:`~amlip_qp.robots.kinematics.RobotKinematics`
-            (light position updates at the iterates).
+            (light position updates at the iterates), on the output map of the
+            kinematics last given to :meth:`solve` (the Python
+            :class:`~amlip_qp.robots.outputs.OutputMap` before any).
         size: Number of outputs.
 
     Raises:
@@ -128,6 +133,13 @@ class IterativeIK:
         self.lu = None
 
     # ---------------------------------------------------------------- pieces
+    def _adopt_output_map(self, output_map) -> None:
+        """Evaluate ``output_map`` (the caller's kinematics' map) from now on, on fresh kinematics."""
+        from amlip_qp.robots.kinematics import RobotKinematics
+
+        self.kin = RobotKinematics(self.robot, output_map)
+        self._cache = None  # the last evaluation was another map's
+
     def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
         """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
 
@@ -251,6 +263,8 @@ class IterativeIK:
             raise InputError(f"stance must be 'left' or 'right', got {stance!r}")
         if not all_finite(h_d, dh_d, ddh_d) or not math.isfinite(heading_rad):
             return self._failed(kin)
+        if kin.output_map is not self.kin.output_map:
+            self._adopt_output_map(kin.output_map)
         rows = self._rows[stance]
         A = rows.A
         s = self.settings
