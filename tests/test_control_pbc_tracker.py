@@ -251,3 +251,28 @@ def test_swing_ankle_gain_scale_stiffens_only_the_swing_ankle(stance):
     assert b.kd[toe][0] == pytest.approx(math.sqrt(10.0) * base.kd_swing_ps)
     np.testing.assert_array_equal(b.kp[~toe], a.kp[~toe])
     np.testing.assert_array_equal(b.kd[~toe], a.kd[~toe])
+
+
+def test_the_walking_controllers_pbc_ik_evaluates_the_controllers_generated_output_map():
+    """In the walking loop with the default kinematics the IK evaluates the controller's generated-C
+    output map (the same object, on the IK's own Pinocchio data), and the walk stands on it."""
+    import mujoco
+
+    from amlip_qp import MujocoLoop
+    from amlip_qp.control.walking.controller import WalkingController
+    from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap
+
+    robot = load_robot("cassie")
+    model, data = robot.mj_model, robot.new_mj_data("stand")
+    tracker = PBCTracker(robot)
+    controller = WalkingController(robot, tracker)
+    loop = MujocoLoop(robot, controller, model, data)
+    command = loop.command(vx_mps=0.5)
+    for _ in range(400):  # 0.2 s
+        tick = loop.step(command)
+        mujoco.mj_step(model, data)
+        assert tick.tracker_ok
+    assert isinstance(controller.kin.output_map, CompiledOutputMap)
+    assert tracker.ik.kin.output_map is controller.kin.output_map
+    assert tracker.ik.kin.data is not controller.kin.data
+    assert data.qpos[2] > 0.8 * robot.new_mj_data("stand").qpos[2]
