@@ -30,8 +30,8 @@ def _ticks(timer, ticks=8, nan_at=None):
 def test_the_timer_gets_both_stages_of_every_tick_and_changes_no_torque():
     timer = StageTimer()
     timed = _ticks(timer)
-    assert len(timer.kinematics_us) == len(timer.tracker_us) == 8
-    assert all(t > 0.0 for t in timer.kinematics_us + timer.tracker_us)
+    assert len(timer.kinematics_us) == len(timer.tracker_us) == len(timer.estimate_us) == len(timer.plan_us) == 8
+    assert all(t > 0.0 for t in timer.kinematics_us + timer.tracker_us + timer.estimate_us + timer.plan_us)
     assert timer.tracker_work_us == [k + t for k, t in zip(timer.kinematics_us, timer.tracker_us)]
     # the QP tracker's own build and solve times (its info), each a part of its compute
     assert len(timer.build_us) == len(timer.solve_us) == 8
@@ -39,6 +39,7 @@ def test_the_timer_gets_both_stages_of_every_tick_and_changes_no_torque():
     np.testing.assert_array_equal(timed, _ticks(None))
     timer.clear()
     assert timer.kinematics_us == timer.tracker_us == timer.tracker_work_us == timer.build_us == timer.solve_us == []
+    assert timer.estimate_us == timer.plan_us == []
 
 
 def test_a_part_the_tracker_does_not_time_is_nan():
@@ -47,6 +48,7 @@ def test_a_part_the_tracker_does_not_time_is_nan():
     timer.record(2000, 9000, {"build_us": True})
     timer.record(2000, 9000)
     assert timer.solve_us[0] == 4.5 and np.isnan(timer.solve_us[1:]).all()
+    assert np.isnan(timer.estimate_us).all() and np.isnan(timer.plan_us).all()  # stages the caller did not time
     assert np.isnan(timer.build_us).all()
     assert timer.tracker_work_us == [11.0, 11.0, 11.0]
 

@@ -66,6 +66,13 @@ def test_the_goals_are_judged_on_the_reference_walk_only(scenario):
         assert set(parts) == {"kinematics", "build", "solve", "rest"} and min(parts.values()) > 0.0
         assert max(parts["build"], parts["solve"], parts["kinematics"]) < row["tracker_per_loop_step"]
         assert re.search(rf"{key}\s+kinematics\s+{parts['kinematics']:.2f}\s+build\s+{parts['build']:.2f}", text)
+        # the controller's tick in its parts: each a positive share, together the whole tick's median or near it
+        # (medians of parts need not add up), the tracker's work the same as the goal's
+        ticked = row["controller_parts_per_loop_step"]
+        assert set(ticked) == {"estimate", "plan", "tracker", "rest"} and min(ticked.values()) > 0.0
+        assert ticked["tracker"] == pytest.approx(row["tracker_per_loop_step"])
+        assert sum(ticked.values()) == pytest.approx(row["controller_per_loop_step"], rel=0.25)
+        assert re.search(rf"{key}\s+estimate\s+{ticked['estimate']:.2f}\s+plan\s+{ticked['plan']:.2f}", text)
     if scenario != bench_harness.REFERENCE_SCENARIO:
         assert r["qp_meets_realtime_goal"] == {} and r["harness_meets_goal"] == {}
         assert "no verdict on the goals" in text

@@ -46,9 +46,10 @@ the robot's ``[compare] realtime_goal`` on its nominal walk. The same two are
 also given over the yardstick's step alone with every step timed on its own
 (:func:`~amlip_qp.experiments.mujoco_yardstick.step_median_us`, robust to a step
 preempted by another process; a warm-cache step, about 2.4 times shorter
-than the loop's), the median over the walks. For a tracker that times its own build and solve
-(the QP tracker's ``info``), the tracker's work is also split into the kinematics update, the
-problem's build, the solver's call and the rest, each over MuJoCo's step in the same tick.
+than the loop's), the median over the walks. The controller's tick is split into the estimate, the
+planner's update, the tracker's own work and the rest, and for a tracker that times its own build
+and solve (the QP tracker's ``info``) the tracker's work into the kinematics update, the problem's
+build, the solver's call and the rest, each over MuJoCo's step in the same tick.
 """
 
 from __future__ import annotations
@@ -109,6 +110,8 @@ VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
 
 #: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).
 _WORK_PARTS = ("tracker", "kinematics", "build", "solve")
+#: The controller's stages besides the tracker's work the stage timer records (``StageTimer``'s lists).
+_TICK_PARTS = ("estimate", "plan")
 
 
 #: Simulated time of the warm-up walk of each tracker (not timed; its end state is the step-alone yardstick's), s.
@@ -139,7 +142,8 @@ def run(
         tick, medians over the ticks (``controller_per_loop_step``,
         ``tracker_per_loop_step``: both parts of one tick see the same machine
         state), the tracker's work in its parts in the same unit (``tracker_parts_per_loop_step``,
-        :func:`tracker_parts`), the goals of :func:`speed_goals` with their
+        :func:`tracker_parts`), the controller's tick in its parts (``controller_parts_per_loop_step``,
+        :func:`controller_parts`), the goals of :func:`speed_goals` with their
         verdicts (``speed_goals``), the ticks timed, and whether any walk fell; ``same_summary`` per tracker (the
         two modes' summaries agree, timing fields aside); ``reference`` (the
         reference walk's figures), the goals (``goal_realtime_factor``,
@@ -187,7 +191,9 @@ def run(
                 ratios["harness"].append(float(np.mean(result.harness_time_us)) / tick_alone)
                 ratios["controller"].append(float(np.median(result.tick_time_us)) / step_us)
                 ratios["tracker"].append(float(np.median(timer.tracker_work_us)) / step_us)
-                got = parts.setdefault(key, {name: [] for name in ("controller", "mujoco", "harness", *_WORK_PARTS)})
+                got = parts.setdefault(
+                    key, {name: [] for name in ("controller", "mujoco", "harness", *_WORK_PARTS, *_TICK_PARTS)}
+                )
                 got["controller"].append(np.asarray(result.tick_time_us))
                 got["mujoco"].append(np.asarray(result.mujoco_time_us))
                 got["harness"].append(np.asarray(result.harness_time_us))
@@ -195,6 +201,8 @@ def run(
                 got["kinematics"].append(np.asarray(timer.kinematics_us))
                 got["build"].append(np.asarray(timer.build_us))
                 got["solve"].append(np.asarray(timer.solve_us))
+                got["estimate"].append(np.asarray(timer.estimate_us))
+                got["plan"].append(np.asarray(timer.plan_us))
                 rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
                 wall[key] = wall.get(key, 0.0) + result.wall_time_s
                 fell[key] = fell.get(key, False) or bool(result.fell)
@@ -226,6 +234,7 @@ def run(
             "controller_per_loop_step": _per_tick_ratio(ticks["controller"], ticks["mujoco"]),
             "tracker_per_loop_step": _per_tick_ratio(ticks["tracker"], ticks["mujoco"]),
             "tracker_parts_per_loop_step": tracker_parts(ticks),
+            "controller_parts_per_loop_step": controller_parts(ticks),
             "ticks": n,
             "fell": fell[key],
         }
@@ -272,6 +281,21 @@ def tracker_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:
     rest = ticks["tracker"] - ticks["kinematics"] - build - solve
     named = {"kinematics": ticks["kinematics"], "build": build, "solve": solve, "rest": rest}
     return {name: float(np.nanmedian(part / mujoco)) for name, part in named.items()}
+
+
+def controller_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:
+    """The controller's tick in its parts, each over MuJoCo's step in the same tick of the loop, medians
+    over the ticks: ``estimate`` (the state estimate, the step clock and its touchdown test, the command's
+    speed correction), ``plan`` (the planner's update), ``tracker`` (the tracker's own work: the
+    kinematics update and its ``compute``) and ``rest`` (the rest of the controller's ``step``: the
+    input checks, the command shaping, the tracking target, the torque limits, the tick's record).
+    Empty when the ticks do not pair up with MuJoCo's (a safe-mode tick)."""
+    mujoco = ticks["mujoco"]
+    if any(ticks[name].shape != mujoco.shape for name in ("controller", "tracker", *_TICK_PARTS)):
+        return {}
+    rest = ticks["controller"] - ticks["estimate"] - ticks["plan"] - ticks["tracker"]
+    named = {"estimate": ticks["estimate"], "plan": ticks["plan"], "tracker": ticks["tracker"], "rest": rest}
+    return {name: float(np.median(part / mujoco)) for name, part in named.items()}
 
 
 def _per_tick_ratio(part_us: np.ndarray, mujoco_us: np.ndarray) -> float:

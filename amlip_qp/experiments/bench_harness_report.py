@@ -38,6 +38,19 @@ def format_report(r: dict) -> str:
             f" {row['tracker_per_step']:6.2f}   {row['controller_per_loop_step']:6.2f}"
             f" {row['tracker_per_loop_step']:6.2f}   " + ("; ".join(verdicts) if verdicts else "no goal")
         )
+    ticked = {key: row["controller_parts_per_loop_step"] for key, row in r["runs"].items()}
+    if any(ticked.values()):
+        lines.append(
+            "  the controller's tick in its parts, over MuJoCo's step in the same tick of the loop (medians over"
+            " the ticks): the estimate (state, step clock, speed correction), the planner's update, the"
+            " tracker's own work, the rest of the tick"
+        )
+        for key, p in ticked.items():
+            if p:
+                lines.append(
+                    f"  {key:19s} estimate   {p['estimate']:5.2f}  plan  {p['plan']:5.2f}"
+                    f"  tracker {p['tracker']:5.2f}  rest {p['rest']:5.2f}"
+                )
     parted = {key: row["tracker_parts_per_loop_step"] for key, row in r["runs"].items()}
     if any(parted.values()):
         lines.append(

@@ -283,7 +283,7 @@ class WalkingController:
         timer = self.stage_timer
         t0_ns = time.perf_counter_ns() if timer is not None else 0
         estimator.observe(measurement)
-        update_ns = time.perf_counter_ns() - t0_ns if timer is not None else 0
+        t1_ns = time.perf_counter_ns() if timer is not None else 0
         kin = self.kin
         touchdown = False
         new_step = False  # a first step or a touchdown: the ground gets a new stance foothold
@@ -316,7 +316,9 @@ class WalkingController:
         v_z = float(est.com_vel_mps[2])
         state = planner_state(stance, est.p_st_m, est.L_Nms, v_z, clock.time_in_step(t), est.com_m)
         ground = self.ground
+        t2_ns = time.perf_counter_ns() if timer is not None else 0
         plan = self._last_plan = plan_tick(self.planner, ground, state, command, est, new_step, self._last_plan)
+        t3_ns = time.perf_counter_ns() if timer is not None else 0
         target = TrackingTarget(
             stance=stance,
             phase=plan.s,
@@ -327,10 +329,10 @@ class WalkingController:
             swing_contact_weight=swing_contact_weight(plan.s),
             stance_ground_pitch_rad=ground.stance_pitch_rad if ground.active else None,
         )
-        t0_ns = time.perf_counter_ns() if timer is not None else 0
+        t4_ns = time.perf_counter_ns() if timer is not None else 0
         result = self.tracker.compute(kin, target)
         if timer is not None:
-            timer.record(update_ns, time.perf_counter_ns() - t0_ns, result.info)
+            timer.record(t1_ns - t0_ns, time.perf_counter_ns() - t4_ns, result.info, t2_ns - t1_ns, t3_ns - t2_ns)
         tau = result.tau_Nm
         ok = result.ok
         # A finite sum implies finite entries; only if it is not (or overflows), look closer.
