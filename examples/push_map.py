@@ -16,15 +16,16 @@ MPC / one-step, with the ratios of the medians and of the weakest cells.
 ``--against CSV`` adds the cells of another push-map sweep's ``results.csv``
 for the sweep's trackers and the groups the sweep lacks (a row without a
 planner is the one-step law's), so that the MPC's cells are compared with
-one-step cells measured before instead of running them again
-(``examples/sweeps/push_map_planners_pbc.toml``: the PBC with the MPC, against
-the PBC's one-step cells of ``docs/media/push_map_results.csv``)::
+one-step cells measured before instead of running them again (e.g. the PBC's
+MPC half alone, ``amlip-qp sweep examples/sweeps/push_map_planners_pbc.toml
+--grid planner=mpc --out out/pbc_mpc_only``, against the PBC's one-step cells
+of ``docs/media/push_map_results.csv``; compare maps of the same bisection)::
 
     python examples/push_map.py --out out/push_map              # run the sweep (resumes), then draw
     python examples/push_map.py --from out/push_map --figure docs/media/push_map.png
     python examples/push_map.py --spec examples/sweeps/push_map_planners.toml --out out/push_map_planners
-    python examples/push_map.py --spec examples/sweeps/push_map_planners_pbc.toml --out out/push_map_planners_pbc \
-        --against docs/media/push_map_results.csv
+    python examples/push_map.py --spec examples/sweeps/push_map_planners_pbc.toml --out out/push_map_planners_pbc
+    python examples/push_map.py --from out/pbc_mpc_only --against docs/media/push_map_results.csv
 
 ``--out`` does not run a sweep its folder already holds finished (every cell
 measured, none failed): it draws it, and the sweep's own wall time stays in

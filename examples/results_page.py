@@ -132,7 +132,8 @@ MANIFEST: tuple[Entry, ...] = (
     entry("friction-demand", "python examples/friction_demand.py --friction 1,3", 50),
     # the terrain-map sweep (56 walks of at most 10 s), one worker, and its figure: 1131 s measured at load 5-7
     entry("terrain-map", "python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png", 1130),
-    # the push maps (80 cells, 410-470 walks of at most 5.5 s, 2 workers; 31 min for the trackers' on a quiet machine),
+    # the push maps (80 cells, 410-560 walks of at most 5.5 s, 2 workers; 31 min for the trackers' on a quiet machine,
+    # 9 and 20 min for the planners' with the QP and the PBC, bisected in six steps),
     # then the figure, cells' table and summary; only the drawing when out/FOLDER holds the sweep finished
     *(
         entry(
@@ -143,6 +144,7 @@ MANIFEST: tuple[Entry, ...] = (
         for tag, spec, name, cost_s in (
             ("", "", "push_map", 3300),
             ("-planners", "--spec examples/sweeps/push_map_planners.toml ", "push_map_planners", 3600),
+            ("-planners-pbc", "--spec examples/sweeps/push_map_planners_pbc.toml ", "push_map_planners_pbc", 4800),
         )
     ),
     # 14 terrain scenarios x both trackers, 28 walks of 14-20 s, one worker process: 1249 s measured on
