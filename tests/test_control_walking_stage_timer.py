@@ -27,7 +27,7 @@ def _ticks(timer, ticks=8, nan_at=None):
     return np.array(taus)
 
 
-def test_the_timer_gets_both_stages_of_every_tick_and_changes_no_torque():
+def test_the_timer_gets_every_stage_of_every_tick_and_changes_no_torque():
     timer = StageTimer()
     timed = _ticks(timer)
     assert len(timer.kinematics_us) == len(timer.tracker_us) == len(timer.estimate_us) == len(timer.plan_us) == 8
