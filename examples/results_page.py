@@ -1,7 +1,6 @@
 """Regenerate the measured blocks of docs/RESULTS.md from the commands that produce them.
 
-Usage: ``python examples/results_page.py --list | --check | --all | --only ID[,ID] [--page PATH]``
-
+Usage: ``python examples/results_page.py --list | --check | --all | --only ID[,ID] [--page PATH]``.
 Each generated block of the page sits between two markers::
 
     <!-- results: ID -->
@@ -132,9 +131,8 @@ MANIFEST: tuple[Entry, ...] = (
     entry("friction-demand", "python examples/friction_demand.py --friction 1,3", 50),
     # the terrain-map sweep (56 walks of at most 10 s), one worker, and its figure: 1131 s measured at load 5-7
     entry("terrain-map", "python examples/terrain_map.py --workers 1 --figure docs/media/terrain_map.png", 1130),
-    # the push maps (80 cells, 410-560 walks of at most 5.5 s, 2 workers; 31 min for the trackers' on a quiet machine,
-    # 9 and 20 min for the planners' with the QP and the PBC, bisected in six steps),
-    # then the figure, cells' table and summary; only the drawing when out/FOLDER holds the sweep finished
+    # the push maps (80 cells, 410-560 walks of at most 5.5 s, 2 workers; 31, 9 and 20 min measured), then the
+    # figure, cells' table and summary; only the drawing when out/FOLDER holds the sweep finished
     *(
         entry(
             f"push-map{tag}",
