@@ -294,6 +294,7 @@ def test_friction_overrides_explicit_pairs_and_priorities():
         ({"actuator_delay_ticks": 1.5}, "actuator delay"),
         ({"actuator_delay_ticks": 101}, "actuator delay"),
         ({"actuator_delay_ticks": True}, "actuator delay"),
+        ({"limb_collisions": "yes"}, "limb collisions"),
     ],
 )
 def test_nonsensical_values_raise_one_line(kwargs, match):

@@ -116,6 +116,12 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
         "coefficients to its mjMINMU = 1e-5)",
     )
     m.add_argument(
+        "--limb-collisions",
+        action="store_true",
+        help="the limbs collide with each other: the legs cannot pass through each other (Cassie's legs "
+        "collide with nothing by default)",
+    )
+    m.add_argument(
         "--actuator-delay",
         type=_type("actuator_delay"),
         default=None,

@@ -93,6 +93,8 @@ def setting_from_options(options: WalkOptions, base: PlantSetting) -> PlantSetti
         mods["spring_scale"] = o.plant_spring_scale
     if o.friction is not None:
         mods["friction"] = o.friction
+    if o.limb_collisions:
+        mods["limb_collisions"] = True
     if o.actuator_delay is not None:
         mods["actuator_delay_ticks"] = o.actuator_delay
     terrain = base.terrain

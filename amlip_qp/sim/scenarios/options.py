@@ -83,6 +83,7 @@ class WalkOptions:
         payload: A payload ``"KG[@X,Y,Z]"`` (kg, m in the base frame) welded to the base.
         plant_spring_scale: Scale of the plant's joint and tendon springs.
         friction: Sliding friction coefficient of the foot-floor contacts.
+        limb_collisions: The limbs collide with each other (the legs cannot pass through each other).
         actuator_delay: Delay of the actuator commands, control ticks (0.5 ms each).
 
     The plant modifiers' and the terrain's bounds are checked where they are
@@ -114,6 +115,7 @@ class WalkOptions:
     payload: str | None = _option(None, V.text)
     plant_spring_scale: float | None = _option(None, V.number)
     friction: float | None = _option(None, V.number)
+    limb_collisions: bool = _option(False, V.flag)
     actuator_delay: int | None = _option(None, V.whole_number)
 
     @classmethod
@@ -193,5 +195,6 @@ SETTING_OPTIONS: tuple[str, ...] = (
     "payload",
     "plant_spring_scale",
     "friction",
+    "limb_collisions",
     "actuator_delay",
 )

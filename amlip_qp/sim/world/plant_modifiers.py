@@ -2,7 +2,7 @@
 
 :class:`PlantModifiers` holds the mismatch of one run (the CLI flags
 ``--plant-mass-scale``, ``--payload KG[@X,Y,Z]``, ``--plant-spring-scale``,
-``--friction MU`` and ``--actuator-delay TICKS``). All but the delay are edits
+``--friction MU``, ``--limb-collisions`` and ``--actuator-delay TICKS``). All but the delay are edits
 of the plant's ``mujoco.MjSpec`` applied before it is compiled
 (:meth:`PlantModifiers.spec_edits`); the delay is an
 :class:`~amlip_qp.sim.world.actuator_delay.ActuatorDelay` the harness puts
@@ -83,6 +83,8 @@ class PlantModifiers:
         friction: The sliding friction coefficient of every foot-floor contact
             (sets the floor's and every geom's that can touch it; see
             :class:`FrictionEdit`), in [1e-5, 10]; ``None`` keeps the model's.
+        limb_collisions: The limbs collide with each other (:class:`LimbCollisionEdit`): the legs
+            cannot pass through each other; ``False`` keeps the model's collisions.
         actuator_delay_ticks: Whole controller ticks between the controller's
             command and the plant's actuators, in [0, 100] (see
             :class:`~amlip_qp.sim.world.actuator_delay.ActuatorDelay`).
@@ -96,6 +98,7 @@ class PlantModifiers:
     payload_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     spring_scale: float = 1.0
     friction: float | None = None
+    limb_collisions: bool = False
     actuator_delay_ticks: int = 0
 
     def __post_init__(self):
@@ -139,6 +142,8 @@ class PlantModifiers:
                 f"friction (--friction) must be a coefficient in [{MIN_FRICTION:g}, {MAX_FRICTION:g}], got {mu!r}; "
                 "e.g. 0.5"
             )
+        if not isinstance(self.limb_collisions, bool):
+            raise InputError(f"limb collisions (--limb-collisions) must be true or false, got {self.limb_collisions!r}")
         n = self.actuator_delay_ticks
         if not isinstance(n, numbers.Integral) or isinstance(n, bool) or not 0 <= n <= MAX_DELAY_TICKS:
             raise InputError(
@@ -165,6 +170,8 @@ class PlantModifiers:
             edits.append(SpringScaleEdit(float(self.spring_scale)))
         if self.friction is not None:
             edits.append(FrictionEdit(float(self.friction)))
+        if self.limb_collisions:
+            edits.append(LimbCollisionEdit(base_body))
         return edits
 
     def describe(self) -> dict:
@@ -179,6 +186,8 @@ class PlantModifiers:
             out["spring_scale"] = float(self.spring_scale)
         if self.friction is not None:
             out["friction"] = float(self.friction)
+        if self.limb_collisions:
+            out["limb_collisions"] = True
         if self.actuator_delay_ticks:
             out["actuator_delay_ticks"] = self.actuator_delay_ticks
         return out
@@ -352,3 +361,37 @@ class FrictionEdit:
                 pair.friction = [self.mu, self.mu, *pair.friction[2:]]
         if spec.option.enableflags & mujoco.mjtEnableBit.mjENBL_OVERRIDE:
             spec.option.o_friction = [self.mu, self.mu, *spec.option.o_friction[2:]]
+
+
+@dataclass(frozen=True)
+class LimbCollisionEdit:
+    """Make the limbs collide with each other: each subtree of bodies under the base body (a biped's
+    two legs; a humanoid's legs and its torso with the arms) collides with every other one.
+
+    Every primitive geom of a subtree (mesh geoms stay as they are) gets the subtree's own collision
+    bit in ``contype`` and the other subtrees' bits in ``conaffinity``; MuJoCo makes a contact where
+    ``contype`` of one geom and ``conaffinity`` of the other share a bit. Bit 0, the ground's, is left
+    alone, so nothing collides with the ground that did not, and the geoms of one subtree do not
+    collide with each other. Cassie's leg capsules are visual geoms that collide with nothing
+    (``contype`` = ``conaffinity`` = 0): with this edit the legs cannot pass through each other.
+    The new contacts take the geoms' own parameters (MuJoCo's defaults for Cassie's capsules).
+    """
+
+    base_body: str
+
+    def __call__(self, spec: mujoco.MjSpec) -> None:
+        base = spec.body(self.base_body)
+        if base is None:
+            raise MJCFError(f"the plant has no body {self.base_body!r} to find the limbs under")
+        limbs = list(base.bodies)
+        if len(limbs) < 2:
+            raise MJCFError(f"--limb-collisions: the base body {self.base_body!r} carries {len(limbs)} limb(s), not 2")
+        if len(limbs) > 30:
+            raise MJCFError(f"--limb-collisions: {len(limbs)} limbs under {self.base_body!r}; at most 30 have bits")
+        bits = [1 << (k + 1) for k in range(len(limbs))]
+        everyone = sum(bits)
+        for limb, bit in zip(limbs, bits):
+            for geom in limb.find_all(mujoco.mjtObj.mjOBJ_GEOM):
+                if geom.type != mujoco.mjtGeom.mjGEOM_MESH:
+                    geom.contype = int(geom.contype) | bit
+                    geom.conaffinity = int(geom.conaffinity) | (everyone & ~bit)
