@@ -118,8 +118,8 @@ def add_plant_options(p: argparse.ArgumentParser) -> None:
     m.add_argument(
         "--limb-collisions",
         action="store_true",
-        help="the limbs collide with each other: the legs cannot pass through each other (Cassie's legs "
-        "collide with nothing by default)",
+        help="the limbs (the base body's child subtrees) collide with each other, so the legs cannot pass "
+        "through each other (by default they collide as the model says)",
     )
     m.add_argument(
         "--actuator-delay",
