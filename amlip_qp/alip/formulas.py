@@ -200,8 +200,8 @@ def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
 
         4 z_cl (s - 1/2)^2 + (H - z_cl) - [dz0 - r(s) + (dz1 - dz0) s + |dz1 - dz0| / 2 * 4 s (1 - s)]
 
-    with ``r(s)`` the CoM's rise term of :func:`com_rise` (``dz0 - r(s) =
-    dz0 s (1 + s - s^2) + dz1 s^2 (1 - s)``), plus the CoM's descent on a step down
+    with ``r(s) = dz0 (1 - s)`` the CoM's rise of :func:`com_rise` (``dz0 - r(s) = dz0 s``), plus
+    the CoM's descent on a step down
     (:func:`downhill_com_terms`). It starts at ``H - a`` and ends at ``H - dz1 + d``
     (``a``, ``d`` of :func:`stance_height`: both 0 unless a step goes down); with
     ``dz0 = dz1 = 0`` it is :func:`clearance_parabola` bit for bit (the
@@ -214,13 +214,10 @@ def swing_height(s, H_m, z_cl_m, dz0_m, dz1_m):
     sn = xp.sin(np.pi * s)
     rise = dz1_m - dz0_m
     lift = 0.5 * abs(rise)
-    # dz0 - r(s) and its derivatives, as sums of products with non-negative factors (exact zeros
-    # on flat ground, see stance_height)
-    both = dz0_m + dz1_m
-    q = dz0_m * (s * (1.0 + s - s * s)) + dz1_m * (s * s * (1.0 - s)) + rise * s + lift * (4.0 * s * (1.0 - s))
-    dq = dz0_m * ((1.0 + 3.0 * s) * (1.0 - s)) + (dz1_m * (2.0 * s) - dz1_m * (3.0 * s * s)) + rise
-    dq = dq + lift * (4.0 - 8.0 * s)
-    ddq = (both * 2.0 - both * (6.0 * s)) - 8.0 * lift
+    # dz0 - r(s) = dz0 s and its derivatives lead the bracket (exact zeros on flat ground)
+    q = dz0_m * s + rise * s + lift * (4.0 * s * (1.0 - s))
+    dq = dz0_m + rise + lift * (4.0 - 8.0 * s)
+    ddq = dz0_m * 0.0 - 8.0 * lift
     e, de, dde = downhill_com_terms(c, sn, xp, dz0_m, dz1_m)
     return y - q + e, dy - dq + de, ddy - ddq + dde
 
@@ -238,25 +235,17 @@ def downhill_com_terms(c, sn, xp, dz0_m, dz1_m):
     return d * (0.5 * (1.0 - c)) - a * (0.5 * (1.0 + c)), k * (0.5 * np.pi * sn), k * (0.5 * np.pi**2 * c)
 
 
-def com_rise(s, dz0_m, dz1_m):
+def com_rise(s, dz0_m):
     """The CoM's height over the stance contact within a step, less ``H`` and the descent of a
-    step down: the cubic ``r(s)`` from ``dz0`` (s=0) to 0 (s=1) whose rates are the steps' rises,
-    ``dr/ds = -dz0`` at s=0 and ``dz1`` at s=1 (m per unit phase).
+    step down: the line ``r(s) = dz0 (1 - s)`` from ``dz0`` (s=0) to 0 (s=1), m.
 
-    ``r(s) = dz0 (1 - s)^2 (1 + s) - dz1 s^2 (1 - s)`` (cubic Hermite). ``dz0`` (m) is the previous
-    stance contact's height minus the current one's, ``dz1`` the target's minus the current one's.
-    The CoM rises (or drops) at the rate of the step it is on when the step starts, and of the
-    next step when it ends, so its vertical velocity is continuous across a touchdown wherever
-    the steps last about as long: on a uniform slope (``dz1 = -dz0``) ``r`` is the line ``dz0
-    (1 - s)``, the CoM moving parallel to the ground (docs/ALIP_SLOPES.md). Written as products
-    with non-negative factors, so that ``dz0 = dz1 = 0`` gives exact ``+0.0`` in every term.
-    Returns ``(r, dr/ds, d2r/ds2)``.
+    ``dz0`` (m) is the previous stance contact's height minus the current one's: the CoM rises
+    (or drops) at the step's own rise, ``-dz0`` per unit phase, as a CoM on the plane through the
+    two contacts, parallel to the ground (docs/ALIP_SLOPES.md), with ``v_z = k v`` at the
+    touchdown. Written so that ``dz0 = 0`` gives exact ``+0.0`` in every term. Returns ``(r,
+    dr/ds, d2r/ds2)``.
     """
-    both = dz0_m + dz1_m
-    r = dz0_m * ((1.0 - s) * (1.0 - s) * (1.0 + s)) - dz1_m * (s * s * (1.0 - s))
-    dr = (dz1_m * (3.0 * s * s) - dz1_m * (2.0 * s)) - dz0_m * ((1.0 - s) * (1.0 + 3.0 * s))
-    ddr = both * (6.0 * s) - both * 2.0
-    return r, dr, ddr
+    return dz0_m * (1.0 - s), 0.0 - dz0_m, dz0_m * 0.0
 
 
 def stance_height(s, H_m, dz0_m, dz1_m):
@@ -266,8 +255,8 @@ def stance_height(s, H_m, dz0_m, dz1_m):
     one's. The CoM has not moved at touchdown: the reference starts at ``H + dz0 - a`` (``a`` =
     :data:`DOWNHILL_COM_SHARE` ``max(dz0, 0)``, the share of that step's drop the CoM took before
     it) and ends at ``H + d`` at s=1 (``d`` = the share ``min(dz1, 0)`` of this step's drop, below
-    ``H``, so that the swing leg reaches a lower foothold), rising at the rate of the step it is
-    on at the start and of the next step at the end (:func:`com_rise`). Level and rising steps
+    ``H``, so that the swing leg reaches a lower foothold), rising at the step's own rise from the
+    last contact (:func:`com_rise`). Level and rising steps
     (``dz0 <= 0``, ``dz1 >= 0``) go from ``H + dz0`` to ``H``; ``dz0 = dz1 = 0`` is the constant
     ``H`` bit for bit. Returns ``(y, dy/ds, d2y/ds2)``.
     """
@@ -275,7 +264,7 @@ def stance_height(s, H_m, dz0_m, dz1_m):
     c = xp.cos(np.pi * s)
     sn = xp.sin(np.pi * s)
     y, dy, ddy = constant(s, H_m)
-    r, dr, ddr = com_rise(s, dz0_m, dz1_m)
+    r, dr, ddr = com_rise(s, dz0_m)
     e, de, dde = downhill_com_terms(c, sn, xp, dz0_m, dz1_m)
     return y + r + e, dy + dr + de, ddy + ddr + dde
 

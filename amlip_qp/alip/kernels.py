@@ -47,7 +47,8 @@ heading's y axis, positive = ground descending ahead, so an uphill slope of
 ``a`` is ``-a``).
 
 With the ground inputs, ``com_z_over_stance`` goes from ``H + dz_sw0`` to
-``H``, ``com_z_over_swing`` from ``H`` to ``H - dz_sw`` (on a step down the CoM
+``H`` (a line, at the step's rise from the last contact:
+:func:`~amlip_qp.alip.formulas.com_rise`), ``com_z_over_swing`` from ``H`` to ``H - dz_sw`` (on a step down the CoM
 takes :data:`~amlip_qp.alip.formulas.DOWNHILL_COM_SHARE` of the drop before the
 touchdown, and both end that much lower) with the foot's apex
 at least ``z_cl`` above the higher end, and ``swing_toe_pitch`` from
