@@ -237,7 +237,8 @@ def test_terrain_scenarios_have_their_speeds_durations_and_modes():
     from amlip_qp.sim.world.terrain import parse_terrain
 
     slopes = [n for n in TERRAIN_SCENARIOS if n.startswith("cassie-slope-")]
-    assert len(slopes) == 10  # 10 and 15 deg up and down, 22 deg up; each blind and terrain-aware
+    # 10 and 15 deg up and down, 22 deg up, each blind and terrain-aware; 26 deg up blind, 30 deg up aware
+    assert len(slopes) == 12
     for name, sc in TERRAIN_SCENARIOS.items():
         spec = parse_terrain(sc.setting.terrain)
         assert not spec.is_flat and sc.robot == "cassie"
