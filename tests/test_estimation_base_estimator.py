@@ -135,3 +135,12 @@ def test_without_a_compiler_the_ekf_runs_on_numpy_with_one_warning(cassie, monke
     assert est.compiled is None
     out = est.fill(_standing(cassie, 0))
     np.testing.assert_allclose(out.q[0:3], cassie.q_stand[0:3], atol=1e-9)
+
+
+@pytest.mark.parametrize("pitch", [float("nan"), float("inf"), 1.6, -2.0])
+def test_the_ground_pitch_must_be_a_finite_angle_within_a_quarter_turn(pitch):
+    est = make_base_estimator("ekf", load_robot("cassie"), 0.0005, [0.03, 0.0, 0.09], backend="numpy")
+    with pytest.raises(InputError, match="ground's pitch"):
+        est.set_ground_pitch(pitch)
+    est.set_ground_pitch(-0.5)
+    assert est.ground_pitch_rad == -0.5

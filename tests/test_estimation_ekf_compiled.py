@@ -17,7 +17,10 @@ def cassie():
     return load_robot("cassie")
 
 
-def test_the_compiled_tick_equals_the_numpy_filter(cassie):
+@pytest.mark.parametrize("ground_pitch_rad", [0.0, -0.4])
+def test_the_compiled_tick_equals_the_numpy_filter(cassie, ground_pitch_rad):
+    """Level ground, and a ground pitched 0.4 rad up along the heading that the blades are taken
+    flat against (``set_ground_pitch``)."""
     ms = stand_in_measurements(cassie, 1500, seed=3)
     rng = np.random.default_rng(4)
     for m in ms:  # the joints move independently, so each leg's chain is exercised
@@ -26,6 +29,8 @@ def test_the_compiled_tick_equals_the_numpy_filter(cassie):
     ref = make_base_estimator("ekf", cassie, 0.0005, IMU, noise=noise, backend="numpy")
     c = make_base_estimator("ekf", cassie, 0.0005, IMU, noise=noise, backend="c")
     assert c.compiled is not None
+    for est in (ref, c):
+        est.set_ground_pitch(ground_pitch_rad)
     worst = 0.0
     used, gated = 0, 0  # ticks a switched-on foot was used / left out (its blade not flat)
     for m in ms:

@@ -218,3 +218,21 @@ def test_so3_exp_is_a_rotation_with_its_left_jacobian():
         lhs = so3_exp(phi + d)[0] @ R.T
         assert np.allclose((lhs - np.eye(3)) / eps, so3_exp(J @ d)[0] / eps - np.eye(3) / eps, atol=1e-5)
     assert np.allclose(so3_exp(np.zeros(3))[0], np.eye(3))
+
+
+def test_a_blade_is_flat_against_the_ground_it_stands_on():
+    """A blade pitched 30 degrees toe-up lies flat on ground pitched 30 degrees up (pitch -30 degrees,
+    positive = descending ahead) within the tolerance, not on level ground; on level ground (pitch 0)
+    the test is the horizontal one, the same booleans."""
+    tol = np.radians(1.0)
+    up30 = 0.2 * np.array([np.cos(np.radians(30.0)), 0.0, np.sin(np.radians(30.0))])
+    R = np.eye(3)
+    assert blade_is_flat(R, up30, tol, np.radians(-30.0))
+    assert blade_is_flat(R, up30, tol, np.radians(-29.5)) and blade_is_flat(R, up30, tol, np.radians(-30.5))
+    assert not blade_is_flat(R, up30, tol, np.radians(-28.0)) and not blade_is_flat(R, up30, tol, np.radians(-32.0))
+    assert not blade_is_flat(R, up30, tol) and not blade_is_flat(R, up30, tol, np.radians(30.0))
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        b = rng.normal(size=3) * np.array([1.0, 1.0, 0.02])
+        old = abs(float(b[2])) <= np.sin(tol) * np.sqrt(float(b @ b))
+        assert blade_is_flat(R, b, tol, 0.0) == old

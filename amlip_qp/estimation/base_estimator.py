@@ -62,6 +62,11 @@ class BaseStateEstimator(Protocol):
     def reset(self) -> None:
         """Start over (a new run)."""
 
+    def set_ground_pitch(self, pitch_rad: float) -> None:
+        """The ground's pitch under the feet along the heading, rad (positive = descending ahead; 0:
+        level ground), as the controller knows it from its footholds or terrain; an estimator that
+        takes a foot's contact from how it lies takes it against this ground."""
+
 
 class TruthBaseEstimator:
     """The simulator's base state, as the harness put it in the measurement."""
@@ -83,6 +88,9 @@ class TruthBaseEstimator:
 
     def reset(self) -> None:
         """Nothing to forget."""
+
+    def set_ground_pitch(self, pitch_rad: float) -> None:
+        """The truth needs no ground."""
 
 
 class EkfBaseEstimator:
@@ -125,8 +133,10 @@ class EkfBaseEstimator:
         self.compiled: CompiledEkf | None = None
         if backend == "c":
             from amlip_qp.codegen.runtime import CodegenFallbackWarning
-            from amlip_qp.estimation.ekf_compiled import CompiledEkf
+            from amlip_qp.estimation.ekf_compiled import GROUND_PITCH_INDEX, CompiledEkf
             from amlip_qp.exceptions import CompilerUnavailableError
+
+            self._ground_index = GROUND_PITCH_INDEX
 
             try:
                 self.compiled = CompiledEkf(self.ekf.noise, self.legs, cache_dir)
@@ -138,6 +148,8 @@ class EkfBaseEstimator:
         self.sides = self.legs.sides
         self._imu = self.legs.imu_pos_in_base_m
         self._q_stand = robot.q_stand.copy()
+        #: The ground's pitch along the heading the blades are taken flat against, rad (:meth:`set_ground_pitch`).
+        self.ground_pitch_rad = 0.0
         stand = self.legs.contacts_in_imu(robot.q_stand) + self._imu  # base frame
         R_stand = quat_xyzw_to_rot(robot.q_stand[3:7])
         #: Mean height of the contact sites in the stand keyframe (world), m.
@@ -151,6 +163,7 @@ class EkfBaseEstimator:
     def reset(self) -> None:
         """Forget the filter; the next :meth:`fill` re-initialises it."""
         self.diverged = False
+        self.ground_pitch_rad = 0.0
         self._t_prev = None
         self._imu_prev = None
         self.to_base.reset()
@@ -158,6 +171,19 @@ class EkfBaseEstimator:
     def state(self):
         """A copy of the filter state (:class:`~amlip_qp.estimation.invariant_ekf.EkfState`)."""
         return self.compiled.unpack() if self.compiled is not None else self.ekf.state()
+
+    def set_ground_pitch(self, pitch_rad: float) -> None:
+        """The ground's pitch along the heading, rad (positive = descending ahead; 0: level ground): a
+        blade foot counts as a fixed contact while it lies flat on this ground
+        (:func:`~amlip_qp.estimation.invariant_ekf.blade_is_flat`), from the next :meth:`fill` on.
+
+        Raises:
+            InputError: A pitch that is not finite or not within (-pi/2, pi/2).
+        """
+        pitch = float(pitch_rad)
+        if not (math.isfinite(pitch) and abs(pitch) < 0.5 * math.pi):
+            raise InputError(f"the ground's pitch must be a finite angle within (-pi/2, pi/2) rad, got {pitch_rad!r}")
+        self.ground_pitch_rad = pitch
 
     def _contacts(self, measurement) -> tuple[bool, bool]:
         fc = measurement.foot_contact
@@ -207,7 +233,7 @@ class EkfBaseEstimator:
             if self._imu_prev is not None:
                 ekf.propagate(self._imu_prev[0], self._imu_prev[1], dt)
         gyro = np.asarray(imu.gyro_radps, dtype=float)
-        ekf.set_contacts(contacts, y, self.legs.blades_in_imu(measurement.q))
+        ekf.set_contacts(contacts, y, self.legs.blades_in_imu(measurement.q), self.ground_pitch_rad)
         ekf.correct(y)
         self._imu_prev = (gyro, np.asarray(imu.accel_mps2, dtype=float))
         if not self.diverged and ekf.diverged():
@@ -219,6 +245,7 @@ class EkfBaseEstimator:
         inp[6] = dt
         inp[7], inp[8] = contacts
         inp[11:14] = imu.gyro_radps
+        inp[self._ground_index] = self.ground_pitch_rad
         q = measurement.q
         c.q_joints[:] = q[7:]
         c.tick()

@@ -38,8 +38,11 @@ LIBRARY_FILE = "libamlip_ekf.so"
 #: Size of the packed filter state: R (9, row-major), v, p, d_left, d_right, b_g, b_a (3 each), P (441).
 N_STATE = 27 + DIM * DIM
 #: Size of the packed tick input before the joint angles: gyro, accel (of the previous tick), dt,
-#: contact switches now (2), contacts the previous tick used (2), gyro now; then ``q[7:]``.
-N_INPUT_HEAD = 3 + 3 + 1 + 2 + 2 + 3
+#: contact switches now (2), contacts the previous tick used (2), gyro now, the ground's pitch along
+#: the blades (rad, :func:`~amlip_qp.estimation.invariant_ekf.blade_is_flat`); then ``q[7:]``.
+N_INPUT_HEAD = 3 + 3 + 1 + 2 + 2 + 3 + 1
+#: Index of the ground's pitch in the packed tick input.
+GROUND_PITCH_INDEX = 14
 #: The joint types the generated leg kinematics knows: Pinocchio short name -> rotation axis.
 _REVOLUTE_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
 
@@ -148,6 +151,7 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
     gyro, accel, dt = u[0:3], u[3:6], u[6]
     c_now, c_before = [u[7], u[8]], [u[9], u[10]]
     gyro_now = u[11:14]
+    ground_pitch = u[GROUND_PITCH_INDEX]
     y, blades = _contacts_in_imu(legs, u[N_INPUT_HEAD:])
     r_imu = ca.DM(legs.imu_pos_in_base_m)
     g = ca.DM(GRAVITY_MPS2)
@@ -177,10 +181,15 @@ def _function(noise: EkfNoise, legs: LegKinematics) -> ca.Function:
 
     # --- a blade foot counts as in contact only while flat (InvariantEKF.set_contacts / blade_is_flat)
     if blades is not None:
-        sin_tol = float(np.sin(n.max_blade_slope_rad))
+        tol = float(n.max_blade_slope_rad)
+        sin_tol = float(np.sin(tol))
+        up = -ground_pitch
         for i in range(2):
             blade_w = ca.mtimes(R, blades[i])
-            flat = ca.fabs(blade_w[2]) <= sin_tol * ca.sqrt(ca.dot(blade_w, blade_w))
+            norm = ca.sqrt(ca.dot(blade_w, blade_w))
+            level = ca.fabs(blade_w[2]) <= sin_tol * norm
+            sloped = ca.logic_and(ca.sin(up - tol) * norm <= blade_w[2], blade_w[2] <= ca.sin(up + tol) * norm)
+            flat = ca.if_else(ground_pitch == 0, level, sloped)
             c_now[i] = ca.if_else(flat, c_now[i], 0.0)
 
     # --- touchdown: restart the slot at p + R y with the covariance augmentation (InvariantEKF._augment)

@@ -161,10 +161,17 @@ def so3_exp(phi) -> tuple[np.ndarray, np.ndarray]:
     return eye + a * K + b * K2, eye + b * K + c * K2
 
 
-def blade_is_flat(R, blade, max_slope_rad: float) -> bool:
-    """True when ``R @ blade`` (a blade in IMU axes, in the world) is within ``max_slope_rad`` of the horizontal."""
+def blade_is_flat(R, blade, max_slope_rad: float, ground_pitch_rad: float = 0.0) -> bool:
+    """True when ``R @ blade`` (a blade in IMU axes, toe minus heel, in the world) lies within
+    ``max_slope_rad`` of the ground: of the horizontal with ``ground_pitch_rad`` 0 (the same test, bit
+    for bit), else of the elevation ``-ground_pitch_rad`` (the ground's pitch along the blade, rad,
+    positive = descending ahead, as :class:`~amlip_qp.messages.TerrainPrediction`'s)."""
     b = np.asarray(R, dtype=float) @ np.asarray(blade, dtype=float)
-    return abs(float(b[2])) <= math.sin(max_slope_rad) * math.sqrt(float(b @ b))
+    norm = math.sqrt(float(b @ b))
+    if ground_pitch_rad == 0.0:
+        return abs(float(b[2])) <= math.sin(max_slope_rad) * norm
+    up = -float(ground_pitch_rad)
+    return math.sin(up - max_slope_rad) * norm <= float(b[2]) <= math.sin(up + max_slope_rad) * norm
 
 
 def measurement_matrix(in_contact: tuple[bool, bool]) -> np.ndarray:
@@ -292,7 +299,9 @@ class InvariantEKF:
         self.v = self.v + acc * dt_s
         self.R = self.R @ so3_exp(w)[0]
 
-    def set_contacts(self, in_contact: tuple[bool, bool], contacts_in_imu, blades_in_imu=None) -> None:
+    def set_contacts(
+        self, in_contact: tuple[bool, bool], contacts_in_imu, blades_in_imu=None, ground_pitch_rad: float = 0.0
+    ) -> None:
         """Declare which feet are in contact; a foot that just touched down restarts its slot.
 
         Args:
@@ -301,12 +310,14 @@ class InvariantEKF:
             blades_in_imu: Each blade foot's toe minus heel, IMU axes, m, shape (2, 3), or
                 ``None`` (no blades). With blades, a foot counts as in contact only while its
                 blade lies flat (:func:`blade_is_flat`).
+            ground_pitch_rad: The ground's pitch along the blades, rad (positive = descending ahead;
+                0: level ground), which "flat" is taken against.
         """
         c = [bool(in_contact[0]), bool(in_contact[1])]
         if blades_in_imu is not None:
             tol = self.noise.max_blade_slope_rad
             for i in range(2):
-                c[i] = c[i] and blade_is_flat(self.R, blades_in_imu[i], tol)
+                c[i] = c[i] and blade_is_flat(self.R, blades_in_imu[i], tol, ground_pitch_rad)
         for i in range(2):
             if c[i] and not self.in_contact[i]:
                 self._augment(i, np.asarray(contacts_in_imu[i], dtype=float))

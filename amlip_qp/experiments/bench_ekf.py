@@ -43,6 +43,9 @@ class _TimedEstimator:
         self.inner.reset()
         self.diverged = self.inner.diverged
 
+    def set_ground_pitch(self, pitch_rad: float) -> None:
+        self.inner.set_ground_pitch(pitch_rad)
+
     def fill(self, measurement):
         t0 = time.perf_counter_ns()
         out = self.inner.fill(measurement)
