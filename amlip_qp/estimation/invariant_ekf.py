@@ -26,9 +26,14 @@ blade) moves by about 0.3 m/s forward and 0.25 m/s down for the first ~40 ms
 of every stance. Taken as a fixed point, that motion biased the velocity
 estimate by 0.04 m/s. So a foot whose switch reports contact is used only while
 its blade (toe minus heel, from the leg kinematics) lies within
-``max_blade_slope_rad`` of the horizontal by the estimated orientation (flat
-ground); it touches down, for the filter, when it lands flat. Feet without a
-blade (``blades_in_imu`` ``None``) are used from the switch alone.
+``max_blade_slope_rad`` of the ground by the estimated orientation: of the
+horizontal on level ground and when blind, and of the ground's pitch along
+the heading that the walking controller passes where it is given the terrain
+(``ground_pitch_rad`` of :meth:`InvariantEKF.set_contacts`; on a 30 degree
+slope a blade resting on the ground is 30 degrees from the horizontal, and
+taken against the horizontal no stance counted). It touches down, for the
+filter, when it lands flat. Feet without a blade (``blades_in_imu`` ``None``)
+are used from the switch alone.
 
 **Propagation** (IMU, control period ``dt``): ``R <- R Exp(w dt)``,
 ``p <- p + v dt + (R a + g) dt^2/2``, ``v <- v + (R a + g) dt`` with the

@@ -271,7 +271,7 @@ class WalkingController:
     def step(self, measurement: Measurement, command: Command) -> TickInfo:
         """One control tick: joint torques (actuator order, joint side, N m) and signals."""
         t = float(measurement.t_s)
-        if self.ground.active:  # the estimator takes a blade's contact against the ground under the stance foot
+        if self.ground.mode == "aware":  # the estimator takes a blade's contact against the known ground
             self.base_estimator.set_ground_pitch(self.ground.stance_pitch_rad)
         measurement = self.base_estimator.fill(measurement)
         q, v = measurement.q, measurement.v
