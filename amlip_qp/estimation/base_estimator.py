@@ -64,8 +64,9 @@ class BaseStateEstimator(Protocol):
 
     def set_ground_pitch(self, pitch_rad: float) -> None:
         """The ground's pitch under the feet along the heading, rad (positive = descending ahead; 0:
-        level ground), as the controller knows it from its footholds or terrain; an estimator that
-        takes a foot's contact from how it lies takes it against this ground."""
+        level ground), which the walking controller passes every tick where it is given the terrain
+        (terrain-aware); an estimator that takes a foot's contact from how it lies takes it against
+        this ground."""
 
 
 class TruthBaseEstimator:
