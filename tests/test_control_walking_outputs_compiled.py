@@ -5,7 +5,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amlip_qp.control.walking.outputs_compiled import CompiledOutputMap, generate_source, make_kinematics
+from amlip_qp.control.walking.outputs_compiled import (
+    MAX_BINDINGS,
+    CompiledOutputMap,
+    generate_source,
+    make_kinematics,
+)
 from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
@@ -30,28 +35,36 @@ def compiled(robot):
     return CompiledOutputMap(robot)
 
 
-def _kin(robot, rng, positions_only=False):
+def _q(robot, rng):
     q = robot.q_stand.copy()
     q[robot.state_map.scalar_pin_q] += rng.normal(0.0, 0.1, robot.state_map.scalar_pin_q.size)
     if robot.is_floating:
         quat = rng.normal(0.0, 0.2, 4)
         quat[3] += 1.0
         q[3:7] = quat / np.linalg.norm(quat)
+    return q
+
+
+def _kin(robot, rng, update="full"):
+    """Kinematics at a random state after ``update``: ``"full"``, ``"kinematics"`` or ``"positions"``."""
+    q, v = _q(robot, rng), rng.normal(0.0, 0.5, robot.nv)
     kin = RobotKinematics(robot)
-    if positions_only:
+    if update == "positions":
         kin.update_positions(q)
+    elif update == "kinematics":
+        kin.update_kinematics(q, v)
     else:
-        kin.update(q, rng.normal(0.0, 0.5, robot.nv))
+        kin.update(q, v)
     return kin
 
 
-@pytest.mark.parametrize("positions_only", [False, True])
-def test_compiled_outputs_equal_the_python_map(robot, compiled, positions_only):
+@pytest.mark.parametrize("update", ["full", "kinematics", "positions"])
+def test_compiled_outputs_equal_the_python_map(robot, compiled, update):
     ref = OutputMap(robot)
     assert compiled.names == ref.names and compiled.size == ref.size
     rng = np.random.default_rng(1)
     for i in range(12):
-        kin = _kin(robot, rng, positions_only)
+        kin = _kin(robot, rng, update)
         stance, heading = ("left", "right")[i % 2], float(rng.uniform(-3.0, 3.0))
         for a, b, what in zip(
             ref.evaluate(kin, stance, heading), compiled.evaluate(kin, stance, heading), ("y", "J", "Jdot_v")
@@ -90,11 +103,39 @@ def test_kinematics_takes_a_drop_in_map_and_rejects_a_wrong_one(robot, compiled)
         kin.output_map = compiled  # chosen when the object is made, not swapped later
 
 
-def test_source_depends_on_the_outputs_only():
+def test_source_depends_on_the_robot_and_its_outputs():
     cassie, rabbit = load_robot("cassie"), load_robot("rabbit")
     assert generate_source(OutputMap(cassie)) != generate_source(OutputMap(rabbit))
     assert generate_source(OutputMap(cassie)) != generate_source(OutputMap(_reordered(cassie)))
     assert generate_source(OutputMap(rabbit)) == generate_source(OutputMap(load_robot("rabbit")))
+
+
+def test_one_map_reads_each_kinematics_own_pinocchio_data(robot, compiled):
+    """The map is bound to each Pinocchio data it is given (the controller's and its IK's), and
+    rebinds one it dropped: evaluated in turns on more kinematics objects than it keeps bound,
+    each gives its own state's outputs."""
+    ref = OutputMap(robot)
+    rng = np.random.default_rng(5)
+    kins = [_kin(robot, rng, ("full", "kinematics")[i % 2]) for i in range(MAX_BINDINGS + 2)]
+    for _ in range(2):
+        for i, kin in enumerate(kins):
+            stance = robot.foot_sides[i % 2]
+            for a, b in zip(ref.evaluate(kin, stance, 0.4), compiled.evaluate(kin, stance, 0.4)):
+                np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
+
+
+def test_a_position_update_after_a_full_one_gives_zero_drift(robot, compiled):
+    """Pinocchio's velocity terms of the earlier update stay in its data; after a position-only
+    update (``v = 0``) the drift is zero and the values are those of the new configuration."""
+    rng = np.random.default_rng(6)
+    kin = _kin(robot, rng, "full")
+    assert np.any(compiled.evaluate(kin, "left", 0.0)[2] != 0.0)
+    kin.update_positions(_q(robot, rng))
+    y, J, jdv = compiled.evaluate(kin, "left", 0.0)
+    y_ref, J_ref, _ = OutputMap(robot).evaluate(kin, "left", 0.0)
+    np.testing.assert_array_equal(jdv, np.zeros(compiled.size))
+    np.testing.assert_allclose(y, y_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(J, J_ref, rtol=1e-12, atol=1e-12)
 
 
 def test_make_kinematics_chooses_the_map_and_the_controller_keeps_the_one_it_is_given():

@@ -10,6 +10,10 @@ Modules (one job each):
   cache (:func:`compile_and_load`, for every generated library of amlip_qp).
 - :mod:`~amlip_qp.codegen.kernels`: the planner kernels with microsecond
   calls (:func:`load_kernels`, :class:`Kernels`, :class:`FastFunction`).
+- :mod:`~amlip_qp.codegen.output_map`, :mod:`~amlip_qp.codegen.frame_terms`: the output map
+  ``h_0`` with its Jacobian and drift, and the frames' Jacobians and drifts, as CasADi
+  expressions of Pinocchio's arrays (read in place by the generated code of the trackers and the
+  walking loop).
 - :mod:`~amlip_qp.codegen.bench`: timings of the fast path, the CasADi
   Function and the numpy reference.
 - :mod:`~amlip_qp.codegen.cli`: the ``amlip-qp codegen`` / ``bench codegen`` handlers.

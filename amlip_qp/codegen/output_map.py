@@ -194,3 +194,43 @@ def output_map_function(
         ["JT", "packed"], ["y", "JyT", "jdv"],
     )  # fmt: skip
     return fn, reads
+
+
+def output_map_on_terms(outputs, terms, stance: str, q, v, heading):
+    """``h_0``'s ``(y, JyT, jdv)`` for ``stance`` as expressions of Pinocchio's terms read in place.
+
+    Args:
+        outputs: The robot's :class:`~amlip_qp.robots.outputs.OutputMap` (what it reads:
+            ``points``, ``rotating_frames``, ``joint_indices``, ``joint_rows``, ``primitives``,
+            ``planar``, ``robot``).
+        terms: A :class:`~amlip_qp.codegen.frame_terms.FrameTerms` holding the base frame, the
+            stance's points and rotating frames, with the base and the rotating frames' rotations.
+        stance: The stance side.
+        q, v: CasADi expressions of the configuration (nq,) and velocity (nv,).
+        heading: The heading ``D`` (rad), a CasADi scalar.
+
+    Returns:
+        ``(y, JyT, jdv)`` (CasADi), the joint outputs' Jacobian entries included (structural
+        ones in ``JyT``).
+    """
+    nv = outputs.robot.nv
+    T = terms
+    base = outputs.robot.base_frame_id
+    frames, rotating = outputs.points(stance), outputs.rotating_frames(stance)
+    JT = ca.horzcat(
+        T.jacobian(base)[3:6, :].T, T.Jcom.T, *[T.jacobian(f)[0:3, :].T for f in frames],
+        *[T.jacobian(f)[3:6, :].T for f in rotating],
+    )  # fmt: skip
+    q_idx, v_idx = outputs.joint_indices(stance)
+    packed = ca.vertcat(
+        ca.reshape(T.rotation(base).T, 9, 1), T.drift(base)[3:6], T.com, T.acom,
+        *[ca.vertcat(T.position(f), T.drift(f)[0:3]) for f in frames],
+        *[ca.vertcat(ca.reshape(T.rotation(f).T, 9, 1), T.drift(f)[3:6]) for f in rotating],
+        *[q[i] for i in q_idx], heading, v,
+    )  # fmt: skip
+    y, JyT, jdv = output_map_function(outputs.primitives, outputs.planar, nv)[0](JT, packed)
+    if q_idx:
+        rows, cols = list(v_idx), list(outputs.joint_rows)
+        n_out = len(outputs.primitives)
+        JyT = JyT + ca.DM(ca.Sparsity.triplet(nv, n_out, rows, cols), 1.0)  # structural zeros there
+    return y, JyT, jdv

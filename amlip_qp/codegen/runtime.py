@@ -47,6 +47,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 from amlip_qp.codegen import generate
 from amlip_qp.exceptions import CodegenError, CompilerUnavailableError
@@ -268,3 +269,30 @@ def _announce_compilation(root: Path) -> None:
         f"amlip_qp: compiling generated C once into {shown} (up to about {COLD_COMPILE_S} s; later runs reuse it)\n"
     )
     sys.stderr.flush()
+
+
+def bind_buffers(functions: dict[str, ca.Function], inputs: list, outputs: list) -> dict[str, tuple]:
+    """Bind each function's inputs and outputs to the arrays (contiguous; a
+    C-order (a, b) array is the column-major (b, a) matrix).
+
+    Returns:
+        Per name, its ``(buffer, evaluate)`` pair.
+
+    Raises:
+        CodegenError: A size differs or an array is not contiguous.
+    """
+    bound = {}
+    # Stub limit: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes it from the buffer).
+    for name, fn in functions.items():
+        buf, ev = fn.buffer()
+        for kind, arrays, nnz, setter in (
+            ("input", inputs, fn.nnz_in, buf.set_arg), ("output", outputs, fn.nnz_out, buf.set_res)
+        ):  # fmt: skip
+            for i, arr in enumerate(arrays):
+                if nnz(i) != arr.size or arr.dtype != np.float64:
+                    raise CodegenError(f"{name} {kind} {i} has the wrong size or type")
+                if not (arr.flags.c_contiguous or arr.flags.f_contiguous):
+                    raise CodegenError(f"{name} {kind} {i} is not contiguous")
+                setter(i, memoryview(arr.reshape(-1, order="A")))  # type: ignore[call-arg]
+        bound[name] = (buf, ev)
+    return bound

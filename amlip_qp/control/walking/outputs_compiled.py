@@ -1,4 +1,4 @@
-"""The output map ``h_0(q)`` with its Jacobian and drift, as generated C.
+"""The output map ``h_0(q)`` with its Jacobian and drift, as generated C reading Pinocchio in place.
 
 :class:`~amlip_qp.robots.outputs.OutputMap` is the readable reference (a
 scalar chain rule in Python). :class:`CompiledOutputMap` evaluates the same
@@ -6,19 +6,22 @@ outputs with C code that CasADi generates from the same definitions, and has
 the same ``evaluate(kin, stance, heading_rad)`` interface, so it plugs into
 :attr:`RobotKinematics.output_map <amlip_qp.robots.kinematics.RobotKinematics.output_map>`.
 
-Python gathers the primitive quantities from Pinocchio (base rotation,
-angular Jacobian and drift, the CoM, the contact points and, if the outputs
-read them, the swing foot's toe and heel and its contact frame's rotation:
-positions, Jacobians, drifts). The generated code
-applies the chain rule symbolically: with ``x`` the primitives (the base
-rotation's entries, the points), ``y = f(x)``, ``J_y = df/dx J_x`` and
-``Jdot_v_y = df/dx Jdot_v_x + xdot^T (d2f/dx2) xdot``, where a rotation
-column ``r_j`` has ``J = -[r_j]x J_w`` and drift ``alpha x r_j + w x (w x r_j)``.
-The joint outputs are joint coordinates and stay in Python.
+The generated function (one per stance side) reads Pinocchio's own storage of
+the kinematics it is given, bound once per Pinocchio data
+(:class:`~amlip_qp.codegen.frame_terms.FrameTerms`: the joint Jacobians, the
+joints' rotations, velocities and drift accelerations, the frames' positions
+and rotations, the CoM terms; every update overwrites them in place), plus
+one small array a call (``q``, ``v``, the heading). It forms the frames'
+Jacobians and drifts as Pinocchio's getters do, then the outputs by the chain
+rule (:func:`~amlip_qp.codegen.output_map.output_map_on_terms`): with ``x``
+the primitives (the base rotation's columns, the points), ``y = f(x)``,
+``J_y = df/dx J_x`` and ``Jdot_v_y = df/dx Jdot_v_x + xdot^T (d2f/dx2) xdot``,
+where a rotation column ``r_j`` has ``J = -[r_j]x J_w`` and drift
+``alpha x r_j + w x (w x r_j)``. A call is one C call and three copies: no
+Python gathers Pinocchio's quantities.
 
-The source depends only on the robot's outputs, whether its root is planar,
-and ``nv``: it is compiled once into the codegen cache (see
-:mod:`amlip_qp.codegen.runtime`).
+The source depends only on the robot's model and outputs: it is compiled once
+into the codegen cache (see :mod:`amlip_qp.codegen.runtime`).
 
 It lives in the walking loop: it needs CasADi and the codegen runtime, which
 ``robots`` may not import. A kinematics object gets it when it is made
@@ -32,11 +35,13 @@ import os
 import warnings
 from typing import TYPE_CHECKING
 
+import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.codegen.output_map import FUNCTION_NAME, output_map_function
-from amlip_qp.exceptions import CodegenError, CompilerUnavailableError, InputError
+from amlip_qp.codegen.frame_terms import FrameTerms
+from amlip_qp.codegen.output_map import output_map_on_terms
+from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.outputs import OutputMap
 
@@ -45,14 +50,47 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
 SOURCE_FILE = "amlip_outputs.c"
 LIBRARY_FILE = "libamlip_outputs.so"
+#: Name stem of the generated functions, ``<stem>_left`` and ``<stem>_right``.
+FUNCTION_STEM = "output_map_in_place"
 #: The output maps of :func:`make_kinematics`: generated C or Python.
 OUTPUT_BACKENDS = ("c", "python")
+#: Pinocchio data objects a map keeps bound at once (the controller's and its IK's kinematics).
+MAX_BINDINGS = 8
+
+
+def output_frame_terms(output_map: OutputMap) -> FrameTerms:
+    """The Pinocchio terms ``output_map`` reads, both stances: the base, the points and the rotating frames."""
+    robot = output_map.robot
+    frames: list[int] = [robot.base_frame_id]
+    rotating: list[int] = []
+    for side in robot.foot_sides:
+        frames += output_map.points(side)
+        rotating += output_map.rotating_frames(side)
+    return FrameTerms(robot.pin_model, frames + rotating, [robot.base_frame_id, *rotating])
+
+
+def output_functions(output_map: OutputMap, terms: FrameTerms) -> dict[str, ca.Function]:
+    """Per stance side, the function of :attr:`FrameTerms.symbols` and ``small = (q, v, heading)``
+    giving ``y``, ``JyT`` and ``jdv`` (expanded to scalar code)."""
+    robot = output_map.robot
+    nq, nv = robot.nq, robot.nv
+    functions = {}
+    for side in robot.foot_sides:
+        u = ca.MX.sym("small", nq + nv + 1)
+        y, JyT, jdv = output_map_on_terms(output_map, terms, side, u[:nq], u[nq : nq + nv], u[nq + nv])
+        fn = ca.Function(
+            f"{FUNCTION_STEM}_{side}", [*(s for _, s in terms.symbols), u],
+            [ca.densify(y), ca.densify(JyT), ca.densify(jdv)],
+            [*(n for n, _ in terms.symbols), "small"], ["y", "JyT", "jdv"],
+        )  # fmt: skip
+        functions[side] = fn.expand()
+    return functions
 
 
 def generate_source(output_map: OutputMap) -> bytes:
     """The C source of ``output_map``'s outputs (:class:`~amlip_qp.robots.outputs.OutputMap`)."""
-    fn, _ = output_map_function(output_map.primitives, output_map.planar, output_map.robot.nv)
-    return generate.single_file_source([fn], SOURCE_FILE)
+    functions = output_functions(output_map, output_frame_terms(output_map))
+    return generate.single_file_source(functions.values(), SOURCE_FILE)
 
 
 class CompiledOutputMap:
@@ -72,83 +110,53 @@ class CompiledOutputMap:
         self.robot = robot
         self.names = ref.names
         self._ref = ref
-        nv = robot.nv
-        source = generate_source(ref)
-        self.library_path, functions = runtime.compile_and_load(
-            source, [FUNCTION_NAME], SOURCE_FILE, LIBRARY_FILE, cache_dir
+        runtime.require_compiler()  # before the generation, which takes a second
+        self._terms = terms = output_frame_terms(ref)
+        functions = output_functions(ref, terms)
+        source = generate.single_file_source(functions.values(), SOURCE_FILE)
+        self._names = {side: fn.name() for side, fn in functions.items()}
+        self.library_path, self._functions = runtime.compile_and_load(
+            source, list(self._names.values()), SOURCE_FILE, LIBRARY_FILE, cache_dir
         )
-        fn = functions[FUNCTION_NAME]
-        n = len(self.names)
-        self._JT = np.zeros((fn.nnz_in(0) // nv, nv))
-        self._p = np.zeros(fn.nnz_in(1))
+        n, nq, nv = len(self.names), robot.nq, robot.nv
+        self._small = np.zeros(nq + nv + 1)
+        self._small_q, self._small_v = self._small[:nq], self._small[nq : nq + nv]
+        self._i_heading = nq + nv
         self._y, self._J, self._jdv = np.zeros(n), np.zeros((n, nv)), np.zeros(n)
-        self._buffer, self._eval = fn.buffer()
-        # Stub limits: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes
-        # it from the buffer); numpy's stubs declare ndarray a Buffer only for Python >= 3.12.
-        for i, arr in enumerate((self._JT, self._p)):
-            self._buffer.set_arg(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
-        for i, arr in enumerate((self._y, self._J, self._jdv)):
-            if fn.nnz_out(i) != arr.size:
-                raise CodegenError(f"{self.library_path}: {FUNCTION_NAME} output {i} has the wrong size")
-            self._buffer.set_res(i, memoryview(arr.reshape(-1)))  # type: ignore[call-arg, arg-type]
-        self._base = robot.base_frame_id
-        # Per stance side: the points and rotating frames of the packed input (OutputInputs' order),
-        # and the joint outputs' q and v indices.
-        sides = robot.foot_sides
-        self._points = {stance: ref.points(stance) for stance in sides}
-        self._rotating = {stance: ref.rotating_frames(stance) for stance in sides}
-        self._joints = {stance: ref.joint_indices(stance) for stance in sides}
-        # the joint outputs' Jacobian entries (row, v index), per stance (a few: set one by one)
-        self._joint_entries = {stance: tuple(zip(ref.joint_rows, self._joints[stance][1])) for stance in sides}
-        # Views of the inputs each primitive is copied into (``view[...] = x`` is the cheapest copy).
-        JT, p = self._JT, self._p
-        self._in_base = (JT[0:3], JT[3:6], p[0:9].reshape(3, 3), p[9:12], p[12:15], p[15:18])
-        n_points, n_rot = len(self._points[sides[0]]), len(self._rotating[sides[0]])
-        self._in_points = tuple((JT[6 + 3 * i : 9 + 3 * i], p[18 + 6 * i : 21 + 6 * i], p[21 + 6 * i : 24 + 6 * i])
-                                for i in range(n_points))  # fmt: skip
-        at, row = 18 + 6 * n_points, 6 + 3 * n_points
-        self._in_rotating = tuple((JT[row + 3 * i : row + 3 + 3 * i], p[at + 12 * i : at + 9 + 12 * i].reshape(3, 3),
-                                   p[at + 9 + 12 * i : at + 12 + 12 * i]) for i in range(n_rot))  # fmt: skip
-        self._at = at + 12 * n_rot  # the joint angles, then the heading
-        self._in_v = p[p.size - nv :]
+        # per Pinocchio data (id): (the data, its views, the buffers, the evaluators per side)
+        self._bindings: dict[int, tuple] = {}
 
     @property
     def size(self) -> int:
         """Number of outputs."""
         return len(self.names)
 
+    def _bound(self, data) -> dict:
+        """The evaluators per side reading ``data`` in place (bound on first use)."""
+        binding = self._bindings.get(id(data))
+        if binding is not None and binding[0] is data:
+            return binding[3]
+        if len(self._bindings) >= MAX_BINDINGS:
+            del self._bindings[next(iter(self._bindings))]  # the oldest
+        views = [*self._terms.views(data), self._small]
+        bound = runtime.bind_buffers(self._functions, views, [self._y, self._J, self._jdv])
+        evals = {side: bound[name][1] for side, name in self._names.items()}
+        # the data, the views and the buffers are kept alive with their evaluators
+        self._bindings[id(data)] = (data, views, [b[0] for b in bound.values()], evals)
+        return evals
+
     def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
         self._ref.checked_swing(stance, heading_rad)
         q, v = kin.state()
-        jac, acc = kin.frame_jacobian6, kin.frame_jdot_v6
-        base = self._base
-        Jw, Jc, R, alpha, com, com_drift = self._in_base
-        Jw[...] = jac(base)[3:]
-        Jc[...] = kin.com_jacobian()
-        R[...] = kin.frame_rotation_view(base)  # row-major into the packed input
-        alpha[...] = acc(base)[3:]
-        com[...] = kin.com_view
-        com_drift[...] = kin.com_jdot_v()
-        for fid, (J_in, pos_in, drift_in) in zip(self._points[stance], self._in_points):
-            J_in[...] = jac(fid)[:3]
-            pos_in[...] = kin.frame_translation_view(fid)
-            drift_in[...] = acc(fid)[:3]
-        for fid, (J_in, R_in, alpha_in) in zip(self._rotating[stance], self._in_rotating):
-            J_in[...] = jac(fid)[3:]
-            R_in[...] = kin.frame_rotation_view(fid)
-            alpha_in[...] = acc(fid)[3:]
-        p, at = self._p, self._at
-        q_idx = self._joints[stance][0]
-        for k, qi in enumerate(q_idx):
-            p[at + k] = q[qi]
-        p[at + len(q_idx)] = heading_rad
-        self._in_v[...] = v
-        self._eval()
-        J = self._J.copy()
-        for entry in self._joint_entries[stance]:
-            J[entry] = 1.0
-        return self._y.copy(), J, self._jdv.copy()
+        evals = self._bound(kin.data)
+        self._small_q[...] = q
+        self._small_v[...] = v
+        self._small[self._i_heading] = heading_rad
+        evals[stance]()
+        # after a position update Pinocchio's velocity terms are stale: the drift is zero, as v is
+        jdv = np.zeros(self._jdv.size) if kin.positions_only else self._jdv.copy()
+        return self._y.copy(), self._J.copy(), jdv
 
 
 def make_kinematics(

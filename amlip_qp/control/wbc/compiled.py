@@ -35,8 +35,9 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
+from amlip_qp.codegen.runtime import bind_buffers
 from amlip_qp.control.wbc.inputs import PackedInput, SymbolicInputs, dm, gather_inputs
-from amlip_qp.exceptions import CodegenError, InputError
+from amlip_qp.exceptions import InputError
 
 if TYPE_CHECKING:
     from amlip_qp.control.tracker import TrackingTarget
@@ -111,33 +112,6 @@ def generate_source(builder: WholeBodyQP) -> tuple[bytes, dict[str, ca.Function]
     # operations per stance; E^T E stays with numpy (docs/TUNING.md).
     functions = {side: assembly_function(builder, side).expand() for side in builder.robot.foot_sides}
     return generate.single_file_source(functions.values(), SOURCE_FILE), functions
-
-
-def bind_buffers(functions: dict[str, ca.Function], inputs: list, outputs: list) -> dict[str, tuple]:
-    """Bind each function's inputs and outputs to the arrays (contiguous; a
-    C-order (a, b) array is the column-major (b, a) matrix).
-
-    Returns:
-        Per name, its ``(buffer, evaluate)`` pair.
-
-    Raises:
-        CodegenError: A size differs or an array is not contiguous.
-    """
-    bound = {}
-    # Stub limit: casadi's FunctionBuffer.set_arg/set_res stubs demand a size (the binding takes it from the buffer).
-    for name, fn in functions.items():
-        buf, ev = fn.buffer()
-        for kind, arrays, nnz, setter in (
-            ("input", inputs, fn.nnz_in, buf.set_arg), ("output", outputs, fn.nnz_out, buf.set_res)
-        ):  # fmt: skip
-            for i, arr in enumerate(arrays):
-                if nnz(i) != arr.size or arr.dtype != np.float64:
-                    raise CodegenError(f"{name} {kind} {i} has the wrong size or type")
-                if not (arr.flags.c_contiguous or arr.flags.f_contiguous):
-                    raise CodegenError(f"{name} {kind} {i} is not contiguous")
-                setter(i, memoryview(arr.reshape(-1, order="A")))  # type: ignore[call-arg]
-        bound[name] = (buf, ev)
-    return bound
 
 
 class CompiledBuild:

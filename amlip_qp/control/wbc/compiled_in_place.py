@@ -10,14 +10,14 @@ Python build to rounding, with less Python a tick:
   its own generated C, the output task's residual and the pelvis-yaw
   feedback with numpy) and copies them into its generated assembly;
 - :class:`InPlaceBuild` binds its generated function's inputs once to
-  Pinocchio's own storage (:class:`~amlip_qp.control.wbc.frame_terms.FrameTerms`:
+  Pinocchio's own storage (:class:`~amlip_qp.codegen.frame_terms.FrameTerms`:
   the joint Jacobians ``data.J``, the joints' rotations, velocities and
   accelerations, the frames' positions, the CoM terms, ``M``, ``h``; every
   update overwrites them in place) plus one small packed array per tick
   (``q``, ``v``, the references, the heading, the swing force ramp ``w``).
   The function (one per stance side) forms the frames' Jacobians (bit for
   bit Pinocchio's) and drifts (to rounding), the output map
-  (:func:`~amlip_qp.codegen.output_map.output_map_function`), the output
+  (:func:`~amlip_qp.codegen.output_map.output_map_on_terms`), the output
   task's residual with the pelvis-yaw feedback
   (:meth:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback.symbolic_correction`),
   the passive forces (:mod:`~amlip_qp.control.wbc.passive_symbolic`) and,
@@ -47,10 +47,11 @@ import numpy as np
 
 from amlip_qp.alip import other_side
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.codegen.output_map import output_map_function
-from amlip_qp.control.wbc.compiled import assembly_function, bind_buffers
+from amlip_qp.codegen.frame_terms import FrameTerms
+from amlip_qp.codegen.output_map import output_map_on_terms
+from amlip_qp.codegen.runtime import bind_buffers
+from amlip_qp.control.wbc.compiled import assembly_function
 from amlip_qp.control.wbc.constraints import FrictionPyramid
-from amlip_qp.control.wbc.frame_terms import FrameTerms
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
 from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
 from amlip_qp.exceptions import InputError
@@ -119,25 +120,8 @@ def tick_function(
     heading, w = u[sl["heading"]], u[sl["w"]]
     T = terms
     base = robot.base_frame_id
-    # The output map (codegen.output_map's packed order), with the joint outputs' ones.
-    J_base = T.jacobian(base)
-    frames, rotating = outputs.points(stance), outputs.rotating_frames(stance)
-    JT = ca.horzcat(
-        J_base[3:6, :].T, T.Jcom.T, *[T.jacobian(f)[0:3, :].T for f in frames],
-        *[T.jacobian(f)[3:6, :].T for f in rotating],
-    )  # fmt: skip
-    q_idx, v_idx = outputs.joint_indices(stance)
-    R = T.rotation(base)
-    packed = ca.vertcat(
-        ca.reshape(R.T, 9, 1), T.drift(base)[3:6], T.com, T.acom,
-        *[ca.vertcat(T.position(f), T.drift(f)[0:3]) for f in frames],
-        *[ca.vertcat(ca.reshape(T.rotation(f).T, 9, 1), T.drift(f)[3:6]) for f in rotating],
-        *[q[i] for i in q_idx], heading, v,
-    )  # fmt: skip
-    y, JyT, jdv = output_map_function(outputs.primitives, outputs.planar, nv)[0](JT, packed)
-    if q_idx:
-        rows, cols = list(v_idx), list(outputs.joint_rows)
-        JyT = JyT + ca.DM(ca.Sparsity.triplet(nv, n_out, rows, cols), 1.0)  # structural zeros there
+    J_base, R = T.jacobian(base), T.rotation(base)
+    y, JyT, jdv = output_map_on_terms(outputs, T, stance, q, v, heading)
     # The output task's residual r = Jdot v - ydd_d - K_d (yd_d - J v) - K_p (y_d - y), the feedback's shift applied.
     kp, kd = dm(task.gains.kp), dm(task.gains.kd)
     r = jdv - ddh_d - kd * (dh_d - ca.mtimes(JyT.T, v)) - kp * (h_d - y)

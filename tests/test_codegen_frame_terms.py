@@ -1,4 +1,4 @@
-"""Tests of the frame terms read from Pinocchio's data (amlip_qp.control.wbc.frame_terms)."""
+"""Tests of the frame terms read from Pinocchio's data (amlip_qp.codegen.frame_terms)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from amlip_qp.control.wbc.frame_terms import FrameTerms
+from amlip_qp.codegen.frame_terms import FrameTerms
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 
