@@ -151,13 +151,16 @@ RULES: dict[str, Rule] = {
     ),
     # the paper's tracker: no QP
     "amlip_qp.control.pbc": Rule(
-        CONTROL_BASE + ("amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.pbc"),
+        CONTROL_BASE
+        + ("amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.passive_symbolic")
+        + ("amlip_qp.control.pbc",),
         ("mujoco", "proxsuite", "qpsolvers"),
     ),
     # the whole-body QP: may use the QP layer
     "amlip_qp.control.wbc": Rule(
         CONTROL_BASE
-        + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc"),
+        + ("amlip_qp.qp", "amlip_qp.control.tracker", "amlip_qp.control.pelvis_yaw", "amlip_qp.control.wbc")
+        + ("amlip_qp.control.passive_symbolic",),
         ("mujoco",),
     ),
     # the MuJoCo side, one subpackage per job (SIM_JOBS, lowest first): each imports only jobs below it

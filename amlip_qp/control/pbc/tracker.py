@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -60,7 +61,10 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from amlip_qp.alip import other_side
+from amlip_qp.codegen.runtime import CodegenFallbackWarning
 from amlip_qp.control.pbc.contact_release import solve_released
+from amlip_qp.control.pbc.contact_rows import contact_rows
+from amlip_qp.control.pbc.dynamics_compiled import CompiledDynamics
 from amlip_qp.control.pbc.gains import PBCGains, default_gains
 from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_newton import all_finite
@@ -68,6 +72,7 @@ from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackingTarget
+from amlip_qp.exceptions import CompilerUnavailableError
 from amlip_qp.messages import TrackerResult
 from amlip_qp.robots.outputs import OutputMap
 from amlip_qp.robots.passive import contiguous_index
@@ -101,11 +106,24 @@ class PBCTracker(Tracker):
         robot: The :class:`~amlip_qp.robots.robot.Robot`.
         gains: Controller gains (default: :func:`default_gains`).
         ik_settings: IK iteration settings.
+        compiled_dynamics: Assemble the system (1)-(3) with the generated C of
+            :mod:`~amlip_qp.control.pbc.dynamics_compiled` (the same system to rounding, read
+            in place from Pinocchio's arrays): ``None`` (default) when a C compiler is found,
+            else the Python assembly with a
+            :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning`; ``True`` requires it
+            (:class:`~amlip_qp.exceptions.CompilerUnavailableError` without a compiler);
+            ``False``: the Python assembly (:meth:`assemble_dynamics`).
     """
 
     name = "pbc"
 
-    def __init__(self, robot: Robot, gains: PBCGains | None = None, ik_settings: IKSettings | None = None):
+    def __init__(
+        self,
+        robot: Robot,
+        gains: PBCGains | None = None,
+        ik_settings: IKSettings | None = None,
+        compiled_dynamics: bool | None = None,
+    ):
         self.robot = robot
         if robot.profile is not None:
             robot.profile.check_supported("pbc")  # the profile's reason, before the IK's own check
@@ -157,6 +175,22 @@ class PBCTracker(Tracker):
                 K[nv + ncf : nv + nc, :nv] = self._J_springs
                 K[:nv, nv + na + ncf :] = -self._J_springs.T
             lay.K, lay.rhs, lay.n_contact = K, np.zeros(nv + nc + na), ncf
+        #: Who assembles the system: ``"c-in-place"`` (:mod:`~amlip_qp.control.pbc.dynamics_compiled`)
+        #: or ``"python"`` (:meth:`assemble_dynamics`).
+        self.dynamics_backend = "python"
+        self._compiled: CompiledDynamics | None = None
+        if compiled_dynamics is None or compiled_dynamics:
+            try:
+                self._compiled = CompiledDynamics(robot, self._layout, self._blade, self._J_springs)
+                self.dynamics_backend = "c-in-place"
+            except CompilerUnavailableError as exc:
+                if compiled_dynamics:
+                    raise
+                warnings.warn(
+                    f"PBCTracker: no compiled dynamics ({exc}); using the Python assembly (same system, slower)",
+                    CodegenFallbackWarning,
+                    stacklevel=2,
+                )
         self._nv = nv
         names = OutputMap(robot).names
         self._yaw_feedback = PelvisYawFeedback.for_outputs(names, self.gains.hip_yaw_feedback)
@@ -202,45 +236,11 @@ class PBCTracker(Tracker):
         self.contact_releases = 0
 
     # ---------------------------------------------------------------- model
-    def _contact_rows(self, kin: RobotKinematics, stance: str, J_out: np.ndarray, a_out: np.ndarray) -> None:
-        """Write the stance contact rows ``J`` (ncf x nv) and ``Jdot_v`` (ncf,) into the buffers."""
-        robot = self.robot
-        cid = robot.contact_frame_ids[stance]
-        J6 = kin.frame_jacobian6(cid)
-        a6 = kin.frame_jdot_v6(cid)
-        if self._planar:
-            J_out[0], J_out[1] = J6[0], J6[2]
-            a_out[0], a_out[1] = a6[0], a6[2]
-            return
-        J_out[:3] = J6[:3]
-        a_out[:3] = a6[:3]
-        if not self._blade[stance]:
-            return
-        # the two rotation axes normal to the blade u: n1 = u x z (or u x x), n2 = u x n1 (scalar math)
-        toe_id, heel_id = robot.sole_line_frame_ids[stance]
-        t, h = kin.frame_translation_view(toe_id).tolist(), kin.frame_translation_view(heel_id).tolist()
-        ux, uy, uz = t[0] - h[0], t[1] - h[1], t[2] - h[2]
-        nu = math.sqrt(ux * ux + uy * uy + uz * uz)
-        ux, uy, uz = ux / nu, uy / nu, uz / nu
-        ax, ay, az = uy, -ux, 0.0
-        na = math.sqrt(ax * ax + ay * ay)
-        if na < 1e-6:
-            ax, ay, az = 0.0, uz, -uy
-            na = math.sqrt(ay * ay + az * az)
-        ax, ay, az = ax / na, ay / na, az / na
-        bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
-        Jw = J6[3:]
-        N = np.array(((ax, ay, az), (bx, by, bz)))
-        J_out[3:5] = np.dot(N, Jw)
-        _, _, _, w0, w1, w2 = a6.tolist()
-        a_out[3] = ax * w0 + ay * w1 + az * w2
-        a_out[4] = bx * w0 + by * w1 + bz * w2
-
     def contact_constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
         """Stance contact rows ``(J, Jdot_v)`` (see the module docstring)."""
         ncf = self._layout[stance].n_contact
         J, a = np.empty((ncf, self._nv)), np.empty(ncf)
-        self._contact_rows(kin, stance, J, a)
+        contact_rows(self.robot, kin, stance, self._blade[stance], J, a)
         return J, a
 
     def constraints(self, kin: RobotKinematics, stance: str) -> tuple[np.ndarray, np.ndarray]:
@@ -248,24 +248,36 @@ class PBCTracker(Tracker):
         Jf, af = self.contact_constraints(kin, stance)
         return np.vstack([Jf, self._J_springs]), np.concatenate([af, np.zeros(len(self._J_springs))])
 
-    def solve_dynamics(self, kin: RobotKinematics, stance: str, vdot_ctrl) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Solve (1)-(3) for ``(vdot, tau_ctrl, lambda)`` given the controlled joints' accelerations.
-
-        Raises:
-            numpy.linalg.LinAlgError: Singular system.
-        """
+    def assemble_dynamics(self, kin: RobotKinematics, stance: str, vdot_ctrl) -> None:
+        """Write the system (1)-(3) for the controlled joints' accelerations ``vdot_ctrl`` into
+        ``stance``'s layout (``K``, ``rhs``): the Python reference of the compiled assembly
+        (:mod:`~amlip_qp.control.pbc.dynamics_compiled`)."""
         lay = self._layout[stance]
         nv, ncf = self._nv, lay.n_contact
         na = len(lay.ctrl_v)
         K, rhs = lay.K, lay.rhs
         K[:nv, :nv] = kin.mass_matrix()
         Jf = K[nv : nv + ncf, :nv]
-        self._contact_rows(kin, stance, Jf, rhs[nv : nv + ncf])
+        contact_rows(self.robot, kin, stance, self._blade[stance], Jf, rhs[nv : nv + ncf])
         np.negative(rhs[nv : nv + ncf], out=rhs[nv : nv + ncf])
         np.negative(Jf.T, out=K[:nv, nv + na : nv + na + ncf])
         np.subtract(kin.passive_forces(), kin.data.nle, out=rhs[:nv])
         rhs[len(rhs) - na :] = vdot_ctrl
-        _, _, x, info = _dgesv(K, rhs, overwrite_a=0, overwrite_b=0)
+
+    def solve_dynamics(self, kin: RobotKinematics, stance: str, vdot_ctrl) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Solve (1)-(3) for ``(vdot, tau_ctrl, lambda)`` given the controlled joints' accelerations
+        (assembled by :attr:`dynamics_backend`'s code).
+
+        Raises:
+            numpy.linalg.LinAlgError: Singular system.
+        """
+        lay = self._layout[stance]
+        if self._compiled is not None:
+            self._compiled.assemble(kin, stance, vdot_ctrl)
+        else:
+            self.assemble_dynamics(kin, stance, vdot_ctrl)
+        nv, na = self._nv, len(lay.ctrl_v)
+        _, _, x, info = _dgesv(lay.K, lay.rhs, overwrite_a=0, overwrite_b=0)
         if info != 0:
             raise np.linalg.LinAlgError(f"singular PBC system (dgesv info {info})")
         return x[:nv], x[nv : nv + na], x[nv + na :]

@@ -20,7 +20,7 @@ Python build to rounding, with less Python a tick:
   (:func:`~amlip_qp.codegen.output_map.output_map_on_terms`), the output
   task's residual with the pelvis-yaw feedback
   (:meth:`~amlip_qp.control.pelvis_yaw.PelvisYawFeedback.symbolic_correction`),
-  the passive forces (:mod:`~amlip_qp.control.wbc.passive_symbolic`) and,
+  the passive forces (:mod:`~amlip_qp.control.passive_symbolic`) and,
   through :func:`~amlip_qp.control.wbc.compiled.assembly_function`, the whole
   problem; ``H = H0 + E^T E`` stays one numpy product. It keeps ``h_0``'s
   ``(y, J, Jdot v)`` of the tick (:attr:`InPlaceBuild.outputs`), which the
@@ -50,10 +50,10 @@ from amlip_qp.codegen import generate, runtime
 from amlip_qp.codegen.frame_terms import FrameTerms
 from amlip_qp.codegen.output_map import output_map_on_terms
 from amlip_qp.codegen.runtime import bind_buffers
+from amlip_qp.control.passive_symbolic import passive_forces_expression
 from amlip_qp.control.wbc.compiled import assembly_function
 from amlip_qp.control.wbc.constraints import FrictionPyramid
 from amlip_qp.control.wbc.inputs import consecutive_slices, dm, swing_force_weight
-from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
 from amlip_qp.exceptions import InputError
 from amlip_qp.qp.problem import QPProblem
 from amlip_qp.robots.outputs import OutputMap, computes_standard_outputs

@@ -1,4 +1,4 @@
-"""Tests of the passive forces as a CasADi expression (amlip_qp.control.wbc.passive_symbolic)."""
+"""Tests of the passive forces as a CasADi expression (amlip_qp.control.passive_symbolic)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from amlip_qp.control.wbc.passive_symbolic import passive_forces_expression
+from amlip_qp.control.passive_symbolic import passive_forces_expression
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.passive import PassiveForces
 
