@@ -87,10 +87,7 @@ def dynamics_function(
     above the diagonal), ``nle``, the :attr:`FrameTerms.symbols` and ``small`` (``q``, ``v``,
     ``vdot_a``); outputs ``KT`` (the transposed matrix: a C-order buffer holds ``K``) and ``rhs``."""
     nv, nq = robot.nv, robot.nq
-    na, ncf = len(layout.ctrl_v), layout.n_contact
-    ns = len(J_springs)
-    nc = ncf + ns
-    n = nv + nc + na
+    na, ncf, ns = len(layout.ctrl_v), layout.n_contact, len(J_springs)
     Mu, nle = ca.MX.sym("M_upper", nv, nv), ca.MX.sym("nle", nv)
     small = ca.MX.sym("small", nq + nv + na)
     q, v, vdot_a = small[:nq], small[nq : nq + nv], small[nq + nv :]
@@ -99,9 +96,8 @@ def dynamics_function(
     K = ca.MX(ca.DM(layout.K))  # the constant entries, as the Python assembly presets them
     K[:nv, :nv] = M
     K[nv : nv + ncf, :nv] = Jf
-    K[:nv, nv + na : nv + na + ncf] = -Jf.T
-    del nc, ns  # the spring rows are among the constants
-    rhs = ca.vertcat(passive_forces_expression(robot, q, v) - nle, -af, ca.MX.zeros(n - nv - ncf - na), vdot_a)
+    K[:nv, nv + na : nv + na + ncf] = -Jf.T  # the springs' rows and columns are among the constants
+    rhs = ca.vertcat(passive_forces_expression(robot, q, v) - nle, -af, ca.MX.zeros(ns), vdot_a)
     return ca.Function(
         f"{FUNCTION_STEM}_{stance}", [Mu, nle, *(s for _, s in terms.symbols), small],
         [ca.densify(K.T), ca.densify(rhs)], ["M_upper", "nle", *(nm for nm, _ in terms.symbols), "small"],
