@@ -4,9 +4,10 @@
 solves the square system of equations (1)-(3) of :mod:`amlip_qp.control.pbc.tracker` in
 ``x = (vdot, tau_ctrl, lambda)``. Its Python assembly is the readable reference
 (:meth:`PBCTracker.assemble_dynamics <amlip_qp.control.pbc.tracker.PBCTracker.assemble_dynamics>`):
-the mass matrix, the stance contact's rows (the contact frame's Jacobian and drift,
-and for a foot held along its sole line the two rotation rows normal to it), the
-passive forces and ``h``, a dozen Pinocchio getters and numpy calls a tick.
+the mass matrix, the stance contact's rows (:mod:`~amlip_qp.control.pbc.contact_rows`:
+the contact frame's Jacobian and drift, and for a foot held along its sole line the two
+rotation rows normal to it), the passive forces and ``h``, a dozen Pinocchio getters and
+numpy calls a tick.
 :class:`CompiledDynamics` writes the same matrix and right-hand side with one call
 of C code that CasADi generates from the same definitions: its inputs are bound once
 per Pinocchio data to Pinocchio's own storage (``M`` read above the diagonal, ``h``,
@@ -47,7 +48,7 @@ FUNCTION_STEM = "pbc_dynamics"
 #: Pinocchio data objects bound at once (a tracker reads the controller's kinematics).
 MAX_BINDINGS = 4
 #: Below this norm (of the sole line's horizontal part) the first blade normal is taken about x
-#: instead of z, as :meth:`PBCTracker.contact_rows` does.
+#: instead of z, as :func:`~amlip_qp.control.pbc.contact_rows.contact_rows` does.
 BLADE_NORMAL_MIN = 1e-6
 
 
@@ -61,7 +62,7 @@ def dynamics_terms(robot: Robot) -> FrameTerms:
 
 def contact_rows_expression(robot: Robot, terms: FrameTerms, stance: str, blade: bool):
     """The stance contact's rows ``(J, Jdot_v)`` as CasADi expressions (the rows of
-    :meth:`PBCTracker.contact_rows <amlip_qp.control.pbc.tracker.PBCTracker.contact_rows>`)."""
+    :func:`~amlip_qp.control.pbc.contact_rows.contact_rows`)."""
     cid = robot.contact_frame_ids[stance]
     J6, a6 = terms.jacobian(cid), terms.drift(cid)
     if robot.is_planar:

@@ -29,7 +29,9 @@ toe is passive, zero torque, as in the paper) follow
 with ``(q_r, qd_r, qdd_r)`` from :class:`~amlip_qp.control.pbc.ik.IterativeIK`.
 (1)-(3) are linear in ``x = (vdot, tau_ctrl, lambda)``; with ``n_c``
 constraint rows and ``n_a`` controlled joints this is a square system of
-``nv + n_c + n_a`` equations, solved each tick. Written as torques, (3) gives
+``nv + n_c + n_a`` equations, solved each tick (assembled by generated C reading
+Pinocchio's arrays in place, :mod:`~amlip_qp.control.pbc.dynamics_compiled`, or by
+:meth:`PBCTracker.assemble_dynamics` without a compiler; the same system to rounding). Written as torques, (3) gives
 ``tau = Bbar^-1 (Mbar qdd_r + Cbar + Gbar) + Mbar-weighted PD``: the
 feed-forward from the references plus PD on the errors of the paper's PBC.
 
