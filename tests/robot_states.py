@@ -76,3 +76,15 @@ def tuned_config(robot_name: str, tracker: str):
     from amlip_qp.profiles import get_profile
 
     return get_profile(robot_name).tracker_config(tracker)
+
+
+def near_stand_q(robot, rng, spread_rad=0.1):
+    """A configuration near the stand pose: every scalar joint moved by a normal draw of
+    ``spread_rad`` and, on a floating base, a random base orientation near upright."""
+    q = robot.q_stand.copy()
+    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, spread_rad, robot.state_map.scalar_pin_q.size)
+    if robot.is_floating:
+        quat = rng.normal(0.0, 0.2, 4)
+        quat[3] += 1.0
+        q[3:7] = quat / np.linalg.norm(quat)
+    return q

@@ -13,6 +13,7 @@ from amlip_qp.control.pbc.tracker import PBCTracker
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
+from robot_states import near_stand_q
 
 
 @pytest.fixture(scope="module", params=["cassie", "rabbit", "g1"])
@@ -24,14 +25,8 @@ def trackers(request):
 
 
 def _kin(robot, rng):
-    q = robot.q_stand.copy()
-    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, 0.1, robot.state_map.scalar_pin_q.size)
-    if robot.is_floating:
-        quat = rng.normal(0.0, 0.2, 4)
-        quat[3] += 1.0
-        q[3:7] = quat / np.linalg.norm(quat)
     kin = RobotKinematics(robot)
-    kin.update(q, rng.normal(0.0, 0.5, robot.nv))
+    kin.update(near_stand_q(robot, rng), rng.normal(0.0, 0.5, robot.nv))
     return kin
 
 

@@ -15,6 +15,7 @@ from amlip_qp.exceptions import InputError
 from amlip_qp.robots import load_robot
 from amlip_qp.robots.kinematics import RobotKinematics
 from amlip_qp.robots.outputs import OutputMap
+from robot_states import near_stand_q
 
 
 def _reordered(robot):
@@ -35,19 +36,9 @@ def compiled(robot):
     return CompiledOutputMap(robot)
 
 
-def _q(robot, rng):
-    q = robot.q_stand.copy()
-    q[robot.state_map.scalar_pin_q] += rng.normal(0.0, 0.1, robot.state_map.scalar_pin_q.size)
-    if robot.is_floating:
-        quat = rng.normal(0.0, 0.2, 4)
-        quat[3] += 1.0
-        q[3:7] = quat / np.linalg.norm(quat)
-    return q
-
-
 def _kin(robot, rng, update="full"):
     """Kinematics at a random state after ``update``: ``"full"``, ``"kinematics"`` or ``"positions"``."""
-    q, v = _q(robot, rng), rng.normal(0.0, 0.5, robot.nv)
+    q, v = near_stand_q(robot, rng), rng.normal(0.0, 0.5, robot.nv)
     kin = RobotKinematics(robot)
     if update == "positions":
         kin.update_positions(q)
@@ -130,7 +121,7 @@ def test_a_position_update_after_a_full_one_gives_zero_drift(robot, compiled):
     rng = np.random.default_rng(6)
     kin = _kin(robot, rng, "full")
     assert np.any(compiled.evaluate(kin, "left", 0.0)[2] != 0.0)
-    kin.update_positions(_q(robot, rng))
+    kin.update_positions(near_stand_q(robot, rng))
     y, J, jdv = compiled.evaluate(kin, "left", 0.0)
     y_ref, J_ref, _ = OutputMap(robot).evaluate(kin, "left", 0.0)
     np.testing.assert_array_equal(jdv, np.zeros(compiled.size))

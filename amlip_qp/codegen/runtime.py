@@ -296,3 +296,30 @@ def bind_buffers(functions: dict[str, ca.Function], inputs: list, outputs: list)
                 setter(i, memoryview(arr.reshape(-1, order="A")))  # type: ignore[call-arg]
         bound[name] = (buf, ev)
     return bound
+
+
+class PerDataBindings:
+    """Generated functions bound in place to the arrays of each Pinocchio data they read.
+
+    ``bind(data)`` binds them (:func:`bind_buffers` on the data's arrays) and returns ``(keep,
+    evaluators)``: what must stay alive while the evaluators run (the views, the buffers) and the
+    evaluators. :meth:`evaluators` binds a data on its first use and keeps the bindings of the last
+    ``max_entries`` data objects (e.g. a controller's kinematics and its IK's); each entry holds its
+    data, so an entry's key (the data's ``id``) is never reused while the entry lives.
+    """
+
+    def __init__(self, bind, max_entries: int):
+        self._bind = bind
+        self._max = max_entries
+        self._entries: dict[int, tuple] = {}
+
+    def evaluators(self, data):
+        """The evaluators bound to ``data`` (binding it first if needed)."""
+        entry = self._entries.get(id(data))
+        if entry is not None and entry[0] is data:
+            return entry[2]
+        if len(self._entries) >= self._max:
+            del self._entries[next(iter(self._entries))]  # the oldest
+        keep, evaluators = self._bind(data)
+        self._entries[id(data)] = (data, keep, evaluators)
+        return evaluators

@@ -146,16 +146,10 @@ class CompiledDynamics:
         self._layouts = layouts
         self._small = {side: np.zeros(nq + nv + len(lay.ctrl_v)) for side, lay in layouts.items()}
         self._nq, self._nv = nq, nv
-        # per Pinocchio data (id): (the data, its views, the buffers, the evaluator per side)
-        self._bindings: dict[int, tuple] = {}
+        self._bindings = runtime.PerDataBindings(self._bind, MAX_BINDINGS)
 
-    def _bound(self, data) -> dict:
-        """The evaluator per side reading ``data`` in place (bound on first use)."""
-        binding = self._bindings.get(id(data))
-        if binding is not None and binding[0] is data:
-            return binding[3]
-        if len(self._bindings) >= MAX_BINDINGS:
-            del self._bindings[next(iter(self._bindings))]  # the oldest
+    def _bind(self, data) -> tuple:
+        """Bind the functions to ``data``'s arrays: ``(what to keep alive, the evaluator per side)``."""
         views = [data.M, data.nle, *self._terms.views(data)]
         evals, buffers = {}, []
         for side, name in self._names.items():
@@ -163,15 +157,14 @@ class CompiledDynamics:
             bound = runtime.bind_buffers({name: self._functions[name]}, [*views, self._small[side]], [lay.K, lay.rhs])
             buffers.append(bound[name][0])
             evals[side] = bound[name][1]
-        self._bindings[id(data)] = (data, views, buffers, evals)
-        return evals
+        return (views, buffers), evals
 
     def assemble(self, kin: RobotKinematics, stance: str, vdot_ctrl: np.ndarray) -> None:
         """Write ``stance``'s ``K`` and ``rhs`` (the layout's buffers) for the kinematics ``kin``
         (a full update: ``M`` and ``h``) and the controlled joints' accelerations ``vdot_ctrl``."""
         kin.require_dynamics()
         q, v = kin.state()
-        evals = self._bound(kin.data)
+        evals = self._bindings.evaluators(kin.data)
         u, nq, nv = self._small[stance], self._nq, self._nv
         u[:nq] = q
         u[nq : nq + nv] = v

@@ -123,33 +123,24 @@ class CompiledOutputMap:
         self._small_q, self._small_v = self._small[:nq], self._small[nq : nq + nv]
         self._i_heading = nq + nv
         self._y, self._J, self._jdv = np.zeros(n), np.zeros((n, nv)), np.zeros(n)
-        # per Pinocchio data (id): (the data, its views, the buffers, the evaluators per side)
-        self._bindings: dict[int, tuple] = {}
+        self._bindings = runtime.PerDataBindings(self._bind, MAX_BINDINGS)
 
     @property
     def size(self) -> int:
         """Number of outputs."""
         return len(self.names)
 
-    def _bound(self, data) -> dict:
-        """The evaluators per side reading ``data`` in place (bound on first use)."""
-        binding = self._bindings.get(id(data))
-        if binding is not None and binding[0] is data:
-            return binding[3]
-        if len(self._bindings) >= MAX_BINDINGS:
-            del self._bindings[next(iter(self._bindings))]  # the oldest
+    def _bind(self, data) -> tuple:
+        """Bind the functions to ``data``'s arrays: ``(what to keep alive, the evaluator per side)``."""
         views = [*self._terms.views(data), self._small]
         bound = runtime.bind_buffers(self._functions, views, [self._y, self._J, self._jdv])
-        evals = {side: bound[name][1] for side, name in self._names.items()}
-        # the data, the views and the buffers are kept alive with their evaluators
-        self._bindings[id(data)] = (data, views, [b[0] for b in bound.values()], evals)
-        return evals
+        return (views, [b[0] for b in bound.values()]), {side: bound[name][1] for side, name in self._names.items()}
 
     def evaluate(self, kin: RobotKinematics, stance: str, heading_rad: float = 0.0):
         """Same contract as :meth:`OutputMap.evaluate <amlip_qp.robots.outputs.OutputMap.evaluate>`."""
         self._ref.checked_swing(stance, heading_rad)
         q, v = kin.state()
-        evals = self._bound(kin.data)
+        evals = self._bindings.evaluators(kin.data)
         self._small_q[...] = q
         self._small_v[...] = v
         self._small[self._i_heading] = heading_rad
