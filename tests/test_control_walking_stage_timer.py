@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from amlip_qp.control.pbc.tracker import PBCTracker
 from amlip_qp.control.walking.controller import WalkingController
 from amlip_qp.control.walking.gait import swing_contact_weight
 from amlip_qp.control.walking.stage_timer import StageTimer
@@ -10,9 +11,9 @@ from amlip_qp.messages import Command, Measurement
 from amlip_qp.robots import load_robot
 
 
-def _ticks(timer, ticks=8, nan_at=None):
+def _ticks(timer, ticks=8, nan_at=None, tracker=QPTracker):
     cassie = load_robot("cassie")
-    controller = WalkingController(cassie, QPTracker(cassie), stage_timer=timer)
+    controller = WalkingController(cassie, tracker(cassie), stage_timer=timer)
     gait = cassie.profile.gait
     command = Command(
         step_time_s=gait.step_time_s, com_height_m=gait.com_height_m, clearance_m=gait.clearance_m, vx_mps=0.5
@@ -40,6 +41,20 @@ def test_the_timer_gets_every_stage_of_every_tick_and_changes_no_torque():
     timer.clear()
     assert timer.kinematics_us == timer.tracker_us == timer.tracker_work_us == timer.build_us == timer.solve_us == []
     assert timer.estimate_us == timer.plan_us == []
+
+
+def test_the_pbc_times_its_ik_compensation_and_dynamics_within_its_compute():
+    timer = StageTimer()
+    timed = _ticks(timer, tracker=PBCTracker)
+    parts = list(zip(timer.ik_us, timer.compensation_us, timer.dynamics_us, timer.tracker_us))
+    assert len(parts) == 8 and all(min(i, c, d) > 0.0 and i + c + d < t for i, c, d, t in parts)
+    assert np.isnan(timer.build_us).all() and np.isnan(timer.solve_us).all()  # the QP's parts
+    np.testing.assert_array_equal(timed, _ticks(None, tracker=PBCTracker))
+    qp = StageTimer()
+    _ticks(qp, ticks=3)
+    assert np.isnan(qp.ik_us + qp.compensation_us + qp.dynamics_us).all()
+    qp.clear()
+    assert qp.ik_us == qp.compensation_us == qp.dynamics_us == []
 
 
 def test_a_part_the_tracker_does_not_time_is_nan():

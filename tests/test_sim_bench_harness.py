@@ -42,8 +42,14 @@ def test_the_report_splits_each_tick_for_every_tracker_and_log_mode():
         assert goals["realtime_factor"]["goal"] == 1.5
         assert goals["realtime_factor"]["met"] == (row["realtime_factor"] >= 1.5)
     text = bench_harness.format_report(r)
-    assert all(row["tracker_parts_per_loop_step"] == {} for row in r["runs"].values())  # the PBC times no solve
-    assert "the tracker's own work in its parts" not in text
+    for key, row in r["runs"].items():
+        # the PBC's own work in its parts: the IK, the swing compensation and the dynamics each a positive
+        # share of MuJoCo's step and less than the whole work, and a line of the table per row
+        parts = row["tracker_parts_per_loop_step"]
+        assert set(parts) == {"kinematics", "ik", "compensation", "dynamics", "rest"} and min(parts.values()) > 0.0
+        assert max(parts["ik"], parts["dynamics"], parts["compensation"]) < row["tracker_per_loop_step"]
+        assert re.search(rf"{key}\s+kinematics\s+{parts['kinematics']:.2f}\s+ik\s+{parts['ik']:.2f}", text)
+    assert "the kinematics update, the IK, the swing compensation" in text and "the problem's build" not in text
     assert "pbc/summary" in text and "same summary in both log modes: pbc: yes" in text
     assert "a cassie-1mps qp walk of 13.20 MuJoCo steps of wall time per tick (harness 3.01) ran at 0.65x" in text
     assert "no verdict on the goals" in text

@@ -109,7 +109,7 @@ VARIANTS: dict[str, tuple[str, dict[str, object]]] = {
 }
 
 #: The tracker's work and the parts of it the stage timer records, per tick (``StageTimer``'s lists).
-_WORK_PARTS = ("tracker", "kinematics", "build", "solve")
+_WORK_PARTS = ("tracker", "kinematics", "build", "solve", "ik", "compensation", "dynamics")
 #: The controller's stages besides the tracker's work the stage timer records (``StageTimer``'s lists).
 _TICK_PARTS = ("estimate", "plan")
 
@@ -201,6 +201,8 @@ def run(
                 got["kinematics"].append(np.asarray(timer.kinematics_us))
                 got["build"].append(np.asarray(timer.build_us))
                 got["solve"].append(np.asarray(timer.solve_us))
+                for part in ("ik", "compensation", "dynamics"):
+                    got[part].append(np.asarray(getattr(timer, f"{part}_us")))
                 got["estimate"].append(np.asarray(timer.estimate_us))
                 got["plan"].append(np.asarray(timer.plan_us))
                 rtf.setdefault(key, []).append(result.sim_time_s / result.wall_time_s)
@@ -271,16 +273,25 @@ _QP_NAMES = (REFERENCE_TRACKER, *(name for name, (base, _) in VARIANTS.items() i
 
 def tracker_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:
     """The tracker's own work per tick in its parts, each over MuJoCo's step in the same tick of the loop,
-    medians over the ticks: ``kinematics`` (the update at the measured state), ``build`` and ``solve``
-    (the problem's build and the solver's call, as the tracker times them in its ``info``) and ``rest``
-    (the rest of its ``compute``: checks, torques, the result). Empty when the tracker times no build
-    and solve (the PBC), or when the ticks do not pair up with MuJoCo's (a safe-mode tick)."""
-    mujoco, build, solve = ticks["mujoco"], ticks["build"], ticks["solve"]
-    if build.shape != mujoco.shape or ticks["tracker"].shape != mujoco.shape or np.isnan(build).all():
+    medians over the ticks: ``kinematics`` (the update at the measured state), the parts of ``compute``
+    the tracker times in its ``info`` (the QP's ``build`` and ``solve``: the problem's build and the
+    solver's call; the PBC's ``ik``, ``compensation`` and ``dynamics``: the IK, the swing compensation,
+    zero where the tracker has none, and the constrained dynamics' assembly and solve) and ``rest`` (the
+    rest of its ``compute``: checks, torques, the result). Empty when the tracker times none of them, or
+    when the ticks do not pair up with MuJoCo's (a safe-mode tick)."""
+    mujoco = ticks["mujoco"]
+    if ticks["tracker"].shape != mujoco.shape:
         return {}
-    rest = ticks["tracker"] - ticks["kinematics"] - build - solve
-    named = {"kinematics": ticks["kinematics"], "build": build, "solve": solve, "rest": rest}
-    return {name: float(np.nanmedian(part / mujoco)) for name, part in named.items()}
+    for names in (("build", "solve"), ("ik", "compensation", "dynamics")):
+        timed = {name: ticks[name] for name in names}
+        if any(t.shape != mujoco.shape for t in timed.values()) or np.isnan(timed[names[0]]).all():
+            continue
+        if "compensation" in timed:
+            timed["compensation"] = np.nan_to_num(timed["compensation"], nan=0.0)
+        rest = ticks["tracker"] - ticks["kinematics"] - sum(timed.values())
+        named = {"kinematics": ticks["kinematics"], **timed, "rest": rest}
+        return {name: float(np.nanmedian(part / mujoco)) for name, part in named.items()}
+    return {}
 
 
 def controller_parts(ticks: dict[str, np.ndarray]) -> dict[str, float]:

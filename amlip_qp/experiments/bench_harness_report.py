@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+#: What each tracker's timed parts of ``compute`` are, in the report's words.
+_QP_PARTS = "the problem's build, the solver's call"
+_PBC_PARTS = "the IK, the swing compensation, the constrained dynamics' assembly and solve"
+
 
 def format_report(r: dict) -> str:
     """The report as a table."""
@@ -52,17 +56,17 @@ def format_report(r: dict) -> str:
                     f"  tracker {p['tracker']:5.2f}  rest {p['rest']:5.2f}"
                 )
     parted = {key: row["tracker_parts_per_loop_step"] for key, row in r["runs"].items()}
-    if any(parted.values()):
+    for part, what in (("build", _QP_PARTS), ("ik", _PBC_PARTS)):
+        rows = {key: p for key, p in parted.items() if part in p}
+        if not rows:
+            continue
         lines.append(
             "  the tracker's own work in its parts, over MuJoCo's step in the same tick of the loop (medians over"
-            " the ticks): the kinematics update, the problem's build, the solver's call, the rest of compute"
+            f" the ticks): the kinematics update, {what}, the rest of compute"
         )
-        for key, p in parted.items():
-            if p:
-                lines.append(
-                    f"  {key:19s} kinematics {p['kinematics']:5.2f}  build {p['build']:5.2f}"
-                    f"  solve {p['solve']:5.2f}  rest {p['rest']:5.2f}"
-                )
+        for key, p in rows.items():
+            named = "  ".join(f"{name} {value:5.2f}" for name, value in p.items())
+            lines.append(f"  {key:19s} {named}")
     same = ", ".join(f"{t}: {'yes' if ok else 'NO'}" for t, ok in r["same_summary"].items())
     lines.append(f"  same summary in both log modes: {same}")
     lines.append(

@@ -302,16 +302,11 @@ class PBCTracker(Tracker):
         h_d, dh_d = target.h_d, target.dh_d
         if self._yaw_feedback is not None:
             h_d, dh_d = self._yaw_feedback.references(kin, target)
-        ik = self.ik.solve(
-            kin,
-            stance,
-            target.heading_rad,
-            h_d,
-            dh_d,
-            target.ddh_d,
-            held_springs=held,
-        )
+        t_ik = time.perf_counter()  # the parts of compute, µs in info: the IK, the compensation, the dynamics
+        ik = self.ik.solve(kin, stance, target.heading_rad, h_d, dh_d, target.ddh_d, held_springs=held)
+        t_part = time.perf_counter()
         info = {"ik_iterations": float(ik.iterations), "ik_residual": float(ik.residual)}
+        info["ik_us"] = (t_part - t_ik) * 1e6
         q_r = ik.q_r[lay.ctrl_q]  # index arrays: new arrays
         v_r = ik.v_r[lay.ctrl_v]
         a_r = ik.a_r[lay.ctrl_v]
@@ -320,6 +315,7 @@ class PBCTracker(Tracker):
         c = self.gains.swing_torso_compensation
         if c > 0.0 and self._has_torso_rows:
             self.compensate_swing(kin, target, lay, c, q_r, v_r)
+            info["compensation_us"] = (time.perf_counter() - t_part) * 1e6
         e = q_r - q[lay.ctrl_q]
         ed = v_r - v[lay.ctrl_v]
         sw = self.gains.swing_scale(target.phase, target.swing_contact_weight)
@@ -330,11 +326,13 @@ class PBCTracker(Tracker):
         vdot_ctrl += a_r
         info["tracking_error_rad"] = float(abs(e).max())
         try:
+            t_part = time.perf_counter()
             vdot, tau_c, lam = self.solve_dynamics(kin, stance, vdot_ctrl)
             if self.gains.release_pulling_contact and lam[self._fz_row] < 0.0:  # the ground would pull
                 vdot, tau_c, lam = solve_released(lay.K, lay.rhs, self._nv, len(lay.ctrl_v), lay.n_contact)
                 self.contact_releases += 1
                 info["contact_released"] = 1.0
+            info["dynamics_us"] = (time.perf_counter() - t_part) * 1e6
         except np.linalg.LinAlgError:
             return self._fallback(kin, lay, q_r, "singular_dynamics", info, t0)
         if not all_finite(tau_c, lam):

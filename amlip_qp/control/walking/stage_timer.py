@@ -5,7 +5,9 @@ A :class:`StageTimer` given to :class:`~amlip_qp.control.walking.controller.Walk
 kinematics update at the measured state, of the estimate (the state estimate, the step clock and
 its touchdown test, the command's speed correction), of the planner's update and of the tracker's
 ``compute``, and the parts of that ``compute`` the tracker times itself (the QP tracker's
-``info["build_us"]``, the problem's build, and ``info["solve_us"]``, the solver's call).
+``info["build_us"]``, the problem's build, and ``info["solve_us"]``, the solver's call; the PBC's
+``info["ik_us"]``, ``info["compensation_us"]`` and ``info["dynamics_us"]``: the IK, the swing
+compensation, the constrained dynamics' assembly and solve).
 ``amlip-qp bench harness`` judges the tracker's own work (the kinematics update and ``compute``
 together) against its speed goal (:mod:`amlip_qp.experiments.bench_goals`) and reports the parts of
 the tick. Without a timer the controller reads no clock (one ``is None`` test per stage).
@@ -36,6 +38,12 @@ class StageTimer:
         #: The solver's call within ``compute`` as the tracker timed it (``info["solve_us"]``), µs; NaN
         #: in a tick whose tracker reports none.
         self.solve_us: list[float] = []
+        #: The PBC's IK within ``compute`` (``info["ik_us"]``), µs; NaN in a tick whose tracker reports none.
+        self.ik_us: list[float] = []
+        #: The PBC's swing compensation (``info["compensation_us"]``), µs; NaN where it reports none.
+        self.compensation_us: list[float] = []
+        #: The PBC's constrained dynamics, assembly and solve (``info["dynamics_us"]``), µs; NaN where none.
+        self.dynamics_us: list[float] = []
 
     def record(
         self,
@@ -54,6 +62,9 @@ class StageTimer:
         parts = info or {}
         self.build_us.append(_part_us(parts, "build_us"))
         self.solve_us.append(_part_us(parts, "solve_us"))
+        self.ik_us.append(_part_us(parts, "ik_us"))
+        self.compensation_us.append(_part_us(parts, "compensation_us"))
+        self.dynamics_us.append(_part_us(parts, "dynamics_us"))
 
     @property
     def tracker_work_us(self) -> list[float]:
@@ -68,6 +79,9 @@ class StageTimer:
         self.plan_us.clear()
         self.build_us.clear()
         self.solve_us.clear()
+        self.ik_us.clear()
+        self.compensation_us.clear()
+        self.dynamics_us.clear()
 
 
 def _part_us(info: Mapping[str, object], key: str) -> float:
