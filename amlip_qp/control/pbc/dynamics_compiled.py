@@ -14,7 +14,7 @@ per Pinocchio data to Pinocchio's own storage (``M`` read above the diagonal, ``
 and :class:`~amlip_qp.codegen.frame_terms.FrameTerms` of the contact frame and the
 sole line's ends), plus one small array a call (``q``, ``v`` and the controlled
 joints' accelerations ``vdot_a`` of (3)); its outputs are the stance's own buffers
-``K`` and ``rhs`` (:class:`~amlip_qp.control.pbc.tracker.StanceLayout`), so LAPACK's
+``K`` and ``rhs`` (:class:`~amlip_qp.control.pbc.stance_layout.StanceLayout`), so LAPACK's
 solve reads them as they are. The passive forces are
 :func:`~amlip_qp.control.passive_symbolic.passive_forces_expression`.
 
@@ -37,7 +37,7 @@ from amlip_qp.codegen.frame_terms import FrameTerms
 from amlip_qp.control.passive_symbolic import passive_forces_expression
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from amlip_qp.control.pbc.tracker import StanceLayout
+    from amlip_qp.control.pbc.stance_layout import StanceLayout
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
 
@@ -111,7 +111,7 @@ class CompiledDynamics:
 
     Args:
         robot: The robot.
-        layouts: The tracker's :class:`~amlip_qp.control.pbc.tracker.StanceLayout` per side
+        layouts: The tracker's :class:`~amlip_qp.control.pbc.stance_layout.StanceLayout` per side
             (their ``K`` with the constant entries set, ``rhs``, ``ctrl_v``, ``n_contact``):
             the functions write into these buffers.
         blade: Per side, whether the foot is held along its sole line (two rotation rows).

@@ -56,7 +56,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -72,6 +71,7 @@ from amlip_qp.control.pbc.ik import IterativeIK
 from amlip_qp.control.pbc.ik_newton import all_finite
 from amlip_qp.control.pbc.ik_settings import IKSettings
 from amlip_qp.control.pbc.springs import spring_deflections_rad
+from amlip_qp.control.pbc.stance_layout import StanceLayout
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackingTarget
 from amlip_qp.exceptions import CompilerUnavailableError
@@ -82,23 +82,6 @@ from amlip_qp.robots.passive import contiguous_index
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
-
-
-@dataclass
-class StanceLayout:
-    """Index bookkeeping and gains for one stance side (read-only; see :meth:`PBCTracker.layout`)."""
-
-    ctrl: np.ndarray  # indices into the actuator list of the controlled joints
-    ctrl_v: np.ndarray  # their Pinocchio v indices
-    ctrl_q: np.ndarray  # their Pinocchio q indices
-    kp: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    kd: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    swing_mask: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    swing_pos: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # positions of swing_mask's
-    swing_v: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # ... and their v indices
-    K: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # KKT matrix, constant entries preset
-    rhs: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    n_contact: int = 0  # contact rows (the spring rows follow)
 
 
 class PBCTracker(Tracker):
