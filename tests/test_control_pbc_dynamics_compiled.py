@@ -98,3 +98,9 @@ def test_without_a_compiler_the_tracker_assembles_in_python_with_a_warning(monke
     assert tracker.dynamics_backend == "python"
     with pytest.raises(CompilerUnavailableError):
         PBCTracker(robot, compiled_dynamics=True)
+
+
+@pytest.mark.parametrize("value", ["yes", 1, 0.0])
+def test_compiled_dynamics_takes_only_none_true_or_false(value):
+    with pytest.raises(InputError, match="compiled_dynamics must be None, True or False"):
+        PBCTracker(load_robot("rabbit"), compiled_dynamics=value)

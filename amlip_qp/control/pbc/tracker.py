@@ -74,7 +74,7 @@ from amlip_qp.control.pbc.springs import spring_deflections_rad
 from amlip_qp.control.pbc.stance_layout import StanceLayout
 from amlip_qp.control.pelvis_yaw import PelvisYawFeedback
 from amlip_qp.control.tracker import Tracker, TrackingTarget
-from amlip_qp.exceptions import CompilerUnavailableError
+from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.messages import TrackerResult
 from amlip_qp.robots.outputs import OutputMap
 from amlip_qp.robots.passive import contiguous_index
@@ -109,6 +109,8 @@ class PBCTracker(Tracker):
         ik_settings: IKSettings | None = None,
         compiled_dynamics: bool | None = None,
     ):
+        if not any(compiled_dynamics is allowed for allowed in (None, True, False)):  # not 0, 1 or 'yes'
+            raise InputError(f"compiled_dynamics must be None, True or False, got {compiled_dynamics!r}")
         self.robot = robot
         if robot.profile is not None:
             robot.profile.check_supported("pbc")  # the profile's reason, before the IK's own check
