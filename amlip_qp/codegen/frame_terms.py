@@ -120,3 +120,22 @@ class FrameTerms:
         w_o = ca.mtimes(R, w)
         lin = ca.mtimes(R, aj[0:3] + ca.cross(alpha, o)) + ca.cross(w_o, v_o)
         return ca.vertcat(lin, ca.mtimes(R, alpha))
+
+
+def output_frame_terms(output_map, also: Iterable[int] = ()) -> FrameTerms:
+    """The Pinocchio terms an output map reads (both stances: the base, the points and the rotating
+    frames; :func:`~amlip_qp.codegen.output_map.output_map_on_terms`), and the frames ``also``
+    (their positions and rotations too).
+
+    Args:
+        output_map: The robot's :class:`~amlip_qp.robots.outputs.OutputMap`.
+        also: More frame ids.
+    """
+    robot = output_map.robot
+    frames: list[int] = [robot.base_frame_id]
+    rotating: list[int] = []
+    for side in robot.foot_sides:
+        frames += output_map.points(side)
+        rotating += output_map.rotating_frames(side)
+    also = [int(f) for f in also]
+    return FrameTerms(robot.pin_model, frames + rotating + also, [robot.base_frame_id, *rotating, *also])

@@ -25,13 +25,19 @@ stacked Jacobians of these equations):
   of the order of ``|a_r| dt`` relative to the drift (checked in
   tests/test_control_pbc_ik.py).
 
-Evaluation: ``h_0(q)`` and its Jacobian come from the output map of the
-kinematics :meth:`IterativeIK.solve` is given (the controller's: by default the
-generated-C :class:`~amlip_qp.control.walking.outputs_compiled.CompiledOutputMap`,
-else the Python :class:`amlip_qp.robots.outputs.OutputMap`; the same outputs to
-rounding), evaluated on the IK's own
-:class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data)
-through the light :meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`.
+Evaluation: at each iterate, Pinocchio updates the IK's own
+:class:`~amlip_qp.robots.kinematics.RobotKinematics` (its own Pinocchio data; the light
+:meth:`~amlip_qp.robots.kinematics.RobotKinematics.update_positions`, or the kinematics-only
+update when the drift is taken there), then one evaluation
+(:mod:`~amlip_qp.control.pbc.ik_evaluation`) gives the varying rows of ``A``, the residual
+and the drift: by default one call of generated C reading Pinocchio's arrays in place
+(:class:`~amlip_qp.control.pbc.ik_compiled.CompiledIKEvaluation`), else Pinocchio's getters
+and the output map of the kinematics :meth:`IterativeIK.solve` is given (the Python
+reference, :class:`~amlip_qp.control.pbc.ik_evaluation.PythonIKEvaluation`; also for an
+output map other than the robot's standard ``h_0``). The generated evaluation computes the
+standard outputs itself, as the generated output map does: on the walking controller's
+kinematics (that map, by default) the two give the same bits; on kinematics with the Python
+:class:`~amlip_qp.robots.outputs.OutputMap`, the same numbers to rounding.
 
 Robustness: each Newton step (:mod:`~amlip_qp.control.pbc.ik_newton`) solves
 ``A dq = -F`` (LU; a damped least-squares step ``(A^T A + mu I) dq = -A^T F``
@@ -51,15 +57,20 @@ which also gives the drift: typically one output-map evaluation per tick
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from amlip_qp.control.pbc.ik_equations import IKEquations, StanceRows
+from amlip_qp.codegen.runtime import CodegenFallbackWarning
+from amlip_qp.control.pbc.ik_compiled import CompiledIKEvaluation
+from amlip_qp.control.pbc.ik_equations import IKEquations
+from amlip_qp.control.pbc.ik_evaluation import PythonIKEvaluation
 from amlip_qp.control.pbc.ik_newton import all_finite, lu_factor, lu_solve, newton_step
 from amlip_qp.control.pbc.ik_settings import IKResult, IKSettings
 from amlip_qp.control.pbc.knee_limits import KneeLimits, swap_rows
-from amlip_qp.exceptions import InputError
+from amlip_qp.exceptions import CompilerUnavailableError, InputError
+from amlip_qp.robots.outputs import computes_standard_outputs
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from amlip_qp.robots.kinematics import RobotKinematics
@@ -72,6 +83,14 @@ class IterativeIK:
     Args:
         robot: The :class:`~amlip_qp.robots.robot.Robot`.
         settings: Iteration settings.
+        compiled: Evaluate with the generated C of
+            :class:`~amlip_qp.control.pbc.ik_compiled.CompiledIKEvaluation` (the Python
+            reference's numbers; see the module doc): ``None`` (default) when a C compiler is
+            found, else the Python reference with a
+            :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning`; ``True`` requires it
+            (:class:`~amlip_qp.exceptions.CompilerUnavailableError` without a compiler);
+            ``False``: the Python reference. Either way, kinematics with an output map other than
+            the robot's standard ``h_0`` are evaluated in Python.
 
     Attributes:
         kin: The IK's own :class:`~amlip_qp.robots.kinematics.RobotKinematics`
@@ -81,12 +100,16 @@ class IterativeIK:
         size: Number of outputs.
 
     Raises:
+        InputError: ``compiled`` is not ``None``, ``True`` or ``False``.
         MJCFError: The model does not give a square system
             (:class:`~amlip_qp.control.pbc.ik_equations.IKEquations`).
     """
 
-    def __init__(self, robot: Robot, settings: IKSettings | None = None):
+    def __init__(self, robot: Robot, settings: IKSettings | None = None, compiled: bool | None = None):
         import pinocchio as pin
+
+        if not any(compiled is allowed for allowed in (None, True, False)):  # not 0, 1 or 'yes'
+            raise InputError(f"compiled must be None, True or False, got {compiled!r}")
 
         from amlip_qp.robots.kinematics import RobotKinematics
         from amlip_qp.robots.outputs import OutputMap
@@ -96,15 +119,26 @@ class IterativeIK:
         self.settings = settings or IKSettings()
         self.model = m = robot.pin_model
         self.kin = RobotKinematics(robot)
-        self.size = OutputMap(robot).size
+        output_map = OutputMap(robot)
+        self.size = output_map.size
         nv = m.nv
         #: The equations of the system (held coordinates and their rows per stance).
         self.equations = eq = IKEquations(robot, self.size)
-        # the same rows as a slice (x, z, pitch: every other row; all six), read as a view
-        self._pose = slice(0, 5, 2) if robot.is_planar else slice(0, 6)
-        self._npose = len(eq.pose_rows)
-        self._planar = robot.is_planar
         self._rows = eq.rows
+        self._python = PythonIKEvaluation(eq, self.size)
+        self._compiled: CompiledIKEvaluation | None = None
+        if compiled is None or compiled:
+            try:
+                self._compiled = CompiledIKEvaluation(eq, output_map)
+            except CompilerUnavailableError as exc:
+                if compiled:
+                    raise
+                warnings.warn(
+                    f"IterativeIK: no compiled evaluation ({exc}); using the Python one (same numbers, slower)",
+                    CodegenFallbackWarning,
+                    stacklevel=2,
+                )
+        self._eval: CompiledIKEvaluation | PythonIKEvaluation = self._compiled or self._python
         # knee <-> output exchanges when a leg cannot reach (see IKSettings.knee_limit_swap)
         self._knees = KneeLimits(robot, self.settings) if self.settings.knee_limit_swap else None
         self._act_q = robot.actuated.pin_q_idx
@@ -118,6 +152,20 @@ class IterativeIK:
         self._cache: tuple | None = None
         #: LU factors of ``A(q_r)`` of the last successful solve (see :meth:`solve_linear`).
         self.lu = None
+
+    @property
+    def evaluation_backend(self) -> str:
+        """Who evaluates the system: ``"c-in-place"``
+        (:class:`~amlip_qp.control.pbc.ik_compiled.CompiledIKEvaluation`) or ``"python"``
+        (:class:`~amlip_qp.control.pbc.ik_evaluation.PythonIKEvaluation`; also for an output map
+        other than the robot's standard ``h_0``)."""
+        return self._eval.backend
+
+    @property
+    def evaluation(self) -> CompiledIKEvaluation | PythonIKEvaluation:
+        """The evaluation in use (:attr:`evaluation_backend`); its ``evaluate`` updates the IK's
+        own kinematics :attr:`kin`."""
+        return self._eval
 
     @property
     def last_result(self) -> IKResult | None:
@@ -139,65 +187,8 @@ class IterativeIK:
 
         self.kin = RobotKinematics(self.robot, output_map)
         self._cache = None  # the last evaluation was another map's
-
-    def _evaluate(self, q, stance: str, heading: float, A: np.ndarray, v=None):
-        """Kinematics at ``q``: fill the varying rows of ``A``; return ``(y, contact pos, contact rot)``.
-
-        With a velocity ``v`` the IK's kinematics get the kinematics-only update at ``(q, v)``
-        (the same bits as the full update's kinematics; then :meth:`_drift` gives ``Adot v``);
-        without, the light position update.
-        """
-        kin = self.kin
-        if v is None:
-            kin.update_positions(q)
-        else:
-            kin.update_kinematics(q, v)
-        y, J, _ = kin.outputs(stance, heading)
-        n = self.size
-        A[:n] = J
-        cid = self.robot.contact_frame_ids[stance]
-        A[n : n + self._npose] = kin.frame_jacobian6(cid)[self._pose]
-        return y, kin.frame_position(cid), kin.frame_rotation(cid)
-
-    def _drift(self, stance: str, heading: float, out: np.ndarray) -> None:
-        """``Adot v`` of the varying rows at the last :meth:`_evaluate` with a ``v`` into ``out``."""
-        kin = self.kin
-        n = self.size
-        out[:n] = kin.outputs(stance, heading)[2]
-        out[n : n + self._npose] = kin.frame_jdot_v6(self.robot.contact_frame_ids[stance])[self._pose]
-
-    def _residual(self, rows: StanceRows, q, y, pos, rot, h_d, fixed) -> np.ndarray:
-        """Fill and return ``F(q)`` from the evaluated values and this tick's targets/estimates."""
-        F, n = rows.F, self.size
-        np.subtract(y, h_d, out=F[:n])
-        r_err = self._pin.log3(rot @ fixed["contact_rot"].T)
-        if self._planar:
-            p_err = pos - fixed["contact_pos"]
-            F[n], F[n + 1], F[n + 2] = p_err[0], p_err[2], r_err[1]
-        else:
-            np.subtract(pos, fixed["contact_pos"], out=F[n : n + 3])
-            F[n + 3 : n + 6] = r_err
-        np.subtract(np.dot(rows.lin_q, q), fixed["lin"], out=F[rows.n_var :])
-        return F
-
-    def _fixed_from(self, kin: RobotKinematics, stance: str) -> dict:
-        """The held quantities and their estimated rates, from the updated kinematics."""
-        rows = self._rows[stance]
-        q, v = kin.state()
-        cid = self.robot.contact_frame_ids[stance]
-        twist = np.dot(kin.frame_jacobian6(cid), v)
-        rates = np.empty(self.model.nv - self.size)
-        npose = self._npose
-        rates[:npose] = twist[self._pose]
-        rates[npose:] = np.dot(rows.lin_rate, v)
-        lin = np.dot(rows.lin_q, q)
-        lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
-        return {
-            "contact_pos": kin.frame_position(cid),
-            "contact_rot": kin.frame_rotation(cid),
-            "lin": lin,
-            "rates": rates,
-        }
+        standard = computes_standard_outputs(output_map)
+        self._eval = self._compiled if (self._compiled is not None and standard) else self._python
 
     def _newton_step(self, F: np.ndarray, A: np.ndarray, lu) -> np.ndarray:
         s = self.settings
@@ -268,11 +259,14 @@ class IterativeIK:
         rows = self._rows[stance]
         A = rows.A
         s = self.settings
+        ev = self._eval
+        kin_ik = self.kin
         try:
-            fixed = self._fixed_from(kin, stance)
+            fixed = self.equations.held_quantities(kin, stance)
             if held_springs is not None:
                 ns = len(self.equations.held_springs)
                 fixed["lin"][len(fixed["lin"]) - ns :] = held_springs
+            ev.set_targets(stance, h_d, fixed)
             prev = self._prev
             warm_start = prev if prev is not None and prev.ok and self._prev_stance == stance else None
             warm = warm_start is not None
@@ -288,17 +282,17 @@ class IterativeIK:
             swap = None
             if warm and cache is not None and cache[0] == stance and cache[1] == heading_rad:
                 # first step from the previous tick's final evaluation (same q, A)
-                F = self._residual(rows, q, cache[2], cache[3], cache[4], h_d, fixed)
-                swap_rows(cache[6], q, A, F)
-                q = self._step(q, self._newton_step(F, A, cache[5]))
+                F = ev.kept_residual(stance, q)
+                swap_rows(cache[3], q, A, F)
+                q = self._step(q, self._newton_step(F, A, cache[2]))
                 it = 1
             self._cache = None
             limit_handled = False
             hold_tried = exact or not s.knee_hold_short_of_limit  # the hold needs the default counts
             knees = self._knees
             while True:
-                y, pos, rot = self._evaluate(q, stance, heading_rad, A, v_pred)
-                F = self._residual(rows, q, y, pos, rot, h_d, fixed)
+                F = ev.evaluate(kin_ik, stance, q, heading_rad, v_pred)
+                y = ev.y
                 swap_rows(swap, q, A, F)
                 residual = float(abs(F).max())
                 lu = lu_factor(A)
@@ -344,18 +338,18 @@ class IterativeIK:
                 for sp in swap:
                     rhs_v[sp[0]] = 0.0
             v_r = lu_solve(lu, rhs_v)
-            cache = (stance, heading_rad, y, pos, rot, lu, swap)
+            cache = (stance, heading_rad, lu, swap)
             m = rows.n_var
             rhs = np.zeros(self.model.nv)
             if v_pred is not None:
-                self._drift(stance, heading_rad, rows.drift)
-                np.subtract(ddh_d, rows.drift[:n], out=rhs[:n])
-                rhs[n:m] = -rows.drift[n:m]
+                drift = ev.drift(kin_ik, stance, heading_rad)
+                np.subtract(ddh_d, drift[:n], out=rhs[:n])
+                rhs[n:m] = -drift[n:m]
             else:
                 # exact: finite difference of A along v_r
                 eps = s.fd_step_s
                 q_eps = pin.integrate(self.model, q, eps * v_r)
-                self._evaluate(q_eps, stance, heading_rad, rows.A_eps)
+                ev.evaluate(kin_ik, stance, q_eps, heading_rad, eps=True)
                 swap_rows(swap, q_eps, rows.A_eps, None)
                 rhs[:n] = ddh_d
                 rhs[:m] -= (rows.A_eps[:m] - A[:m]) @ v_r / eps
@@ -374,6 +368,7 @@ class IterativeIK:
         )
         self._prev, self._prev_stance = res, stance
         self._cache, self.lu = cache, lu
+        ev.keep(stance)
         return res
 
     def _failed(self, kin: RobotKinematics) -> IKResult:

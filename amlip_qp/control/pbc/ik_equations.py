@@ -48,6 +48,7 @@ import numpy as np
 from amlip_qp.exceptions import MJCFError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    from amlip_qp.robots.kinematics import RobotKinematics
     from amlip_qp.robots.robot import Robot
 
 
@@ -85,6 +86,8 @@ class IKEquations:
         n_out: Number of outputs ``n_h``.
 
     Attributes:
+        robot: The robot.
+        n_out: Number of outputs ``n_h``.
         pose_rows: Rows of the stance contact pose's 6-D twist that are equations
             (planar robots: x, z, pitch).
         held_springs: The springs the IK holds: the passive joints outside
@@ -105,6 +108,8 @@ class IKEquations:
         nv, nq = m.nv, m.nq
         # in-plane rows of the contact pose (planar robots: x, z, pitch)
         self.pose_rows = np.array([0, 2, 4]) if robot.is_planar else np.arange(6)
+        self._pose = slice(0, 5, 2) if robot.is_planar else slice(0, 6)  # the same rows, read as a view
+        self.n_out = n_out
         # Held springs: the passive joints outside couplings, then the coupling lengths.
         springs = robot.springs
         self.held_springs = tuple(r for r in springs if r.kind == "joint") + tuple(
@@ -170,6 +175,29 @@ class IKEquations:
                 slice(start, start + len(self.posture_q)),
                 np.asarray(robot.q_stand, dtype=float)[self.posture_q],
             )
+
+    def held_quantities(self, kin: RobotKinematics, stance: str) -> dict:
+        """What the IK holds for ``stance``, from the controller's updated kinematics ``kin``: the
+        contact frame's position (m, ``contact_pos``) and rotation (``contact_rot``), the linear
+        rows' values (``lin``: the held ankle, posture and springs) and the held coordinates' rates
+        (``rates``: the contact pose's twist rows, then the linear rows').
+        """
+        rows = self.rows[stance]
+        q, v = kin.state()
+        cid = self.robot.contact_frame_ids[stance]
+        twist = np.dot(kin.frame_jacobian6(cid), v)
+        rates = np.empty(self.robot.nv - self.n_out)
+        npose = len(self.pose_rows)
+        rates[:npose] = twist[self._pose]
+        rates[npose:] = np.dot(rows.lin_rate, v)
+        lin = np.dot(rows.lin_q, q)
+        lin[rows.posture] = rows.posture_target  # posture joints: at the stand pose (their rates are 0)
+        return {
+            "contact_pos": kin.frame_position(cid),
+            "contact_rot": kin.frame_rotation(cid),
+            "lin": lin,
+            "rates": rates,
+        }
 
     def controlled_actuated(self, stance: str) -> np.ndarray:
         """Indices into the actuator list of the joints the IK solves for (all but the held stance ankle)."""

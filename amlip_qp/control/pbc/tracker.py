@@ -98,6 +98,8 @@ class PBCTracker(Tracker):
             :class:`~amlip_qp.codegen.runtime.CodegenFallbackWarning`; ``True`` requires it
             (:class:`~amlip_qp.exceptions.CompilerUnavailableError` without a compiler);
             ``False``: the Python assembly (:meth:`assemble_dynamics`).
+        compiled_ik: The IK's evaluation in generated C, the same choice
+            (:class:`~amlip_qp.control.pbc.ik.IterativeIK`'s ``compiled``).
     """
 
     name = "pbc"
@@ -108,15 +110,17 @@ class PBCTracker(Tracker):
         gains: PBCGains | None = None,
         ik_settings: IKSettings | None = None,
         compiled_dynamics: bool | None = None,
+        compiled_ik: bool | None = None,
     ):
-        if not any(compiled_dynamics is allowed for allowed in (None, True, False)):  # not 0, 1 or 'yes'
-            raise InputError(f"compiled_dynamics must be None, True or False, got {compiled_dynamics!r}")
+        for name, value in (("compiled_dynamics", compiled_dynamics), ("compiled_ik", compiled_ik)):
+            if not any(value is allowed for allowed in (None, True, False)):  # not 0, 1 or 'yes'
+                raise InputError(f"{name} must be None, True or False, got {value!r}")
         self.robot = robot
         if robot.profile is not None:
             robot.profile.check_supported("pbc")  # the profile's reason, before the IK's own check
         self.gains = gains or default_gains(robot)
         self.shortest_step_s = self.gains.shortest_step_s
-        self.ik = IterativeIK(robot, ik_settings)
+        self.ik = IterativeIK(robot, ik_settings, compiled_ik)
         nv = robot.nv
         act = robot.actuated
         self._nu = len(act)

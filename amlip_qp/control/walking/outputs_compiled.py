@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from amlip_qp.codegen import generate, runtime
-from amlip_qp.codegen.frame_terms import FrameTerms
+from amlip_qp.codegen.frame_terms import FrameTerms, output_frame_terms
 from amlip_qp.codegen.output_map import output_map_on_terms
 from amlip_qp.exceptions import CompilerUnavailableError, InputError
 from amlip_qp.robots.kinematics import RobotKinematics
@@ -56,17 +56,6 @@ FUNCTION_STEM = "output_map_in_place"
 OUTPUT_BACKENDS = ("c", "python")
 #: Pinocchio data objects a map keeps bound at once (the controller's and its IK's kinematics).
 MAX_BINDINGS = 8
-
-
-def output_frame_terms(output_map: OutputMap) -> FrameTerms:
-    """The Pinocchio terms ``output_map`` reads, both stances: the base, the points and the rotating frames."""
-    robot = output_map.robot
-    frames: list[int] = [robot.base_frame_id]
-    rotating: list[int] = []
-    for side in robot.foot_sides:
-        frames += output_map.points(side)
-        rotating += output_map.rotating_frames(side)
-    return FrameTerms(robot.pin_model, frames + rotating, [robot.base_frame_id, *rotating])
 
 
 def output_functions(output_map: OutputMap, terms: FrameTerms) -> dict[str, ca.Function]:
