@@ -209,3 +209,22 @@ def test_the_one_step_planner_times_its_steps_only_in_the_aware_mode():
     assert FOOTHOLD_TIMING.step_time_min == 1.0 and FOOTHOLD_TIMING.step_time_max > 1.0
     mpc = make_mpc_planner(names, 31.0, backend="numpy", clock=StepClock())
     assert extra(mpc, GroundPredictor("aware", stairs_up, BLADE_M)) == {}  # no plan yet: no regions either
+
+
+def test_the_mpc_plans_no_step_shorter_than_t_in_the_aware_mode():
+    """The walking loop's MPC in the aware mode: its shortest step raised to the one-step planner's there
+    (``T``); elsewhere its own (0.6 ``T``); a longer shortest step of the caller's is kept."""
+    from amlip_qp.alip import StepClock
+    from amlip_qp.alip.mpc_planner import MPCSettings
+    from amlip_qp.control.walking.planners import FOOTHOLD_TIMING, make_planner
+
+    names = ("torso_pitch", "com_z_over_stance", "com_x_over_swing", "com_z_over_swing")
+
+    def shortest(aware: bool, settings: MPCSettings | None = None) -> float:
+        planner = make_planner("mpc", names, 31.0, StepClock(), "numpy", None, settings, 0.2, aware=aware)
+        assert planner.settings.step_time_min_s == 0.2  # the tracker's shortest step, s, either way
+        return planner.settings.step_time_min
+
+    assert shortest(False) == MPCSettings().step_time_min == 0.6
+    assert shortest(True) == FOOTHOLD_TIMING.step_time_min == 1.0
+    assert shortest(True, MPCSettings(step_time_min=1.2)) == 1.2

@@ -8,8 +8,8 @@ for 15 s, blind and terrain-aware; stairs of 10 cm rise and 30 cm run up and dow
 speed over the last 3 s, horizontal along the heading (the summary's ``mean_velocity``), is within
 0.15 m/s of the command. The 22 degree slope and the PBC tracker are reported
 (``examples/terrain_table.py``), not required. The stairs are also walked from other starts, and
-with 15 cm risers (the 10 cm scenario on ``stairs:0.15:0.3``), and the steeper slopes are walked
-(``cassie-slope-26-up``, blind, and ``cassie-slope-30-up-aware``).
+with 15 cm risers (the 10 cm scenario on ``stairs:0.15:0.3``; by the step-timing MPC too), and the
+steeper slopes are walked (``cassie-slope-26-up``, blind, and ``cassie-slope-30-up-aware``).
 """
 
 from __future__ import annotations
@@ -103,6 +103,33 @@ def test_qp_walks_15_cm_stairs_down_as_well_as_up():
     landed = [s.swing_actual_m[2] - res.steps[0].swing_actual_m[2] for s in res.steps]  # over the floor
     assert max(landed) == pytest.approx(4 * 0.15, abs=0.03)  # the landing, 4 risers up
     assert landed[-1] == pytest.approx(0.0, abs=0.03)  # back on the floor
+
+
+def test_the_mpc_walks_15_cm_stairs_with_no_step_shorter_than_t():
+    """The step-timing MPC on the 15 cm stairs, terrain-aware: in that mode it plans no step shorter
+    than the command's ``T`` (the one-step planner's rule there), so each swing has the time to climb
+    its riser. No fall, the speed within the band, up to the landing and back on the floor; with its
+    own shortest step, 0.6 ``T``, it shortened steps to 0.10-0.15 s and fell on the way up (6.61 s)."""
+    from dataclasses import replace
+
+    from amlip_qp.sim.reports.summary import mean_velocity_heading
+    from amlip_qp.sim.scenarios.factory import build_simulation
+    from amlip_qp.sim.scenarios.named import SCENARIOS
+
+    base = SCENARIOS["cassie-stairs-10cm"]
+    scenario = base.with_(setting=replace(base.setting, terrain="stairs:0.15:0.3"))
+    sim = build_simulation(scenario, "qp", planner="mpc")
+    assert sim.controller.planner.settings.step_time_min == 1.0
+    res = sim.run(scenario.duration_s, log="summary")
+    assert not res.fell, f"fell at {res.fall_time_s} s"
+    assert res.fallback_ticks == 0
+    vx = float(mean_velocity_heading(res, 3.0)[0])
+    assert abs(vx - scenario.vx.final_mps) <= SPEED_TOLERANCE_MPS, f"mean speed {vx:.3f} m/s"
+    T = 0.3  # Cassie's step time at 0.4 m/s
+    assert min(s.t_end_s - s.t_start_s for s in res.steps) > 0.8 * T  # touchdowns may come a little early
+    landed = [s.swing_actual_m[2] - res.steps[0].swing_actual_m[2] for s in res.steps]
+    assert max(landed) == pytest.approx(4 * 0.15, abs=0.04)
+    assert landed[-1] == pytest.approx(0.0, abs=0.03)
 
 
 @pytest.mark.parametrize(("name", "degrees"), [("cassie-slope-26-up", 26.0), ("cassie-slope-30-up-aware", 30.0)])

@@ -184,7 +184,15 @@ class WalkingController:
         descent = "landing" if self.ground.active else None
         shortest = tracker.shortest_step_s  # the MPC plans no step shorter than the tracker follows
         self.planner: Planner = make_planner(
-            planner, output_names(robot), robot.mass_kg, self.clock, planner_backend, descent, mpc_settings, shortest
+            planner,
+            output_names(robot),
+            robot.mass_kg,
+            self.clock,
+            planner_backend,
+            descent,
+            mpc_settings,
+            shortest,
+            aware=self.ground.mode == "aware",
         )
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()

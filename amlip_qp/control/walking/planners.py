@@ -22,7 +22,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 PLANNERS = ("one-step", "mpc")
 #: The one-step planner's step time when the terrain-aware mode moves its target onto a tread
 #: (:mod:`amlip_qp.alip.step_timing`): 1.0 to 1.4 times the command's (lengthened, never shortened:
-#: docs/TUNING.md, "Terrain").
+#: docs/TUNING.md, "Terrain"). In that mode the step-timing MPC's shortest step is the same
+#: (:func:`make_planner`): a short step leaves the swing foot too little time to climb a riser.
 FOOTHOLD_TIMING = StepTiming(step_time_min=1.0)
 
 
@@ -45,21 +46,26 @@ def make_planner(
     late_descent: str | None,
     mpc_settings: MPCSettings | None = None,
     shortest_step_s: float = 0.0,
+    aware: bool = False,
 ) -> Planner:
     """The planner ``name`` (:data:`PLANNERS`) on ``clock``, its kernels the generated C (``backend="c"``)
     or the numpy references (``"numpy"``): ``"one-step"``, the paper's
     :class:`~amlip_qp.alip.planner.Planner`; ``"mpc"``, the step-timing
     :class:`~amlip_qp.alip.mpc_planner.MPCPlanner` (:func:`amlip_qp.control.mpc.make_mpc_planner`),
     its ``step_time_min_s`` raised to ``shortest_step_s`` (the tracker's shortest step, s;
-    :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`)."""
+    :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`) and, for the terrain-aware mode
+    (``aware``), its ``step_time_min`` to that of :data:`FOOTHOLD_TIMING`: no step shorter than the
+    command's ``T``, as the one-step planner's there."""
     check_planner(name, mpc_settings)
     if name == "mpc":
         from amlip_qp.control.mpc import make_mpc_planner
 
-        if shortest_step_s > 0.0:
-            base = mpc_settings or MPCSettings()
-            if shortest_step_s > base.step_time_min_s:
-                mpc_settings = replace(base, step_time_min_s=float(shortest_step_s))
+        base = mpc_settings or MPCSettings()
+        if shortest_step_s > base.step_time_min_s:
+            base = replace(base, step_time_min_s=float(shortest_step_s))
+        if aware and FOOTHOLD_TIMING.step_time_min > base.step_time_min:
+            base = replace(base, step_time_min=FOOTHOLD_TIMING.step_time_min)
+        mpc_settings = base
 
         return make_mpc_planner(
             outputs, mass_kg, backend=backend, settings=mpc_settings, clock=clock, late_descent=late_descent
