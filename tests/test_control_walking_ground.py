@@ -228,3 +228,5 @@ def test_the_mpc_plans_no_step_shorter_than_t_in_the_aware_mode():
     assert shortest(False) == MPCSettings().step_time_min == 0.6
     assert shortest(True) == FOOTHOLD_TIMING.step_time_min == 1.0
     assert shortest(True, MPCSettings(step_time_min=1.2)) == 1.2
+    with pytest.raises(InputError, match="step_time_max must be >= 1.0"):
+        shortest(True, MPCSettings(step_time_max=0.9))

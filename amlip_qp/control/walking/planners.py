@@ -55,7 +55,11 @@ def make_planner(
     its ``step_time_min_s`` raised to ``shortest_step_s`` (the tracker's shortest step, s;
     :attr:`~amlip_qp.control.tracker.Tracker.shortest_step_s`) and, for the terrain-aware mode
     (``aware``), its ``step_time_min`` to that of :data:`FOOTHOLD_TIMING`: no step shorter than the
-    command's ``T``, as the one-step planner's there."""
+    command's ``T``, as the one-step planner's there.
+
+    Raises:
+        InputError: An unknown planner, MPC settings for another planner, or (``aware``) an MPC
+            ``step_time_max`` below 1.0."""
     check_planner(name, mpc_settings)
     if name == "mpc":
         from amlip_qp.control.mpc import make_mpc_planner
@@ -64,6 +68,11 @@ def make_planner(
         if shortest_step_s > base.step_time_min_s:
             base = replace(base, step_time_min_s=float(shortest_step_s))
         if aware and FOOTHOLD_TIMING.step_time_min > base.step_time_min:
+            if base.step_time_max < FOOTHOLD_TIMING.step_time_min:
+                raise InputError(
+                    "terrain-aware, the MPC plans no step shorter than T: MPCSettings.step_time_max must be"
+                    f" >= {FOOTHOLD_TIMING.step_time_min}, got {base.step_time_max!r}"
+                )
             base = replace(base, step_time_min=FOOTHOLD_TIMING.step_time_min)
         mpc_settings = base
 
