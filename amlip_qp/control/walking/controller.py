@@ -183,17 +183,11 @@ class WalkingController:
         self.clock = StepClock()
         descent = "landing" if self.ground.active else None
         shortest = tracker.shortest_step_s  # the MPC plans no step shorter than the tracker follows
+        aware = self.ground.mode == "aware"  # nor, terrain-aware, shorter than T
         self.planner: Planner = make_planner(
-            planner,
-            output_names(robot),
-            robot.mass_kg,
-            self.clock,
-            planner_backend,
-            descent,
-            mpc_settings,
-            shortest,
-            aware=self.ground.mode == "aware",
-        )
+            planner, output_names(robot), robot.mass_kg, self.clock, planner_backend, descent, mpc_settings, shortest,
+            aware=aware,
+        )  # fmt: skip
         self.initial_stance = initial_stance
         self._tau_lo = robot.actuated.torque_limit_Nm[:, 0].copy()
         self._tau_hi = robot.actuated.torque_limit_Nm[:, 1].copy()
