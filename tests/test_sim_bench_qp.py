@@ -22,12 +22,12 @@ from amlip_qp.experiments.qp_solver_list import SolverSpec
 #: The solvers of the `test` extra (pyproject.toml), each driven through its own interface.
 TEST_EXTRA_SOLVERS = ",".join(
     ("proxsuite-init", "daqp-hot", "daqp-hot-model", "daqp-tracker", "daqp-cold", "daqp-eliminated")
-    + ("piqp", "clarabel", "qpalm", "quadprog", "qpmad", "osqp")
+    + ("piqp", "clarabel", "qpalm", "quadprog", "qpmad", "eiquadprog", "osqp")
 )
 #: Active-set solvers: their x matches the reference's to this (the reference stops at 1e-12), and
 #: their cost exceeds the reference's by at most this (the optimal costs are of order -1e3 to -1e4).
 EXACT, EXACT_DX, EXACT_COST = (
-    ("daqp-hot", "daqp-hot-model", "daqp-tracker", "daqp-cold", "daqp-eliminated", "quadprog", "qpmad"),
+    ("daqp-hot", "daqp-hot-model", "daqp-tracker", "daqp-cold", "daqp-eliminated", "quadprog", "qpmad", "eiquadprog"),
     1e-5,
     1e-6,
 )
@@ -176,6 +176,72 @@ def test_a_solver_that_is_not_installed_is_named_and_the_bench_goes_on(walk):
     assert out["missing"] == ["not installed: ghost (pip install amlip-qp-no-such-solver)"]
     assert set(out["solvers"]) == {"proxsuite-warm", "daqp-cold"}
     assert "not installed: ghost (pip install amlip-qp-no-such-solver)" in format_report(out)
+
+
+def test_eiquadprogs_form_holds_the_reference_solutions(walk):
+    """Equalities and fixed variables as equality rows, each finite side of a row or a bound as one
+    inequality row: the reference solutions satisfy them, and nothing else is added."""
+    from amlip_qp.experiments.qp_runner_eiquadprog import eiquadprog_form
+
+    problems = walk[0][:40]
+    refs, _ = reference_solutions(problems)
+    for p, x in zip(problems, refs):
+        H, g, CE, ce0, CI, ci0 = eiquadprog_form(p)
+        fixed = p.lb == p.ub
+        assert CE.shape == (p.n_eq + int(fixed.sum()), p.n)
+        n_in = sum(int(np.isfinite(v).sum()) for v in (p.l, p.u)) + sum(
+            int((np.isfinite(v) & ~fixed).sum()) for v in (p.lb, p.ub)
+        )
+        assert CI.shape == (n_in, p.n)
+        assert np.max(np.abs(CE @ x + ce0)) < 1e-8
+        assert np.min(CI @ x + ci0) > -1e-8
+        assert np.array_equal(H, p.H) and np.array_equal(g, p.g)
+        assert all(a.flags.c_contiguous for a in (H, g, CE, ce0, CI, ci0))
+
+
+def test_eiquadprog_solves_a_small_problem_exactly_and_names_an_infeasible_one():
+    """min 1/2 |x - (1, 2)|^2 s.t. x0 + x1 = 1 (optimum (0, 1)) and x0 >= 0.5 (active): (0.5, 0.5).
+    Then x0 >= 1 with x0 <= 0: no solution, counted with its status (the dual method finds the dual
+    unbounded)."""
+    from amlip_qp.experiments.qp_runner_eiquadprog import EiquadprogRunner
+    from amlip_qp.qp.problem import QPProblem
+
+    inf = np.inf
+    p = QPProblem(
+        H=np.eye(2), g=np.array([-1.0, -2.0]), A=np.array([[1.0, 1.0]]), b=np.array([1.0]),
+        C=np.array([[1.0, 0.0]]), l=np.array([0.5]), u=np.array([inf]),
+        lb=np.full(2, -inf), ub=np.full(2, inf),
+    )  # fmt: skip
+    run = EiquadprogRunner()
+    x = run.solve(run.prepare(p))
+    assert x is not None and np.allclose(x, [0.5, 0.5], atol=1e-12, rtol=0)
+    assert run.failures == 0 and run.iterations >= 1
+    bad = QPProblem(
+        H=np.eye(1), g=np.zeros(1), A=np.zeros((0, 1)), b=np.zeros(0), C=np.eye(1), l=np.ones(1),
+        u=np.full(1, inf), lb=np.full(1, -inf), ub=np.zeros(1),
+    )  # fmt: skip
+    assert run.solve(run.prepare(bad)) is None
+    assert run.failures == 1 and run.statuses == {"dual unbounded (infeasible)": 1}
+    # the workspace resizes back to the first problem's shape
+    x = run.solve(run.prepare(p))
+    assert x is not None and np.allclose(x, [0.5, 0.5], atol=1e-12, rtol=0)
+
+
+def test_eiquadprog_without_a_compiler_is_named_not_usable_with_the_reason(monkeypatch, tmp_path):
+    from amlip_qp.experiments import qp_runner_eiquadprog as eiq
+
+    spec = next(s for s in qp_solver_list.SOLVERS if s.name == "eiquadprog")
+    monkeypatch.setenv("AMLIP_QP_CC", "none")
+    monkeypatch.setenv("AMLIP_QP_CACHE_DIR", str(tmp_path))
+    eiq.load_shim.cache_clear()
+    try:
+        assert eiq.installed()
+        assert not qp_solver_list.available(spec)
+        line = qp_solver_list.missing_line(spec)
+        assert line == "not usable: eiquadprog (AMLIP_QP_CC=none disables the C compiler)"
+    finally:
+        eiq.load_shim.cache_clear()
+    assert not any(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize(

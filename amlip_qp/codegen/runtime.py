@@ -151,23 +151,34 @@ def cache_key(source: bytes, compiler: Sequence[str], flags: Sequence[str] = CFL
 # --- compilation ---------------------------------------------------------------
 
 
+def _key_flags(compile_flags: Sequence[str], link_flags: Sequence[str]) -> tuple[str, ...]:
+    """The flags a cache key hashes: :data:`CFLAGS`, then any extra compile and link flags."""
+    return (*CFLAGS, *compile_flags, "|", *link_flags) if compile_flags or link_flags else CFLAGS
+
+
 def build_library(
     source: bytes,
     compiler: Sequence[str],
     cache_dir: Path | None = None,
     source_file: str = generate.SOURCE_FILE,
     library_file: str = LIBRARY_FILE,
+    compile_flags: Sequence[str] = (),
+    link_flags: Sequence[str] = (),
 ) -> Path:
     """Compile ``source`` into ``<cache>/<key>/<library_file>`` unless it is there.
 
     ``source_file`` and ``library_file`` name the files in the cache folder
     (default: the planner kernels'; other generated code, e.g. the whole-body
     QP assembly of :mod:`amlip_qp.control.wbc.compiled`, uses its own names).
+    ``compile_flags`` go after :data:`CFLAGS`, before the source; ``link_flags`` after the
+    source and ``-lm``. The key hashes them with the source, the compiler and :data:`CFLAGS`
+    (with none, the key of the C sources without extra flags).
     Returns the library path. Raises :class:`CodegenError` (with the
     compiler's output) when compilation fails, ``_NoCompiler`` when the
     compiler cannot be executed.
     """
-    folder = (cache_root() if cache_dir is None else Path(cache_dir)) / cache_key(source, compiler)
+    flags = _key_flags(compile_flags, link_flags)
+    folder = (cache_root() if cache_dir is None else Path(cache_dir)) / cache_key(source, compiler, flags)
     lib = folder / library_file
     if lib.is_file():
         return lib
@@ -182,7 +193,7 @@ def build_library(
         raise CodegenError(
             f"cannot write the kernel cache {folder}: {exc}; set ${CACHE_ENV} to a writable folder"
         ) from exc
-    cmd = [*compiler, *CFLAGS, "-o", tmp, str(src), "-lm"]
+    cmd = [*compiler, *CFLAGS, *compile_flags, "-o", tmp, str(src), "-lm", *link_flags]
     try:
         try:
             proc = subprocess.run(cmd, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S)
@@ -201,10 +212,19 @@ def build_library(
 
 
 def compile_library(
-    source: bytes, source_file: str, library_file: str, cache_dir: str | os.PathLike | None = None
+    source: bytes,
+    source_file: str,
+    library_file: str,
+    cache_dir: str | os.PathLike | None = None,
+    *,
+    compile_flags: Sequence[str] = (),
+    link_flags: Sequence[str] = (),
 ) -> Path:
     """Compile C ``source`` once into the cache (as :func:`compile_and_load`, announcing a cold
     cache on stderr) and return the library's path, for loading with :mod:`ctypes`.
+
+    ``compile_flags`` go before the source (e.g. ``-x c++`` and include folders), ``link_flags``
+    after it (e.g. a library to link); both are part of the cache key (:func:`build_library`).
 
     Raises:
         CompilerUnavailableError: No usable C compiler (the message says why).
@@ -213,9 +233,10 @@ def compile_library(
     root = cache_root() if cache_dir is None else Path(cache_dir)
     try:
         compiler = find_compiler()
-        if not (root / cache_key(source, compiler) / library_file).is_file():
+        flags = _key_flags(compile_flags, link_flags)
+        if not (root / cache_key(source, compiler, flags) / library_file).is_file():
             _announce_compilation(root)
-        return build_library(source, compiler, root, source_file, library_file)
+        return build_library(source, compiler, root, source_file, library_file, compile_flags, link_flags)
     except _NoCompiler as exc:
         raise CompilerUnavailableError(str(exc)) from None
 

@@ -6,6 +6,12 @@ box): the tracker's ProxSuite path and the solvers ``qpsolvers`` supports.
 A solver whose module does not import is reported as not installed, with the
 package that brings it (:func:`available`). The ``bench`` extra of
 ``pyproject.toml`` installs the open-source ones that install from pip.
+eiquadprog-fast, TSID's solver, comes from pip as a C++ library without a
+Python binding; the bench compiles a shim for it
+(:mod:`amlip_qp.experiments.qp_runner_eiquadprog`) and reports it as not
+usable, with the reason, where that cannot be done (e.g. no compiler).
+TSID itself is not compared: its ``libtsid`` dependency has no wheel for
+this platform and does not build from its source distribution through pip.
 
 Left out: MOSEK (its pip package needs a licence file to solve anything),
 COPT (its pip build stopped the process with an illegal instruction on the
@@ -20,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from amlip_qp.exceptions import InputError
+from amlip_qp.experiments import qp_runner_eiquadprog as eiquadprog
 from amlip_qp.experiments import qp_runners as dense
 from amlip_qp.experiments import qp_runners_sparse as sparse
 
@@ -45,17 +52,22 @@ class SolverSpec:
 
     Attributes:
         name: Name in the report and in ``--solvers``.
-        module: The Python module it needs (imported to tell whether it is installed).
-        pip: The pip package that installs ``module``.
+        module: The Python module it needs (imported to tell whether it is installed); ``None``
+            for a solver without one, told by ``installed``.
+        pip: The pip package that installs it.
         make: Builds the runner.
         backend: The ``qpsolvers`` backend name that must be available too (``None``: not through qpsolvers).
+        installed: Whether the package is installed, for a solver without a Python module.
+        unusable: Why an installed solver cannot run here (e.g. no compiler for its shim), or ``None``.
     """
 
     name: str
-    module: str
+    module: str | None
     pip: str
     make: Callable[[SolverSettings], dense.Runner]
     backend: str | None = None
+    installed: Callable[[], bool] | None = None
+    unusable: Callable[[], str | None] | None = None
 
 
 def _qpsolvers(name: str, module: str, pip: str, box_as_rows: bool = False) -> SolverSpec:
@@ -76,6 +88,14 @@ SOLVERS: tuple[SolverSpec, ...] = (
     SolverSpec("qpalm", "qpalm", "qpalm", lambda s: sparse.QPALMRunner(s.eps_abs)),
     SolverSpec("quadprog", "quadprog", "quadprog", lambda s: dense.QuadprogRunner()),
     SolverSpec("qpmad", "pyqpmad", "pyqpmad", lambda s: dense.QPMADRunner()),
+    SolverSpec(
+        "eiquadprog",
+        None,
+        "eiquadprog",
+        lambda s: eiquadprog.EiquadprogRunner(),
+        installed=eiquadprog.installed,
+        unusable=eiquadprog.unusable,
+    ),
     SolverSpec("osqp", "osqp", "osqp", lambda s: sparse.OSQPRunner(s.eps_abs)),
     _qpsolvers("highs", "highspy", "highspy"),
     _qpsolvers("ecos", "ecos", "ecos", box_as_rows=True),  # ECOS takes no infinite bound
@@ -110,12 +130,24 @@ def select(names: str | None, solvers: tuple[SolverSpec, ...] = SOLVERS) -> tupl
     return tuple(s for s in solvers if s.name in keep)
 
 
-def available(spec: SolverSpec) -> bool:
-    """Whether ``spec``'s module imports (and its ``qpsolvers`` backend is registered)."""
+def _installed(spec: SolverSpec) -> bool:
+    """Whether ``spec``'s package is installed: its module imports (or its own test says so)."""
+    if spec.module is None:
+        return spec.installed is not None and spec.installed()
     try:
         importlib.import_module(spec.module)
     except Exception:  # an ImportError, or a broken build failing at import
         return False
+    return True
+
+
+def available(spec: SolverSpec) -> bool:
+    """Whether ``spec`` can run: its package is installed (its module imports, and its ``qpsolvers``
+    backend is registered), and nothing makes it unusable here."""
+    if not _installed(spec):
+        return False
+    if spec.unusable is not None:
+        return spec.unusable() is None
     if spec.backend is None:
         return True
     import qpsolvers
@@ -137,5 +169,10 @@ def versions(specs: tuple[SolverSpec, ...] | list[SolverSpec]) -> dict[str, str]
 
 
 def missing_line(spec: SolverSpec) -> str:
-    """The report's line for a solver that is not installed."""
+    """The report's line for a solver that cannot run: not installed (and how to install it), or
+    installed but unusable here (and why)."""
+    if _installed(spec) and spec.unusable is not None:
+        why = spec.unusable()
+        if why is not None:
+            return f"not usable: {spec.name} ({why})"
     return f"not installed: {spec.name} (pip install {spec.pip})"
