@@ -160,16 +160,16 @@ class EiquadprogRunner(Runner):
         workspace = self._lib.amlip_eiquadprog_new()
         if not workspace:
             raise MemoryError("eiquadprog: no memory for a workspace")
-        self._workspace = ctypes.c_void_p(workspace)
+        self._workspace: ctypes.c_void_p | None = ctypes.c_void_p(workspace)
         self._iterations = ctypes.c_int(0)
         #: Statuses other than optimal, by name, counted over the solves.
         self.statuses: dict[str, int] = {}
 
     def __del__(self) -> None:
         workspace = getattr(self, "_workspace", None)
+        self._workspace = None
         if workspace is not None and workspace.value:
             self._lib.amlip_eiquadprog_free(workspace)
-            workspace.value = None
 
     def prepare(self, p: QPProblem) -> tuple:
         H, g, CE, ce0, CI, ci0 = eiquadprog_form(p)
